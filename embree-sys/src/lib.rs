@@ -1,0 +1,1 @@
+//! Raw bindings to Embree 3 (placeholder until bindgen generation lands).

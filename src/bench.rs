@@ -1,0 +1,1 @@
+//! Benchmarks of the tracing backends and of the render pipeline.

@@ -1,0 +1,91 @@
+//! Command-line interface: clap definitions and dispatch. Each subcommand
+//! lives in its own file and turns its arguments into library calls.
+
+use clap::{Parser, Subcommand};
+
+mod bench;
+mod calibrate;
+mod compare;
+mod diurnal;
+mod info;
+mod merge;
+mod radiance;
+mod render;
+mod scene;
+mod sensitivity;
+mod sun;
+mod thermal;
+mod weather;
+
+/// irsig — physics-based thermal-infrared synthetic image generator.
+///
+/// Models the whole imaging chain the way DIRSIG does: scene geometry and
+/// materials, weather history and sun, ray-traced solar history and shape
+/// factors, a THERM-style 1-D thermal model per facet, the radiometric "big
+/// equation" through an atmosphere, and a frame camera or airborne line
+/// scanner. Internal units are SI.
+#[derive(Debug, Parser)]
+#[command(name = "irsig", version = concat!(env!("CARGO_PKG_VERSION"), " (Embree ", env!("IRSIG_EMBREE_VERSION"), ")"), propagate_version = true)]
+pub struct Cli {
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render a scene to EXR, ENVI and PNG images.
+    Render(render::Args),
+    /// Print statistics of the layers of an image file.
+    Info(info::Args),
+    /// Benchmarks: ray-tracing backends, the render pipeline.
+    Bench(bench::Args),
+    /// Check a scene file and print a summary.
+    Scene(scene::Args),
+    /// Read a weather file and print its records in SI units.
+    Weather(weather::Args),
+    /// Solar position (NREL SPA) for a place and time.
+    Sun(sun::Args),
+    /// Solve the thermal model for one free-standing facet.
+    Thermal(thermal::Args),
+    /// Planck band radiance and its inverse (brightness temperature).
+    Radiance(radiance::Args),
+    /// Compare a synthetic image with truth imagery or point measurements.
+    Compare(compare::Args),
+    /// Sensitivity of temperatures and radiances to input parameters.
+    Sensitivity(sensitivity::Args),
+    /// Fit input parameters to truth measurements.
+    Calibrate(calibrate::Args),
+    /// Target/background contrast through the day; thermal crossover times.
+    Diurnal(diurnal::Args),
+    /// Merge tiles rendered with `render --tile K/N` into one image set.
+    Merge(merge::Args),
+}
+
+/// Parse the command line and run the chosen subcommand.
+pub fn run() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = cli.threads {
+        anyhow::ensure!(n > 0, "--threads must be at least 1");
+        pool = pool.num_threads(n);
+    }
+    pool.build_global()?;
+    match cli.command {
+        Command::Render(a) => render::run(a),
+        Command::Info(a) => info::run(a),
+        Command::Bench(a) => bench::run(a),
+        Command::Scene(a) => scene::run(a),
+        Command::Weather(a) => weather::run(a),
+        Command::Sun(a) => sun::run(a),
+        Command::Thermal(a) => thermal::run(a),
+        Command::Radiance(a) => radiance::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::Sensitivity(a) => sensitivity::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
+        Command::Diurnal(a) => diurnal::run(a),
+        Command::Merge(a) => merge::run(a),
+    }
+}

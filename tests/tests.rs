@@ -1,0 +1,1 @@
+//! irsig's integration tests: one binary, one module per concern.
