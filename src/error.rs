@@ -22,11 +22,17 @@ pub struct Location {
 impl Location {
     /// A location in a file.
     pub fn file(path: impl AsRef<Path>) -> Self {
-        Location { path: Some(path.as_ref().to_path_buf()), ..Default::default() }
+        Location {
+            path: Some(path.as_ref().to_path_buf()),
+            ..Default::default()
+        }
     }
     /// A location naming only a field (e.g. a command-line option).
     pub fn field(field: impl Into<String>) -> Self {
-        Location { field: Some(field.into()), ..Default::default() }
+        Location {
+            field: Some(field.into()),
+            ..Default::default()
+        }
     }
     /// The same location at a 1-based line.
     pub fn at_line(mut self, line: usize) -> Self {
@@ -102,15 +108,24 @@ pub enum Error {
 impl Error {
     /// An I/O error on `path`.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
-        Error::Io { path: path.as_ref().to_path_buf(), source }
+        Error::Io {
+            path: path.as_ref().to_path_buf(),
+            source,
+        }
     }
     /// A parse/validation error at `location`.
     pub fn parse(location: Location, message: impl Into<String>) -> Self {
-        Error::Parse { location, message: message.into() }
+        Error::Parse {
+            location,
+            message: message.into(),
+        }
     }
     /// An invalid parameter value.
     pub fn invalid(field: impl Into<String>, message: impl Into<String>) -> Self {
-        Error::Invalid { field: field.into(), message: message.into() }
+        Error::Invalid {
+            field: field.into(),
+            message: message.into(),
+        }
     }
 }
 

@@ -30,7 +30,11 @@ impl TriangleMesh {
     /// The three vertices of triangle `prim` in object space.
     pub fn triangle(&self, prim: usize) -> [Vec3; 3] {
         let [a, b, c] = self.indices[prim];
-        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
     }
 }
 
@@ -57,7 +61,10 @@ impl SceneGeometry {
     pub fn single(mesh: TriangleMesh) -> Self {
         SceneGeometry {
             meshes: vec![mesh],
-            instances: vec![Instance { mesh: 0, world_from_object: Affine3A::IDENTITY }],
+            instances: vec![Instance {
+                mesh: 0,
+                world_from_object: Affine3A::IDENTITY,
+            }],
         }
     }
 
@@ -76,7 +83,10 @@ impl SceneGeometry {
 
     /// Total number of facets (triangles over all instances).
     pub fn facet_count(&self) -> usize {
-        self.instances.iter().map(|i| self.meshes[i.mesh].triangle_count()).sum()
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh].triangle_count())
+            .sum()
     }
 
     /// Number of distinct triangles stored (each mesh once).
@@ -116,12 +126,23 @@ impl SceneGeometry {
     /// The geometry flattened into one world-space mesh (instances expanded),
     /// in global facet order. Used by backends without instancing and by tests.
     pub fn flatten(&self) -> TriangleMesh {
-        let mut out = TriangleMesh { name: "flattened".into(), ..Default::default() };
+        let mut out = TriangleMesh {
+            name: "flattened".into(),
+            ..Default::default()
+        };
         for inst in &self.instances {
             let m = &self.meshes[inst.mesh];
             let base = out.positions.len() as u32;
-            out.positions.extend(m.positions.iter().map(|p| inst.world_from_object.transform_point3(*p)));
-            out.indices.extend(m.indices.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+            out.positions.extend(
+                m.positions
+                    .iter()
+                    .map(|p| inst.world_from_object.transform_point3(*p)),
+            );
+            out.indices.extend(
+                m.indices
+                    .iter()
+                    .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+            );
         }
         out
     }
@@ -131,5 +152,9 @@ impl SceneGeometry {
 pub fn triangle_normal_area(t: &[Vec3; 3]) -> (Vec3, f32) {
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     let len = n.length();
-    if len > 0.0 { (n / len, 0.5 * len) } else { (Vec3::Z, 0.0) }
+    if len > 0.0 {
+        (n / len, 0.5 * len)
+    } else {
+        (Vec3::Z, 0.0)
+    }
 }

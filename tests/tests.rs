@@ -1,1 +1,17 @@
 //! irsig's integration tests: one binary, one module per concern.
+//! Tests that read `../shared/data` skip with a notice where it is absent.
+
+mod util;
+
+mod analysis;
+mod atmosphere;
+mod backends;
+mod cli;
+mod material;
+mod radiometry;
+mod render;
+mod scene;
+mod sensor;
+mod sun;
+mod thermal;
+mod weather;

@@ -24,7 +24,12 @@ pub struct Ray {
 impl Ray {
     /// An unbounded ray starting at `tnear = 0`.
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Ray { origin, dir, tnear: 0.0, tfar: f32::INFINITY }
+        Ray {
+            origin,
+            dir,
+            tnear: 0.0,
+            tfar: f32::INFINITY,
+        }
     }
 }
 
