@@ -21,6 +21,7 @@ pub mod analysis;
 pub mod atmosphere;
 pub mod bench;
 pub mod error;
+pub mod exposure;
 pub mod geometry;
 pub mod material;
 pub mod output;

@@ -7,6 +7,7 @@ mod analysis;
 mod atmosphere;
 mod backends;
 mod cli;
+mod exposure;
 mod material;
 mod radiometry;
 mod render;

@@ -1,0 +1,1 @@
+//! Ray-traced per-facet inputs of the thermal model (being written).

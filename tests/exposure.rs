@@ -1,0 +1,1 @@
+//! Tests: exposure (solar history, shape factor, background).
