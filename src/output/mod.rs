@@ -1,5 +1,32 @@
-//! Image outputs: a stack of named float layers and its writers/readers
-//! (OpenEXR, ENVI, PNG quick-look), all written atomically.
+//! Image outputs: a stack of named float layers ([`ImageStack`]) and its
+//! writers/readers, every file written atomically ([`atomic`]).
+//!
+//! - [`write_exr`] / [`read_exr`]: OpenEXR, one `f32` channel per layer (the
+//!   DIRSIG-style "debug images": `band0_radiance`, `apparent_temperature`,
+//!   `surface_temperature`, `material_id`, `object_id`, `shape_factor`,
+//!   `sun_fraction`, `depth`, ...).
+//! - [`write_envi`] / [`read_envi`]: ENVI `NAME.img` + `NAME.hdr`,
+//!   band-sequential little-endian float32 with band names and wavelengths.
+//! - [`write_quicklook_png`]: PNG quick-look of apparent temperature with a
+//!   colour map and a scale bar in K.
+//! - [`read_image`]: read an EXR or ENVI file by its extension.
+
+pub mod atomic;
+mod envi;
+mod exr_io;
+mod quicklook;
+
+use std::path::Path;
+
+pub use atomic::{AtomicFile, WriteSeek, write_atomic};
+pub use envi::{EnviImage, envi_paths, read_envi, write_envi};
+pub use exr_io::{read_exr, write_exr};
+pub use quicklook::{
+    BAR_AREA_HEIGHT, MIN_CANVAS_WIDTH, RgbImage, auto_range, inferno, render_quicklook,
+    write_quicklook_png,
+};
+
+use crate::{Error, Location, Result};
 
 /// One named float layer, row-major, `width × height` values.
 #[derive(Debug, Clone, PartialEq)]
@@ -21,9 +48,133 @@ pub struct ImageStack {
     pub layers: Vec<Layer>,
 }
 
+/// Statistics of one layer over its non-NaN values (`irsig info`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LayerStats {
+    /// Layer name.
+    pub name: String,
+    /// Smallest non-NaN value (`None` if every value is NaN).
+    pub min: Option<f64>,
+    /// Largest non-NaN value.
+    pub max: Option<f64>,
+    /// Mean of the non-NaN values.
+    pub mean: Option<f64>,
+    /// Number of NaN values.
+    pub nan_count: usize,
+}
+
+impl Layer {
+    /// Statistics over the non-NaN values (infinities included).
+    pub fn stats(&self) -> LayerStats {
+        let (mut lo, mut hi, mut sum, mut n, mut nan) =
+            (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, 0usize, 0usize);
+        for &v in &self.data {
+            if v.is_nan() {
+                nan += 1;
+                continue;
+            }
+            let v = v as f64;
+            lo = lo.min(v);
+            hi = hi.max(v);
+            sum += v;
+            n += 1;
+        }
+        let some = |v: f64| (n > 0).then_some(v);
+        LayerStats {
+            name: self.name.clone(),
+            min: some(lo),
+            max: some(hi),
+            mean: some(sum / n.max(1) as f64),
+            nan_count: nan,
+        }
+    }
+}
+
 impl ImageStack {
+    /// An image with no layers yet.
+    pub fn new(width: usize, height: usize) -> Self {
+        ImageStack {
+            width,
+            height,
+            layers: Vec::new(),
+        }
+    }
+
     /// The layer called `name`, if present.
     pub fn layer(&self, name: &str) -> Option<&Layer> {
         self.layers.iter().find(|l| l.name == name)
+    }
+
+    /// Append a layer, checking its size and that its name is new.
+    pub fn push(&mut self, name: impl Into<String>, data: Vec<f32>) -> Result<()> {
+        let name = name.into();
+        if data.len() != self.width * self.height {
+            return Err(Error::invalid(
+                format!("layer `{name}`"),
+                format!(
+                    "{} values: expected {}×{} = {}",
+                    data.len(),
+                    self.width,
+                    self.height,
+                    self.width * self.height
+                ),
+            ));
+        }
+        if self.layer(&name).is_some() {
+            return Err(Error::invalid(
+                format!("layer `{name}`"),
+                "duplicate layer name",
+            ));
+        }
+        self.layers.push(Layer { name, data });
+        Ok(())
+    }
+
+    /// Check every layer has `width · height` values and names are unique.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.width * self.height;
+        for (i, l) in self.layers.iter().enumerate() {
+            if l.data.len() != n {
+                return Err(Error::invalid(
+                    format!("layer `{}`", l.name),
+                    format!(
+                        "{} values: expected {}×{} = {n}",
+                        l.data.len(),
+                        self.width,
+                        self.height
+                    ),
+                ));
+            }
+            if self.layers[..i].iter().any(|o| o.name == l.name) {
+                return Err(Error::invalid(
+                    format!("layer `{}`", l.name),
+                    "duplicate layer name",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Per-layer statistics, in layer order.
+    pub fn stats(&self) -> Vec<LayerStats> {
+        self.layers.iter().map(Layer::stats).collect()
+    }
+}
+
+/// Read an image file into an [`ImageStack`], choosing the format by the
+/// extension: `.exr` (OpenEXR), `.hdr` / `.img` (ENVI).
+pub fn read_image(path: impl AsRef<Path>) -> Result<ImageStack> {
+    let path = path.as_ref();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => read_exr(path),
+        Some("hdr") | Some("img") => Ok(read_envi(path)?.stack),
+        _ => Err(Error::parse(
+            Location::file(path),
+            "unknown image format: expected a `.exr`, `.hdr` or `.img` file",
+        )),
     }
 }

@@ -1,0 +1,105 @@
+//! Atomic file writes: write to a temporary file in the destination's
+//! directory, flush and `fsync` it, then rename it over the final name.
+//!
+//! A rename within one directory is atomic on POSIX file systems, so a reader
+//! (or a rerun after a crash) sees either the old file, or the complete new
+//! one — never a truncated one. If the writer fails, or the process is killed
+//! part-way, nothing appears under the final name; the temporary file
+//! (`.NAME.XXXXXX.tmp`) is removed on error and on drop.
+
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::{Path, PathBuf};
+
+use crate::{Error, Result};
+
+/// A file being written under a temporary name, to appear under its final
+/// name only on [`AtomicFile::commit`]. Dropping it uncommitted removes the
+/// temporary file.
+///
+/// Use it directly to commit several files together (ENVI `.img` + `.hdr`):
+/// write all, then commit in order; otherwise use [`write_atomic`].
+pub struct AtomicFile {
+    path: PathBuf,
+    writer: BufWriter<tempfile::NamedTempFile>,
+}
+
+impl AtomicFile {
+    /// Start writing `path` (its directory must exist).
+    pub fn create(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref().to_path_buf();
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = path
+            .file_name()
+            .ok_or_else(|| {
+                Error::invalid("output path", format!("`{}` names no file", path.display()))
+            })?
+            .to_string_lossy()
+            .into_owned();
+        let tmp = tempfile::Builder::new()
+            .prefix(&format!(".{name}."))
+            .suffix(".tmp")
+            .tempfile_in(&dir)
+            .map_err(|e| Error::io(&path, e))?;
+        Ok(AtomicFile {
+            path,
+            writer: BufWriter::with_capacity(1 << 20, tmp),
+        })
+    }
+
+    /// The final path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The (buffered, seekable) writer of the temporary file.
+    pub fn writer(&mut self) -> &mut BufWriter<tempfile::NamedTempFile> {
+        &mut self.writer
+    }
+
+    /// Flush, `fsync` and rename the file to its final name, replacing any
+    /// existing file there.
+    pub fn commit(self) -> Result<()> {
+        let path = self.path;
+        let tmp = self
+            .writer
+            .into_inner()
+            .map_err(|e| Error::io(&path, e.into_error()))?;
+        tmp.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
+        tmp.persist(&path).map_err(|e| Error::io(&path, e.error))?;
+        // Make the rename itself durable (POSIX: fsync the directory).
+        #[cfg(unix)]
+        if let Some(dir) = path.parent() {
+            let dir = if dir.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                dir
+            };
+            if let Ok(d) = File::open(dir) {
+                let _ = d.sync_all();
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A writer that is both [`Write`] and [`Seek`] (the EXR encoder seeks).
+pub trait WriteSeek: Write + Seek {}
+impl<T: Write + Seek> WriteSeek for T {}
+
+/// Write `path` atomically: `write` fills a temporary file in the same
+/// directory, which is then flushed, `fsync`ed and renamed to `path`. If
+/// `write` returns an error, no file appears under `path` (an existing one
+/// is left untouched) and the temporary file is removed.
+pub fn write_atomic<T>(
+    path: impl AsRef<Path>,
+    write: impl FnOnce(&mut dyn WriteSeek) -> Result<T>,
+) -> Result<T> {
+    let mut file = AtomicFile::create(path)?;
+    let value = write(file.writer())?;
+    file.commit()?;
+    Ok(value)
+}

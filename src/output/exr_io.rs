@@ -1,0 +1,130 @@
+//! OpenEXR writer and reader for an [`ImageStack`] (crate `exr`): one `f32`
+//! channel per layer, in a single EXR part, lossless ZIP compression.
+//!
+//! EXR stores channels sorted by name; the layer order is kept in the custom
+//! part attribute `irsigLayerOrder` (a text vector) and restored on reading.
+//! Files written by other tools (without that attribute) read back with
+//! channels in name order; `f16` and `u32` channels are converted to `f32`.
+
+use std::path::Path;
+
+use exr::prelude::traits::*;
+use exr::prelude::{self as x};
+
+use super::atomic::write_atomic;
+use super::{ImageStack, Layer};
+use crate::{Error, Location, Result};
+
+/// Name of the custom attribute that records the layer order.
+const ORDER_ATTRIBUTE: &str = "irsigLayerOrder";
+
+/// Write `stack` to `path` as OpenEXR, atomically. Layer names must be
+/// non-empty, unique and free of `.` (EXR's layer separator).
+pub fn write_exr(path: impl AsRef<Path>, stack: &ImageStack) -> Result<()> {
+    let path = path.as_ref();
+    stack.validate()?;
+    if stack.width == 0 || stack.height == 0 || stack.layers.is_empty() {
+        return Err(Error::invalid(
+            "image",
+            format!(
+                "cannot write an empty image ({}×{}, {} layers) to {}",
+                stack.width,
+                stack.height,
+                stack.layers.len(),
+                path.display()
+            ),
+        ));
+    }
+    for l in &stack.layers {
+        if l.name.contains('.') || l.name.is_empty() {
+            return Err(Error::invalid(
+                "layer name",
+                format!("`{}`: expected a non-empty name without `.`", l.name),
+            ));
+        }
+    }
+    let channels: x::SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = stack
+        .layers
+        .iter()
+        .map(|l| x::AnyChannel::new(l.name.as_str(), x::FlatSamples::F32(l.data.clone())))
+        .collect();
+    let mut attributes = x::LayerAttributes::named("irsig");
+    attributes.other.insert(
+        x::Text::from(ORDER_ATTRIBUTE),
+        x::AttributeValue::TextVector(
+            stack
+                .layers
+                .iter()
+                .map(|l| x::Text::from(l.name.as_str()))
+                .collect(),
+        ),
+    );
+    let layer = x::Layer::new(
+        (stack.width, stack.height),
+        attributes,
+        x::Encoding::SMALL_LOSSLESS,
+        x::AnyChannels::sort(channels),
+    );
+    let image = x::Image::from_layer(layer);
+    write_atomic(path, |w| {
+        image
+            .write()
+            .non_parallel()
+            .to_buffered(w)
+            .map_err(|e| Error::Other(format!("{}: writing OpenEXR: {e}", path.display())))
+    })
+}
+
+/// Read an OpenEXR file written by [`write_exr`] (or any flat, single-part
+/// EXR) into an [`ImageStack`].
+pub fn read_exr(path: impl AsRef<Path>) -> Result<ImageStack> {
+    let path = path.as_ref();
+    let bad = |m: String| Error::parse(Location::file(path), m);
+    if !path.exists() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        ));
+    }
+    let image = x::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_file(path)
+        .map_err(|e| bad(format!("not a readable OpenEXR image: {e}")))?;
+    let layer = image.layer_data;
+    let (width, height) = (layer.size.width(), layer.size.height());
+    let mut layers: Vec<Layer> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| Layer {
+            name: c.name.to_string(),
+            data: match &c.sample_data {
+                x::FlatSamples::F32(v) => v.clone(),
+                x::FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
+                x::FlatSamples::U32(v) => v.iter().map(|&u| u as f32).collect(),
+            },
+        })
+        .collect();
+    if let Some(x::AttributeValue::TextVector(order)) =
+        layer.attributes.other.get(&x::Text::from(ORDER_ATTRIBUTE))
+    {
+        let order: Vec<String> = order.iter().map(|t| t.to_string()).collect();
+        if order.len() == layers.len() && layers.iter().all(|l| order.contains(&l.name)) {
+            layers.sort_by_key(|l| order.iter().position(|n| *n == l.name));
+        }
+    }
+    let stack = ImageStack {
+        width,
+        height,
+        layers,
+    };
+    stack
+        .validate()
+        .map_err(|e| bad(format!("inconsistent image: {e}")))?;
+    Ok(stack)
+}
