@@ -1,7 +1,5 @@
 //! Tests: sensor geometry, sensor effects, and image outputs.
 
-use std::io::Write;
-
 use irsig::output::{
     self, ImageStack, Layer, read_envi, read_exr, read_image, render_quicklook, write_atomic,
     write_envi, write_exr, write_quicklook_png,
@@ -64,11 +62,23 @@ fn exr_round_trip_is_bit_exact_and_keeps_layer_order() {
 fn envi_round_trip_and_header_fields() {
     let dir = tempfile::tempdir().unwrap();
     let mut s = ImageStack::new(11, 5);
-    s.push("band0_radiance", (0..55).map(|i| i as f32 * 0.25 - 3.0).collect())
-        .unwrap();
-    s.push("band1_radiance", (0..55).map(|i| (i as f32).sqrt()).collect())
-        .unwrap();
-    write_envi(dir.path().join("cube"), &s, Some(&[3.75, 10.5]), "irsig test").unwrap();
+    s.push(
+        "band0_radiance",
+        (0..55).map(|i| i as f32 * 0.25 - 3.0).collect(),
+    )
+    .unwrap();
+    s.push(
+        "band1_radiance",
+        (0..55).map(|i| (i as f32).sqrt()).collect(),
+    )
+    .unwrap();
+    write_envi(
+        dir.path().join("cube"),
+        &s,
+        Some(&[3.75, 10.5]),
+        "irsig test",
+    )
+    .unwrap();
     assert_eq!(listing(dir.path()), vec!["cube.hdr", "cube.img"]);
     let hdr = std::fs::read_to_string(dir.path().join("cube.hdr")).unwrap();
     for field in [
@@ -83,7 +93,10 @@ fn envi_round_trip_and_header_fields() {
         "band names = {band0_radiance, band1_radiance}",
         "wavelength = {3.75, 10.5}",
     ] {
-        assert!(hdr.lines().any(|l| l == field), "{field} missing in:\n{hdr}");
+        assert!(
+            hdr.lines().any(|l| l == field),
+            "{field} missing in:\n{hdr}"
+        );
     }
     assert!(hdr.starts_with("ENVI\n"));
     // Band-sequential little-endian float32: size, and the first values of
@@ -137,7 +150,9 @@ fn envi_reader_handles_bil_big_endian_and_reports_bad_headers() {
     .unwrap();
     let msg = read_envi(dir.path().join("c.hdr")).unwrap_err().to_string();
     assert!(msg.contains("c.img") && msg.contains("needs 8"), "{msg}");
-    let msg = read_image(dir.path().join("x.tif")).unwrap_err().to_string();
+    let msg = read_image(dir.path().join("x.tif"))
+        .unwrap_err()
+        .to_string();
     assert!(msg.contains("x.tif") && msg.contains(".exr"), "{msg}");
 }
 
