@@ -1,0 +1,146 @@
+//! Deterministic sample patterns: points on a facet, directions over its
+//! hemisphere, and the per-facet pseudo-random numbers that jitter them.
+
+use glam::Vec3;
+
+/// Barycentric coordinates `(b1, b2)` (weights of vertices 1 and 2) of the
+/// `n²` stratified sample points of a triangle: the centroids of the `n²`
+/// congruent sub-triangles obtained by cutting every edge into `n` equal
+/// parts. Each point stands for the same area `A/n²`; all lie strictly
+/// inside the triangle. `n = 1` gives the centroid.
+pub fn triangle_strata(n: u32) -> Vec<(f32, f32)> {
+    let n = n.max(1);
+    let nf = n as f32;
+    let mut out = Vec::with_capacity((n * n) as usize);
+    for i in 0..n {
+        for j in 0..n - i {
+            // "Upward" sub-triangle (i,j),(i+1,j),(i,j+1).
+            out.push(((i as f32 + 1.0 / 3.0) / nf, (j as f32 + 1.0 / 3.0) / nf));
+            // "Downward" sub-triangle (i+1,j),(i,j+1),(i+1,j+1), where it exists.
+            if i + j + 1 < n {
+                out.push(((i as f32 + 2.0 / 3.0) / nf, (j as f32 + 2.0 / 3.0) / nf));
+            }
+        }
+    }
+    out
+}
+
+/// An orthonormal basis `(t, b)` completing the unit vector `n` to a
+/// right-handed frame `(t, b, n)`; continuous except at `n.z = -1`.
+/// Duff et al. (2017), "Building an Orthonormal Basis, Revisited",
+/// JCGT 6(1), Listing 3.
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// One hemisphere direction in a facet's local frame (`z` along the normal)
+/// with its weight in the cosine-weighted (view-factor) measure. Weights of a
+/// pattern sum to 1. Patterns are ordered so that samples `2k` and `2k+1`
+/// have equal weights and neighbouring cells (paired for the error estimate).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HemiSample {
+    /// Unit direction, local frame (`z ≥ 0`).
+    pub dir: Vec3,
+    /// Weight in `∫ cos θ dω / π`.
+    pub weight: f32,
+}
+
+/// DIRSIG's fixed hemisphere grid: zenith bands of `dz` degrees × azimuth
+/// sectors of `da` degrees, one ray per cell, through the cell's
+/// cosine-weighted median zenith angle (`sin²θ = (sin²θ₁ + sin²θ₂)/2`) and
+/// centre azimuth. Cell weight = `(sin²θ₂ − sin²θ₁)/2 · Δφ/π`, the cell's
+/// exact share of `∫cosθ dω/π` (Modest, *Radiative Heat Transfer*, 3rd ed.,
+/// eq. 4.11). Cells are ordered band by band, azimuth fastest, so cells
+/// `2k` and `2k+1` are azimuth neighbours in the same band (when the number
+/// of sectors is even).
+pub fn dirsig_grid(dz_deg: f32, da_deg: f32) -> Vec<HemiSample> {
+    let nz = (90.0 / dz_deg).round().max(1.0) as u32;
+    let na = (360.0 / da_deg).round().max(1.0) as u32;
+    let dz = std::f64::consts::FRAC_PI_2 / nz as f64;
+    let da = std::f64::consts::TAU / na as f64;
+    let mut out = Vec::with_capacity((nz * na) as usize);
+    for i in 0..nz {
+        let (s1, s2) = ((i as f64 * dz).sin(), ((i + 1) as f64 * dz).sin());
+        let w = 0.5 * (s2 * s2 - s1 * s1) * da / std::f64::consts::PI;
+        let sin_t = (0.5 * (s1 * s1 + s2 * s2)).sqrt();
+        let cos_t = (1.0 - sin_t * sin_t).max(0.0).sqrt();
+        for j in 0..na {
+            let phi = (j as f64 + 0.5) * da;
+            out.push(HemiSample {
+                dir: Vec3::new(
+                    (sin_t * phi.cos()) as f32,
+                    (sin_t * phi.sin()) as f32,
+                    cos_t as f32,
+                ),
+                weight: w as f32,
+            });
+        }
+    }
+    out
+}
+
+/// Side of the stratification grid used for `samples` stratified
+/// cosine-weighted directions: `ceil(√samples)` rounded up to even (so that
+/// strata pair up for the variance estimate), at least 2.
+pub fn stratified_side(samples: u32) -> u32 {
+    let m = (samples.max(1) as f64).sqrt().ceil() as u32;
+    (m + (m & 1)).max(2)
+}
+
+/// Stratified cosine-weighted hemisphere directions (`m × m` strata of the
+/// unit square, one jittered sample each, `m` = [`stratified_side`]), mapped
+/// by `θ = acos √(1−u₁)`, `φ = 2π u₂` so that equal areas of the square are
+/// equal shares of `∫cosθ dω/π` (Pharr, Jakob & Humphreys, *PBR* 4th ed.,
+/// §A.5.3). Samples `2k`, `2k+1` are neighbouring strata. `rng` yields the
+/// jitter in `[0, 1)`.
+pub fn stratified_cosine(samples: u32, mut rng: impl FnMut() -> f32) -> Vec<HemiSample> {
+    let m = stratified_side(samples);
+    let w = 1.0 / (m * m) as f32;
+    let mut out = Vec::with_capacity((m * m) as usize);
+    for i in 0..m {
+        for j in 0..m {
+            let u1 = ((i as f32 + rng()) / m as f32).min(1.0 - f32::EPSILON);
+            let u2 = (j as f32 + rng()) / m as f32;
+            let sin_t = u1.sqrt();
+            let cos_t = (1.0 - u1).sqrt();
+            let phi = std::f32::consts::TAU * u2;
+            out.push(HemiSample {
+                dir: Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t),
+                weight: w,
+            });
+        }
+    }
+    out
+}
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a tiny counter-based generator, so
+/// every facet's jitter depends only on (seed, facet), never on threads.
+#[derive(Debug, Clone)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    /// Stream for `(seed, key)`.
+    pub fn new(seed: u64, key: u64) -> Self {
+        let mut s = SplitMix64(seed ^ key.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        s.next_u64();
+        s
+    }
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in `[0, 1)` with 24 bits.
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+}

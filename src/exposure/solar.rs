@@ -1,0 +1,122 @@
+//! Solar history: per facet and time step, the sunlit fraction and the cosine
+//! of the solar incidence angle.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::FacetSamples;
+use crate::trace::{Coherence, Ray, Tracer};
+
+/// Sunlit fraction and cosine of incidence of every facet at every step of a
+/// history window, facet-major (`[facet * steps + step]`).
+///
+/// - `sun_fraction` ∈ [0, 1]: the share of the facet's sample points from
+///   which a ray toward the sun reaches the sky unobstructed (each point
+///   stands for an equal area, so this is the sunlit area fraction to
+///   `1/n²`). It is exactly 0 when the sun is at or below the horizon, or
+///   when a single-sided facet faces away from it, and exactly 0 or 1 when
+///   all points agree.
+/// - `cos_incidence` ∈ [0, 1]: `n·s` for the unit sun direction `s`, 0 when
+///   the sun is below the horizon or behind a single-sided facet. For a
+///   double-sided facet it is `|n·s|`: the face toward the sun is lit.
+///
+/// The absorbed direct solar flux is then
+/// `α · E_dn · sun_fraction · cos_incidence` (W/m²).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SolarHistory {
+    /// Time steps per facet.
+    pub steps: usize,
+    /// Sunlit fraction, `[facet * steps + step]`.
+    pub sun_fraction: Vec<f32>,
+    /// Cosine of the solar incidence angle, `[facet * steps + step]`.
+    pub cos_incidence: Vec<f32>,
+}
+
+impl SolarHistory {
+    /// Number of facets.
+    pub fn facet_count(&self) -> usize {
+        self.sun_fraction.len().checked_div(self.steps).unwrap_or(0)
+    }
+    /// Sunlit fraction of `facet` at every step.
+    pub fn sun_fraction(&self, facet: usize) -> &[f32] {
+        &self.sun_fraction[facet * self.steps..(facet + 1) * self.steps]
+    }
+    /// Cosine of incidence of `facet` at every step.
+    pub fn cos_incidence(&self, facet: usize) -> &[f32] {
+        &self.cos_incidence[facet * self.steps..(facet + 1) * self.steps]
+    }
+}
+
+/// Traces the solar history of every facet: for each step whose sun is above
+/// the horizon and in front of the facet, one occlusion ray per sample
+/// point toward the sun. `sun_dirs` are unit east-north-up vectors toward
+/// the sun, one per step, computed once for the scene (`z ≤ 0`: below the
+/// horizon). Facets go through the tracer `batch_facets` at a time, batches
+/// in parallel; each ray's answer depends only on its facet and step, so
+/// the result is the same for any number of threads.
+pub fn solar_history<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    sun_dirs: &[Vec3],
+    batch_facets: usize,
+) -> (SolarHistory, u64) {
+    let steps = sun_dirs.len();
+    let n = facets.len();
+    let batch = batch_facets.max(1);
+    let chunks: Vec<(Vec<f32>, Vec<f32>, u64)> = (0..n.div_ceil(batch))
+        .into_par_iter()
+        .map(|c| {
+            let (f0, f1) = (c * batch, ((c + 1) * batch).min(n));
+            let mut frac = vec![0.0f32; (f1 - f0) * steps];
+            let mut cosi = vec![0.0f32; (f1 - f0) * steps];
+            let mut rays = Vec::new();
+            // (slot in frac, number of rays) for each traced (facet, step).
+            let mut slots: Vec<(u32, u32)> = Vec::new();
+            for (s, &dir) in sun_dirs.iter().enumerate() {
+                if dir.z <= 0.0 {
+                    continue;
+                }
+                for f in f0..f1 {
+                    let c = facets.normal[f].dot(dir);
+                    let side = if facets.double_sided[f] {
+                        c.signum()
+                    } else if c > 0.0 {
+                        1.0
+                    } else {
+                        continue;
+                    };
+                    let slot = (f - f0) * steps + s;
+                    cosi[slot] = c.abs().min(1.0);
+                    if c == 0.0 {
+                        continue;
+                    }
+                    let lift = facets.normal[f] * (side * facets.offset_m);
+                    let pts = facets.facet_points(f);
+                    rays.extend(pts.iter().map(|&p| Ray::new(p + lift, dir)));
+                    slots.push((slot as u32, pts.len() as u32));
+                }
+            }
+            let mut occ = vec![false; rays.len()];
+            tracer.occluded(&rays, Coherence::Incoherent, &mut occ);
+            let mut k = 0usize;
+            for &(slot, m) in &slots {
+                let lit = occ[k..k + m as usize].iter().filter(|&&o| !o).count();
+                frac[slot as usize] = lit as f32 / m as f32;
+                k += m as usize;
+            }
+            (frac, cosi, rays.len() as u64)
+        })
+        .collect();
+    let mut out = SolarHistory {
+        steps,
+        sun_fraction: Vec::with_capacity(n * steps),
+        cos_incidence: Vec::with_capacity(n * steps),
+    };
+    let mut rays = 0;
+    for (f, c, r) in chunks {
+        out.sun_fraction.extend(f);
+        out.cos_incidence.extend(c);
+        rays += r;
+    }
+    (out, rays)
+}
