@@ -1,1 +1,428 @@
-//! Tests: material.
+//! Tests: material database (JSON), DIRSIG `.mat`/`.ems` import.
+
+use std::path::Path;
+
+use irsig::material::{EmissivityCurve, MaterialDb, MaterialSource, db, dirsig};
+
+use crate::util::{repo_path, shared_data};
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * b.abs().max(1e-12)
+}
+
+/// Every entry of DIRSIG's tahoe.mat loads; THERM units converted by hand:
+/// k[W/(m·K)] = k[cal/(cm·h·°C)] · 4.1868/36, c = c[cal/(g·°C)] · 4186.8,
+/// ρ = ρ[g/cm³] · 1000, thickness = cm / 100.
+#[test]
+fn tahoe_mat_every_entry_in_si() {
+    let Some(dir) = shared_data("dirsig") else {
+        return;
+    };
+    let path = dir.join("tahoe.mat");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let n_entries = text.matches("MATERIAL_ENTRY").count();
+    let db = MaterialDb::load(&path).unwrap();
+    assert_eq!(db.len(), n_entries);
+    assert_eq!(db.len(), 10);
+
+    // Class #8 carries steel's properties: 464.4 cal/(cm·h·°C) = 54.0 W/(m·K).
+    let steel = db.get("Class #8").unwrap();
+    assert_eq!(steel.id, 18);
+    assert!(
+        close(steel.conductivity_w_m_k, 54.01, 1e-3),
+        "{}",
+        steel.conductivity_w_m_k
+    );
+    assert!(close(steel.specific_heat_j_kg_k, 0.089 * 4186.8, 1e-12));
+    assert!(close(steel.specific_heat_j_kg_k, 372.6, 1e-3));
+    assert!(close(steel.density_kg_m3, 7833.0, 1e-12));
+    assert!(close(steel.thickness_m, 0.01, 1e-12));
+    assert_eq!(steel.solar_absorptivity, 0.88);
+    assert_eq!(steel.thermal_emissivity, 0.7);
+    assert_eq!(steel.exposed_area, -0.5);
+    assert_eq!(steel.exposed_fraction(), 0.5);
+    // Incropera Table A.1 gives plain carbon steel k = 60.5, cp = 434,
+    // ρ = 7854: the converted values are steel-like, which is what fixes the
+    // unit interpretation.
+    assert!(steel.conductivity_w_m_k > 40.0 && steel.conductivity_w_m_k < 70.0);
+
+    // Water: 5.13 → 0.597 W/(m·K) (Incropera Table A.6, 300 K: 0.613);
+    // 1 cal/(g·°C) = 4186.8 J/(kg·K); 1 g/cm³.
+    let w = db.get("Water").unwrap();
+    assert_eq!(w.id, 11);
+    assert!(
+        close(w.conductivity_w_m_k, 0.5966, 1e-3),
+        "{}",
+        w.conductivity_w_m_k
+    );
+    assert!(close(w.specific_heat_j_kg_k, 4186.8, 1e-12));
+    assert!(close(w.density_kg_m3, 1000.0, 1e-12));
+    assert_eq!(w.thermal_emissivity, 0.98);
+    assert_eq!(w.exposed_area, 0.5);
+
+    let asph = db.get("Class #4 (asphalt)").unwrap();
+    assert!(close(asph.conductivity_w_m_k, 20.93 * 0.1163, 1e-9));
+    assert!(close(asph.conductivity_w_m_k, 2.434, 1e-3));
+    assert!(close(asph.specific_heat_j_kg_k, 1946.86, 1e-4));
+    assert_eq!(asph.solar_absorptivity, 0.95);
+
+    let pine = db.get("Class #7 (Pine Tree)").unwrap();
+    assert!(close(pine.conductivity_w_m_k, 3.838e-4, 1e-3));
+    assert!(close(pine.specific_heat_j_kg_k, 2.6132 * 4186.8, 1e-12));
+    assert_eq!(pine.exposed_area, 0.17);
+
+    let conc = db.get("Class #9 (concrete)").unwrap();
+    assert!(close(conc.density_kg_m3, 2280.0, 1e-12));
+    assert!(close(conc.conductivity_w_m_k, 1.800, 1e-3));
+    assert!(close(conc.specific_heat_j_kg_k, 670.3, 1e-3));
+
+    // Every entry: valid, not double sided, 1 cm thick.
+    for m in db.materials() {
+        assert!(m.problems().is_empty(), "{}: {:?}", m.name, m.problems());
+        assert!(!m.double_sided);
+        assert!(close(m.thickness_m, 0.01, 1e-12));
+        assert_eq!(m.specular_fraction, 0.0);
+    }
+    // The terrain proxy's gray.ems sits next to tahoe.mat (found by base
+    // name): 0.9 from 0.2 to 20 µm. The class*.ems files are absent: grey,
+    // with a warning each.
+    let terrain = db.get("Terrain (proxy)").unwrap();
+    let c = terrain.emissivity_curve.as_ref().unwrap();
+    assert_eq!(c.wavelengths_um, vec![0.2, 20.0]);
+    assert_eq!(c.emissivity, vec![vec![0.9, 0.9]]);
+    assert!(c.angles_deg.is_empty());
+    assert!(close(terrain.emissivity_at(10.0, 45.0), 0.9, 1e-12));
+    assert_eq!(db.warnings.len(), 9, "{:#?}", db.warnings);
+    assert!(db.warnings[0].contains("class1.ems"));
+    assert!(w.emissivity_curve.is_none());
+    assert_eq!(w.emissivity_at(10.0, 0.0), 0.98);
+    assert!(matches!(db.source(0), Some(MaterialSource::Text(t)) if t.contains("tahoe.mat")));
+}
+
+#[test]
+fn gray_ems() {
+    let Some(dir) = shared_data("dirsig") else {
+        return;
+    };
+    let c = dirsig::read_ems(&dir.join("gray.ems")).unwrap();
+    assert_eq!(
+        c,
+        EmissivityCurve {
+            wavelengths_um: vec![0.2, 20.0],
+            emissivity: vec![vec![0.9, 0.9]],
+            angles_deg: vec![],
+        }
+    );
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Two curves; the angular table selects curve 1 up to 59°, blends to curve 2
+/// (index 1.5 at 60°) and uses curve 2 beyond. The curves are resampled on
+/// the union of their wavelengths.
+#[test]
+fn ems_two_curves_angular_blend() {
+    let d = tempfile::tempdir().unwrap();
+    let mut t = String::from("2\n");
+    for a in 0..=90 {
+        let c = if a < 60 {
+            1.0
+        } else if a == 60 {
+            1.5
+        } else {
+            2.0
+        };
+        t.push_str(&format!("{c:.1}\n"));
+    }
+    t.push_str("CURVE_BEGIN\n 8.0 0.90\n12.0 0.98\nCURVE_BEGIN\n 8.0 0.80\n10.0 0.80\n12.0 0.90\n");
+    let p = write(d.path(), "two.ems", &t);
+    let c = dirsig::read_ems(&p).unwrap();
+    assert_eq!(c.wavelengths_um, vec![8.0, 10.0, 12.0]);
+    assert_eq!(c.angles_deg.len(), 91);
+    assert!(c.problems().is_empty());
+    // Curve 1 resampled at 10 µm: 0.94.
+    assert!(close(c.emissivity[0][1], 0.94, 1e-12));
+    assert!(close(c.at(10.0, 30.0), 0.94, 1e-12));
+    assert!(close(c.at(10.0, 60.0), 0.5 * (0.94 + 0.80), 1e-12));
+    assert!(close(c.at(12.0, 90.0), 0.90, 1e-12));
+    // Between 59° (curve 1) and 60° (blend): linear in angle.
+    assert!(close(c.at(8.0, 59.5), 0.5 * (0.90 + 0.85), 1e-12));
+}
+
+#[test]
+fn ems_errors_name_line() {
+    let d = tempfile::tempdir().unwrap();
+    let mut t = String::from("1\n");
+    for _ in 0..91 {
+        t.push_str("1.0\n");
+    }
+    t.push_str("CURVE_BEGIN\n8.0 0.9\n9.0 1.7\n");
+    let p = write(d.path(), "bad.ems", &t);
+    let e = dirsig::read_ems(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.ems:line 95") && e.contains("outside 0..=1"),
+        "{e}"
+    );
+
+    let p = write(d.path(), "short.ems", "1\n1.0\n1.0\n");
+    let e = dirsig::read_ems(&p).unwrap_err().to_string();
+    assert!(e.contains("91 angular lines"), "{e}");
+
+    let mut t = String::from("1\n");
+    for _ in 0..91 {
+        t.push_str("3.0\n");
+    }
+    let p = write(d.path(), "idx.ems", &t);
+    let e = dirsig::read_ems(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("idx.ems:line 2") && e.contains("outside 1..=1"),
+        "{e}"
+    );
+}
+
+const MAT_OK: &str = "MATERIAL_ENTRY {
+    ID = 7
+    NAME = Steel plate
+    DOUBLE_SIDED = TRUE
+    TEMP_SOLVER_NAME = Therm
+    TEMP_SOLVER {
+        SPECIFIC_HEAT        = 0.1
+        MASS_DENSITY         = 7.8
+        THERMAL_CONDUCTIVITY = 430
+        SOLAR_ABSORPTION     = 0.5
+        THERMAL_EMISSIVITY   = 0.8
+        EXPOSED_AREA         = 1
+        THICKNESS            = 0.5
+    }
+}
+";
+
+#[test]
+fn mat_errors_name_line_and_key() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(d.path(), "ok.mat", MAT_OK);
+    let db = MaterialDb::load(&p).unwrap();
+    let m = db.get("Steel plate").unwrap();
+    assert!(m.double_sided);
+    assert!(close(m.thickness_m, 0.005, 1e-12));
+    assert!(close(m.conductivity_w_m_k, 430.0 * 4.1868 / 36.0, 1e-12));
+
+    let bad = MAT_OK.replace("= 430", "= fast");
+    let p = write(d.path(), "num.mat", &bad);
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("num.mat:line 9") && e.contains("THERMAL_CONDUCTIVITY"),
+        "{e}"
+    );
+
+    let bad = MAT_OK.replace("THERMAL_EMISSIVITY   = 0.8", "THERMAL_EMISSIVITY   = 1.8");
+    let p = write(d.path(), "eps.mat", &bad);
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("eps.mat:line 11") && e.contains("THERMAL_EMISSIVITY"),
+        "{e}"
+    );
+
+    let bad = MAT_OK.replace("= Therm", "= ExternalFile");
+    let p = write(d.path(), "solver.mat", &bad);
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("solver.mat:line 5") && e.contains("not supported"),
+        "{e}"
+    );
+
+    let bad = MAT_OK.trim_end().trim_end_matches('}');
+    let p = write(d.path(), "open.mat", bad);
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("open.mat:line 1") && e.contains("not closed"),
+        "{e}"
+    );
+
+    let bad = MAT_OK.replace("        THICKNESS            = 0.5\n", "");
+    let p = write(d.path(), "thick.mat", &bad);
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("thick.mat:line 6") && e.contains("THICKNESS"),
+        "{e}"
+    );
+}
+
+/// The shipped library: loads, every required material present, valid,
+/// and each thermal/optical value carries a source.
+#[test]
+fn shipped_materials_json() {
+    let path = repo_path("scenes/materials.json");
+    let db = MaterialDb::load(&path).unwrap();
+    let required = [
+        "asphalt",
+        "concrete",
+        "grass",
+        "bare_soil",
+        "asphalt_shingle_roof",
+        "tar_gravel_roof",
+        "brick",
+        "wood_siding",
+        "aluminium_siding",
+        "glass",
+        "painted_steel",
+        "water",
+        "deciduous_canopy",
+        "coniferous_canopy",
+        "sand",
+    ];
+    for name in required {
+        let i = db
+            .index_of(name)
+            .unwrap_or_else(|| panic!("{name} missing"));
+        let m = &db.materials()[i];
+        assert!(m.problems().is_empty(), "{name}: {:?}", m.problems());
+        let Some(MaterialSource::PerField(src)) = db.source(i) else {
+            panic!("{name}: no per-field source")
+        };
+        for f in [
+            "specific_heat_j_kg_k",
+            "conductivity_w_m_k",
+            "density_kg_m3",
+            "thickness_m",
+            "solar_absorptivity",
+            "thermal_emissivity",
+            "exposed_area",
+        ] {
+            assert!(
+                src.get(f).is_some_and(|s| s.len() > 10),
+                "{name}.{f}: no source"
+            );
+        }
+    }
+    let ids: std::collections::HashSet<u32> = db.materials().iter().map(|m| m.id).collect();
+    assert_eq!(ids.len(), db.len(), "ids are unique");
+    // Physical orderings any table agrees on.
+    let g = |n: &str| db.get(n).unwrap().clone();
+    assert!(g("aluminium_siding").conductivity_w_m_k > g("painted_steel").conductivity_w_m_k);
+    assert!(g("painted_steel").conductivity_w_m_k > 10.0 * g("concrete").conductivity_w_m_k);
+    assert!(g("water").specific_heat_j_kg_k > g("grass").specific_heat_j_kg_k);
+    assert!(g("sand").conductivity_w_m_k < g("bare_soil").conductivity_w_m_k);
+    // Oke (1987): thermal inertia of asphalt √(kρc) ≈ 1205 J/(m²·K·s½),
+    // water ≈ 1545 (still, 4 °C), dry sand ≈ 620.
+    assert!(close(g("asphalt").thermal_inertia(), 1205.0, 0.01));
+    assert!(close(g("sand").thermal_inertia(), 620.0, 0.01));
+    assert!(close(g("water").thermal_inertia(), 1545.0, 0.05));
+    // Thin things exchange heat on both faces; ground does not.
+    assert_eq!(g("painted_steel").exposed_fraction(), 1.0);
+    assert_eq!(g("asphalt").exposed_fraction(), 0.0);
+}
+
+#[test]
+fn json_db_errors_name_file_line_field() {
+    let d = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(repo_path("scenes/materials.json")).unwrap();
+    // Two validation problems, both reported with their lines.
+    let mut v: serde_json::Value = serde_json::from_str(&good).unwrap();
+    v["materials"][2]["thickness_m"] = serde_json::json!(-0.1);
+    v["materials"][5]["thermal_emissivity"] = serde_json::json!(1.3);
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    let p = write(d.path(), "m.json", &text);
+    let errs = db::load_json_all(&p).unwrap_err();
+    assert_eq!(errs.len(), 2, "{errs:?}");
+    let line_of = |needle: &str, nth: usize| {
+        text.lines()
+            .enumerate()
+            .filter(|(_, l)| l.contains(needle))
+            .nth(nth)
+            .unwrap()
+            .0
+            + 1
+    };
+    let e0 = errs[0].to_string();
+    assert!(
+        e0.contains(&format!(
+            "m.json:line {}",
+            line_of("\"thickness_m\": -0.1", 0)
+        )) && e0.contains("materials[2].thickness_m")
+            && e0.contains("> 0"),
+        "{e0}"
+    );
+    let e1 = errs[1].to_string();
+    assert!(
+        e1.contains(&format!(
+            "line {}",
+            line_of("\"thermal_emissivity\": 1.3", 0)
+        )) && e1.contains("0..=1"),
+        "{e1}"
+    );
+
+    // Typo'd key: serde's own line.
+    let bad = "{\"materials\": [\n {\"id\": 1, \"name\": \"x\",\n  \"specfic_heat\": 3}]}";
+    let p = write(d.path(), "typo.json", bad);
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("typo.json:line 3") && e.contains("specfic_heat"),
+        "{e}"
+    );
+
+    // Duplicate names.
+    let mut v: serde_json::Value = serde_json::from_str(&good).unwrap();
+    v["materials"][1]["name"] = serde_json::json!("asphalt");
+    let p = write(
+        d.path(),
+        "dup.json",
+        &serde_json::to_string_pretty(&v).unwrap(),
+    );
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("materials[1].name") && e.contains("twice"),
+        "{e}"
+    );
+}
+
+#[test]
+fn emissivity_from_csv_and_inline() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "e.csv",
+        "# measured\nwavelength_um,0,60\n8,0.95,0.90\n10,0.97,0.92\n12,0.96,0.91\n",
+    );
+    write(d.path(), "two.csv", "8 0.9\n12 0.95\n");
+    let text = r#"{"materials": [
+      {"id": 1, "name": "a", "specific_heat_j_kg_k": 900, "conductivity_w_m_k": 1,
+       "density_kg_m3": 2000, "thickness_m": 0.1, "solar_absorptivity": 0.5,
+       "thermal_emissivity": 0.95, "emissivity_file": "e.csv"},
+      {"id": 2, "name": "b", "specific_heat_j_kg_k": 900, "conductivity_w_m_k": 1,
+       "density_kg_m3": 2000, "thickness_m": 0.1, "solar_absorptivity": 0.5,
+       "thermal_emissivity": 0.95, "emissivity_file": "two.csv"},
+      {"id": 3, "name": "c", "specific_heat_j_kg_k": 900, "conductivity_w_m_k": 1,
+       "density_kg_m3": 2000, "thickness_m": 0.1, "solar_absorptivity": 0.5,
+       "thermal_emissivity": 0.95,
+       "emissivity_curve": {"wavelengths_um": [3, 5, 8, 14], "emissivity": [0.8, 0.85, 0.95, 0.97]}}
+    ]}"#;
+    let p = write(d.path(), "db.json", text);
+    let db = MaterialDb::load(&p).unwrap();
+    let a = db.get("a").unwrap();
+    assert!(close(a.emissivity_at(11.0, 0.0), 0.965, 1e-12));
+    assert!(close(
+        a.emissivity_at(11.0, 30.0),
+        0.5 * (0.965 + 0.915),
+        1e-12
+    ));
+    assert!(close(
+        db.get("b").unwrap().emissivity_at(10.0, 0.0),
+        0.925,
+        1e-12
+    ));
+    let c = db.get("c").unwrap().emissivity_curve.as_ref().unwrap();
+    assert!(close(c.band_mean(8.0, 14.0), 0.96, 1e-9));
+
+    // Missing file: named, with the JSON field.
+    let p = write(d.path(), "db2.json", &text.replace("two.csv", "nope.csv"));
+    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("db2.json:line 7") && e.contains("nope.csv"),
+        "{e}"
+    );
+}

@@ -1,0 +1,330 @@
+//! irsig's JSON material database.
+//!
+//! ```json
+//! {
+//!   "description": "free text",
+//!   "notes": { "anything": "free-form, ignored" },
+//!   "materials": [
+//!     { "id": 1, "name": "asphalt",
+//!       "specific_heat_j_kg_k": 920, "conductivity_w_m_k": 0.75,
+//!       "density_kg_m3": 2110, "thickness_m": 0.1,
+//!       "solar_absorptivity": 0.9, "thermal_emissivity": 0.95,
+//!       "exposed_area": 0, "self_power_w_m2": 0,
+//!       "specular_fraction": 0, "transmissivity": 0, "double_sided": false,
+//!       "emissivity_file": "asphalt.ems",
+//!       "source": { "density_kg_m3": "Oke (1987) Table 2.1", "...": "..." } }
+//!   ]
+//! }
+//! ```
+//! `exposed_area`, `self_power_w_m2`, `specular_fraction`, `transmissivity`
+//! and `double_sided` default to 0/false. Spectral emissivity is either
+//! inline (`emissivity_curve`: `{wavelengths_um, emissivity, angles_deg}`,
+//! `emissivity` one list or one list per angle) or `emissivity_file` (a
+//! DIRSIG `.ems`, or a CSV read by [`read_emissivity_csv`]), relative to the
+//! database file. Unknown keys are errors (they are usually typos).
+
+use std::path::Path;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::{EmissivityCurve, Material, MaterialDb, MaterialSource, dirsig};
+use crate::error::{Error, Location, Result};
+use crate::scene::jsonloc::JsonLines;
+
+/// The top level of a JSON material database file.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialFile {
+    /// JSON Schema reference for editors (ignored).
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
+    /// Free text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Free-form notes (conventions, references); ignored by irsig.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub notes: Option<serde_json::Value>,
+    /// The materials.
+    pub materials: Vec<MaterialEntry>,
+}
+
+/// Emissivity values: one list (normal view) or one list per angle.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum EmissivityRows {
+    /// One row at normal view.
+    Single(Vec<f64>),
+    /// One row per angle of `angles_deg`.
+    PerAngle(Vec<Vec<f64>>),
+}
+
+/// An inline emissivity curve.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EmissivityCurveSpec {
+    /// Wavelengths, µm, increasing.
+    pub wavelengths_um: Vec<f64>,
+    /// Emissivity per wavelength (or per angle, per wavelength).
+    pub emissivity: EmissivityRows,
+    /// View zenith angles of the rows, degrees (omit for one row).
+    #[serde(default)]
+    pub angles_deg: Vec<f64>,
+}
+
+impl From<EmissivityCurveSpec> for EmissivityCurve {
+    fn from(s: EmissivityCurveSpec) -> Self {
+        EmissivityCurve {
+            wavelengths_um: s.wavelengths_um,
+            emissivity: match s.emissivity {
+                EmissivityRows::Single(r) => vec![r],
+                EmissivityRows::PerAngle(r) => r,
+            },
+            angles_deg: s.angles_deg,
+        }
+    }
+}
+
+/// One material of a JSON database (SI units; field names carry them).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialEntry {
+    /// Numeric id.
+    pub id: u32,
+    /// Unique name; scene parts refer to it.
+    pub name: String,
+    /// Free text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Specific heat, J/(kg·K).
+    pub specific_heat_j_kg_k: f64,
+    /// Thermal conductivity, W/(m·K).
+    pub conductivity_w_m_k: f64,
+    /// Density, kg/m³.
+    pub density_kg_m3: f64,
+    /// Slab thickness, m.
+    pub thickness_m: f64,
+    /// Solar absorptivity, 0–1.
+    pub solar_absorptivity: f64,
+    /// Broadband thermal emissivity, 0–1.
+    pub thermal_emissivity: f64,
+    /// Fraction of the back face exposed to air (see `irsig::material`), −1..=1.
+    #[serde(default)]
+    pub exposed_area: f64,
+    /// Self-generated power, W/m².
+    #[serde(default)]
+    pub self_power_w_m2: f64,
+    /// Specular fraction of reflection, 0–1.
+    #[serde(default)]
+    pub specular_fraction: f64,
+    /// Transmissivity, 0–1.
+    #[serde(default)]
+    pub transmissivity: f64,
+    /// Both faces are front faces.
+    #[serde(default)]
+    pub double_sided: bool,
+    /// Inline spectral emissivity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emissivity_curve: Option<EmissivityCurveSpec>,
+    /// Spectral emissivity file (DIRSIG `.ems` or CSV), relative to this file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emissivity_file: Option<String>,
+    /// Where the values come from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<MaterialSource>,
+}
+
+/// Load a JSON material database, collecting every problem found (each
+/// naming the file, line and JSON path).
+pub fn load_json_all(path: &Path) -> std::result::Result<MaterialDb, Vec<Error>> {
+    let text = std::fs::read_to_string(path).map_err(|e| vec![Error::io(path, e)])?;
+    let file: MaterialFile = serde_json::from_str(&text).map_err(|e| {
+        vec![Error::parse(
+            Location::file(path).at_line(e.line()),
+            format!("column {}: {e}", e.column()),
+        )]
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let lines = std::cell::OnceCell::new();
+    let at = |field: String| {
+        let l = lines.get_or_init(|| JsonLines::new(&text));
+        let mut loc = Location::file(path);
+        if let Some(n) = l.line(&field) {
+            loc = loc.at_line(n);
+        }
+        loc.with_field(field)
+    };
+    let mut errors = Vec::new();
+    let mut db = MaterialDb::new();
+    for (i, e) in file.materials.into_iter().enumerate() {
+        let curve = match (&e.emissivity_curve, &e.emissivity_file) {
+            (Some(_), Some(_)) => {
+                errors.push(Error::parse(
+                    at(format!("materials[{i}].emissivity_file")),
+                    "give either `emissivity_curve` or `emissivity_file`, not both",
+                ));
+                None
+            }
+            (Some(c), None) => Some(EmissivityCurve::from(c.clone())),
+            (None, Some(f)) => match read_emissivity_file(&base.join(f)) {
+                Ok(c) => Some(c),
+                Err(err) => {
+                    errors.push(Error::parse(
+                        at(format!("materials[{i}].emissivity_file")),
+                        format!("cannot use emissivity file: {err}"),
+                    ));
+                    None
+                }
+            },
+            (None, None) => None,
+        };
+        let m = Material {
+            id: e.id,
+            name: e.name.clone(),
+            specific_heat_j_kg_k: e.specific_heat_j_kg_k,
+            conductivity_w_m_k: e.conductivity_w_m_k,
+            density_kg_m3: e.density_kg_m3,
+            thickness_m: e.thickness_m,
+            solar_absorptivity: e.solar_absorptivity,
+            thermal_emissivity: e.thermal_emissivity,
+            exposed_area: e.exposed_area,
+            self_power_w_m2: e.self_power_w_m2,
+            specular_fraction: e.specular_fraction,
+            transmissivity: e.transmissivity,
+            emissivity_curve: curve,
+            double_sided: e.double_sided,
+        };
+        let problems = m.problems();
+        if !problems.is_empty() {
+            for (field, msg) in problems {
+                errors.push(Error::parse(
+                    at(format!("materials[{i}].{field}")),
+                    format!("material `{}`: {msg}", m.name),
+                ));
+            }
+            continue;
+        }
+        if db.index_of(&m.name).is_some() {
+            errors.push(Error::parse(
+                at(format!("materials[{i}].name")),
+                format!("material name `{}` is defined twice", m.name),
+            ));
+            continue;
+        }
+        db.insert(m, e.source, path)
+            .expect("validated and unique above");
+    }
+    if errors.is_empty() {
+        Ok(db)
+    } else {
+        Err(errors)
+    }
+}
+
+/// Read a spectral emissivity file: DIRSIG `.ems` by extension, else CSV.
+pub fn read_emissivity_file(path: &Path) -> Result<EmissivityCurve> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ems"))
+    {
+        dirsig::read_ems(path)
+    } else {
+        read_emissivity_csv(path)
+    }
+}
+
+/// Read a CSV emissivity curve: comma (or whitespace) separated columns,
+/// `#` comments. Two columns: wavelength (µm), emissivity. More columns: a
+/// header line is required, `wavelength_um,<angle>,<angle>,…` with view
+/// zenith angles in degrees, one emissivity column per angle. A header
+/// line (non-numeric first field) is optional with two columns.
+pub fn read_emissivity_csv(path: &Path) -> Result<EmissivityCurve> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let split = |l: &str| -> Vec<String> {
+        l.split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .map(str::to_string)
+            .collect()
+    };
+    let mut angles: Option<Vec<f64>> = None;
+    let mut wl = Vec::new();
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    let mut ncols = 0;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let f = split(line);
+        let loc = || Location::file(path).at_line(n + 1);
+        if wl.is_empty() && angles.is_none() && f[0].parse::<f64>().is_err() {
+            // Header.
+            let a: std::result::Result<Vec<f64>, _> =
+                f[1..].iter().map(|s| s.parse::<f64>()).collect();
+            match a {
+                Ok(a) if f.len() > 2 => angles = Some(a),
+                _ if f.len() == 2 => angles = Some(vec![]),
+                _ => {
+                    return Err(Error::parse(
+                        loc(),
+                        "header must be `wavelength_um,<angle_deg>,<angle_deg>,…` (angles as numbers)",
+                    ));
+                }
+            }
+            continue;
+        }
+        let v: std::result::Result<Vec<f64>, _> = f.iter().map(|s| s.parse::<f64>()).collect();
+        let v = v.map_err(|_| {
+            Error::parse(
+                loc(),
+                format!("expected numbers (wavelength µm, emissivity…), found `{line}`"),
+            )
+        })?;
+        if ncols == 0 {
+            ncols = v.len();
+            if ncols < 2 {
+                return Err(Error::parse(
+                    loc(),
+                    "expected at least 2 columns: wavelength_um, emissivity",
+                ));
+            }
+            if ncols > 2 && angles.as_ref().is_none_or(|a| a.len() != ncols - 1) {
+                return Err(Error::parse(
+                    loc(),
+                    format!(
+                        "{ncols} columns need a header `wavelength_um,<angle_deg>…` with {} angles",
+                        ncols - 1
+                    ),
+                ));
+            }
+            cols = vec![Vec::new(); ncols - 1];
+        }
+        if v.len() != ncols {
+            return Err(Error::parse(
+                loc(),
+                format!("expected {ncols} columns, found {}", v.len()),
+            ));
+        }
+        wl.push(v[0]);
+        for (c, x) in cols.iter_mut().zip(&v[1..]) {
+            c.push(*x);
+        }
+    }
+    if wl.is_empty() {
+        return Err(Error::parse(Location::file(path), "no data rows"));
+    }
+    let angles = if ncols > 2 {
+        angles.unwrap_or_default()
+    } else {
+        vec![]
+    };
+    let curve = EmissivityCurve {
+        wavelengths_um: wl,
+        emissivity: cols,
+        angles_deg: angles,
+    };
+    if let Some(p) = curve.problems().into_iter().next() {
+        return Err(Error::parse(Location::file(path), p));
+    }
+    Ok(curve)
+}

@@ -1,0 +1,168 @@
+//! Wavefront OBJ loading (through `tobj`), triangulated, one [`ObjGroup`]
+//! per object/group and material.
+//!
+//! The `usemtl` names are kept even when the `.mtl` file is absent (irsig
+//! maps them to its own material database, not to the MTL's colours): the
+//! text is handed to `tobj` with a synthetic material library naming every
+//! `usemtl` in the file.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Error, Location, Result};
+use crate::geometry::TriangleMesh;
+
+/// One group of an OBJ file: the faces of one `o`/`g` name and `usemtl`.
+#[derive(Debug, Clone)]
+pub struct ObjGroup {
+    /// The object/group name (`o` or `g`), or `"unnamed"`.
+    pub name: String,
+    /// The `usemtl` name in effect, if any.
+    pub material_name: Option<String>,
+    /// The triangles (polygons fan-triangulated), in the file's units.
+    pub mesh: TriangleMesh,
+}
+
+/// Load an OBJ file as triangulated groups. Errors name the file (and, for
+/// malformed numbers or indices found by a pre-scan, the line).
+pub fn load_obj(path: &Path) -> Result<Vec<ObjGroup>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    load_obj_str(&text, path)
+}
+
+/// Load OBJ text; `path` is used in error messages only.
+pub fn load_obj_str(text: &str, path: &Path) -> Result<Vec<ObjGroup>> {
+    // Pre-scan: usemtl names, and line-precise checks tobj does not report.
+    let mut names: Vec<String> = Vec::new();
+    let mut nverts = 0usize;
+    let mut body = String::with_capacity(text.len() + 32);
+    body.push_str("mtllib irsig-usemtl-names\n");
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        let loc = || Location::file(path).at_line(n + 1);
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("mtllib") => {
+                // The real MTL only carries colours; skip it.
+                body.push('\n');
+                continue;
+            }
+            Some("usemtl") => {
+                let name = line["usemtl".len()..].trim().to_string();
+                if name.is_empty() {
+                    return Err(Error::parse(loc(), "`usemtl` without a material name"));
+                }
+                if !names.contains(&name) {
+                    names.push(name);
+                }
+            }
+            Some("v") => {
+                let v: Vec<&str> = it.collect();
+                if v.len() < 3
+                    || v[..3]
+                        .iter()
+                        .any(|s| s.parse::<f32>().map_or(true, |x| !x.is_finite()))
+                {
+                    return Err(Error::parse(
+                        loc(),
+                        format!("vertex needs 3 finite numbers `v x y z`, found `{line}`"),
+                    ));
+                }
+                nverts += 1;
+            }
+            Some("f") => {
+                let idx: Vec<&str> = it.collect();
+                if idx.len() < 3 {
+                    return Err(Error::parse(
+                        loc(),
+                        format!("face needs at least 3 vertices, found `{line}`"),
+                    ));
+                }
+                for s in idx {
+                    let i: i64 = s
+                        .split('/')
+                        .next()
+                        .unwrap_or("")
+                        .parse()
+                        .map_err(|_| Error::parse(loc(), format!("bad face vertex `{s}`")))?;
+                    let ok = if i > 0 {
+                        i as usize <= nverts
+                    } else {
+                        i < 0 && (-i) as usize <= nverts
+                    };
+                    if !ok {
+                        return Err(Error::parse(
+                            loc(),
+                            format!(
+                                "face vertex index {i} refers to a vertex not defined before (have {nverts})"
+                            ),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+        body.push_str(raw);
+        body.push('\n');
+    }
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mtl_names = names.clone();
+    let (models, _) = tobj::load_obj_buf(&mut Cursor::new(body.as_bytes()), &opts, move |_| {
+        let mats: Vec<tobj::Material> = mtl_names
+            .iter()
+            .map(|n| tobj::Material {
+                name: n.clone(),
+                ..Default::default()
+            })
+            .collect();
+        let map = mtl_names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.clone(), i))
+            .collect();
+        Ok((mats, map))
+    })
+    .map_err(|e| Error::parse(Location::file(path), format!("invalid OBJ: {e}")))?;
+    let mut out = Vec::with_capacity(models.len());
+    for m in models {
+        let p = &m.mesh.positions;
+        let positions: Vec<Vec3> = p
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        let indices: Vec<[u32; 3]> = m
+            .mesh
+            .indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        if indices.is_empty() {
+            continue;
+        }
+        let name = if m.name.is_empty() {
+            "unnamed".to_string()
+        } else {
+            m.name
+        };
+        out.push(ObjGroup {
+            material_name: m.mesh.material_id.map(|i| names[i].clone()),
+            mesh: TriangleMesh {
+                name: name.clone(),
+                positions,
+                indices,
+            },
+            name,
+        });
+    }
+    if out.is_empty() {
+        return Err(Error::parse(Location::file(path), "OBJ file has no faces"));
+    }
+    Ok(out)
+}
