@@ -1,1 +1,676 @@
-//! Tests: weather.
+//! Tests: weather (readers, filling, interpolation, the town history).
+
+use std::path::{Path, PathBuf};
+
+use chrono::{DateTime, FixedOffset, TimeDelta};
+use irsig::sun::{self, Site};
+use irsig::weather::{self, Format, LoadOptions, WeatherHistory, WeatherRecord, physics};
+
+use crate::util;
+
+fn t(s: &str) -> DateTime<FixedOffset> {
+    DateTime::parse_from_rfc3339(s).unwrap()
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol
+}
+
+fn write_tmp(dir: &tempfile::TempDir, name: &str, text: &str) -> PathBuf {
+    let p = dir.path().join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const ROCHESTER: Site = Site {
+    latitude_deg: 43.16,
+    longitude_deg: -77.61,
+    altitude_m: 170.0,
+};
+
+// ---------------------------------------------------------------- physics
+
+/// Clark & Allen as in the EnergyPlus Engineering Reference, by hand:
+/// T_db 18 °C, T_dp 12 °C, N = 3 tenths:
+/// ε = (0.787 + 0.764 ln(285.15/273)) (1 + 0.0672 − 0.0315 + 0.00756) = 0.855752,
+/// E = ε σ 291.15⁴ = 348.680 W/m².
+#[test]
+fn clark_allen_hand_values() {
+    let eps = physics::clark_allen_sky_emissivity(285.15, 0.3);
+    assert!(close(eps, 0.855_752, 1e-6), "{eps}");
+    let e = physics::clark_allen_sky_longwave_w_m2(291.15, 285.15, 0.3);
+    assert!(close(e, 348.680, 1e-3), "{e}");
+    // Clear sky, cold: T_db −5.3 °C, T_dp −20 °C → ε = 0.729326, E = 212.863 W/m².
+    let e = physics::clark_allen_sky_longwave_w_m2(267.85, 253.15, 0.0);
+    assert!(close(e, 212.863, 1e-3), "{e}");
+    // Overcast raises emissivity by the cubic cloud factor (N = 10: ×1.0940).
+    let r = physics::clark_allen_sky_emissivity(285.15, 1.0)
+        / physics::clark_allen_sky_emissivity(285.15, 0.0);
+    assert!(close(r, 1.0 + 0.224 - 0.35 + 0.28, 1e-12), "{r}");
+}
+
+/// Erbs et al. (1982) diffuse fraction by hand, and the split's energy closure.
+#[test]
+fn erbs_hand_values_and_closure() {
+    assert!(close(physics::erbs_diffuse_fraction(0.1), 0.991, 1e-12));
+    assert!(close(physics::erbs_diffuse_fraction(0.5), 0.659_15, 1e-9));
+    assert!(close(
+        physics::erbs_diffuse_fraction(0.75),
+        0.183_081_25,
+        1e-9
+    ));
+    assert!(close(physics::erbs_diffuse_fraction(0.85), 0.165, 1e-12));
+    // The published branches meet (nearly) at k_t = 0.22.
+    let lo = 1.0 - 0.09 * 0.22;
+    assert!(close(physics::erbs_diffuse_fraction(0.2200001), lo, 5e-4));
+    // Split: GHI = DHI + DNI cos z.
+    let (z, r) = (30.0f64, 1.0);
+    let ghi = 0.6 * 1367.0 * z.to_radians().cos(); // k_t = 0.6
+    let (dni, dhi) = physics::erbs_split(ghi, z, r);
+    assert!(close(dhi + dni * z.to_radians().cos(), ghi, 1e-9));
+    assert!(close(dhi / ghi, physics::erbs_diffuse_fraction(0.6), 1e-12));
+    // Sun down: all diffuse / nothing.
+    assert_eq!(physics::erbs_split(10.0, 95.0, 1.0), (0.0, 10.0));
+}
+
+/// Magnus (Alduchov & Eskridge 1996): e_s(20 °C) = 6.1094 exp(17.625·20/263.04) hPa
+/// = 23.3344 hPa; RH(20 °C, T_d 10 °C) = 0.525413; dew point inverts RH exactly.
+#[test]
+fn magnus_hand_values_and_inverse() {
+    assert!(close(
+        physics::saturation_vapour_pressure_pa(293.15),
+        2333.44,
+        0.01
+    ));
+    let rh = physics::relative_humidity_from_dew_point(293.15, 283.15);
+    assert!(close(rh, 0.525_413, 1e-6), "{rh}");
+    for (tk, h) in [(253.0, 0.3), (283.0, 0.55), (303.0, 0.9), (300.0, 1.0)] {
+        let td = physics::dew_point_from_relative_humidity(tk, h);
+        assert!(close(
+            physics::relative_humidity_from_dew_point(tk, td),
+            h,
+            1e-12
+        ));
+    }
+    assert!(close(
+        physics::dew_point_from_relative_humidity(300.0, 1.0),
+        300.0,
+        1e-9
+    ));
+}
+
+// ---------------------------------------------------------------- DIRSIG .wth
+
+#[test]
+fn dirsig_wth_saw_reads_with_hand_conversions() {
+    let Some(dir) = util::shared_data("dirsig") else {
+        return;
+    };
+    let path = dir.join("saw.wth");
+    let opts = LoadOptions::default()
+        .with_start(t("2025-01-15T00:00:00-05:00"))
+        .with_site(ROCHESTER);
+    let h = weather::load_with(&path, &opts).unwrap();
+    assert_eq!(h.format(), Some(Format::DirsigWth));
+    assert_eq!(h.records().len(), 193);
+    assert_eq!(h.step(), TimeDelta::minutes(15));
+    assert!(h.is_uniform());
+    assert_eq!(h.start(), t("2025-01-15T00:00:00-05:00"));
+    assert_eq!(h.end(), t("2025-01-17T00:00:00-05:00"));
+    // Row `12.00 -5.30 1000.00  0.31-20.00   5.00    98.02     5.17 1.00  0  0   0.00  0.00`
+    let r = &h.records()[48];
+    assert_eq!(r.time, t("2025-01-15T12:00:00-05:00"));
+    assert!(close(r.air_temperature_k, 267.85, 1e-9));
+    assert!(close(r.pressure_pa, 100_000.0, 1e-9));
+    assert!(close(r.relative_humidity, 0.31, 1e-12));
+    assert!(close(r.dew_point_k, 253.15, 1e-9));
+    assert!(close(r.wind_speed_m_s, 5.0, 1e-12));
+    // 98.02 L/h × 41840 J/m² / 3600 s = 1139.2102 W/m²; 5.17 L/h = 60.0869 W/m².
+    assert!(close(r.direct_normal_w_m2, 1139.2102, 1e-3));
+    assert!(close(r.diffuse_horizontal_w_m2, 60.0869, 1e-3));
+    assert_eq!(r.total_sky_cover, 0.0);
+    // Filled: GHI = DHI + DNI cos z (Sun at Rochester), sky longwave by Clark & Allen.
+    let p = sun::position_standard(&ROCHESTER, r.time).unwrap();
+    let ghi =
+        r.diffuse_horizontal_w_m2 + r.direct_normal_w_m2 * p.apparent_zenith_deg.to_radians().cos();
+    assert!(close(r.global_horizontal_w_m2, ghi, 1e-6));
+    assert!(close(r.sky_longwave_w_m2, 212.863, 1e-3));
+    assert!(h.filled(48).contains(&"global_horizontal_w_m2"));
+    assert!(h.filled(48).contains(&"sky_longwave_w_m2"));
+    // Columns that run together: row 1 `0.00-15.00 …` is hour 0, −15 °C.
+    assert!(close(h.records()[0].air_temperature_k, 258.15, 1e-9));
+    assert!(close(h.records()[192].air_temperature_k, 258.15, 1e-9));
+}
+
+#[test]
+fn dirsig_wth_needs_start_and_site() {
+    let Some(dir) = util::shared_data("dirsig") else {
+        return;
+    };
+    let path = dir.join("saw.wth");
+    let e = weather::load(&path).unwrap_err().to_string();
+    assert!(e.contains("saw.wth") && e.contains("start"), "{e}");
+    let opts = LoadOptions::default().with_start(t("2025-01-15T00:00:00-05:00"));
+    let e = weather::load_with(&path, &opts).unwrap_err().to_string();
+    assert!(e.contains("site"), "{e}");
+}
+
+#[test]
+fn dirsig_wth_bad_rows_name_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = "0.00-15.00 1000.00  0.68-20.00   5.00     0.00     0.00 1.00  0  0   0.00  0.00";
+    let row2 = "0.25-15.00 1000.00  0.68-20.00   5.00    -1.00     0.00 1.00  0  0   0.00  0.00";
+    let p = write_tmp(&dir, "neg.wth", &format!("2 0.25\n{good}\n{row2}\n"));
+    let opts = LoadOptions::default()
+        .with_start(t("2025-01-15T00:00:00-05:00"))
+        .with_site(ROCHESTER);
+    let e = weather::load_with(&p, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("neg.wth:line 3") && e.contains("negative irradiance"),
+        "{e}"
+    );
+    let row2 = "0.25-15.00 1000.00  1.68-20.00   5.00     0.00     0.00 1.00  0  0   0.00  0.00";
+    let p = write_tmp(&dir, "rh.wth", &format!("2 0.25\n{good}\n{row2}\n"));
+    let e = weather::load_with(&p, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("rh.wth:line 3") && e.contains("relative_humidity"),
+        "{e}"
+    );
+    let p = write_tmp(
+        &dir,
+        "short.wth",
+        &format!("2 0.25\n{good}\n0.25-15.00 1000.00\n"),
+    );
+    let e = weather::load_with(&p, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("short.wth:line 3") && e.contains("columns"),
+        "{e}"
+    );
+    let p = write_tmp(&dir, "count.wth", &format!("3 0.25\n{good}\n{good}\n"));
+    let e = weather::load_with(&p, &opts).unwrap_err().to_string();
+    assert!(e.contains("count.wth:line 3") && e.contains("hour"), "{e}");
+}
+
+// ---------------------------------------------------------------- EPW
+
+#[test]
+fn epw_fixture_reads_site_times_and_fills_longwave() {
+    let path = util::repo_path("tests/data/weather/rochester_sample.epw");
+    let h = weather::load(&path).unwrap();
+    assert_eq!(h.format(), Some(Format::Epw));
+    let s = h.site().unwrap();
+    assert_eq!(
+        (s.latitude_deg, s.longitude_deg, s.altitude_m),
+        (43.12, -77.68, 169.0)
+    );
+    assert_eq!(h.records().len(), 6);
+    // Hour 5 is hour-ending 05:00 local standard time (UTC−5).
+    assert_eq!(h.start(), t("1990-06-21T05:00:00-05:00"));
+    assert_eq!(h.end(), t("1990-06-21T10:00:00-05:00"));
+    let r = &h.records()[3]; // hour 8: 18.0 °C, 12.0 °C, 68 %, 99700 Pa, IR 9999, OSC 3
+    assert!(close(r.air_temperature_k, 291.15, 1e-9));
+    assert!(close(r.dew_point_k, 285.15, 1e-9));
+    assert!(close(r.relative_humidity, 0.68, 1e-12));
+    assert!(close(r.pressure_pa, 99_700.0, 1e-9));
+    assert_eq!(
+        (
+            r.global_horizontal_w_m2,
+            r.direct_normal_w_m2,
+            r.diffuse_horizontal_w_m2
+        ),
+        (402.0, 655.0, 88.0)
+    );
+    assert_eq!((r.wind_direction_deg, r.wind_speed_m_s), (230.0, 2.6));
+    assert!(close(r.total_sky_cover, 0.4, 1e-12) && close(r.opaque_sky_cover, 0.3, 1e-12));
+    assert!(
+        close(r.sky_longwave_w_m2, 348.680, 1e-3),
+        "{}",
+        r.sky_longwave_w_m2
+    );
+    assert_eq!(h.filled(3), &["sky_longwave_w_m2"]);
+    assert_eq!(h.records()[2].sky_longwave_w_m2, 340.0);
+    assert!(h.filled(2).is_empty());
+}
+
+#[test]
+fn epw_bad_rows_name_file_line_and_field() {
+    let text = std::fs::read_to_string(util::repo_path("tests/data/weather/rochester_sample.epw"))
+        .unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let dir = tempfile::tempdir().unwrap();
+    // RH 150 % at line 11.
+    let mut bad: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+    bad[10] = bad[10].replacen(",16.7,12.0,74,", ",16.7,12.0,150,", 1);
+    let p = write_tmp(&dir, "rh.epw", &bad.join("\n"));
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("rh.epw:line 11") && e.contains("relative_humidity"),
+        "{e}"
+    );
+    // Truncated row at line 12.
+    let mut bad: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+    bad[11] = bad[11].split(',').take(15).collect::<Vec<_>>().join(",");
+    let p = write_tmp(&dir, "short.epw", &bad.join("\n"));
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("short.epw:line 12") && e.contains("diffuse horizontal"),
+        "{e}"
+    );
+    // NaN dry bulb at line 9.
+    let mut bad: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+    bad[8] = bad[8].replacen(",14.4,", ",NaN,", 1);
+    let p = write_tmp(&dir, "nan.epw", &bad.join("\n"));
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("nan.epw:line 9") && e.contains("dry bulb"),
+        "{e}"
+    );
+}
+
+// ---------------------------------------------------------------- TMY3
+
+#[test]
+fn tmy3_fixture_reads_and_splits_missing_beam_by_erbs() {
+    let path = util::repo_path("tests/data/weather/rochester_sample_tmy3.csv");
+    let h = weather::load(&path).unwrap();
+    assert_eq!(h.format(), Some(Format::Tmy3));
+    let s = *h.site().unwrap();
+    assert_eq!(
+        (s.latitude_deg, s.longitude_deg, s.altitude_m),
+        (43.117, -77.683, 169.0)
+    );
+    assert_eq!(h.start(), t("1988-06-21T11:00:00-05:00"));
+    let r = &h.records()[1]; // 12:00: 23.9 °C, 12.8 °C, 50 %, 996 mbar, 250°, 4.6 m/s
+    assert!(close(r.air_temperature_k, 297.05, 1e-9));
+    assert!(close(r.pressure_pa, 99_600.0, 1e-9));
+    assert_eq!(
+        (
+            r.global_horizontal_w_m2,
+            r.direct_normal_w_m2,
+            r.diffuse_horizontal_w_m2
+        ),
+        (842.0, 768.0, 157.0)
+    );
+    assert!(close(r.total_sky_cover, 0.3, 1e-12) && close(r.opaque_sky_cover, 0.2, 1e-12));
+    // 13:00 has DNI and DHI −9900 (missing): Erbs split of GHI 760 with the Sun at 12:30 LST.
+    let r = &h.records()[2];
+    let p = sun::position_standard(&s, t("1988-06-21T12:30:00-05:00")).unwrap();
+    let (dni, dhi) = physics::erbs_split(760.0, p.apparent_zenith_deg, p.distance_au);
+    assert!(close(r.direct_normal_w_m2, dni, 1e-9) && close(r.diffuse_horizontal_w_m2, dhi, 1e-9));
+    let kt = 760.0 / (1367.0 / p.distance_au.powi(2) * p.apparent_zenith_deg.to_radians().cos());
+    assert!((0.6..0.75).contains(&kt), "k_t {kt}");
+    assert!(close(dhi, 760.0 * physics::erbs_diffuse_fraction(kt), 1e-6));
+    assert!(h.filled(2).contains(&"direct_normal_w_m2"));
+    // Sky longwave filled by Clark & Allen with the opaque cover (4 tenths).
+    let lw = physics::clark_allen_sky_longwave_w_m2(r.air_temperature_k, r.dew_point_k, 0.4);
+    assert!(close(r.sky_longwave_w_m2, lw, 1e-9));
+}
+
+// ---------------------------------------------------------------- irsig CSV/JSON
+
+fn sample_history() -> WeatherHistory {
+    let rec = |time: &str, air: f64, dir: f64, dni: f64| WeatherRecord {
+        time: t(time),
+        air_temperature_k: air,
+        dew_point_k: 283.15,
+        relative_humidity: physics::relative_humidity_from_dew_point(air, 283.15),
+        pressure_pa: 100_000.0,
+        wind_speed_m_s: 2.0,
+        wind_direction_deg: dir,
+        direct_normal_w_m2: dni,
+        diffuse_horizontal_w_m2: 100.0,
+        global_horizontal_w_m2: 100.0 + 0.5 * dni,
+        sky_longwave_w_m2: 330.0,
+        total_sky_cover: 0.2,
+        opaque_sky_cover: 0.1,
+    };
+    WeatherHistory::new(
+        vec![
+            rec("2025-06-21T12:00:00-04:00", 293.15, 350.0, 800.0),
+            rec("2025-06-21T13:00:00-04:00", 295.15, 10.0, 700.0),
+            rec("2025-06-21T14:00:00-04:00", 296.15, 20.0, 600.0),
+        ],
+        Some(ROCHESTER),
+    )
+    .unwrap()
+}
+
+#[test]
+fn interpolation_is_linear_and_bounded() {
+    let h = sample_history();
+    let r = h.at(t("2025-06-21T12:30:00-04:00")).unwrap();
+    assert!(close(r.air_temperature_k, 294.15, 1e-9));
+    assert!(close(r.direct_normal_w_m2, 750.0, 1e-9));
+    // Wind direction along the short arc: 350° → 10° passes through 0°.
+    assert!(close(r.wind_direction_deg, 0.0, 1e-9) || close(r.wind_direction_deg, 360.0, 1e-9));
+    // Same instant in UTC gives the same answer; time keeps the history's offset.
+    let ru = h.at(t("2025-06-21T16:30:00Z")).unwrap();
+    assert_eq!(ru, r);
+    assert_eq!(r.time.to_rfc3339(), "2025-06-21T12:30:00-04:00");
+    // At a record: that record.
+    assert_eq!(
+        h.at(t("2025-06-21T13:00:00-04:00")).unwrap(),
+        h.records()[1]
+    );
+    assert_eq!(h.at(h.end()).unwrap(), h.records()[2]);
+    // Outside: an error naming the time and the span.
+    let e = h
+        .at(t("2025-06-21T14:00:01-04:00"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("2025-06-21T14:00:01-04:00") && e.contains("outside"),
+        "{e}"
+    );
+    assert!(h.at(t("2025-06-21T11:59:59-04:00")).is_err());
+}
+
+#[test]
+fn irsig_csv_round_trip_and_json() {
+    let h = sample_history();
+    let mut buf = Vec::new();
+    weather::write_csv(&h, &["test"], &mut buf).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("w.csv");
+    std::fs::write(&p, &buf).unwrap();
+    let back = weather::load(&p).unwrap();
+    assert_eq!(back.format(), Some(Format::IrsigCsv));
+    assert_eq!(back.site(), Some(&ROCHESTER));
+    for (a, b) in h.records().iter().zip(back.records()) {
+        assert_eq!(a.time, b.time);
+        assert!(close(a.air_temperature_k, b.air_temperature_k, 1e-3));
+        assert!(close(a.relative_humidity, b.relative_humidity, 1e-4));
+        assert!(close(a.direct_normal_w_m2, b.direct_normal_w_m2, 1e-2));
+    }
+    // JSON with the same records (serde of WeatherRecord) reads back identically.
+    let json = serde_json::json!({"site": ROCHESTER, "records": h.records()});
+    let pj = dir.path().join("w.json");
+    std::fs::write(&pj, json.to_string()).unwrap();
+    let hj = weather::load(&pj).unwrap();
+    assert_eq!(hj.records(), h.records());
+    // Unknown JSON field → error naming it.
+    std::fs::write(
+        &pj,
+        r#"{"records": [{"time": "2025-06-21T12:00:00Z", "air_temp": 3}]}"#,
+    )
+    .unwrap();
+    let e = weather::load(&pj).unwrap_err().to_string();
+    assert!(e.contains("w.json") && e.contains("air_temp"), "{e}");
+}
+
+#[test]
+fn irsig_csv_optional_columns_are_filled() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_tmp(
+        &dir,
+        "min.csv",
+        "# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170\n\
+         time,air_temperature_k,relative_humidity,wind_speed_m_s,global_horizontal_w_m2,opaque_sky_cover\n\
+         2025-06-21T12:00:00-04:00,293.15,0.5254132558,2,700,0.2\n\
+         2025-06-21T12:15:00-04:00,293.65,,2,710,0.2\n",
+    );
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("min.csv:line 4") && e.contains("dew point"),
+        "{e}"
+    );
+    std::fs::write(
+        &p,
+        "# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170\n\
+         time,air_temperature_k,relative_humidity,wind_speed_m_s,global_horizontal_w_m2,opaque_sky_cover\n\
+         2025-06-21T12:00:00-04:00,293.15,0.5254132558,2,700,0.2\n\
+         2025-06-21T12:15:00-04:00,293.65,0.51,2,710,0.2\n",
+    )
+    .unwrap();
+    let h = weather::load(&p).unwrap();
+    let r = &h.records()[0];
+    // Dew point by inverse Magnus: RH 0.525413 at 20 °C → 10 °C.
+    assert!(close(r.dew_point_k, 283.15, 1e-6), "{}", r.dew_point_k);
+    // Pressure: ICAO standard atmosphere at 170 m = 99 299 Pa.
+    assert!(close(r.pressure_pa, 99_299.0, 2.0), "{}", r.pressure_pa);
+    assert_eq!(r.wind_direction_deg, 180.0);
+    assert_eq!(r.total_sky_cover, 0.2);
+    // Erbs split closes on GHI.
+    let p0 = sun::position_standard(&ROCHESTER, r.time).unwrap();
+    let cz = p0.apparent_zenith_deg.to_radians().cos();
+    assert!(close(
+        r.diffuse_horizontal_w_m2 + r.direct_normal_w_m2 * cz,
+        700.0,
+        1e-6
+    ));
+    let f = h.filled(0);
+    for name in [
+        "dew_point_k",
+        "pressure_pa",
+        "wind_direction_deg",
+        "direct_normal_w_m2",
+        "sky_longwave_w_m2",
+        "total_sky_cover",
+    ] {
+        assert!(f.contains(&name), "{name} not in {f:?}");
+    }
+}
+
+#[test]
+fn irsig_csv_bad_rows_name_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = format!("{}\n", weather::CSV_HEADER);
+    let good =
+        "2025-06-21T12:00:00-04:00,293.15,283.15,0.525,100000,2,180,700,100,600,330,0.1,0.1\n";
+    let cases: [(&str, &str, &[&str]); 6] = [
+        (
+            "nan.csv",
+            "2025-06-21T12:15:00-04:00,NaN,283.15,0.525,100000,2,180,700,100,600,330,0.1,0.1\n",
+            &["nan.csv:line 3", "air_temperature_k"],
+        ),
+        (
+            "rh.csv",
+            "2025-06-21T12:15:00-04:00,293.15,283.15,1.5,100000,2,180,700,100,600,330,0.1,0.1\n",
+            &["rh.csv:line 3", "relative_humidity", "1.5"],
+        ),
+        (
+            "neg.csv",
+            "2025-06-21T12:15:00-04:00,293.15,283.15,0.5,100000,2,180,-5,100,600,330,0.1,0.1\n",
+            &[
+                "neg.csv:line 3",
+                "direct_normal_w_m2",
+                "negative irradiance",
+            ],
+        ),
+        (
+            "cols.csv",
+            "2025-06-21T12:15:00-04:00,293.15,283.15,0.5,100000,2,180,700\n",
+            &[
+                "cols.csv:line 3",
+                "diffuse_horizontal_w_m2",
+                "8 columns, expected 13",
+            ],
+        ),
+        (
+            "time.csv",
+            "2025-06-21 12:15,293.15,283.15,0.5,100000,2,180,700,100,600,330,0.1,0.1\n",
+            &["time.csv:line 3", "RFC 3339"],
+        ),
+        (
+            "order.csv",
+            "2025-06-21T11:15:00-04:00,293.15,283.15,0.5,100000,2,180,700,100,600,330,0.1,0.1\n",
+            &["order.csv:line 3", "increasing"],
+        ),
+    ];
+    for (name, row, needles) in cases {
+        let p = write_tmp(&dir, name, &format!("{head}{good}{row}"));
+        let e = weather::load(&p).unwrap_err().to_string();
+        for n in needles {
+            assert!(e.contains(n), "{name}: `{n}` not in `{e}`");
+        }
+    }
+    let p = write_tmp(&dir, "hdr.csv", &format!("time,air_temp\n{good}"));
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("hdr.csv:line 1") && e.contains("air_temp"),
+        "{e}"
+    );
+}
+
+// ---------------------------------------------------------------- town history
+
+#[test]
+fn town_weather_csv_is_reproduced_by_the_generator() {
+    let path = util::repo_path("scenes/town/weather.csv");
+    let committed = weather::load(&path).unwrap();
+    let (generated, _) = weather::synth::town_history().unwrap();
+    assert_eq!(committed.records().len(), generated.records().len());
+    assert_eq!(committed.site(), Some(&weather::synth::TOWN_SITE));
+    for (a, b) in committed.records().iter().zip(generated.records()) {
+        assert_eq!(a.time, b.time);
+        let pairs = [
+            (a.air_temperature_k, b.air_temperature_k),
+            (a.dew_point_k, b.dew_point_k),
+            (a.relative_humidity, b.relative_humidity),
+            (a.pressure_pa, b.pressure_pa),
+            (a.wind_speed_m_s, b.wind_speed_m_s),
+            (a.wind_direction_deg, b.wind_direction_deg),
+            (a.direct_normal_w_m2, b.direct_normal_w_m2),
+            (a.diffuse_horizontal_w_m2, b.diffuse_horizontal_w_m2),
+            (a.global_horizontal_w_m2, b.global_horizontal_w_m2),
+            (a.sky_longwave_w_m2, b.sky_longwave_w_m2),
+            (a.total_sky_cover, b.total_sky_cover),
+            (a.opaque_sky_cover, b.opaque_sky_cover),
+        ];
+        for (x, y) in pairs {
+            assert!(close(x, y, 0.051), "{}: {x} vs {y}", a.time);
+        }
+    }
+}
+
+#[test]
+fn town_weather_covers_the_image_time_with_plausible_physics() {
+    let h = weather::load(&util::repo_path("scenes/town/weather.csv")).unwrap();
+    assert_eq!(h.step(), TimeDelta::minutes(15));
+    assert!(h.is_uniform());
+    assert!(h.start() <= t("2025-06-19T14:00:00-04:00"));
+    assert!(h.end() >= t("2025-06-21T14:00:00-04:00"));
+    assert!(h.end() - h.start() >= TimeDelta::hours(48));
+    let noon = h.at(t("2025-06-21T13:15:00-04:00")).unwrap();
+    // Closure GHI = DHI + DNI cos z with the SPA Sun.
+    let p = sun::position_standard(&ROCHESTER, noon.time).unwrap();
+    let cz = p.apparent_zenith_deg.to_radians().cos();
+    assert!(close(
+        noon.global_horizontal_w_m2,
+        noon.diffuse_horizontal_w_m2 + noon.direct_normal_w_m2 * cz,
+        0.2
+    ));
+    // A turbid summer clear sky near the solstice noon: DNI 750–950, GHI 800–1000 W/m².
+    assert!(
+        (750.0..950.0).contains(&noon.direct_normal_w_m2),
+        "{noon:?}"
+    );
+    assert!(
+        (800.0..1000.0).contains(&noon.global_horizontal_w_m2),
+        "{noon:?}"
+    );
+    // Night is dark; sky longwave 300–420 W/m² throughout; daytime warmer than night.
+    let night = h.at(t("2025-06-21T02:00:00-04:00")).unwrap();
+    assert_eq!(night.global_horizontal_w_m2, 0.0);
+    assert!(noon.air_temperature_k > night.air_temperature_k + 5.0);
+    for r in h.records() {
+        assert!((300.0..420.0).contains(&r.sky_longwave_w_m2), "{r:?}");
+        assert!(r.dew_point_k < r.air_temperature_k);
+    }
+    // The first afternoon is cloudier than the clear third one at the same hour.
+    let c = h.at(t("2025-06-19T14:30:00-04:00")).unwrap();
+    let k = h.at(t("2025-06-21T14:30:00-04:00")).unwrap();
+    assert!(c.opaque_sky_cover > 0.5 && k.opaque_sky_cover == 0.0);
+    assert!(c.direct_normal_w_m2 < 0.5 * k.direct_normal_w_m2);
+    assert!(c.sky_longwave_w_m2 > k.sky_longwave_w_m2 - 5.0);
+}
+
+// ---------------------------------------------------------------- CLI
+
+#[test]
+fn cli_weather_show_json_shape() {
+    let out = std::process::Command::new(util::irsig_bin())
+        .args(["weather", "show", "--json"])
+        .arg(util::repo_path("tests/data/weather/rochester_sample.epw"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let recs = v["records"].as_array().unwrap();
+    assert_eq!(recs.len(), 6);
+    let keys: Vec<&str> = recs[3]
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
+    let mut expected = vec![
+        "time",
+        "air_temperature_k",
+        "dew_point_k",
+        "relative_humidity",
+        "pressure_pa",
+        "wind_speed_m_s",
+        "direct_normal_w_m2",
+        "diffuse_horizontal_w_m2",
+        "global_horizontal_w_m2",
+        "sky_longwave_w_m2",
+        "opaque_sky_cover",
+    ];
+    let mut got = keys.clone();
+    got.sort_unstable();
+    expected.sort_unstable();
+    assert_eq!(got, expected);
+    assert_eq!(recs[3]["time"], "1990-06-21T08:00:00-05:00");
+    assert!(close(
+        recs[3]["sky_longwave_w_m2"].as_f64().unwrap(),
+        348.680,
+        1e-3
+    ));
+    assert!(close(
+        recs[3]["opaque_sky_cover"].as_f64().unwrap(),
+        0.3,
+        1e-12
+    ));
+}
+
+#[test]
+fn cli_weather_show_wth_needs_start() {
+    let Some(dir) = util::shared_data("dirsig") else {
+        return;
+    };
+    let wth: &Path = &dir.join("saw.wth");
+    let out = std::process::Command::new(util::irsig_bin())
+        .args(["weather", "show"])
+        .arg(wth)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("start"));
+    let out = std::process::Command::new(util::irsig_bin())
+        .args([
+            "weather",
+            "show",
+            "--start",
+            "2025-01-15T00:00:00-05:00",
+            "--lat",
+            "43.16",
+            "--lon",
+            "-77.61",
+        ])
+        .arg(wth)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("2025-01-15T12:00:00-05:00"));
+    assert_eq!(text.lines().filter(|l| l.starts_with("2025-")).count(), 193);
+}

@@ -1,8 +1,40 @@
 //! Weather histories: a time series of surface meteorology in SI units,
 //! interpolated in time, read from irsig JSON/CSV, EPW, TMY3 and DIRSIG `.wth`.
+//!
+//! Every reader turns its file into records whose fields may be missing; one common
+//! step ([`fill`]) then fills the gaps the way the reference tools do and records which
+//! fields were filled:
+//!
+//! - dew point ↔ relative humidity by the Magnus form of Alduchov & Eskridge (1996);
+//! - sky longwave by Clark & Allen as EnergyPlus does ([`physics::clark_allen_sky_longwave_w_m2`]);
+//! - a missing direct/diffuse split from global horizontal by Erbs et al. (1982), or the
+//!   third of (GHI, DNI, DHI) from the closure GHI = DHI + DNI cos z (both need the site
+//!   and the Sun, [`crate::sun`]);
+//! - pressure, wind direction and sky cover, when missing, hold the previous good value
+//!   (EnergyPlus practice); before any good value: the standard atmosphere at the site's
+//!   altitude, 180°, and the other sky-cover field or 5 tenths (EnergyPlus defaults).
+//!
+//! Air temperature, humidity (dew point or RH), wind speed and solar irradiance are never
+//! invented: a record without them is an error naming the file and line.
 
-use chrono::{DateTime, FixedOffset};
+use std::path::Path;
+
+use chrono::{DateTime, FixedOffset, TimeDelta, TimeZone};
 use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Location, Result};
+use crate::sun::Site;
+
+mod epw;
+mod fill;
+mod irsig;
+pub mod physics;
+pub mod synth;
+mod text;
+mod tmy3;
+mod wth;
+
+pub use irsig::{CSV_HEADER, write_csv};
 
 /// One weather record, SI units. Field names carry their units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -33,4 +65,332 @@ pub struct WeatherRecord {
     pub total_sky_cover: f64,
     /// Opaque sky cover, fraction 0–1.
     pub opaque_sky_cover: f64,
+}
+
+/// The weather file formats irsig reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub enum Format {
+    /// irsig CSV (header [`CSV_HEADER`], RFC 3339 times).
+    IrsigCsv,
+    /// irsig JSON (`{"site": …, "records": […]}`).
+    IrsigJson,
+    /// EnergyPlus weather (EPW).
+    Epw,
+    /// NSRDB TMY3 CSV.
+    Tmy3,
+    /// DIRSIG/THERM `.wth` (fixed width, no date).
+    DirsigWth,
+}
+
+/// Options for formats that lack information the scene provides.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Local date and time of the first row (hour 0) of a DIRSIG `.wth` file, which
+    /// carries none. Required for `.wth`, ignored otherwise.
+    pub start: Option<DateTime<FixedOffset>>,
+    /// The site, for files that carry none (`.wth`, irsig CSV/JSON without one). Needed
+    /// where an irradiance split must be computed. A file's own site takes precedence.
+    pub site: Option<Site>,
+    /// Replace the year of every EPW/TMY3 row (typical-year files mix years).
+    pub year: Option<i32>,
+}
+
+impl LoadOptions {
+    /// Options giving the start time of a `.wth` file.
+    pub fn with_start(mut self, start: DateTime<FixedOffset>) -> Self {
+        self.start = Some(start);
+        self
+    }
+    /// Options giving the site.
+    pub fn with_site(mut self, site: Site) -> Self {
+        self.site = Some(site);
+        self
+    }
+    /// Options replacing the year of EPW/TMY3 rows.
+    pub fn with_year(mut self, year: i32) -> Self {
+        self.year = Some(year);
+        self
+    }
+}
+
+/// A weather history: records in strictly increasing time, SI units, linearly
+/// interpolated in time by [`WeatherHistory::at`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct WeatherHistory {
+    records: Vec<WeatherRecord>,
+    site: Option<Site>,
+    filled: Vec<Vec<&'static str>>,
+    format: Option<Format>,
+}
+
+impl WeatherHistory {
+    /// A history from complete records (at least two, strictly increasing in time, every
+    /// value finite and in range).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming `records[i].<field>` for a bad value or order.
+    pub fn new(records: Vec<WeatherRecord>, site: Option<Site>) -> Result<WeatherHistory> {
+        if let Some(s) = &site {
+            s.validate()?;
+        }
+        for (i, r) in records.iter().enumerate() {
+            fill::check_record(r)
+                .map_err(|(field, msg)| Error::invalid(format!("records[{i}].{field}"), msg))?;
+        }
+        check_times(records.iter().map(|r| r.time), |i| {
+            Location::field(format!("records[{i}].time"))
+        })?;
+        let n = records.len();
+        Ok(WeatherHistory {
+            records,
+            site,
+            filled: vec![Vec::new(); n],
+            format: None,
+        })
+    }
+
+    pub(crate) fn from_parts(
+        records: Vec<WeatherRecord>,
+        site: Option<Site>,
+        filled: Vec<Vec<&'static str>>,
+        format: Format,
+    ) -> WeatherHistory {
+        WeatherHistory {
+            records,
+            site,
+            filled,
+            format: Some(format),
+        }
+    }
+
+    /// The records, in increasing time.
+    pub fn records(&self) -> &[WeatherRecord] {
+        &self.records
+    }
+
+    /// The site the file declared (EPW, TMY3, irsig) or the one given in [`LoadOptions`].
+    pub fn site(&self) -> Option<&Site> {
+        self.site.as_ref()
+    }
+
+    /// The format the history was read from (`None` when built in memory).
+    pub fn format(&self) -> Option<Format> {
+        self.format
+    }
+
+    /// Names of the fields of record `i` that were filled rather than read
+    /// (e.g. `["sky_longwave_w_m2"]`). Empty for out-of-range `i`.
+    pub fn filled(&self, i: usize) -> &[&'static str] {
+        self.filled.get(i).map_or(&[], Vec::as_slice)
+    }
+
+    /// Time of the first record.
+    pub fn start(&self) -> DateTime<FixedOffset> {
+        self.records[0].time
+    }
+
+    /// Time of the last record.
+    pub fn end(&self) -> DateTime<FixedOffset> {
+        self.records[self.records.len() - 1].time
+    }
+
+    /// The smallest interval between consecutive records (the step of a uniform history).
+    pub fn step(&self) -> TimeDelta {
+        self.records
+            .windows(2)
+            .map(|w| w[1].time - w[0].time)
+            .min()
+            .unwrap_or_default()
+    }
+
+    /// Whether all consecutive records are the same interval apart.
+    pub fn is_uniform(&self) -> bool {
+        let s = self.step();
+        self.records.windows(2).all(|w| w[1].time - w[0].time == s)
+    }
+
+    /// The weather at `t`, linearly interpolated between the two records around it
+    /// (wind direction along the shorter arc). The returned record's `time` is `t` in the
+    /// history's UTC offset.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] (field `time`) naming `t` and the history's span when `t` is
+    /// outside it.
+    pub fn at<Tz: TimeZone>(&self, t: DateTime<Tz>) -> Result<WeatherRecord> {
+        let offset = *self.records[0].time.offset();
+        let t = t.with_timezone(&offset);
+        let (start, end) = (self.start(), self.end());
+        if t < start || t > end {
+            return Err(Error::invalid(
+                "time",
+                format!(
+                    "{} is outside the weather history, which covers {} to {}",
+                    t.to_rfc3339(),
+                    start.to_rfc3339(),
+                    end.to_rfc3339()
+                ),
+            ));
+        }
+        let j = self.records.partition_point(|r| r.time <= t);
+        // j ≥ 1 since records[0].time ≤ t.
+        if j >= self.records.len() {
+            let mut r = self.records[self.records.len() - 1];
+            r.time = t;
+            return Ok(r);
+        }
+        let (a, b) = (&self.records[j - 1], &self.records[j]);
+        let span = (b.time - a.time).num_microseconds().unwrap_or(i64::MAX) as f64;
+        let w = (t - a.time).num_microseconds().unwrap_or(0) as f64 / span;
+        Ok(interpolate(a, b, w, t))
+    }
+}
+
+fn lerp(a: f64, b: f64, w: f64) -> f64 {
+    a + (b - a) * w
+}
+
+fn interpolate(
+    a: &WeatherRecord,
+    b: &WeatherRecord,
+    w: f64,
+    t: DateTime<FixedOffset>,
+) -> WeatherRecord {
+    let mut d = b.wind_direction_deg - a.wind_direction_deg;
+    if d > 180.0 {
+        d -= 360.0;
+    } else if d < -180.0 {
+        d += 360.0;
+    }
+    WeatherRecord {
+        time: t,
+        air_temperature_k: lerp(a.air_temperature_k, b.air_temperature_k, w),
+        dew_point_k: lerp(a.dew_point_k, b.dew_point_k, w),
+        relative_humidity: lerp(a.relative_humidity, b.relative_humidity, w),
+        pressure_pa: lerp(a.pressure_pa, b.pressure_pa, w),
+        wind_speed_m_s: lerp(a.wind_speed_m_s, b.wind_speed_m_s, w),
+        wind_direction_deg: (a.wind_direction_deg + d * w).rem_euclid(360.0),
+        direct_normal_w_m2: lerp(a.direct_normal_w_m2, b.direct_normal_w_m2, w),
+        diffuse_horizontal_w_m2: lerp(a.diffuse_horizontal_w_m2, b.diffuse_horizontal_w_m2, w),
+        global_horizontal_w_m2: lerp(a.global_horizontal_w_m2, b.global_horizontal_w_m2, w),
+        sky_longwave_w_m2: lerp(a.sky_longwave_w_m2, b.sky_longwave_w_m2, w),
+        total_sky_cover: lerp(a.total_sky_cover, b.total_sky_cover, w),
+        opaque_sky_cover: lerp(a.opaque_sky_cover, b.opaque_sky_cover, w),
+    }
+}
+
+/// Times must be at least two and strictly increasing.
+pub(crate) fn check_times(
+    times: impl Iterator<Item = DateTime<FixedOffset>>,
+    loc: impl Fn(usize) -> Location,
+) -> Result<()> {
+    let mut prev: Option<DateTime<FixedOffset>> = None;
+    let mut n = 0;
+    for (i, t) in times.enumerate() {
+        if let Some(p) = prev {
+            if t <= p {
+                return Err(Error::parse(
+                    loc(i),
+                    format!(
+                        "time {} is not after the previous record's {}; records must be in strictly increasing time",
+                        t.to_rfc3339(),
+                        p.to_rfc3339()
+                    ),
+                ));
+            }
+        }
+        prev = Some(t);
+        n += 1;
+    }
+    if n < 2 {
+        return Err(Error::parse(
+            loc(n),
+            format!("a weather history needs at least 2 records, found {n}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Read a weather file, picking the reader by extension and content. Formats that need
+/// outside information (a `.wth` file's date) need [`load_with`].
+///
+/// # Errors
+/// I/O errors, and parse/validation errors naming the file, line and column.
+pub fn load(path: &Path) -> Result<WeatherHistory> {
+    load_with(path, &LoadOptions::default())
+}
+
+/// Read a weather file with options (see [`LoadOptions`]).
+///
+/// # Errors
+/// As [`load`]; for `.wth` without `options.start`, an error saying the scene must give it.
+pub fn load_with(path: &Path, options: &LoadOptions) -> Result<WeatherHistory> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let format = detect_format(path, &text)?;
+    load_str(&text, path, format, options)
+}
+
+/// Parse weather text already in memory; `path` is used in messages only.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_str(
+    text: &str,
+    path: &Path,
+    format: Format,
+    options: &LoadOptions,
+) -> Result<WeatherHistory> {
+    if let Some(s) = &options.site {
+        s.validate()?;
+    }
+    let parsed = match format {
+        Format::IrsigCsv => irsig::read_csv(text, path)?,
+        Format::IrsigJson => irsig::read_json(text, path)?,
+        Format::Epw => epw::read(text, path, options)?,
+        Format::Tmy3 => tmy3::read(text, path, options)?,
+        Format::DirsigWth => wth::read(text, path, options)?,
+    };
+    fill::complete(parsed, path, options.site, format)
+}
+
+/// Decide a file's format from its extension, then its content.
+///
+/// # Errors
+/// [`Error::Parse`] when the format cannot be recognised.
+pub fn detect_format(path: &Path, text: &str) -> Result<Format> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let first = lines.next().unwrap_or("").trim_start_matches('\u{feff}');
+    let second = lines.next().unwrap_or("");
+    let tmy3_like = second.starts_with("Date (MM/DD/YYYY)");
+    match ext.as_deref() {
+        Some("epw") => return Ok(Format::Epw),
+        Some("wth") => return Ok(Format::DirsigWth),
+        Some("json") => return Ok(Format::IrsigJson),
+        Some("csv") if tmy3_like => return Ok(Format::Tmy3),
+        Some("csv") => return Ok(Format::IrsigCsv),
+        _ => {}
+    }
+    if first.starts_with("LOCATION,") {
+        Ok(Format::Epw)
+    } else if tmy3_like {
+        Ok(Format::Tmy3)
+    } else if first.trim_start().starts_with('{') {
+        Ok(Format::IrsigJson)
+    } else if first.starts_with('#') || first.starts_with("time,") || first == "time" {
+        Ok(Format::IrsigCsv)
+    } else if first.split_whitespace().count() == 2
+        && first.split_whitespace().all(|w| w.parse::<f64>().is_ok())
+    {
+        Ok(Format::DirsigWth)
+    } else {
+        Err(Error::parse(
+            Location::file(path).at_line(1),
+            "unrecognised weather format: expected irsig CSV (header starting `time,`), irsig JSON, \
+             EPW (`LOCATION,…`), TMY3 CSV or DIRSIG .wth (`193 0.25`)",
+        ))
+    }
 }

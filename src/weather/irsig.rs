@@ -1,0 +1,292 @@
+//! irsig's own weather formats: CSV and JSON, SI units, RFC 3339 times.
+//!
+//! CSV: lines starting with `#` are comments; a comment
+//! `# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170` declares the site.
+//! The header names the columns (any order, any subset of [`CSV_HEADER`] that includes
+//! `time`); an empty cell is a missing value, filled as documented in [`crate::weather`].
+//!
+//! JSON: `{"site": {"latitude_deg":…, "longitude_deg":…, "altitude_m":…} | null,
+//! "records": [{"time": "RFC 3339", "air_temperature_k": …, …}]}` with the same field
+//! names; absent or `null` fields are missing values.
+
+use std::io::Write;
+use std::path::Path;
+
+use chrono::{DateTime, FixedOffset};
+use serde::Deserialize;
+
+use super::fill::{Parsed, RawRecord};
+use super::text::{opt_number, split_csv};
+use super::{WeatherHistory, WeatherRecord};
+use crate::error::{Error, Location, Result};
+use crate::sun::Site;
+
+/// The full header of an irsig weather CSV (also the column order [`write_csv`] uses).
+pub const CSV_HEADER: &str = "time,air_temperature_k,dew_point_k,relative_humidity,pressure_pa,wind_speed_m_s,wind_direction_deg,direct_normal_w_m2,diffuse_horizontal_w_m2,global_horizontal_w_m2,sky_longwave_w_m2,total_sky_cover,opaque_sky_cover";
+
+fn parse_time(s: &str, loc: &Location) -> Result<DateTime<FixedOffset>> {
+    DateTime::parse_from_rfc3339(s.trim()).map_err(|e| {
+        Error::parse(
+            loc.clone(),
+            format!(
+                "time `{}` is not RFC 3339 with a UTC offset (e.g. 2025-06-21T14:00:00-04:00): {e}",
+                s.trim()
+            ),
+        )
+    })
+}
+
+fn parse_site_comment(rest: &str, loc: &Location) -> Result<Site> {
+    let (mut lat, mut lon, mut alt) = (None, None, None);
+    for kv in rest.split_whitespace() {
+        let (k, v) = kv.split_once('=').ok_or_else(|| {
+            Error::parse(
+                loc.clone(),
+                format!("site comment: expected key=value, found `{kv}`"),
+            )
+        })?;
+        let value = opt_number(v, &loc.clone().with_field(k.to_string()), k)?;
+        match k {
+            "latitude_deg" => lat = value,
+            "longitude_deg" => lon = value,
+            "altitude_m" => alt = value,
+            _ => {
+                return Err(Error::parse(
+                    loc.clone(),
+                    format!(
+                        "site comment: unknown key `{k}`; expected latitude_deg, longitude_deg, altitude_m"
+                    ),
+                ));
+            }
+        }
+    }
+    match (lat, lon) {
+        (Some(la), Some(lo)) => Site::new(la, lo, alt.unwrap_or(0.0))
+            .map_err(|e| Error::parse(loc.clone(), e.to_string())),
+        _ => Err(Error::parse(
+            loc.clone(),
+            "site comment needs latitude_deg= and longitude_deg=",
+        )),
+    }
+}
+
+fn set_field(r: &mut RawRecord, name: &str, v: Option<f64>) {
+    match name {
+        "air_temperature_k" => r.air_temperature_k = v,
+        "dew_point_k" => r.dew_point_k = v,
+        "relative_humidity" => r.relative_humidity = v,
+        "pressure_pa" => r.pressure_pa = v,
+        "wind_speed_m_s" => r.wind_speed_m_s = v,
+        "wind_direction_deg" => r.wind_direction_deg = v,
+        "direct_normal_w_m2" => r.direct_normal_w_m2 = v,
+        "diffuse_horizontal_w_m2" => r.diffuse_horizontal_w_m2 = v,
+        "global_horizontal_w_m2" => r.global_horizontal_w_m2 = v,
+        "sky_longwave_w_m2" => r.sky_longwave_w_m2 = v,
+        "total_sky_cover" => r.total_sky_cover = v,
+        "opaque_sky_cover" => r.opaque_sky_cover = v,
+        _ => {}
+    }
+}
+
+pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
+    let known: Vec<&str> = CSV_HEADER.split(',').collect();
+    let mut site = None;
+    let mut header: Option<Vec<String>> = None;
+    let mut records = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let loc = Location::file(path).at_line(i + 1);
+        let line = line.trim_start_matches('\u{feff}').trim_end();
+        if line.trim().is_empty() {
+            continue;
+        }
+        if let Some(c) = line.strip_prefix('#') {
+            if let Some(rest) = c.trim_start().strip_prefix("site:") {
+                site = Some(parse_site_comment(rest, &loc)?);
+            }
+            continue;
+        }
+        let cells = split_csv(line);
+        let Some(cols) = &header else {
+            let cols: Vec<String> = cells.iter().map(|c| c.trim().to_string()).collect();
+            for (j, c) in cols.iter().enumerate() {
+                if !known.contains(&c.as_str()) {
+                    return Err(Error::parse(
+                        loc.with_field(c.clone()),
+                        format!(
+                            "unknown column `{c}` (column {}); expected names from `{CSV_HEADER}`",
+                            j + 1
+                        ),
+                    ));
+                }
+                if cols[..j].contains(c) {
+                    return Err(Error::parse(
+                        loc.with_field(c.clone()),
+                        format!("column `{c}` appears twice"),
+                    ));
+                }
+            }
+            if !cols.iter().any(|c| c == "time") {
+                return Err(Error::parse(
+                    loc.with_field("time"),
+                    "the header has no `time` column",
+                ));
+            }
+            header = Some(cols);
+            continue;
+        };
+        if cells.len() != cols.len() {
+            let field = cols.get(cells.len()).cloned().unwrap_or_default();
+            return Err(Error::parse(
+                if cells.len() < cols.len() {
+                    loc.with_field(field)
+                } else {
+                    loc
+                },
+                format!(
+                    "{} columns, expected {} as in the header{}",
+                    cells.len(),
+                    cols.len(),
+                    if cells.len() < cols.len() {
+                        " (missing columns from the one named)"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        let ti = cols.iter().position(|c| c == "time").unwrap_or(0);
+        let time = parse_time(&cells[ti], &loc.clone().with_field("time"))?;
+        let mut r = RawRecord::new(loc.clone(), time);
+        for (c, cell) in cols.iter().zip(&cells) {
+            if c == "time" {
+                continue;
+            }
+            let v = opt_number(cell, &loc.clone().with_field(c.clone()), c)?;
+            set_field(&mut r, c, v);
+        }
+        records.push(r);
+    }
+    if header.is_none() {
+        return Err(Error::parse(
+            Location::file(path),
+            format!("no header line; expected `{CSV_HEADER}`"),
+        ));
+    }
+    Ok(Parsed {
+        records,
+        site,
+        irradiance_offset: chrono::TimeDelta::zero(),
+    })
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JsonFile {
+    #[serde(default)]
+    site: Option<Site>,
+    records: Vec<JsonRecord>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JsonRecord {
+    time: String,
+    air_temperature_k: Option<f64>,
+    dew_point_k: Option<f64>,
+    relative_humidity: Option<f64>,
+    pressure_pa: Option<f64>,
+    wind_speed_m_s: Option<f64>,
+    wind_direction_deg: Option<f64>,
+    direct_normal_w_m2: Option<f64>,
+    diffuse_horizontal_w_m2: Option<f64>,
+    global_horizontal_w_m2: Option<f64>,
+    sky_longwave_w_m2: Option<f64>,
+    total_sky_cover: Option<f64>,
+    opaque_sky_cover: Option<f64>,
+}
+
+pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
+    let f: JsonFile = serde_json::from_str(text).map_err(|e| {
+        Error::parse(
+            Location::file(path).at_line(e.line()),
+            format!("{e}; expected {{\"site\": …, \"records\": [{{\"time\": …, …}}]}}"),
+        )
+    })?;
+    if let Some(s) = &f.site {
+        s.validate()
+            .map_err(|e| Error::parse(Location::file(path).with_field("site"), e.to_string()))?;
+    }
+    let mut records = Vec::with_capacity(f.records.len());
+    for (i, j) in f.records.into_iter().enumerate() {
+        let loc = Location::file(path).with_field(format!("records[{i}]"));
+        let time = parse_time(
+            &j.time,
+            &Location::file(path).with_field(format!("records[{i}].time")),
+        )?;
+        let mut r = RawRecord::new(loc, time);
+        r.air_temperature_k = j.air_temperature_k;
+        r.dew_point_k = j.dew_point_k;
+        r.relative_humidity = j.relative_humidity;
+        r.pressure_pa = j.pressure_pa;
+        r.wind_speed_m_s = j.wind_speed_m_s;
+        r.wind_direction_deg = j.wind_direction_deg;
+        r.direct_normal_w_m2 = j.direct_normal_w_m2;
+        r.diffuse_horizontal_w_m2 = j.diffuse_horizontal_w_m2;
+        r.global_horizontal_w_m2 = j.global_horizontal_w_m2;
+        r.sky_longwave_w_m2 = j.sky_longwave_w_m2;
+        r.total_sky_cover = j.total_sky_cover;
+        r.opaque_sky_cover = j.opaque_sky_cover;
+        records.push(r);
+    }
+    Ok(Parsed {
+        records,
+        site: f.site,
+        irradiance_offset: chrono::TimeDelta::zero(),
+    })
+}
+
+fn csv_row(r: &WeatherRecord) -> String {
+    format!(
+        "{},{:.3},{:.3},{:.4},{:.1},{:.2},{:.1},{:.2},{:.2},{:.2},{:.2},{:.3},{:.3}",
+        r.time.to_rfc3339(),
+        r.air_temperature_k,
+        r.dew_point_k,
+        r.relative_humidity,
+        r.pressure_pa,
+        r.wind_speed_m_s,
+        r.wind_direction_deg,
+        r.direct_normal_w_m2,
+        r.diffuse_horizontal_w_m2,
+        r.global_horizontal_w_m2,
+        r.sky_longwave_w_m2,
+        r.total_sky_cover,
+        r.opaque_sky_cover
+    )
+}
+
+/// Write a history as irsig CSV (site comment when known, then [`CSV_HEADER`], then
+/// one row per record; `comments` are written first, each prefixed with `# `).
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_csv(
+    history: &WeatherHistory,
+    comments: &[&str],
+    w: &mut impl Write,
+) -> std::io::Result<()> {
+    for c in comments {
+        writeln!(w, "# {c}")?;
+    }
+    if let Some(s) = history.site() {
+        writeln!(
+            w,
+            "# site: latitude_deg={} longitude_deg={} altitude_m={}",
+            s.latitude_deg, s.longitude_deg, s.altitude_m
+        )?;
+    }
+    writeln!(w, "{CSV_HEADER}")?;
+    for r in history.records() {
+        writeln!(w, "{}", csv_row(r))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,188 @@
+//! NSRDB TMY3 CSV (Wilcox & Marion 2008, *Users Manual for TMY3 Data Sets*,
+//! NREL/TP-581-43156).
+//!
+//! Line 1: `USAF,"station name",state,time zone (h),latitude,longitude,elevation (m)`.
+//! Line 2: column names, e.g. `Date (MM/DD/YYYY),Time (HH:MM),…,GHI (W/m^2),…`.
+//! Rows are hour-ending local standard time (`01:00`..`24:00`); solar values are the
+//! hour's totals (Wh/m² = mean W/m²), so an irradiance split uses the Sun at the hour's
+//! midpoint. Missing values are written −9900 (manual §4) or left empty. Columns are
+//! found by name; the units are those in the names (°C, %, mbar, m/s, tenths).
+
+use std::path::Path;
+
+use chrono::{FixedOffset, NaiveDate, TimeDelta, TimeZone};
+
+use super::LoadOptions;
+use super::fill::{Parsed, RawRecord};
+use super::text::{number, split_csv};
+use crate::error::{Error, Location, Result};
+use crate::sun::Site;
+
+/// Values at or below this are TMY3's "missing" code (−9900).
+const MISSING: f64 = -9900.0;
+
+const DATE: &str = "Date (MM/DD/YYYY)";
+const TIME: &str = "Time (HH:MM)";
+/// (column name, required)
+const COLUMNS: [(&str, bool); 11] = [
+    ("GHI (W/m^2)", true),
+    ("DNI (W/m^2)", true),
+    ("DHI (W/m^2)", true),
+    ("TotCld (tenths)", false),
+    ("OpqCld (tenths)", false),
+    ("Dry-bulb (C)", true),
+    ("Dew-point (C)", false),
+    ("RHum (%)", false),
+    ("Pressure (mbar)", false),
+    ("Wdir (degrees)", false),
+    ("Wspd (m/s)", true),
+];
+
+pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Parsed> {
+    let mut lines = text.lines().enumerate();
+    let (_, meta) = lines
+        .next()
+        .ok_or_else(|| Error::parse(Location::file(path), "empty TMY3 file"))?;
+    let mloc = Location::file(path).at_line(1);
+    let m = split_csv(meta.trim_start_matches('\u{feff}'));
+    if m.len() < 7 {
+        return Err(Error::parse(
+            mloc,
+            "expected site metadata `USAF,name,state,time zone,latitude,longitude,elevation`",
+        ));
+    }
+    let tz = number(
+        &m[3],
+        &mloc.clone().with_field("time zone"),
+        "time zone (h)",
+    )?;
+    let lat = number(&m[4], &mloc.clone().with_field("latitude"), "latitude (°)")?;
+    let lon = number(
+        &m[5],
+        &mloc.clone().with_field("longitude"),
+        "longitude (°)",
+    )?;
+    let elev = number(
+        &m[6],
+        &mloc.clone().with_field("elevation"),
+        "elevation (m)",
+    )?;
+    let site = Site::new(lat, lon, elev).map_err(|e| Error::parse(mloc.clone(), e.to_string()))?;
+    let offset = if (-14.0..=14.0).contains(&tz) {
+        FixedOffset::east_opt((tz * 3600.0).round() as i32)
+    } else {
+        None
+    }
+    .ok_or_else(|| {
+        Error::parse(
+            mloc.clone().with_field("time zone"),
+            format!("time zone {tz} h: expected −14..14"),
+        )
+    })?;
+
+    let (hi, header) = lines
+        .next()
+        .ok_or_else(|| Error::parse(Location::file(path).at_line(2), "missing column-name line"))?;
+    let hloc = Location::file(path).at_line(hi + 1);
+    let names: Vec<String> = split_csv(header)
+        .iter()
+        .map(|s| s.trim().to_string())
+        .collect();
+    let find = |name: &str| names.iter().position(|n| n == name);
+    let date_i = find(DATE).ok_or_else(|| {
+        Error::parse(hloc.clone().with_field(DATE), format!("no `{DATE}` column"))
+    })?;
+    let time_i = find(TIME).ok_or_else(|| {
+        Error::parse(hloc.clone().with_field(TIME), format!("no `{TIME}` column"))
+    })?;
+    let mut idx = [None; COLUMNS.len()];
+    for (k, (name, required)) in COLUMNS.iter().enumerate() {
+        idx[k] = find(name);
+        if *required && idx[k].is_none() {
+            return Err(Error::parse(
+                hloc.clone().with_field(*name),
+                format!("no `{name}` column"),
+            ));
+        }
+    }
+
+    let mut records = Vec::new();
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let loc = Location::file(path).at_line(i + 1);
+        let f = split_csv(line);
+        if f.len() < names.len() {
+            return Err(Error::parse(
+                loc.with_field(names[f.len()].clone()),
+                format!(
+                    "{} columns, expected {} as in the header",
+                    f.len(),
+                    names.len()
+                ),
+            ));
+        }
+        let dloc = loc.clone().with_field(DATE);
+        let date_s = f[date_i].trim();
+        let mut dp = date_s.split('/');
+        let (mo, da, yr) = (dp.next(), dp.next(), dp.next());
+        let date = match (mo, da, yr) {
+            (Some(mo), Some(da), Some(yr)) => {
+                let year = match options.year {
+                    Some(y) => Some(y),
+                    None => yr.trim().parse().ok(),
+                };
+                match (mo.trim().parse(), da.trim().parse(), year) {
+                    (Ok(mo), Ok(da), Some(y)) => NaiveDate::from_ymd_opt(y, mo, da),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+        .ok_or_else(|| Error::parse(dloc, format!("`{date_s}` is not a MM/DD/YYYY date")))?;
+        let time_s = f[time_i].trim();
+        let hm = time_s
+            .split_once(':')
+            .and_then(|(h, m)| Some((h.parse::<i64>().ok()?, m.parse::<i64>().ok()?)))
+            .filter(|&(h, m)| (0..=24).contains(&h) && (0..60).contains(&m))
+            .ok_or_else(|| {
+                Error::parse(
+                    loc.clone().with_field(TIME),
+                    format!("`{time_s}` is not HH:MM (01:00..24:00, hour-ending)"),
+                )
+            })?;
+        let midnight = offset
+            .from_local_datetime(&date.and_hms_opt(0, 0, 0).unwrap_or_default())
+            .single()
+            .ok_or_else(|| Error::parse(loc.clone(), "local midnight is not representable"))?;
+        let time = midnight + TimeDelta::minutes(hm.0 * 60 + hm.1);
+        let get = |k: usize| -> Result<Option<f64>> {
+            let Some(j) = idx[k] else { return Ok(None) };
+            let s = f[j].trim();
+            if s.is_empty() {
+                return Ok(None);
+            }
+            let v = number(s, &loc.clone().with_field(COLUMNS[k].0), COLUMNS[k].0)?;
+            Ok(if v <= MISSING { None } else { Some(v) })
+        };
+        let mut r = RawRecord::new(loc.clone(), time);
+        r.global_horizontal_w_m2 = get(0)?;
+        r.direct_normal_w_m2 = get(1)?;
+        r.diffuse_horizontal_w_m2 = get(2)?;
+        r.total_sky_cover = get(3)?.map(|t| t / 10.0);
+        r.opaque_sky_cover = get(4)?.map(|t| t / 10.0);
+        r.air_temperature_k = get(5)?.map(|c| c + 273.15);
+        r.dew_point_k = get(6)?.map(|c| c + 273.15);
+        r.relative_humidity = get(7)?.map(|p| p / 100.0);
+        r.pressure_pa = get(8)?.map(|p| p * 100.0);
+        r.wind_direction_deg = get(9)?;
+        r.wind_speed_m_s = get(10)?;
+        records.push(r);
+    }
+    Ok(Parsed {
+        records,
+        site: Some(site),
+        irradiance_offset: TimeDelta::minutes(-30),
+    })
+}
