@@ -197,3 +197,38 @@ fn cli_sun_json() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("latitude"), "{err}");
 }
+
+/// Independent implementation: 400 random instants 1950–2050 (random sites, elevation,
+/// pressure, temperature, ΔT) from pvlib-python's `spa.py` (NumPy SPA). The issue's
+/// target is 0.001° for any date 1950–2050.
+#[test]
+fn spa_matches_pvlib_1950_2050() {
+    let text =
+        std::fs::read_to_string(util::repo_path("tests/data/sun/pvlib_spa_1950_2050.csv")).unwrap();
+    let (mut n, mut max_z0, mut max_z, mut max_az, mut max_r) = (0, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    {
+        let f: Vec<&str> = line.split(',').collect();
+        let time: DateTime<Utc> = f[0].parse().unwrap();
+        let v: Vec<f64> = f[1..].iter().map(|s| s.parse().unwrap()).collect();
+        let site = Site::new(v[0], v[1], v[2]).unwrap();
+        let p = sun::position(&site, time, v[5], v[3], v[4]).unwrap();
+        max_z0 = max_z0.max((p.zenith_deg - v[6]).abs());
+        max_z = max_z.max((p.apparent_zenith_deg - v[7]).abs());
+        let daz = (p.azimuth_deg - v[8] + 540.0).rem_euclid(360.0) - 180.0;
+        max_az = max_az.max(daz.abs());
+        max_r = max_r.max((p.distance_au - v[9]).abs());
+        n += 1;
+    }
+    eprintln!(
+        "SPA vs pvlib 1950-2050: {n} rows, max |Δzenith| {max_z0:.2e}°, |Δapparent| {max_z:.2e}°, |Δazimuth| {max_az:.2e}°, |ΔR| {max_r:.2e} AU"
+    );
+    assert_eq!(n, 400);
+    assert!(
+        max_z0 < 1e-3 && max_z < 1e-3 && max_az < 1e-3,
+        "{max_z0} {max_z} {max_az}"
+    );
+    assert!(max_r < 1e-8, "{max_r}");
+}

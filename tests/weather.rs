@@ -674,3 +674,21 @@ fn cli_weather_show_wth_needs_start() {
     assert!(text.contains("2025-01-15T12:00:00-05:00"));
     assert_eq!(text.lines().filter(|l| l.starts_with("2025-")).count(), 193);
 }
+
+#[test]
+fn epw_year_override_and_mixed_years_hint() {
+    let path = util::repo_path("tests/data/weather/rochester_sample.epw");
+    let h = weather::load_with(&path, &LoadOptions::default().with_year(2025)).unwrap();
+    assert_eq!(h.start(), t("2025-06-21T05:00:00-05:00"));
+    // The history's own site gives the Sun: Rochester, 21 June 10:00 EST, Sun up in the south-east.
+    let p = h.sun_position(h.end()).unwrap();
+    assert!(p.is_up() && (90.0..180.0).contains(&p.azimuth_deg), "{p:?}");
+    // A typical-year file whose years go backwards: the error names the line and suggests --year.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let bad = text.replacen("1990,6,21,9,", "1987,6,21,9,", 1);
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_tmp(&dir, "mixed.epw", &bad);
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(e.contains("mixed.epw:line 13") && e.contains("year"), "{e}");
+    assert!(weather::load_with(&p, &LoadOptions::default().with_year(1990)).is_ok());
+}

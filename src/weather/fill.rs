@@ -171,6 +171,15 @@ pub(crate) fn complete(
             .records
             .get(i)
             .map_or_else(|| Location::file(path), |r| r.loc.clone())
+    })
+    .map_err(|e| match (format, e) {
+        (Format::Epw | Format::Tmy3, Error::Parse { location, message }) => Error::parse(
+            location,
+            format!(
+                "{message} (typical-year files mix years: give one year with LoadOptions::year / --year)"
+            ),
+        ),
+        (_, e) => e,
     })?;
 
     let mut out = Vec::with_capacity(parsed.records.len());

@@ -185,6 +185,21 @@ impl WeatherHistory {
         self.filled.get(i).map_or(&[], Vec::as_slice)
     }
 
+    /// The Sun at `t` for the history's site (standard atmosphere, estimated ΔT; see
+    /// [`crate::sun::position_standard`]).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] when the history has no site, or as the solar position.
+    pub fn sun_position<Tz: TimeZone>(&self, t: DateTime<Tz>) -> Result<crate::sun::SunPosition> {
+        let site = self.site.as_ref().ok_or_else(|| {
+            Error::invalid(
+                "site",
+                "the weather history has no site; give one with LoadOptions::site",
+            )
+        })?;
+        crate::sun::position_standard(site, t)
+    }
+
     /// Time of the first record.
     pub fn start(&self) -> DateTime<FixedOffset> {
         self.records[0].time
