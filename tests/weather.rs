@@ -692,3 +692,59 @@ fn epw_year_override_and_mixed_years_hint() {
     assert!(e.contains("mixed.epw:line 13") && e.contains("year"), "{e}");
     assert!(weather::load_with(&p, &LoadOptions::default().with_year(1990)).is_ok());
 }
+
+/// A real NSRDB TMY3 file (Greensboro NC, 723170TYA.CSV as shipped in pvlib-python's data;
+/// public-domain NREL data): header and the 24 rows of 21 June.
+#[test]
+fn tmy3_real_file_reads_and_closes_irradiance() {
+    let path = util::repo_path("tests/data/weather/723170TYA_jun21.csv");
+    let h = weather::load(&path).unwrap();
+    let s = *h.site().unwrap();
+    assert_eq!(
+        (s.latitude_deg, s.longitude_deg, s.altitude_m),
+        (36.1, -79.95, 273.0)
+    );
+    assert_eq!(h.records().len(), 24);
+    assert_eq!(h.start(), t("1989-06-21T01:00:00-05:00"));
+    assert_eq!(h.end(), t("1989-06-22T00:00:00-05:00"));
+    // `06/21/1989,12:00,…,702,…,395,…,324,…,6,A,7,6,A,7,25.0,A,7,21.1,A,7,79,A,7,990,A,7,260,A,7,2.6,…`
+    let r = &h.records()[11];
+    assert_eq!(r.time, t("1989-06-21T12:00:00-05:00"));
+    assert!(close(r.air_temperature_k, 298.15, 1e-9) && close(r.dew_point_k, 294.25, 1e-9));
+    assert!(close(r.relative_humidity, 0.79, 1e-12) && close(r.pressure_pa, 99_000.0, 1e-9));
+    assert_eq!((r.wind_direction_deg, r.wind_speed_m_s), (260.0, 2.6));
+    assert_eq!(
+        (
+            r.global_horizontal_w_m2,
+            r.direct_normal_w_m2,
+            r.diffuse_horizontal_w_m2
+        ),
+        (702.0, 395.0, 324.0)
+    );
+    assert!(close(r.opaque_sky_cover, 0.6, 1e-12));
+    let lw = physics::clark_allen_sky_longwave_w_m2(298.15, 294.25, 0.6);
+    assert!(close(r.sky_longwave_w_m2, lw, 1e-9));
+    assert_eq!(h.filled(11), &["sky_longwave_w_m2"]);
+    // Hour-ending means: the measured components close on GHI with the Sun at mid-hour
+    // (GHI = DHI + DNI cos z), far better than with the Sun at the stamped hour end.
+    let (mut err_mid, mut err_end) = (0.0, 0.0);
+    for r in h
+        .records()
+        .iter()
+        .filter(|r| r.global_horizontal_w_m2 > 200.0)
+    {
+        let closure = |tt| {
+            let p = h.sun_position(tt).unwrap();
+            (r.diffuse_horizontal_w_m2
+                + r.direct_normal_w_m2 * p.apparent_zenith_deg.to_radians().cos()
+                - r.global_horizontal_w_m2)
+                .abs()
+        };
+        err_mid += closure(r.time - TimeDelta::minutes(30));
+        err_end += closure(r.time);
+    }
+    eprintln!(
+        "TMY3 closure |DHI + DNI cos z − GHI| summed: mid-hour {err_mid:.0}, hour end {err_end:.0} W/m²"
+    );
+    assert!(err_mid < 0.1 * err_end, "{err_mid} {err_end}");
+}
