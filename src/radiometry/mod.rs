@@ -1,1 +1,21 @@
-//! (radiometry: being written.)
+//! Radiometry: Planck's law, spectral grids and sensor bands, band integrals
+//! and brightness temperature, sensor spectral responses, angular spectral
+//! emissivity, and the per-hit radiance ("big equation").
+//!
+//! How the pieces fit:
+//! - [`planck`]: B(λ, T) in W·m⁻²·sr⁻¹·µm⁻¹ (CODATA 2018 by default).
+//! - [`band`]: [`SpectralGrid`] (wavelengths + trapezoid weights) and
+//!   [`Band`] (grid + relative response R, peak 1). Band radiance is
+//!   ∫ R L dλ in W·m⁻²·sr⁻¹; [`Band::brightness_temperature`] inverts it.
+//! - [`response`]: the spectral response CSV reader.
+//!
+//! Internal units: wavelength µm, temperature K, spectral radiance
+//! W·m⁻²·sr⁻¹·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
+
+pub mod band;
+pub mod planck;
+pub mod response;
+
+pub use band::{Band, DEFAULT_STEP_UM, SpectralGrid};
+pub use planck::{Constants, Planck, planck_radiance};
+pub use response::{SpectralResponse, read_response_csv};

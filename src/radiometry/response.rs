@@ -1,0 +1,185 @@
+//! Sensor relative spectral response: the type and its CSV reader.
+//!
+//! File format: one `wavelength_um, response` pair per line. Separators may
+//! be commas, semicolons, tabs or spaces; a header line (any first data line
+//! whose first field is not a number) is optional; `#` starts a comment;
+//! blank lines are ignored. Wavelengths in µm, strictly increasing; responses
+//! finite and ≥ 0, not all zero. Any further columns are an error (they would
+//! be silently misread otherwise). Between points the response is linear;
+//! outside the first/last point it is zero.
+
+use std::path::Path;
+
+use crate::{Error, Location, Result};
+
+/// A relative spectral response curve (dimensionless, any scale).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpectralResponse {
+    wavelengths_um: Vec<f64>,
+    response: Vec<f64>,
+}
+
+impl SpectralResponse {
+    /// A response from pairs; validates as the CSV reader does.
+    pub fn new(wavelengths_um: Vec<f64>, response: Vec<f64>) -> Result<Self> {
+        if wavelengths_um.len() != response.len() {
+            return Err(Error::invalid(
+                "response",
+                "wavelength and response lists differ in length",
+            ));
+        }
+        if wavelengths_um.len() < 2 {
+            return Err(Error::invalid(
+                "response",
+                "a spectral response needs at least two points",
+            ));
+        }
+        for i in 0..wavelengths_um.len() {
+            let (l, r) = (wavelengths_um[i], response[i]);
+            if !(l.is_finite() && l > 0.0) || (i > 0 && l <= wavelengths_um[i - 1]) {
+                return Err(Error::invalid(
+                    format!("wavelength_um[{i}]"),
+                    format!("expected positive, strictly increasing wavelengths, got {l}"),
+                ));
+            }
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(Error::invalid(
+                    format!("response[{i}]"),
+                    format!("expected a finite response ≥ 0, got {r}"),
+                ));
+            }
+        }
+        if response.iter().all(|&r| r == 0.0) {
+            return Err(Error::invalid(
+                "response",
+                "the response is zero everywhere",
+            ));
+        }
+        Ok(SpectralResponse {
+            wavelengths_um,
+            response,
+        })
+    }
+
+    /// The wavelengths, µm.
+    pub fn wavelengths_um(&self) -> &[f64] {
+        &self.wavelengths_um
+    }
+    /// The response values as given.
+    pub fn response(&self) -> &[f64] {
+        &self.response
+    }
+    /// Response at `wavelength_um`: linear between points, 0 outside.
+    pub fn at(&self, wavelength_um: f64) -> f64 {
+        let w = &self.wavelengths_um;
+        if wavelength_um < w[0] || wavelength_um > w[w.len() - 1] {
+            return 0.0;
+        }
+        let i = w.partition_point(|&x| x <= wavelength_um);
+        if i == 0 {
+            return self.response[0];
+        }
+        if i >= w.len() {
+            return self.response[w.len() - 1];
+        }
+        let t = (wavelength_um - w[i - 1]) / (w[i] - w[i - 1]);
+        self.response[i - 1] + t * (self.response[i] - self.response[i - 1])
+    }
+}
+
+/// Read a response CSV file (see the module docs for the format).
+pub fn read_response_csv(path: impl AsRef<Path>) -> Result<SpectralResponse> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_response_csv(&text, path)
+}
+
+/// Parse response CSV text; `path` is used in error messages only.
+pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<SpectralResponse> {
+    let path = path.as_ref();
+    let mut wl = Vec::new();
+    let mut resp = Vec::new();
+    let mut seen_data_or_header = false;
+    for (i, raw) in text.lines().enumerate() {
+        let lineno = i + 1;
+        let loc = || Location::file(path).at_line(lineno);
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let line = line.trim_start_matches('\u{feff}');
+        if line.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line
+            .split([',', ';', '\t', ' '])
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .collect();
+        if !seen_data_or_header {
+            seen_data_or_header = true;
+            if fields.first().is_some_and(|f| f.parse::<f64>().is_err()) {
+                continue; // header
+            }
+        }
+        if fields.len() != 2 {
+            return Err(Error::parse(
+                loc(),
+                format!(
+                    "expected two fields `wavelength_um, response`, found {}: `{line}`",
+                    fields.len()
+                ),
+            ));
+        }
+        let l: f64 = fields[0].parse().map_err(|_| {
+            Error::parse(
+                loc().with_field("wavelength_um"),
+                format!("expected a wavelength in µm, found `{}`", fields[0]),
+            )
+        })?;
+        let r: f64 = fields[1].parse().map_err(|_| {
+            Error::parse(
+                loc().with_field("response"),
+                format!("expected a relative response, found `{}`", fields[1]),
+            )
+        })?;
+        if !(l.is_finite() && l > 0.0) {
+            return Err(Error::parse(
+                loc().with_field("wavelength_um"),
+                format!("expected a positive wavelength in µm, found {l}"),
+            ));
+        }
+        if l > 1000.0 {
+            return Err(Error::parse(
+                loc().with_field("wavelength_um"),
+                format!("wavelength {l} is not plausible in µm (nm or cm⁻¹ given?)"),
+            ));
+        }
+        if let Some(&prev) = wl.last() {
+            if l <= prev {
+                return Err(Error::parse(
+                    loc().with_field("wavelength_um"),
+                    format!("wavelengths must increase strictly: {l} follows {prev}"),
+                ));
+            }
+        }
+        if !(r.is_finite() && r >= 0.0) {
+            return Err(Error::parse(
+                loc().with_field("response"),
+                format!("expected a finite response ≥ 0, found {r}"),
+            ));
+        }
+        wl.push(l);
+        resp.push(r);
+    }
+    if wl.len() < 2 {
+        return Err(Error::parse(
+            Location::file(path),
+            format!("expected at least two response points, found {}", wl.len()),
+        ));
+    }
+    if resp.iter().all(|&r| r == 0.0) {
+        return Err(Error::parse(
+            Location::file(path),
+            "the response is zero at every wavelength",
+        ));
+    }
+    SpectralResponse::new(wl, resp)
+}
