@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod material;
 pub mod output;
 pub mod radiometry;
+pub mod render;
 pub mod scene;
 pub mod sensor;
 pub mod sun;
