@@ -462,6 +462,7 @@ fn double_sided_facets_take_sun_and_sky_on_both_faces() {
     let one = compute_exposure(&brute, &geo, &[], &steps, &stratified(64)).unwrap();
     for f in wall {
         assert_eq!(one.solar.sun_fraction(f), &[0.0, 1.0]);
+        assert_eq!(one.sky.back_shape_factor(f), None);
     }
 }
 

@@ -84,18 +84,25 @@ pub struct BackgroundEntry {
 ///   below the horizon, whose temperature is taken as air-like;
 /// - `background` lists the facets hit, merged by id, sorted by id.
 ///
-/// For a double-sided facet every quantity is the mean of its two faces.
+/// For a double-sided facet `shape_factor` is its front face's F,
+/// `back_shape_factor` its back face's, and the ground weight and background
+/// are the mean over both faces (each face's rays carry half weight), so
+/// that `(F + F_back)/2 + ground_weight + Σ background.weight = 1`.
 /// The longwave background term of the thermal balance uses `1 − F` with
 /// the radiative mean `T_bg⁴ = (Σ wᵢ Tᵢ⁴ + g·T_ground⁴) / (1 − F)`
 /// ([`SkyView::background_temperature`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SkyView {
-    /// Shape factor F (view factor to the sky), per facet.
+    /// Shape factor F (view factor to the sky) of the front face, per facet.
     pub shape_factor: Vec<f32>,
+    /// Shape factor of the back face of double-sided facets (`None` for
+    /// single-sided ones).
+    pub back_shape_factor: Vec<Option<f32>>,
     /// Estimated standard error of F, per facet: from the squared
     /// differences of paired neighbouring cells/strata,
     /// `SE² = Σ_pairs w² (yₐ − y_b)²` (a conservative estimate for stratified
     /// sampling; for the fixed grid an indication of its quadrature error).
+    /// For a double-sided facet, the error of the mean over both faces.
     pub std_error: Vec<f32>,
     /// View factor to the ground beyond the scene / below the horizon.
     pub ground_weight: Vec<f32>,
@@ -110,6 +117,19 @@ impl SkyView {
     pub fn facet_count(&self) -> usize {
         self.shape_factor.len()
     }
+    /// Shape factor of the back face of `facet` when it is double-sided.
+    pub fn back_shape_factor(&self, facet: usize) -> Option<f32> {
+        self.back_shape_factor[facet]
+    }
+    /// Mean sky view factor over the facet's faces: F, or `(F + F_back)/2`
+    /// for a double-sided facet. `1 −` it is the view factor to the
+    /// background (neighbours and ground).
+    pub fn mean_shape_factor(&self, facet: usize) -> f32 {
+        match self.back_shape_factor(facet) {
+            Some(b) => 0.5 * (self.shape_factor[facet] + b),
+            None => self.shape_factor[facet],
+        }
+    }
     /// The facets seen by `facet`, with their view factors.
     pub fn background(&self, facet: usize) -> &[BackgroundEntry] {
         &self.entries[self.offsets[facet] as usize..self.offsets[facet + 1] as usize]
@@ -117,9 +137,9 @@ impl SkyView {
 
     /// Background (non-sky) temperature of `facet`, K: the radiative mean
     /// over what it sees below the sky, `T_bg = ((Σ wᵢ Tᵢ⁴ + g T_ground⁴) /
-    /// (1 − F))^¼`, given every facet's temperature (`temps`, K) and the
-    /// ground-beyond-the-scene temperature. Returns `t_ground` when the facet
-    /// sees only sky.
+    /// (1 − F))^¼` (`F` the mean over faces for double-sided facets), given
+    /// every facet's temperature (`temps`, K) and the ground-beyond-the-scene
+    /// temperature. Returns `t_ground` when the facet sees only sky.
     pub fn background_temperature(&self, facet: usize, temps: &[f32], t_ground: f32) -> f32 {
         let g = self.ground_weight[facet];
         let mut num = g * t_ground.powi(4);
@@ -168,6 +188,7 @@ pub fn sky_view<T: Tracer + ?Sized>(
         } => dirsig_grid(zenith_step_deg, azimuth_step_deg),
         SkySampling::Stratified { .. } => Vec::new(),
     };
+    let face_rays = sampling.rays_per_face();
     let chunks: Vec<(SkyView, u64)> = (0..n.div_ceil(batch))
         .into_par_iter()
         .map(|c| {
@@ -205,9 +226,11 @@ pub fn sky_view<T: Tracer + ?Sized>(
             let mut seen: Vec<BackgroundEntry> = Vec::new();
             for w in ranges.windows(2) {
                 let (r0, r1) = (w[0], w[1]);
-                let (mut sky, mut ground, mut var) = (0.0f64, 0.0f64, 0.0f64);
+                let (mut sky, mut ground, mut var) = ([0.0f64; 2], 0.0f64, 0.0f64);
                 seen.clear();
                 let is_sky = |i: usize| hits[i].is_none() && rays[i].dir.z > 0.0;
+                // Rays of the back face follow those of the front.
+                let per_face = (r1 - r0) / if r1 - r0 == 2 * face_rays { 2 } else { 1 };
                 for i in r0..r1 {
                     match hits[i] {
                         Some(h) => seen.push(BackgroundEntry {
@@ -218,7 +241,9 @@ pub fn sky_view<T: Tracer + ?Sized>(
                             ) as u32,
                             weight: weights[i],
                         }),
-                        None if rays[i].dir.z > 0.0 => sky += weights[i] as f64,
+                        None if rays[i].dir.z > 0.0 => {
+                            sky[(i - r0) / per_face] += weights[i] as f64
+                        }
                         None => ground += weights[i] as f64,
                     }
                 }
@@ -238,7 +263,14 @@ pub fn sky_view<T: Tracer + ?Sized>(
                         _ => out.entries.push(*e),
                     }
                 }
-                out.shape_factor.push(sky as f32);
+                if r1 - r0 == per_face {
+                    out.shape_factor.push(sky[0] as f32);
+                    out.back_shape_factor.push(None);
+                } else {
+                    // Each face's rays carried half weight.
+                    out.shape_factor.push((2.0 * sky[0]) as f32);
+                    out.back_shape_factor.push(Some((2.0 * sky[1]) as f32));
+                }
                 out.ground_weight.push(ground as f32);
                 out.std_error.push(var.sqrt() as f32);
                 out.offsets.push(out.entries.len() as u32);
@@ -254,6 +286,7 @@ pub fn sky_view<T: Tracer + ?Sized>(
     for (c, r) in chunks {
         let base = out.entries.len() as u32;
         out.shape_factor.extend(c.shape_factor);
+        out.back_shape_factor.extend(c.back_shape_factor);
         out.std_error.extend(c.std_error);
         out.ground_weight.extend(c.ground_weight);
         out.offsets.extend(c.offsets[1..].iter().map(|o| o + base));
