@@ -551,3 +551,77 @@ fn bad_inputs_are_reported() {
             .contains("samples_per_edge")
     );
 }
+
+#[test]
+fn history_window_puts_the_image_times_on_the_grid() {
+    use chrono::{DateTime, TimeDelta};
+    use irsig::exposure::{HistoryWindow, history_times};
+    let (weather, _) = irsig::weather::synth::town_history().unwrap();
+    let a = DateTime::parse_from_rfc3339("2025-06-21T13:00:00-04:00").unwrap();
+    let b = DateTime::parse_from_rfc3339("2025-06-21T13:07:00-04:00").unwrap();
+    let w = HistoryWindow::default();
+    let t = history_times(&weather, &[b, a], &w).unwrap();
+    // 24 h at 15 min from 13:00 the day before, then 13:07.
+    assert_eq!(t.len(), 96 + 1 + 1);
+    assert_eq!(t[0], a - TimeDelta::hours(24));
+    assert!(
+        t.windows(2)
+            .all(|p| p[1] > p[0] && p[1] - p[0] <= TimeDelta::minutes(15))
+    );
+    assert_eq!(t[96], a);
+    assert_eq!(t[97], b);
+    // An hourly-coarse step is capped; a finer one is kept.
+    let w5 = HistoryWindow {
+        max_step: TimeDelta::minutes(5),
+        ..w
+    };
+    assert_eq!(
+        history_times(&weather, &[a], &w5).unwrap().len(),
+        24 * 12 + 1
+    );
+    // Outside the weather: an error naming the spans.
+    let early = DateTime::parse_from_rfc3339("2025-06-19T06:00:00-04:00").unwrap();
+    let e = history_times(&weather, &[early], &w)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("weather history covers") && e.contains("2025-06-18T06:00:00-04:00"),
+        "{e}"
+    );
+    assert!(history_times(&weather, &[], &w).is_err());
+}
+
+#[test]
+fn sun_directions_follow_the_ephemeris() {
+    use chrono::{DateTime, TimeDelta};
+    use irsig::exposure::sun_directions;
+    let (weather, _) = irsig::weather::synth::town_history().unwrap();
+    let site = *weather.site().unwrap();
+    let t0 = DateTime::parse_from_rfc3339("2025-06-21T00:00:00-04:00").unwrap();
+    let times: Vec<_> = (0..96).map(|i| t0 + TimeDelta::minutes(15 * i)).collect();
+    let d = sun_directions(&site, &times).unwrap();
+    assert!(d.iter().all(|v| (v.length() - 1.0).abs() < 1e-5));
+    // Highest sun at the solstice: 90° − (latitude − 23.44°), to the south.
+    let (k, top) = d
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.z.total_cmp(&b.1.z))
+        .unwrap();
+    let elev = top.z.asin().to_degrees() as f64;
+    let expect = 90.0 - (site.latitude_deg - 23.44);
+    assert!(
+        (elev - expect).abs() < 0.3,
+        "noon elevation {elev} vs {expect}"
+    );
+    assert!(top.y < 0.0 && top.x.abs() < 0.1, "due south: {top}");
+    // Solar noon at Rochester (77.6° W, EDT = UTC−4) is about 13:15 local.
+    let noon = times[k];
+    assert!(
+        (noon - DateTime::parse_from_rfc3339("2025-06-21T13:15:00-04:00").unwrap())
+            .num_minutes()
+            .abs()
+            <= 15
+    );
+    // Night: below the horizon.
+    assert!(d[4].z < 0.0 && d[92].z < 0.0);
+}

@@ -13,6 +13,9 @@
 //!   and the background — which facets the blocked rays hit, with weights —
 //!   plus the weight of the ground beyond the scene.
 //! - [`compute_exposure`] runs all of it and times it ([`Exposure`]).
+//! - [`history_times`] / [`sun_directions`]: the record times of the
+//!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min) and the
+//!   sun's direction at each, computed once for the scene (NREL SPA).
 //!
 //! Rays go through any [`Tracer`] (Embree or obvhs) in batches of
 //! [`ExposureParams::batch_facets`] facets, batches in parallel (rayon).
@@ -31,6 +34,7 @@
 //! ```
 
 mod facets;
+mod history;
 pub mod sampling;
 mod sky;
 mod solar;
@@ -40,6 +44,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 pub use facets::FacetSamples;
+pub use history::{HistoryWindow, history_times, sun_directions};
 pub use sky::{BackgroundEntry, SkySampling, SkyView, sky_view};
 pub use solar::{SolarHistory, solar_history};
 
