@@ -4,8 +4,35 @@
 //! used for cross-checks and benchmarks. Both answer the same two batched
 //! queries — closest hit and occlusion — over a [`SceneGeometry`], and agree
 //! hit for hit (tests/backends.rs).
+//!
+//! Build one with [`build`] and a [`Backend`]; trace large batches with
+//! [`intersect_all`] / [`occluded_all`], which split them over rayon in
+//! fixed-size chunks (results do not depend on the thread count).
+//!
+//! ```no_run
+//! use irsig::geometry::procedural::{self, TerrainParams};
+//! use irsig::trace::{self, Backend, Coherence, Ray};
+//! use glam::Vec3;
+//!
+//! let geom = procedural::generate(&TerrainParams::with_triangles(100_000, 1));
+//! let tracer = trace::build(&geom, Backend::Embree)?;
+//! let rays = vec![Ray::new(Vec3::new(0.0, 0.0, 500.0), Vec3::NEG_Z)];
+//! let hits = trace::intersect_all(tracer.as_ref(), &rays, Coherence::Incoherent);
+//! assert!(hits[0].is_some());
+//! # Ok::<(), irsig::Error>(())
+//! ```
+
+use std::fmt;
+use std::str::FromStr;
 
 use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::geometry::SceneGeometry;
+
+pub mod bvh;
+pub mod embree;
 
 /// A ray: `origin + t·dir` for `t` in `[tnear, tfar]`. `dir` need not be
 /// normalised; hit distances are in units of `|dir|`.
@@ -69,4 +96,101 @@ pub trait Tracer: Send + Sync {
     fn intersect(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]);
     /// For every ray, whether anything is hit within `[tnear, tfar]`.
     fn occluded(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]);
+}
+
+/// The ray-tracing backends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// Embree, packet API at the native width (the default).
+    #[default]
+    Embree,
+    /// Embree, one ray at a time (`rtcIntersect1`), for comparison.
+    EmbreeSingle,
+    /// obvhs (pure-Rust CWBVH), instances flattened.
+    Obvhs,
+}
+
+impl Backend {
+    /// All backends, in report order.
+    pub const ALL: [Backend; 3] = [Backend::Embree, Backend::EmbreeSingle, Backend::Obvhs];
+
+    /// The command-line name (`embree`, `embree-single`, `obvhs`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Backend::Embree => "embree",
+            Backend::EmbreeSingle => "embree-single",
+            Backend::Obvhs => "obvhs",
+        }
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for Backend {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Backend::ALL
+            .into_iter()
+            .find(|b| b.as_str() == s)
+            .ok_or_else(|| {
+                Error::invalid(
+                    "backend",
+                    format!("unknown backend `{s}` (expected embree, embree-single or obvhs)"),
+                )
+            })
+    }
+}
+
+/// Builds a tracer over `geom` with `backend`. Returned boxed so callers can
+/// pick the backend at run time; the concrete types are
+/// [`embree::EmbreeTracer`] and [`bvh::ObvhsTracer`].
+pub fn build(geom: &SceneGeometry, backend: Backend) -> Result<Box<dyn Tracer>> {
+    Ok(match backend {
+        Backend::Embree => Box::new(embree::EmbreeTracer::new(geom, true)?),
+        Backend::EmbreeSingle => Box::new(embree::EmbreeTracer::new(geom, false)?),
+        Backend::Obvhs => Box::new(bvh::ObvhsTracer::new(geom)?),
+    })
+}
+
+/// Whether two hit distances agree: within 1e-4 relative, or within
+/// `abs_tol` (the float resolution of the scene's coordinates, e.g. 1e-6 of
+/// its size over `|dir|`, which matters for hits very close to the origin).
+pub fn distances_agree(a: f32, b: f32, abs_tol: f32) -> bool {
+    (a - b).abs() <= (1e-4 * a.abs().max(b.abs())).max(abs_tol)
+}
+
+/// Rays per parallel work item in [`intersect_all`] / [`occluded_all`]; a
+/// multiple of every packet width, so packets never straddle chunks.
+pub const CHUNK_RAYS: usize = 1024;
+
+/// Closest hits of all `rays`, traced in parallel (rayon) over chunks of
+/// [`CHUNK_RAYS`]. The result is identical for any thread count.
+pub fn intersect_all(tracer: &dyn Tracer, rays: &[Ray], coherence: Coherence) -> Vec<Option<Hit>> {
+    let mut out = vec![None; rays.len()];
+    rays.par_chunks(CHUNK_RAYS)
+        .zip(out.par_chunks_mut(CHUNK_RAYS))
+        .for_each(|(r, o)| tracer.intersect(r, coherence, o));
+    out
+}
+
+/// Occlusion of all `rays` (anything hit within `[tnear, tfar]`), in
+/// parallel over chunks of [`CHUNK_RAYS`]; identical for any thread count.
+pub fn occluded_all(tracer: &dyn Tracer, rays: &[Ray], coherence: Coherence) -> Vec<bool> {
+    let mut out = vec![false; rays.len()];
+    rays.par_chunks(CHUNK_RAYS)
+        .zip(out.par_chunks_mut(CHUNK_RAYS))
+        .for_each(|(r, o)| tracer.occluded(r, coherence, o));
+    out
+}
+
+/// Prepares a worker thread for tracing: sets flush-to-zero and
+/// denormals-are-zero, as Embree recommends. Call it from a rayon pool's
+/// `start_handler` (the CLI does). The Embree tracer also sets them on the
+/// calling thread at the start of every batch.
+pub fn init_worker_thread() {
+    embree::set_flush_denormals();
 }

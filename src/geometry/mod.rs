@@ -10,6 +10,8 @@
 
 use glam::{Affine3A, Vec3};
 
+pub mod procedural;
+
 /// A triangle mesh in its own (object) space.
 #[derive(Debug, Clone, Default)]
 pub struct TriangleMesh {

@@ -1,0 +1,816 @@
+//! The Embree backend: safe, owning wrappers over `embree-sys` and a
+//! [`Tracer`] built on them.
+//!
+//! # Ownership
+//! [`Device`], [`Scene`] and [`Geometry`] each own one Embree reference and
+//! release it on `Drop`. Embree reference-counts its objects internally (a
+//! scene keeps its geometries, an instance keeps its instanced scene, every
+//! object keeps its device), so handles may be dropped in any order. Rust-side
+//! state the device needs (the error slot its callback writes to) sits behind
+//! an `Arc` that every child handle holds, so it outlives all of them.
+//!
+//! # Scene layout
+//! One Embree scene per [`SceneGeometry`]. A mesh placed by a single instance
+//! is attached directly to the top-level scene as a triangle geometry (its
+//! vertices transformed to world space when the transform is not the
+//! identity). A mesh placed by two or more instances is stored once in its own
+//! scene and placed by Embree *instance* geometries (Debian's build has one
+//! instance level). Either way the top-level geometry id is the
+//! [`SceneGeometry`] instance index, so hits report `(instance, prim)` in the
+//! crate's numbering.
+//!
+//! # Queries
+//! Batches go through Embree's packet API at the width chosen at run time
+//! (16 where the library reports native 16-wide support, AVX-512; else 8,
+//! AVX2; else 4), or through the single-ray API (`rtcIntersect1` /
+//! `rtcOccluded1`) for comparison. Packets are formed from consecutive rays of
+//! the batch: callers put coherent rays (a 4×2 or 8×1 pixel tile) next to each
+//! other. [`Coherence::Coherent`] sets Embree's coherent context flag.
+
+use std::ffi::{CStr, c_char, c_void};
+use std::sync::{Arc, Mutex};
+
+use embree_sys as raw;
+use glam::{Affine3A, Mat3A, Vec3};
+
+use super::{Coherence, Hit, Ray, Tracer};
+use crate::error::{Error, Result};
+use crate::geometry::SceneGeometry;
+
+/// Sets flush-to-zero and denormals-are-zero in this thread's SSE control
+/// register (MXCSR), as Embree recommends for performance. Affects only the
+/// calling thread. No-op on other architectures.
+pub fn set_flush_denormals() {
+    #[cfg(target_arch = "x86_64")]
+    {
+        const FTZ: u32 = 1 << 15;
+        const DAZ: u32 = 1 << 6;
+        let mut csr: u32 = 0;
+        // SAFETY: `stmxcsr` stores the 32-bit MXCSR register to the given
+        // address, which points to a live local `u32`.
+        unsafe {
+            std::arch::asm!("stmxcsr [{}]", in(reg) &mut csr, options(nostack, preserves_flags));
+        }
+        if csr & (FTZ | DAZ) != FTZ | DAZ {
+            let new = csr | FTZ | DAZ;
+            // SAFETY: `ldmxcsr` loads MXCSR from a live local `u32`; the value
+            // only adds the FTZ and DAZ bits to the current (valid) setting.
+            unsafe {
+                std::arch::asm!("ldmxcsr [{}]", in(reg) &new, options(nostack, readonly, preserves_flags));
+            }
+        }
+    }
+}
+
+/// Rust-side state of a device: the handle and the slot where the error
+/// callback records the first error message since the last check.
+struct DeviceInner {
+    raw: raw::RTCDevice,
+    error: Box<Mutex<Option<String>>>,
+}
+
+// SAFETY: Embree devices are thread-safe (the API may be called from any
+// thread); the error slot is a Mutex.
+unsafe impl Send for DeviceInner {}
+// SAFETY: as above.
+unsafe impl Sync for DeviceInner {}
+
+impl Drop for DeviceInner {
+    fn drop(&mut self) {
+        // SAFETY: `raw` is a valid device we hold one reference to. The
+        // callback is removed first so that it can never see a dangling
+        // `error` pointer, should Embree keep the device alive longer.
+        unsafe {
+            raw::rtcSetDeviceErrorFunction(self.raw, None, std::ptr::null_mut());
+            raw::rtcReleaseDevice(self.raw);
+        }
+    }
+}
+
+/// Called by Embree on an error in any thread; records the first message.
+unsafe extern "C" fn error_callback(user: *mut c_void, code: raw::RTCError, msg: *const c_char) {
+    let _ = std::panic::catch_unwind(|| {
+        let text = if msg.is_null() {
+            String::new()
+        } else {
+            // SAFETY: Embree passes a NUL-terminated message valid for the
+            // duration of the call.
+            unsafe { CStr::from_ptr(msg) }
+                .to_string_lossy()
+                .into_owned()
+        };
+        // SAFETY: `user` is the `Mutex` in `DeviceInner::error`, boxed (stable
+        // address) and alive until the callback is unset in `Drop`.
+        let slot = unsafe { &*(user as *const Mutex<Option<String>>) };
+        let mut g = slot.lock().unwrap_or_else(|e| e.into_inner());
+        if g.is_none() {
+            *g = Some(format!("{} ({text})", error_name(code)));
+        }
+    });
+}
+
+fn error_name(code: raw::RTCError) -> &'static str {
+    match code {
+        raw::RTC_ERROR_NONE => "no error",
+        raw::RTC_ERROR_INVALID_ARGUMENT => "invalid argument",
+        raw::RTC_ERROR_INVALID_OPERATION => "invalid operation",
+        raw::RTC_ERROR_OUT_OF_MEMORY => "out of memory",
+        raw::RTC_ERROR_UNSUPPORTED_CPU => "unsupported CPU",
+        raw::RTC_ERROR_CANCELLED => "cancelled",
+        _ => "unknown error",
+    }
+}
+
+/// An Embree device (the library instance: thread pool, ISA choice).
+#[derive(Clone)]
+pub struct Device(Arc<DeviceInner>);
+
+impl Device {
+    /// Creates a device with the default configuration.
+    pub fn new() -> Result<Self> {
+        // SAFETY: a NULL config string selects the defaults.
+        let dev = unsafe { raw::rtcNewDevice(std::ptr::null()) };
+        if dev.is_null() {
+            // SAFETY: querying the error of a NULL device returns the error
+            // of the last failed device creation on this thread.
+            let code = unsafe { raw::rtcGetDeviceError(std::ptr::null_mut()) };
+            return Err(Error::Embree(format!(
+                "cannot create a device: {}",
+                error_name(code)
+            )));
+        }
+        let inner = DeviceInner {
+            raw: dev,
+            error: Box::new(Mutex::new(None)),
+        };
+        let user = &*inner.error as *const Mutex<Option<String>> as *mut c_void;
+        // SAFETY: `dev` is valid; `user` points to the boxed Mutex, which
+        // lives as long as `inner` (the callback is unset before release).
+        unsafe { raw::rtcSetDeviceErrorFunction(dev, Some(error_callback), user) };
+        Ok(Device(Arc::new(inner)))
+    }
+
+    /// The raw handle (valid while `self` lives).
+    pub fn as_raw(&self) -> raw::RTCDevice {
+        self.0.raw
+    }
+
+    /// Takes the first error reported since the last check, as an `Err`.
+    pub fn check(&self) -> Result<()> {
+        let mut g = self.0.error.lock().unwrap_or_else(|e| e.into_inner());
+        match g.take() {
+            Some(m) => Err(Error::Embree(m)),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether the library supports `width`-wide packets natively (4, 8, 16).
+    pub fn supports_packet_width(&self, width: usize) -> bool {
+        let prop = match width {
+            4 => raw::RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED,
+            8 => raw::RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED,
+            16 => raw::RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED,
+            _ => return false,
+        };
+        // SAFETY: valid device, valid property id.
+        unsafe { raw::rtcGetDeviceProperty(self.0.raw, prop) != 0 }
+    }
+
+    /// The packet width to use by default: 8 where supported natively
+    /// (AVX2 and AVX-512 builds), else 16, else 4.
+    ///
+    /// Width 16 is not preferred on AVX-512 machines: Debian's Embree 3.13.5
+    /// was seen to loop forever in `rtcOccluded16` with the coherent flag on
+    /// scattered rays (AMD Zen 4), and 8-wide packets measured as fast on
+    /// primary rays. Width 16 stays available through [`RayMode::Packet`]
+    /// (its occlusion queries then never set the coherent flag).
+    pub fn native_packet_width(&self) -> usize {
+        [8, 16, 4]
+            .into_iter()
+            .find(|&w| self.supports_packet_width(w))
+            .unwrap_or(4)
+    }
+
+    /// The library's version, e.g. `"3.13.5"`.
+    pub fn version(&self) -> String {
+        let get = |p| {
+            // SAFETY: valid device, valid property id.
+            unsafe { raw::rtcGetDeviceProperty(self.0.raw, p) }
+        };
+        format!(
+            "{}.{}.{}",
+            get(raw::RTC_DEVICE_PROPERTY_VERSION_MAJOR),
+            get(raw::RTC_DEVICE_PROPERTY_VERSION_MINOR),
+            get(raw::RTC_DEVICE_PROPERTY_VERSION_PATCH)
+        )
+    }
+}
+
+/// An Embree scene (an acceleration structure over geometries).
+pub struct Scene {
+    raw: raw::RTCScene,
+    device: Device,
+}
+
+// SAFETY: Embree scenes may be used from any thread; after `commit` they are
+// immutable and queries are thread-safe. Mutation goes through `&mut self`.
+unsafe impl Send for Scene {}
+// SAFETY: as above: `&Scene` only allows queries.
+unsafe impl Sync for Scene {}
+
+impl Drop for Scene {
+    fn drop(&mut self) {
+        // SAFETY: we own one reference to a valid scene.
+        unsafe { raw::rtcReleaseScene(self.raw) }
+    }
+}
+
+impl Scene {
+    /// A new empty scene on `device`.
+    pub fn new(device: &Device) -> Result<Self> {
+        // SAFETY: valid device.
+        let s = unsafe { raw::rtcNewScene(device.as_raw()) };
+        device.check()?;
+        if s.is_null() {
+            return Err(Error::Embree("cannot create a scene".into()));
+        }
+        Ok(Scene {
+            raw: s,
+            device: device.clone(),
+        })
+    }
+
+    /// Attaches `geom` under the id `id` (the scene keeps its own reference).
+    pub fn attach(&mut self, geom: &Geometry, id: u32) -> Result<()> {
+        // SAFETY: valid scene and committed geometry of the same device.
+        unsafe { raw::rtcAttachGeometryByID(self.raw, geom.raw, id) };
+        self.device.check()
+    }
+
+    /// Builds the acceleration structure.
+    pub fn commit(&mut self) -> Result<()> {
+        // SAFETY: valid scene.
+        unsafe { raw::rtcCommitScene(self.raw) };
+        self.device.check()
+    }
+
+    /// The raw handle (valid while `self` lives).
+    pub fn as_raw(&self) -> raw::RTCScene {
+        self.raw
+    }
+}
+
+/// An Embree geometry (a triangle mesh or an instance).
+pub struct Geometry {
+    raw: raw::RTCGeometry,
+    device: Device,
+}
+
+impl Drop for Geometry {
+    fn drop(&mut self) {
+        // SAFETY: we own one reference to a valid geometry.
+        unsafe { raw::rtcReleaseGeometry(self.raw) }
+    }
+}
+
+/// Vertex storage for a shared Embree buffer: `xyz` per vertex plus one float
+/// of padding at the end (Embree reads 16 bytes for the last vertex).
+pub struct VertexBuffer(Vec<f32>);
+
+impl VertexBuffer {
+    /// Packs `points` with the trailing pad float.
+    pub fn new(points: impl ExactSizeIterator<Item = Vec3>) -> Self {
+        let mut v = Vec::with_capacity(points.len() * 3 + 1);
+        for p in points {
+            v.extend_from_slice(&[p.x, p.y, p.z]);
+        }
+        v.push(0.0);
+        VertexBuffer(v)
+    }
+    fn count(&self) -> usize {
+        (self.0.len() - 1) / 3
+    }
+}
+
+impl Geometry {
+    /// A triangle mesh over `vertices` (shared: Embree reads it in place, so
+    /// it must outlive every scene the geometry is attached to — the caller
+    /// keeps it) and `indices` (copied into a new Embree buffer).
+    ///
+    /// Indices are validated against the vertex count.
+    pub fn triangles(
+        device: &Device,
+        vertices: &VertexBuffer,
+        indices: &[[u32; 3]],
+    ) -> Result<Self> {
+        let nv = vertices.count();
+        if let Some((i, t)) = indices
+            .iter()
+            .enumerate()
+            .find(|(_, t)| t.iter().any(|&k| k as usize >= nv))
+        {
+            return Err(Error::invalid(
+                format!("triangle {i}"),
+                format!("vertex index in {t:?} out of range (mesh has {nv} vertices)"),
+            ));
+        }
+        // SAFETY: valid device and geometry type.
+        let g = unsafe { raw::rtcNewGeometry(device.as_raw(), raw::RTC_GEOMETRY_TYPE_TRIANGLE) };
+        device.check()?;
+        let geom = Geometry {
+            raw: g,
+            device: device.clone(),
+        };
+        // SAFETY: `vertices.0` holds `nv` packed float3 plus one pad float, so
+        // Embree's 16-byte loads stay in bounds; the caller keeps it alive
+        // (documented above).
+        unsafe {
+            raw::rtcSetSharedGeometryBuffer(
+                g,
+                raw::RTC_BUFFER_TYPE_VERTEX,
+                0,
+                raw::RTC_FORMAT_FLOAT3,
+                vertices.0.as_ptr() as *const c_void,
+                0,
+                12,
+                nv,
+            )
+        };
+        device.check()?;
+        // SAFETY: Embree allocates `indices.len()` items of 12 bytes and
+        // returns a pointer to them (or NULL on error, checked below).
+        let ib = unsafe {
+            raw::rtcSetNewGeometryBuffer(
+                g,
+                raw::RTC_BUFFER_TYPE_INDEX,
+                0,
+                raw::RTC_FORMAT_UINT3,
+                12,
+                indices.len(),
+            )
+        };
+        device.check()?;
+        if ib.is_null() && !indices.is_empty() {
+            return Err(Error::Embree("cannot allocate an index buffer".into()));
+        }
+        if !indices.is_empty() {
+            // SAFETY: `ib` points to `indices.len() * 12` writable bytes and
+            // `[u32; 3]` is 12 bytes; the regions do not overlap.
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    indices.as_ptr() as *const u8,
+                    ib as *mut u8,
+                    std::mem::size_of_val(indices),
+                )
+            };
+        }
+        // SAFETY: valid geometry with its buffers set.
+        unsafe { raw::rtcCommitGeometry(g) };
+        device.check()?;
+        Ok(geom)
+    }
+
+    /// An instance of the committed `scene`, placed by `world_from_object`.
+    pub fn instance(device: &Device, scene: &Scene, world_from_object: &Affine3A) -> Result<Self> {
+        // SAFETY: valid device and geometry type.
+        let g = unsafe { raw::rtcNewGeometry(device.as_raw(), raw::RTC_GEOMETRY_TYPE_INSTANCE) };
+        device.check()?;
+        let geom = Geometry {
+            raw: g,
+            device: device.clone(),
+        };
+        let m = world_from_object.matrix3;
+        let t = world_from_object.translation;
+        // Column-major 3×4: the three basis columns, then the translation.
+        let xfm: [f32; 12] = [
+            m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z, m.z_axis.x,
+            m.z_axis.y, m.z_axis.z, t.x, t.y, t.z,
+        ];
+        // SAFETY: valid instance geometry and a committed scene of the same
+        // device (the instance keeps its own reference to it); `xfm` holds 12
+        // floats in the declared format and is copied by Embree.
+        unsafe {
+            raw::rtcSetGeometryInstancedScene(g, scene.raw);
+            raw::rtcSetGeometryTransform(
+                g,
+                0,
+                raw::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                xfm.as_ptr() as *const c_void,
+            );
+            raw::rtcCommitGeometry(g);
+        }
+        geom.device.check()?;
+        Ok(geom)
+    }
+}
+
+/// Ray-packet valid mask, aligned as Embree requires for every width
+/// (16/32/64 bytes for 4/8/16 lanes).
+#[repr(C, align(64))]
+struct Valid<const W: usize>([i32; W]);
+
+/// How an [`EmbreeTracer`] feeds rays to Embree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RayMode {
+    /// One ray at a time (`rtcIntersect1` / `rtcOccluded1`).
+    Single,
+    /// Packets of this width (4, 8 or 16: `rtcIntersect4/8/16`).
+    Packet(usize),
+}
+
+/// Embree tracer over a [`SceneGeometry`].
+pub struct EmbreeTracer {
+    // Field order matters for drop: the scenes go before the vertex storage
+    // they read from.
+    scene: Scene,
+    _mesh_scenes: Vec<Scene>,
+    _vertices: Vec<VertexBuffer>,
+    /// Per instance: the cofactor matrix turning an object-space geometric
+    /// normal into world space, for instances traced through Embree
+    /// instancing (Embree reports their `Ng` in object space).
+    normal_from_object: Vec<Option<Mat3A>>,
+    device: Device,
+    mode: RayMode,
+    name: &'static str,
+}
+
+/// Cofactor matrix of `m` (`det(m)·m⁻ᵀ`): maps `a×b` to `(m a)×(m b)`, so it
+/// turns an object-space `(p1-p0)×(p2-p0)` into the world-space one.
+fn cofactor(m: Mat3A) -> Mat3A {
+    Mat3A::from_cols(
+        m.y_axis.cross(m.z_axis),
+        m.z_axis.cross(m.x_axis),
+        m.x_axis.cross(m.y_axis),
+    )
+}
+
+impl EmbreeTracer {
+    /// Builds the scene; `packets` selects the packet API at the native
+    /// width ([`Device::native_packet_width`]) rather than single rays.
+    pub fn new(geom: &SceneGeometry, packets: bool) -> Result<Self> {
+        let device = Device::new()?;
+        let mode = if packets {
+            RayMode::Packet(device.native_packet_width())
+        } else {
+            RayMode::Single
+        };
+        Self::with_device(device, geom, mode)
+    }
+
+    /// Builds the scene with an explicit ray mode; a packet width the library
+    /// does not support natively is an error.
+    pub fn with_mode(geom: &SceneGeometry, mode: RayMode) -> Result<Self> {
+        Self::with_device(Device::new()?, geom, mode)
+    }
+
+    fn with_device(device: Device, geom: &SceneGeometry, mode: RayMode) -> Result<Self> {
+        if let RayMode::Packet(w) = mode {
+            if !device.supports_packet_width(w) {
+                return Err(Error::invalid(
+                    "packet width",
+                    format!(
+                        "{w} is not supported by this Embree build/CPU (expected 4, 8 or 16; native is {})",
+                        device.native_packet_width()
+                    ),
+                ));
+            }
+        }
+        let mut uses = vec![0usize; geom.meshes.len()];
+        for (i, inst) in geom.instances.iter().enumerate() {
+            if inst.mesh >= geom.meshes.len() {
+                return Err(Error::invalid(
+                    format!("instances[{i}].mesh"),
+                    format!(
+                        "mesh index {} out of range ({} meshes)",
+                        inst.mesh,
+                        geom.meshes.len()
+                    ),
+                ));
+            }
+            uses[inst.mesh] += 1;
+        }
+        let mut top = Scene::new(&device)?;
+        let mut vertices = Vec::new();
+        let mut mesh_scenes: Vec<Option<Scene>> = (0..geom.meshes.len()).map(|_| None).collect();
+        let mut normal_from_object = Vec::with_capacity(geom.instances.len());
+        for (i, inst) in geom.instances.iter().enumerate() {
+            let mesh = &geom.meshes[inst.mesh];
+            let id = u32::try_from(i)
+                .map_err(|_| Error::invalid("instances", "more than 2^32 instances"))?;
+            if uses[inst.mesh] == 1 {
+                // Placed once: attach directly, in world space.
+                let vb = if inst.world_from_object == Affine3A::IDENTITY {
+                    VertexBuffer::new(mesh.positions.iter().copied())
+                } else {
+                    VertexBuffer::new(
+                        mesh.positions
+                            .iter()
+                            .map(|p| inst.world_from_object.transform_point3(*p)),
+                    )
+                };
+                let g = Geometry::triangles(&device, &vb, &mesh.indices)?;
+                top.attach(&g, id)?;
+                vertices.push(vb);
+                normal_from_object.push(None);
+            } else {
+                if mesh_scenes[inst.mesh].is_none() {
+                    let vb = VertexBuffer::new(mesh.positions.iter().copied());
+                    let g = Geometry::triangles(&device, &vb, &mesh.indices)?;
+                    let mut s = Scene::new(&device)?;
+                    s.attach(&g, 0)?;
+                    s.commit()?;
+                    vertices.push(vb);
+                    mesh_scenes[inst.mesh] = Some(s);
+                }
+                let s = mesh_scenes[inst.mesh].as_ref().expect("built above");
+                let g = Geometry::instance(&device, s, &inst.world_from_object)?;
+                top.attach(&g, id)?;
+                normal_from_object.push(Some(cofactor(inst.world_from_object.matrix3)));
+            }
+        }
+        top.commit()?;
+        let name = match mode {
+            RayMode::Single => "embree_single",
+            RayMode::Packet(_) => "embree_packet",
+        };
+        Ok(EmbreeTracer {
+            scene: top,
+            _mesh_scenes: mesh_scenes.into_iter().flatten().collect(),
+            _vertices: vertices,
+            normal_from_object,
+            device,
+            mode,
+            name,
+        })
+    }
+
+    /// How rays are fed to Embree.
+    pub fn mode(&self) -> RayMode {
+        self.mode
+    }
+
+    /// The device.
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn make_hit(
+        &self,
+        t: f32,
+        geom_id: u32,
+        inst_id: u32,
+        prim: u32,
+        u: f32,
+        v: f32,
+        ng: Vec3,
+    ) -> Option<Hit> {
+        if geom_id == raw::RTC_INVALID_GEOMETRY_ID {
+            return None;
+        }
+        let instance = if inst_id != raw::RTC_INVALID_GEOMETRY_ID {
+            inst_id
+        } else {
+            geom_id
+        };
+        let ng = match self
+            .normal_from_object
+            .get(instance as usize)
+            .copied()
+            .flatten()
+        {
+            Some(c) => c * ng,
+            None => ng,
+        };
+        Some(Hit {
+            t,
+            instance,
+            prim,
+            u,
+            v,
+            ng,
+        })
+    }
+
+    /// Occlusion context for a packet width (see [`Device::native_packet_width`]:
+    /// no coherent flag on 16-wide occlusion).
+    fn occlusion_context(width: usize, coherence: Coherence) -> raw::RTCIntersectContext {
+        if width == 16 {
+            Self::context(Coherence::Incoherent)
+        } else {
+            Self::context(coherence)
+        }
+    }
+
+    fn context(coherence: Coherence) -> raw::RTCIntersectContext {
+        let mut ctx = raw::RTCIntersectContext::default();
+        // SAFETY: `ctx` is a valid, writable RTCIntersectContext.
+        unsafe { raw::rtcInitIntersectContext(&mut ctx) };
+        if coherence == Coherence::Coherent {
+            ctx.flags = raw::RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        }
+        ctx
+    }
+
+    fn intersect_single(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]) {
+        let mut ctx = Self::context(coherence);
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            let mut rh = raw::RTCRayHit {
+                ray: single_ray(r),
+                hit: raw::RTCHit {
+                    geomID: raw::RTC_INVALID_GEOMETRY_ID,
+                    instID: [raw::RTC_INVALID_GEOMETRY_ID],
+                    ..Default::default()
+                },
+            };
+            // SAFETY: committed scene; `ctx` initialised; `rh` is a valid,
+            // 16-byte-aligned RTCRayHit (its type's alignment).
+            unsafe { raw::rtcIntersect1(self.scene.raw, &mut ctx, &mut rh) };
+            let h = &rh.hit;
+            *o = self.make_hit(
+                rh.ray.tfar,
+                h.geomID,
+                h.instID[0],
+                h.primID,
+                h.u,
+                h.v,
+                Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
+            );
+        }
+    }
+
+    fn occluded_single(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]) {
+        let mut ctx = Self::context(coherence);
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            let mut ray = single_ray(r);
+            // SAFETY: committed scene; `ctx` initialised; `ray` is a valid,
+            // 16-byte-aligned RTCRay.
+            unsafe { raw::rtcOccluded1(self.scene.raw, &mut ctx, &mut ray) };
+            *o = ray.tfar == f32::NEG_INFINITY;
+        }
+    }
+}
+
+fn single_ray(r: &Ray) -> raw::RTCRay {
+    raw::RTCRay {
+        org_x: r.origin.x,
+        org_y: r.origin.y,
+        org_z: r.origin.z,
+        tnear: r.tnear,
+        dir_x: r.dir.x,
+        dir_y: r.dir.y,
+        dir_z: r.dir.z,
+        time: 0.0,
+        tfar: r.tfar,
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    }
+}
+
+/// Generates the packet paths for one width.
+macro_rules! packet_paths {
+    ($w:literal, $isect_name:ident, $occl_name:ident, $rayhit:ty, $ray:ty, $isect:path, $occl:path) => {
+        impl EmbreeTracer {
+            fn $isect_name(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]) {
+                let mut ctx = Self::context(coherence);
+                let mut valid = Valid::<$w>([0; $w]);
+                let mut rh = <$rayhit>::default();
+                for (rc, oc) in rays.chunks($w).zip(out.chunks_mut($w)) {
+                    for i in 0..$w {
+                        // Padding lanes repeat the first ray, marked invalid.
+                        let r = rc.get(i).unwrap_or(&rc[0]);
+                        valid.0[i] = if i < rc.len() { -1 } else { 0 };
+                        let ray = &mut rh.ray;
+                        ray.org_x[i] = r.origin.x;
+                        ray.org_y[i] = r.origin.y;
+                        ray.org_z[i] = r.origin.z;
+                        ray.tnear[i] = r.tnear;
+                        ray.dir_x[i] = r.dir.x;
+                        ray.dir_y[i] = r.dir.y;
+                        ray.dir_z[i] = r.dir.z;
+                        ray.time[i] = 0.0;
+                        ray.tfar[i] = r.tfar;
+                        ray.mask[i] = u32::MAX;
+                        ray.id[i] = i as u32;
+                        ray.flags[i] = 0;
+                        rh.hit.geomID[i] = raw::RTC_INVALID_GEOMETRY_ID;
+                        rh.hit.instID[0][i] = raw::RTC_INVALID_GEOMETRY_ID;
+                    }
+                    // SAFETY: committed scene; `ctx` initialised; `valid` and
+                    // `rh` have the alignment Embree requires for this width
+                    // (`Valid` is 64-byte aligned, the RTCRayHitN type carries
+                    // its own alignment) and every lane is initialised.
+                    unsafe { $isect(valid.0.as_ptr(), self.scene.raw, &mut ctx, &mut rh) };
+                    let h = &rh.hit;
+                    for (i, o) in oc.iter_mut().enumerate() {
+                        *o = self.make_hit(
+                            rh.ray.tfar[i],
+                            h.geomID[i],
+                            h.instID[0][i],
+                            h.primID[i],
+                            h.u[i],
+                            h.v[i],
+                            Vec3::new(h.Ng_x[i], h.Ng_y[i], h.Ng_z[i]),
+                        );
+                    }
+                }
+            }
+
+            fn $occl_name(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]) {
+                let mut ctx = Self::occlusion_context($w, coherence);
+                let mut valid = Valid::<$w>([0; $w]);
+                let mut ray = <$ray>::default();
+                for (rc, oc) in rays.chunks($w).zip(out.chunks_mut($w)) {
+                    for i in 0..$w {
+                        let r = rc.get(i).unwrap_or(&rc[0]);
+                        valid.0[i] = if i < rc.len() { -1 } else { 0 };
+                        ray.org_x[i] = r.origin.x;
+                        ray.org_y[i] = r.origin.y;
+                        ray.org_z[i] = r.origin.z;
+                        ray.tnear[i] = r.tnear;
+                        ray.dir_x[i] = r.dir.x;
+                        ray.dir_y[i] = r.dir.y;
+                        ray.dir_z[i] = r.dir.z;
+                        ray.time[i] = 0.0;
+                        ray.tfar[i] = r.tfar;
+                        ray.mask[i] = u32::MAX;
+                        ray.id[i] = i as u32;
+                        ray.flags[i] = 0;
+                    }
+                    // SAFETY: as for the intersect path: committed scene,
+                    // initialised context, aligned valid mask and ray packet.
+                    unsafe { $occl(valid.0.as_ptr(), self.scene.raw, &mut ctx, &mut ray) };
+                    for (i, o) in oc.iter_mut().enumerate() {
+                        *o = ray.tfar[i] == f32::NEG_INFINITY;
+                    }
+                }
+            }
+        }
+    };
+}
+
+packet_paths!(
+    4,
+    intersect4,
+    occluded4,
+    raw::RTCRayHit4,
+    raw::RTCRay4,
+    raw::rtcIntersect4,
+    raw::rtcOccluded4
+);
+packet_paths!(
+    8,
+    intersect8,
+    occluded8,
+    raw::RTCRayHit8,
+    raw::RTCRay8,
+    raw::rtcIntersect8,
+    raw::rtcOccluded8
+);
+packet_paths!(
+    16,
+    intersect16,
+    occluded16,
+    raw::RTCRayHit16,
+    raw::RTCRay16,
+    raw::rtcIntersect16,
+    raw::rtcOccluded16
+);
+
+impl Tracer for EmbreeTracer {
+    fn name(&self) -> &str {
+        self.name
+    }
+
+    fn intersect(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]) {
+        assert_eq!(
+            rays.len(),
+            out.len(),
+            "intersect: rays and out differ in length"
+        );
+        set_flush_denormals();
+        match self.mode {
+            RayMode::Single => self.intersect_single(rays, coherence, out),
+            RayMode::Packet(4) => self.intersect4(rays, coherence, out),
+            RayMode::Packet(8) => self.intersect8(rays, coherence, out),
+            RayMode::Packet(_) => self.intersect16(rays, coherence, out),
+        }
+    }
+
+    fn occluded(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]) {
+        assert_eq!(
+            rays.len(),
+            out.len(),
+            "occluded: rays and out differ in length"
+        );
+        set_flush_denormals();
+        match self.mode {
+            RayMode::Single => self.occluded_single(rays, coherence, out),
+            RayMode::Packet(4) => self.occluded4(rays, coherence, out),
+            RayMode::Packet(8) => self.occluded8(rays, coherence, out),
+            RayMode::Packet(_) => self.occluded16(rays, coherence, out),
+        }
+    }
+}
