@@ -90,7 +90,10 @@ fn soup_scene(seed: u64, tris: usize, copies: usize) -> SceneGeometry {
                     rng.random_range(0.5..2.0),
                     rng.random_range(0.5..2.0),
                 ),
-                Quat::from_axis_angle(unit_dir(&mut rng), rng.random_range(0.0..6.28)),
+                Quat::from_axis_angle(
+                    unit_dir(&mut rng),
+                    rng.random_range(0.0..std::f32::consts::TAU),
+                ),
                 Vec3::new(k as f32 * 25.0 - 25.0, rng.random_range(-5.0..5.0), 20.0),
             ),
         });
@@ -230,7 +233,7 @@ fn box_instance_top_is_hit_at_its_analytic_height() {
     let mut geom = SceneGeometry::single(procedural::box_mesh());
     geom.instances[0].world_from_object = Affine3A::from_scale_rotation_translation(
         Vec3::new(10.0, 10.0, 5.0),
-        Quat::from_rotation_z(0.5236),
+        Quat::from_rotation_z(std::f32::consts::FRAC_PI_6),
         Vec3::new(100.0, 50.0, 2.0),
     );
     // Twice, so that Embree uses real instancing for the box.
