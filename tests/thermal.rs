@@ -1,1 +1,590 @@
-//! Tests: thermal.
+//! Tests: thermal. The slab model against analytic solutions of heat
+//! conduction (Carslaw & Jaeger, *Conduction of Heat in Solids*, 2nd ed.,
+//! 1959), conservation of energy, the steady surface balance, and the
+//! qualitative behaviour of thin and thick objects.
+
+use irsig::thermal::{
+    self, BackBoundary, Background, Boundary, FacetInputs, Forcing, Grid, STEFAN_BOLTZMANN_W_M2_K4,
+    Slab, SlabProperties, SolveOptions, Spinup, SurfaceFlux, mcadams_h_w_m2_k,
+};
+use std::f64::consts::PI;
+
+/// The concrete of issue 4: k 1.4 W/(m·K), ρ 2300 kg/m³, c 880 J/(kg·K).
+const K_CONCRETE: f64 = 1.4;
+const RHO_C_CONCRETE: f64 = 2300.0 * 880.0;
+const DAY_S: f64 = 86_400.0;
+
+/// The grid used by the analytic checks: the `accurate` preset.
+fn fine_grid() -> Grid {
+    SolveOptions::accurate().grid
+}
+
+/// erfc(x) for x ≥ 0 (Numerical Recipes §6.2 `erfcc`, fractional error
+/// < 1.2e−7).
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let ans = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 { ans } else { 2.0 - ans }
+}
+
+/// Amplitude and phase (rad) of the component at `omega` of samples `y`
+/// taken at times `t` covering exactly whole periods with uniform spacing.
+fn fourier(t: &[f64], y: &[f64], omega: f64) -> (f64, f64) {
+    let n = y.len() as f64;
+    let (mut s, mut c) = (0.0, 0.0);
+    for (ti, yi) in t.iter().zip(y) {
+        s += yi * (omega * ti).sin();
+        c += yi * (omega * ti).cos();
+    }
+    let (a, b) = (2.0 * s / n, 2.0 * c / n);
+    // y ≈ mean + a sin ωt + b cos ωt = mean + A sin(ωt + φ).
+    ((a * a + b * b).sqrt(), b.atan2(a))
+}
+
+/// Carslaw & Jaeger §2.6: a semi-infinite solid whose surface temperature
+/// varies as A sin ωt. At depth x the wave has amplitude A e^(−x/d) and lags
+/// by x/d radians, d = √(2κ/ω).
+#[test]
+fn periodic_surface_temperature_matches_carslaw_jaeger() {
+    let omega = 2.0 * PI / DAY_S;
+    let kappa = K_CONCRETE / RHO_C_CONCRETE;
+    let d = (2.0 * kappa / omega).sqrt();
+    // The published values of the issue follow from these formulas.
+    for (x, ratio, lag_h) in [(0.05, 0.69592, 1.3847), (0.10, 0.48431, 2.7694)] {
+        assert!(((-x / d).exp() - ratio).abs() < 1e-5);
+        assert!((x / d / omega / 3600.0 - lag_h).abs() < 1e-4);
+    }
+    let (tm, amp) = (300.0, 10.0);
+    // 1 m of concrete ≈ 7 damping depths: the deep end does not feel the wave.
+    let depth = 1.0;
+    for (dt, grid, tol_ratio, tol_lag) in [
+        (450.0, fine_grid(), 0.01, 0.01),
+        (450.0, Grid::default(), 0.02, 0.02),
+    ] {
+        let mut slab = Slab::new(depth, K_CONCRETE, RHO_C_CONCRETE, grid, tm);
+        // Start on the periodic solution, so no start-up transient remains.
+        slab.set_temperatures(|x| tm + amp * (-x / d).exp() * (-x / d).sin());
+        let insulated = Boundary::Flux(SurfaceFlux::default());
+        let steps = (DAY_S / dt) as usize;
+        let (mut ts, mut y0, mut y5, mut y10) = (vec![], vec![], vec![], vec![]);
+        for i in 0..2 * steps {
+            let t = i as f64 * dt;
+            slab.step(
+                dt,
+                |f| Boundary::Temperature(tm + amp * (omega * (t + f * dt)).sin()),
+                |_| insulated,
+            );
+            if i >= steps {
+                ts.push(t + dt);
+                y0.push(slab.front_k());
+                y5.push(slab.temperature_at(0.05));
+                y10.push(slab.temperature_at(0.10));
+            }
+        }
+        let (a0, p0) = fourier(&ts, &y0, omega);
+        assert!((a0 - amp).abs() < 1e-6 * amp, "surface amplitude {a0}");
+        for (x, y, ratio, lag_h) in [(0.05, &y5, 0.69592, 1.3847), (0.10, &y10, 0.48431, 2.7694)] {
+            let (a, p) = fourier(&ts, y, omega);
+            let got_ratio = a / a0;
+            let got_lag_h = (p0 - p).rem_euclid(2.0 * PI) / omega / 3600.0;
+            eprintln!(
+                "periodic dt {dt} s, {} cells: x = {x} m ratio {got_ratio:.5} (exact {ratio}), \
+                 lag {got_lag_h:.4} h (exact {lag_h})",
+                grid.cells
+            );
+            assert!(
+                (got_ratio / ratio - 1.0).abs() < tol_ratio,
+                "x = {x}: amplitude ratio {got_ratio}, expected {ratio} ± {tol_ratio}"
+            );
+            assert!(
+                (got_lag_h / lag_h - 1.0).abs() < tol_lag,
+                "x = {x}: lag {got_lag_h} h, expected {lag_h} h ± {tol_lag}"
+            );
+        }
+    }
+}
+
+/// Carslaw & Jaeger §2.9: constant flux q₀ into a semi-infinite solid from
+/// t = 0: ΔT(x, t) = (2q₀/k)√(κt/π) e^(−x²/4κt) − (q₀x/k) erfc(x/2√(κt)).
+#[test]
+fn constant_surface_flux_matches_erfc_solution() {
+    let q0 = 500.0;
+    let kappa = K_CONCRETE / RHO_C_CONCRETE;
+    let exact = |x: f64, t: f64| {
+        2.0 * q0 / K_CONCRETE * (kappa * t / PI).sqrt() * (-x * x / (4.0 * kappa * t)).exp()
+            - q0 * x / K_CONCRETE * erfc(x / (2.0 * (kappa * t).sqrt()))
+    };
+    // The issue's published values.
+    assert!((exact(0.0, 3600.0) - 20.1098).abs() < 1e-3);
+    assert!((exact(0.05, 3600.0) - 7.0990).abs() < 1e-3);
+    for (dt, grid, tol) in [(60.0, fine_grid(), 0.01), (450.0, Grid::default(), 0.02)] {
+        let mut slab = Slab::new(1.0, K_CONCRETE, RHO_C_CONCRETE, grid, 300.0);
+        let heat = Boundary::Flux(SurfaceFlux::constant(q0));
+        let insulated = Boundary::Flux(SurfaceFlux::default());
+        for _ in 0..(3600.0 / dt) as usize {
+            slab.step(dt, |_| heat, |_| insulated);
+        }
+        let (s, x5) = (slab.front_k() - 300.0, slab.temperature_at(0.05) - 300.0);
+        eprintln!(
+            "flux dt {dt} s, {} cells: surface +{s:.4} K (exact 20.1098), 5 cm +{x5:.4} K (exact 7.0990)",
+            grid.cells
+        );
+        assert!((s / 20.1098 - 1.0).abs() < tol, "surface rise {s} K");
+        assert!((x5 / 7.0990 - 1.0).abs() < tol, "rise at 5 cm {x5} K");
+    }
+}
+
+/// The front balance of a facet in full sun, as a flux law.
+fn sunny_front(t_air: f64, wind: f64) -> SurfaceFlux {
+    let (alpha, eps) = (0.7, 0.9);
+    let h = mcadams_h_w_m2_k(wind);
+    SurfaceFlux {
+        source_w_m2: alpha * 800.0 + alpha * 100.0 + eps * 330.0 + h * t_air,
+        linear_w_m2_k: h,
+        radiative_w_m2_k4: eps * STEFAN_BOLTZMANN_W_M2_K4,
+    }
+}
+
+/// Energy conservation: the time integral of the net surface flux equals
+/// the change in stored heat. The flux is evaluated by the test from the
+/// surface temperature and integrated by the trapezoidal rule, independently
+/// of the solver's own bookkeeping.
+#[test]
+fn energy_is_conserved() {
+    let front = sunny_front(295.0, 2.0);
+    let mut slab = Slab::new(0.2, K_CONCRETE, RHO_C_CONCRETE, Grid::default(), 280.0);
+    let e0 = slab.stored_energy_j_m2();
+    let dt = 10.0;
+    let insulated = Boundary::Flux(SurfaceFlux::default());
+    let mut integral = 0.0;
+    let mut q_prev = front.flux(slab.front_k());
+    for _ in 0..(6.0 * 3600.0 / dt) as usize {
+        slab.step(dt, |_| Boundary::Flux(front), |_| insulated);
+        let q = front.flux(slab.front_k());
+        integral += 0.5 * dt * (q_prev + q);
+        q_prev = q;
+    }
+    let de = slab.stored_energy_j_m2() - e0;
+    eprintln!("energy: ∫q dt = {integral:.1} J/m², ΔE = {de:.1} J/m²");
+    assert!(de > 1e6, "the slab should have gained heat: {de}");
+    assert!(
+        (integral / de - 1.0).abs() < 1e-3,
+        "∫q dt {integral} vs ΔE {de}"
+    );
+    // The solver's bookkeeping agrees to rounding.
+    let (fin, bin) = slab.boundary_energy_j_m2();
+    assert_eq!(bin, 0.0);
+    assert!(
+        (fin / de - 1.0).abs() < 1e-9,
+        "scheme quadrature {fin} vs ΔE {de}"
+    );
+}
+
+/// The energy budget reported by `solve` closes for every back boundary.
+#[test]
+fn solve_energy_budget_closes() {
+    let times: Vec<f64> = (0..=96).map(|i| i as f64 * 900.0).collect();
+    let mut forcing = Forcing::constant(&times, 290.0, 2.0, 0.0, 0.0, 300.0);
+    for (i, &t) in times.iter().enumerate() {
+        let s = (PI * (t / 3600.0 - 6.0) / 12.0).sin().max(0.0);
+        forcing.direct_normal_w_m2[i] = 850.0 * s;
+        forcing.diffuse_horizontal_w_m2[i] = 120.0 * s;
+        forcing.air_temperature_k[i] = 288.0 + 6.0 * (2.0 * PI * (t / 3600.0 - 9.0) / 24.0).sin();
+    }
+    let sun = vec![1.0f32; times.len()];
+    let cos: Vec<f32> = times
+        .iter()
+        .map(|t| (PI * (t / 3600.0 - 6.0) / 12.0).sin().max(0.0) as f32)
+        .collect();
+    let inputs = FacetInputs::new(&sun, &cos, 0.8);
+    for back in [
+        BackBoundary::Insulated,
+        BackBoundary::Exposed,
+        BackBoundary::BUILDING,
+        BackBoundary::GROUND,
+    ] {
+        let props = SlabProperties {
+            conductivity_w_m_k: K_CONCRETE,
+            density_kg_m3: 2300.0,
+            specific_heat_j_kg_k: 880.0,
+            thickness_m: 0.1,
+            solar_absorptivity: 0.7,
+            thermal_emissivity: 0.9,
+            self_power_w_m2: 0.0,
+            back,
+        };
+        let mut opts = SolveOptions::default();
+        opts.spinup.max_cycles = 0;
+        let sol = thermal::solve(&props, &forcing, &inputs, &opts).unwrap();
+        let e = sol.energy;
+        let scale = e.front_in_j_m2.abs().max(e.stored_change_j_m2.abs());
+        assert!(scale > 1e5, "{back:?}: {e:?}");
+        assert!(
+            (e.front_in_j_m2 + e.back_in_j_m2 - e.stored_change_j_m2).abs() < 1e-3 * scale,
+            "{back:?}: {e:?}"
+        );
+    }
+}
+
+/// Bisection root of a decreasing function on [lo, hi].
+fn bisect(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    assert!(f(lo) > 0.0 && f(hi) < 0.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Under constant forcing the surface settles where the balance is zero
+/// (insulated back), or where it equals the conduction through the wall to
+/// the interior (building back).
+#[test]
+fn steady_state_is_root_of_surface_balance() {
+    let (t_air, wind, dni, dh, sky, cos, f_sky) = (293.0, 1.5, 700.0, 90.0, 320.0, 0.6, 0.75);
+    let (alpha, eps) = (0.65, 0.92);
+    let sigma = STEFAN_BOLTZMANN_W_M2_K4;
+    let h = 5.7 + 3.8 * wind;
+    let t_bg: f64 = 290.0;
+    let balance = |t: f64| {
+        alpha * dni * cos
+            + alpha * f_sky * dh
+            + eps * f_sky * sky
+            + eps * (1.0 - f_sky) * sigma * t_bg.powi(4)
+            - eps * sigma * t.powi(4)
+            + h * (t_air - t)
+            + 25.0
+    };
+    let times: Vec<f64> = (0..=10 * 96).map(|i| i as f64 * 900.0).collect();
+    let forcing = Forcing::constant(&times, t_air, wind, dni, dh, sky);
+    let sun = vec![1.0f32; times.len()];
+    let cosv = vec![cos as f32; times.len()];
+    let mut inputs = FacetInputs::new(&sun, &cosv, f_sky);
+    inputs.background = Background::Constant(t_bg);
+    let thickness = 0.15;
+    let (t_in, h_in) = (295.0, 7.7);
+    for back in [
+        BackBoundary::Insulated,
+        BackBoundary::Interior {
+            air_temperature_k: t_in,
+            film_coefficient_w_m2_k: h_in,
+        },
+    ] {
+        let props = SlabProperties {
+            conductivity_w_m_k: K_CONCRETE,
+            density_kg_m3: 2300.0,
+            specific_heat_j_kg_k: 880.0,
+            thickness_m: thickness,
+            solar_absorptivity: alpha,
+            thermal_emissivity: eps,
+            self_power_w_m2: 25.0,
+            back,
+        };
+        let expected = match back {
+            BackBoundary::Insulated => bisect(balance, 200.0, 450.0),
+            // Series resistance of the wall and the interior film.
+            _ => bisect(
+                |t| balance(t) - (t - t_in) / (thickness / K_CONCRETE + 1.0 / h_in),
+                200.0,
+                450.0,
+            ),
+        };
+        let sol = thermal::solve(&props, &forcing, &inputs, &SolveOptions::default()).unwrap();
+        let got = *sol.surface_temperature_k.last().unwrap();
+        eprintln!("steady {back:?}: solver {got:.5} K, root {expected:.5} K");
+        assert!((got - expected).abs() < 1e-3, "{got} vs {expected}");
+        assert!(sol.last_period_change_k.unwrap() < 1e-3);
+    }
+}
+
+/// A synthetic clear or overcast two-day history for a horizontal facet,
+/// solar noon at 12:00, sunrise 06:00; returns the forcing and cos θ.
+fn synthetic_days(clear: bool) -> (Forcing, Vec<f32>) {
+    let times: Vec<f64> = (0..=192).map(|i| i as f64 * 900.0).collect();
+    let mut forcing = Forcing::constant(&times, 288.0, 2.0, 0.0, 0.0, 0.0);
+    let mut cos = Vec::with_capacity(times.len());
+    for (i, &t) in times.iter().enumerate() {
+        let hour = (t / 3600.0) % 24.0;
+        let elev = (PI * (hour - 6.0) / 12.0).sin().max(0.0); // sin of solar elevation
+        let t_air = 288.0 + 6.0 * (2.0 * PI * (hour - 9.0) / 24.0).sin();
+        forcing.air_temperature_k[i] = t_air;
+        let blackbody = STEFAN_BOLTZMANN_W_M2_K4 * t_air.powi(4);
+        if clear {
+            forcing.direct_normal_w_m2[i] = 850.0 * elev.powf(0.3) * (elev > 0.0) as u8 as f64;
+            forcing.diffuse_horizontal_w_m2[i] = 100.0 * elev;
+            forcing.sky_longwave_w_m2[i] = 0.75 * blackbody;
+        } else {
+            forcing.diffuse_horizontal_w_m2[i] = 150.0 * elev;
+            forcing.sky_longwave_w_m2[i] = 0.97 * blackbody;
+        }
+        cos.push(elev as f32);
+    }
+    (forcing, cos)
+}
+
+/// A thin aluminium panel (both faces exposed) and a thick wood wall (back
+/// to a building interior), same optical properties.
+fn panel_and_wall() -> (SlabProperties, SlabProperties) {
+    let panel = SlabProperties {
+        conductivity_w_m_k: 200.0,
+        density_kg_m3: 2700.0,
+        specific_heat_j_kg_k: 900.0,
+        thickness_m: 0.002,
+        solar_absorptivity: 0.7,
+        thermal_emissivity: 0.9,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::Exposed,
+    };
+    let wall = SlabProperties {
+        conductivity_w_m_k: 0.15,
+        density_kg_m3: 600.0,
+        specific_heat_j_kg_k: 1700.0,
+        thickness_m: 0.1,
+        back: BackBoundary::BUILDING,
+        ..panel
+    };
+    (panel, wall)
+}
+
+/// The seed's finding, part 1: in sun, a thin aluminium panel heats and
+/// cools much faster than a thick wood wall. Both sit 6 h in steady sun
+/// (records every minute); then a shadow falls abruptly for 3 h. The panel
+/// relaxes exponentially with time constant `ρcL / 2(h + 4εσT³)` ≈ 2.7 min;
+/// the wall surface cools like that of a semi-infinite solid, quickly at
+/// first then with a long √t tail (its characteristic time `(e/H)²`, `e` =
+/// √(kρc), is ≈ 11 min and the tail lasts hours).
+#[test]
+fn thin_panel_heats_and_cools_faster_than_thick_wall() {
+    let (panel, wall) = panel_and_wall();
+    let n = 9 * 60 + 1;
+    let times: Vec<f64> = (0..n).map(|i| i as f64 * 60.0).collect();
+    let t_air: f64 = 293.0;
+    let sky = 0.75 * STEFAN_BOLTZMANN_W_M2_K4 * t_air.powi(4);
+    let forcing = Forcing::constant(&times, t_air, 2.0, 800.0, 100.0, sky);
+    let mut sun = vec![1.0f32; n];
+    sun[361..].fill(0.0); // shadow from 6 h 01 min
+    let cos = vec![0.8f32; n];
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let mut opts = SolveOptions::default();
+    opts.spinup.max_cycles = 0;
+    // Minutes after the shadow falls until 63 % and 90 % of the 3-h drop.
+    let mut t63 = [0.0; 2];
+    let mut t90 = [0.0; 2];
+    for (j, props) in [panel, wall].iter().enumerate() {
+        let t = thermal::solve(props, &forcing, &inputs, &opts)
+            .unwrap()
+            .surface_temperature_k;
+        let (start, end) = (t[360], t[n - 1]);
+        assert!(
+            start - end > 10.0,
+            "the shadow should cool the surface: {start} → {end}"
+        );
+        let minutes_to = |share: f64| {
+            (360..n)
+                .find(|&i| start - t[i] >= share * (start - end))
+                .unwrap() as f64
+                - 360.0
+        };
+        t63[j] = minutes_to(0.632);
+        t90[j] = minutes_to(0.9);
+        eprintln!(
+            "step response: {} from {start:.2} K to {end:.2} K, 63 % after {} min, 90 % after {} min",
+            ["panel", "wall"][j],
+            t63[j],
+            t90[j]
+        );
+    }
+    assert!(
+        t63[0] <= 6.0 && t90[0] <= 10.0,
+        "panel: {} / {} min",
+        t63[0],
+        t90[0]
+    );
+    assert!(
+        t63[1] > 2.0 * t63[0],
+        "63 %: wall {} min vs panel {} min",
+        t63[1],
+        t63[0]
+    );
+    assert!(
+        t90[1] > 4.0 * t90[0],
+        "90 %: wall {} min vs panel {} min",
+        t90[1],
+        t90[0]
+    );
+}
+
+/// The seed's finding, part 2: through a clear day the panel and the wall
+/// surface temperatures differ by many kelvin; under overcast (no direct
+/// sun, warm cloudy sky) both stay near the air temperature and differ much
+/// less.
+#[test]
+fn panel_and_wall_differ_much_less_under_overcast() {
+    let (panel, wall) = panel_and_wall();
+    let mut max_gap = [0.0; 2];
+    for (case, clear) in [true, false].into_iter().enumerate() {
+        let (forcing, cos) = synthetic_days(clear);
+        let sun = vec![1.0f32; cos.len()];
+        let inputs = FacetInputs::new(&sun, &cos, 1.0);
+        let opts = SolveOptions::default();
+        let p = thermal::solve(&panel, &forcing, &inputs, &opts).unwrap();
+        let w = thermal::solve(&wall, &forcing, &inputs, &opts).unwrap();
+        let (tp, tw) = (&p.surface_temperature_k, &w.surface_temperature_k);
+        max_gap[case] = tp[96..]
+            .iter()
+            .zip(&tw[96..])
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{}: diurnal range panel {:.2} K, wall {:.2} K; max |T_panel − T_wall| {:.2} K",
+            if clear { "clear" } else { "overcast" },
+            range(&tp[96..]),
+            range(&tw[96..]),
+            max_gap[case]
+        );
+    }
+    assert!(max_gap[0] > 5.0, "clear-day gap {} K", max_gap[0]);
+    assert!(
+        max_gap[1] < 0.25 * max_gap[0],
+        "overcast gap {} K should be much smaller than clear gap {} K",
+        max_gap[1],
+        max_gap[0]
+    );
+}
+
+fn range(t: &[f64]) -> f64 {
+    t.iter().cloned().fold(f64::MIN, f64::max) - t.iter().cloned().fold(f64::MAX, f64::min)
+}
+
+/// Degenerate grids (one to three cells) take the same code paths' edge
+/// cases: they must still conserve energy and reach the analytic steady
+/// state of a wall between outdoor balance and interior film.
+#[test]
+fn coarse_grids_conserve_energy_and_reach_steady_state() {
+    let times: Vec<f64> = (0..=4 * 96).map(|i| i as f64 * 900.0).collect();
+    let forcing = Forcing::constant(&times, 290.0, 3.0, 600.0, 80.0, 310.0);
+    let sun = vec![1.0f32; times.len()];
+    let cos = vec![0.5f32; times.len()];
+    let inputs = FacetInputs::new(&sun, &cos, 0.9);
+    let props = SlabProperties {
+        conductivity_w_m_k: 0.8,
+        density_kg_m3: 1800.0,
+        specific_heat_j_kg_k: 840.0,
+        thickness_m: 0.02,
+        solar_absorptivity: 0.6,
+        thermal_emissivity: 0.9,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::Interior {
+            air_temperature_k: 295.0,
+            film_coefficient_w_m2_k: 8.0,
+        },
+    };
+    let sigma = STEFAN_BOLTZMANN_W_M2_K4;
+    let h = 5.7 + 3.8 * 3.0;
+    let front = |t: f64| {
+        0.6 * 600.0 * 0.5
+            + 0.6 * 0.9 * 80.0
+            + 0.9 * 0.9 * 310.0
+            + 0.9 * 0.1 * sigma * 290.0f64.powi(4)
+            - 0.9 * sigma * t.powi(4)
+            + h * (290.0 - t)
+    };
+    let expected = bisect(
+        |t| front(t) - (t - 295.0) / (0.02 / 0.8 + 1.0 / 8.0),
+        200.0,
+        450.0,
+    );
+    for cells in [1, 2, 3] {
+        let opts = SolveOptions {
+            grid: Grid { cells, growth: 1.3 },
+            spinup: Spinup::none(),
+            ..SolveOptions::default()
+        };
+        let sol = thermal::solve(&props, &forcing, &inputs, &opts).unwrap();
+        let got = *sol.surface_temperature_k.last().unwrap();
+        assert!(
+            (got - expected).abs() < 1e-3,
+            "{cells} cells: {got} vs {expected}"
+        );
+        let e = sol.energy;
+        assert!(
+            (e.front_in_j_m2 + e.back_in_j_m2 - e.stored_change_j_m2).abs()
+                < 1e-6 * e.front_in_j_m2.abs(),
+            "{cells} cells: {e:?}"
+        );
+    }
+}
+
+/// Bad inputs are reported with the field at fault, not solved.
+#[test]
+fn invalid_inputs_name_the_field() {
+    let times = [0.0, 900.0, 1800.0];
+    let forcing = Forcing::constant(&times, 290.0, 1.0, 0.0, 0.0, 300.0);
+    let sun = [1.0f32; 3];
+    let cos = [0.5f32; 3];
+    let good = SlabProperties {
+        conductivity_w_m_k: 1.0,
+        density_kg_m3: 1000.0,
+        specific_heat_j_kg_k: 1000.0,
+        thickness_m: 0.1,
+        solar_absorptivity: 0.5,
+        thermal_emissivity: 0.9,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::Insulated,
+    };
+    let opts = SolveOptions::default();
+    let err = |props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs| {
+        thermal::solve(props, forcing, inputs, &opts)
+            .unwrap_err()
+            .to_string()
+    };
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let bad = SlabProperties {
+        thickness_m: 0.0,
+        ..good
+    };
+    assert!(err(&bad, &forcing, &inputs).contains("thickness_m"));
+    let bad = SlabProperties {
+        thermal_emissivity: 1.5,
+        ..good
+    };
+    assert!(err(&bad, &forcing, &inputs).contains("thermal_emissivity"));
+    let mut f = forcing.clone();
+    f.times_s[2] = 900.0;
+    assert!(err(&good, &f, &inputs).contains("records[2].time"));
+    let mut f = forcing.clone();
+    f.air_temperature_k[1] = f64::NAN;
+    assert!(err(&good, &f, &inputs).contains("records[1].air_temperature_k"));
+    let short = FacetInputs::new(&sun[..2], &cos, 1.0);
+    assert!(err(&good, &forcing, &short).contains("sun_fraction"));
+    let bad_f = FacetInputs::new(&sun, &cos, 1.2);
+    assert!(err(&good, &forcing, &bad_f).contains("shape_factor"));
+}
+
+/// `EXPOSED_AREA` → back boundary, as documented on
+/// `BackBoundary::from_exposed_area`.
+#[test]
+fn exposed_area_maps_to_back_boundary() {
+    assert_eq!(BackBoundary::from_exposed_area(-0.5), BackBoundary::GROUND);
+    assert_eq!(
+        BackBoundary::from_exposed_area(0.0),
+        BackBoundary::Insulated
+    );
+    assert_eq!(BackBoundary::from_exposed_area(0.5), BackBoundary::BUILDING);
+    assert_eq!(BackBoundary::from_exposed_area(1.0), BackBoundary::Exposed);
+}

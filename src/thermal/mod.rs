@@ -1,1 +1,985 @@
-//! (thermal: being written.)
+//! The THERM-style thermal model: the temperature of each facet through a
+//! weather history, from a 1-D transient slab model.
+//!
+//! DIRSIG computes facet temperatures with THERM, a 1-D slab model driven
+//! by the weather history and by ray-traced per-facet inputs (solar history,
+//! sky shape factor, background); see Schott, *Remote Sensing: The Image
+//! Chain Approach*, 2nd ed., Oxford UP, 2007 (DIRSIG chapter) and the DIRSIG
+//! User Manual ("THERM temperature solver"). irsig's model has the same
+//! inputs and the same front-surface energy balance ([`balance`]) with a
+//! modern numerical core ([`conduction`]: finite volumes through the
+//! thickness, L-stable second-order TR-BDF2 time stepping, Newton on the
+//! radiative boundary).
+//!
+//! # How the types fit together
+//! - [`SlabProperties`]: one material's thermal properties and its
+//!   [`BackBoundary`] (what the back face of the slab touches), built from a
+//!   [`Material`] with [`SlabProperties::from_material`].
+//! - [`Forcing`]: the weather history shared by all facets (air temperature,
+//!   wind, direct/diffuse solar, sky longwave), from
+//!   [`WeatherRecord`]s.
+//! - [`FacetInputs`]: what the ray tracer computes per facet — sunlit
+//!   fraction and cos of the solar incidence per record, the sky shape factor
+//!   `F` and the background temperature.
+//! - [`solve`]`(props, forcing, inputs, options)` → [`ThermalSolution`]: the
+//!   front-surface temperature at every weather record, with convergence and
+//!   energy diagnostics. It is a pure function, cheap (tens of µs), and safe
+//!   to call from many threads (`rayon`).
+//!
+//! Facets with a fixed temperature or a temperature from a file do not go
+//! through this module: that is the caller's (the scene integrator's) job.
+//!
+//! ```
+//! use irsig::thermal::{self, BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions};
+//! // Two records 15 min apart of a warm sunny calm day.
+//! let forcing = Forcing::constant(&[0.0, 900.0], 300.0, 1.0, 800.0, 100.0, 350.0);
+//! let props = SlabProperties {
+//!     conductivity_w_m_k: 1.4, density_kg_m3: 2300.0, specific_heat_j_kg_k: 880.0,
+//!     thickness_m: 0.2, solar_absorptivity: 0.7, thermal_emissivity: 0.9,
+//!     self_power_w_m2: 0.0, back: BackBoundary::Insulated,
+//! };
+//! let sun = [1.0f32, 1.0];
+//! let cos = [0.8f32, 0.8];
+//! let inputs = FacetInputs::new(&sun, &cos, 1.0);
+//! let sol = thermal::solve(&props, &forcing, &inputs, &SolveOptions::default()).unwrap();
+//! assert!(sol.surface_temperature_k[1] > 300.0); // sunlit concrete warms above the air
+//! ```
+
+pub mod balance;
+pub mod conduction;
+
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::weather::WeatherRecord;
+pub use balance::{INTERIOR_AIR_K, INTERIOR_FILM_W_M2_K, mcadams_h_w_m2_k};
+pub use conduction::{Boundary, Grid, STEFAN_BOLTZMANN_W_M2_K4, Slab, StepStats, SurfaceFlux};
+
+/// Angular frequency of the diurnal cycle, rad/s.
+pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
+
+/// What the back face of a slab exchanges heat with.
+///
+/// | variant      | typical objects                  | back-face flux into the slab                |
+/// |--------------|----------------------------------|---------------------------------------------|
+/// | `Exposed`    | leaves, fences, vehicle panels   | `h(u)(T_air−T) + ε F_b E_sky + ε(1−F_b)σT_bg⁴ − εσT⁴` |
+/// | `Ground`     | soil, asphalt, concrete slabs on grade | none: the column extends to `depth_m`, held at `T_deep` |
+/// | `Interior`   | building walls and roofs         | `h_i (T_interior − T)`                      |
+/// | `Insulated`  | objects backed by insulation     | 0                                           |
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BackBoundary {
+    /// Adiabatic back face: no heat flows through it.
+    Insulated,
+    /// Both faces exposed to the environment: the back face convects to the
+    /// air with the same `h(u)` as the front, and exchanges longwave with the
+    /// sky (shape factor `F_b`, [`FacetInputs::back_shape_factor`]) and the
+    /// background. It receives no sunlight.
+    Exposed,
+    /// Ground: the slab is a column of the material down to `depth_m` (None:
+    /// the larger of the thickness and five diurnal damping depths
+    /// `5·√(2κ/ω)`, where the diurnal wave has decayed to e⁻⁵ < 1 %), whose
+    /// bottom is held at `deep_temperature_k` (None: the time-mean air
+    /// temperature of the history).
+    Ground {
+        /// Deep-soil temperature, K (None: mean air temperature).
+        deep_temperature_k: Option<f64>,
+        /// Depth of the column, m (None: automatic, see above).
+        depth_m: Option<f64>,
+    },
+    /// Building envelope: the back face exchanges heat with interior air
+    /// through a film coefficient (convection + radiation to the room).
+    Interior {
+        /// Interior air temperature, K.
+        air_temperature_k: f64,
+        /// Interior film coefficient, W m⁻² K⁻¹.
+        film_coefficient_w_m2_k: f64,
+    },
+}
+
+impl BackBoundary {
+    /// A building interior at [`INTERIOR_AIR_K`] with the ISO 6946 film
+    /// coefficient [`INTERIOR_FILM_W_M2_K`].
+    pub const BUILDING: BackBoundary = BackBoundary::Interior {
+        air_temperature_k: INTERIOR_AIR_K,
+        film_coefficient_w_m2_k: INTERIOR_FILM_W_M2_K,
+    };
+
+    /// The ground with automatic depth and deep temperature.
+    pub const GROUND: BackBoundary = BackBoundary::Ground {
+        deep_temperature_k: None,
+        depth_m: None,
+    };
+
+    /// irsig's reading of THERM's `EXPOSED_AREA` (DIRSIG does not document
+    /// it publicly; the values in DIRSIG material files are −0.5 for terrain,
+    /// 0.5 for water and one-sided objects, 0.1–0.5 for others, and 1 is the
+    /// usual value for thin plates exposed on both sides):
+    ///
+    /// - `a < 0` → [`BackBoundary::Ground`] (the negative sign marks
+    ///   material lying on the earth: DIRSIG's terrain classes use −0.5);
+    /// - `a = 0` → [`BackBoundary::Insulated`];
+    /// - `0 < a < 0.75` → [`BackBoundary::BUILDING`] (one face exposed, the
+    ///   other facing a conditioned interior);
+    /// - `a ≥ 0.75` → [`BackBoundary::Exposed`] (both faces exposed, i.e.
+    ///   about twice the one-sided area).
+    ///
+    /// Non-finite values are rejected by [`SlabProperties::from_material`].
+    pub fn from_exposed_area(a: f64) -> BackBoundary {
+        if a < 0.0 {
+            BackBoundary::GROUND
+        } else if a == 0.0 {
+            BackBoundary::Insulated
+        } else if a < 0.75 {
+            BackBoundary::BUILDING
+        } else {
+            BackBoundary::Exposed
+        }
+    }
+}
+
+/// Thermal properties of one slab material, SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlabProperties {
+    /// Thermal conductivity `k`, W m⁻¹ K⁻¹.
+    pub conductivity_w_m_k: f64,
+    /// Mass density `ρ`, kg m⁻³.
+    pub density_kg_m3: f64,
+    /// Specific heat `c`, J kg⁻¹ K⁻¹.
+    pub specific_heat_j_kg_k: f64,
+    /// Slab thickness, m.
+    pub thickness_m: f64,
+    /// Solar (shortwave) absorptivity `α`, 0–1.
+    pub solar_absorptivity: f64,
+    /// Broadband thermal emissivity `ε`, 0–1.
+    pub thermal_emissivity: f64,
+    /// Self-generated power `P` delivered at the front surface, W m⁻².
+    pub self_power_w_m2: f64,
+    /// What the back face touches.
+    pub back: BackBoundary,
+}
+
+impl SlabProperties {
+    /// Thermal diffusivity `κ = k/(ρc)`, m² s⁻¹.
+    pub fn diffusivity_m2_s(&self) -> f64 {
+        self.conductivity_w_m_k / (self.density_kg_m3 * self.specific_heat_j_kg_k)
+    }
+
+    /// Diurnal damping depth `√(2κ/ω)`, m (Carslaw & Jaeger §2.6).
+    pub fn diurnal_damping_depth_m(&self) -> f64 {
+        (2.0 * self.diffusivity_m2_s() / DIURNAL_OMEGA_RAD_S).sqrt()
+    }
+
+    /// Depth of the computed column, m: the thickness, or for
+    /// [`BackBoundary::Ground`] the column depth described there.
+    pub fn column_depth_m(&self) -> f64 {
+        match self.back {
+            BackBoundary::Ground {
+                depth_m: Some(d), ..
+            } => d,
+            BackBoundary::Ground { depth_m: None, .. } => {
+                self.thickness_m.max(5.0 * self.diurnal_damping_depth_m())
+            }
+            _ => self.thickness_m,
+        }
+    }
+
+    /// Thermal properties of a material; the back boundary follows
+    /// [`BackBoundary::from_exposed_area`]. Errors name the material and the
+    /// offending field.
+    pub fn from_material(m: &Material) -> Result<SlabProperties> {
+        let field = |f: &str| format!("material `{}` (id {}): {f}", m.name, m.id);
+        if !m.exposed_area.is_finite() {
+            return Err(Error::invalid(
+                field("exposed_area"),
+                format!("expected a finite number, got {}", m.exposed_area),
+            ));
+        }
+        let p = SlabProperties {
+            conductivity_w_m_k: m.conductivity_w_m_k,
+            density_kg_m3: m.density_kg_m3,
+            specific_heat_j_kg_k: m.specific_heat_j_kg_k,
+            thickness_m: m.thickness_m,
+            solar_absorptivity: m.solar_absorptivity,
+            thermal_emissivity: m.thermal_emissivity,
+            self_power_w_m2: m.self_power_w_m2,
+            back: BackBoundary::from_exposed_area(m.exposed_area),
+        };
+        p.validate_with(&field)?;
+        Ok(p)
+    }
+
+    /// Check every property is in its physical domain.
+    pub fn validate(&self) -> Result<()> {
+        self.validate_with(&|f: &str| f.to_string())
+    }
+
+    fn validate_with(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        let positive = [
+            ("conductivity_w_m_k", self.conductivity_w_m_k, "W/(m·K)"),
+            ("density_kg_m3", self.density_kg_m3, "kg/m³"),
+            (
+                "specific_heat_j_kg_k",
+                self.specific_heat_j_kg_k,
+                "J/(kg·K)",
+            ),
+            ("thickness_m", self.thickness_m, "m"),
+        ];
+        for (name, v, unit) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(
+                    field(name),
+                    format!("expected a positive number ({unit}), got {v}"),
+                ));
+            }
+        }
+        for (name, v) in [
+            ("solar_absorptivity", self.solar_absorptivity),
+            ("thermal_emissivity", self.thermal_emissivity),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::invalid(
+                    field(name),
+                    format!("expected a fraction in [0, 1], got {v}"),
+                ));
+            }
+        }
+        if !self.self_power_w_m2.is_finite() {
+            return Err(Error::invalid(
+                field("self_power_w_m2"),
+                format!(
+                    "expected a finite power (W/m²), got {}",
+                    self.self_power_w_m2
+                ),
+            ));
+        }
+        match self.back {
+            BackBoundary::Ground {
+                deep_temperature_k,
+                depth_m,
+            } => {
+                if let Some(t) = deep_temperature_k
+                    && !(t.is_finite() && t > 0.0)
+                {
+                    return Err(Error::invalid(
+                        field("back.deep_temperature_k"),
+                        format!("expected a positive temperature (K), got {t}"),
+                    ));
+                }
+                if let Some(d) = depth_m
+                    && !(d.is_finite() && d > 0.0)
+                {
+                    return Err(Error::invalid(
+                        field("back.depth_m"),
+                        format!("expected a positive depth (m), got {d}"),
+                    ));
+                }
+            }
+            BackBoundary::Interior {
+                air_temperature_k,
+                film_coefficient_w_m2_k,
+            } => {
+                if !(air_temperature_k.is_finite() && air_temperature_k > 0.0) {
+                    return Err(Error::invalid(
+                        field("back.air_temperature_k"),
+                        format!("expected a positive temperature (K), got {air_temperature_k}"),
+                    ));
+                }
+                if !(film_coefficient_w_m2_k.is_finite() && film_coefficient_w_m2_k >= 0.0) {
+                    return Err(Error::invalid(
+                        field("back.film_coefficient_w_m2_k"),
+                        format!(
+                            "expected a non-negative coefficient (W/(m²·K)), got {film_coefficient_w_m2_k}"
+                        ),
+                    ));
+                }
+            }
+            BackBoundary::Insulated | BackBoundary::Exposed => {}
+        }
+        Ok(())
+    }
+}
+
+impl TryFrom<&Material> for SlabProperties {
+    type Error = Error;
+    fn try_from(m: &Material) -> Result<SlabProperties> {
+        SlabProperties::from_material(m)
+    }
+}
+
+/// The weather history driving every facet, one entry per record, SI units.
+/// Between records every quantity varies linearly in time.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Forcing {
+    /// Record times, seconds since the first record (strictly increasing).
+    pub times_s: Vec<f64>,
+    /// Air temperature, K.
+    pub air_temperature_k: Vec<f64>,
+    /// Wind speed, m/s.
+    pub wind_speed_m_s: Vec<f64>,
+    /// Direct-normal solar irradiance, W m⁻².
+    pub direct_normal_w_m2: Vec<f64>,
+    /// Diffuse-horizontal solar irradiance, W m⁻².
+    pub diffuse_horizontal_w_m2: Vec<f64>,
+    /// Downwelling sky longwave on a horizontal surface, W m⁻².
+    pub sky_longwave_w_m2: Vec<f64>,
+}
+
+impl Forcing {
+    /// The forcing of a weather history (validated).
+    pub fn from_records(records: &[WeatherRecord]) -> Result<Forcing> {
+        let t0 = records.first().map(|r| r.time);
+        let f = Forcing {
+            times_s: records
+                .iter()
+                .map(|r| (r.time - t0.expect("non-empty")).num_milliseconds() as f64 * 1e-3)
+                .collect(),
+            air_temperature_k: records.iter().map(|r| r.air_temperature_k).collect(),
+            wind_speed_m_s: records.iter().map(|r| r.wind_speed_m_s).collect(),
+            direct_normal_w_m2: records.iter().map(|r| r.direct_normal_w_m2).collect(),
+            diffuse_horizontal_w_m2: records.iter().map(|r| r.diffuse_horizontal_w_m2).collect(),
+            sky_longwave_w_m2: records.iter().map(|r| r.sky_longwave_w_m2).collect(),
+        };
+        f.validate()?;
+        Ok(f)
+    }
+
+    /// Constant weather at the given record times (for tests and studies).
+    pub fn constant(
+        times_s: &[f64],
+        air_temperature_k: f64,
+        wind_speed_m_s: f64,
+        direct_normal_w_m2: f64,
+        diffuse_horizontal_w_m2: f64,
+        sky_longwave_w_m2: f64,
+    ) -> Forcing {
+        let n = times_s.len();
+        Forcing {
+            times_s: times_s.to_vec(),
+            air_temperature_k: vec![air_temperature_k; n],
+            wind_speed_m_s: vec![wind_speed_m_s; n],
+            direct_normal_w_m2: vec![direct_normal_w_m2; n],
+            diffuse_horizontal_w_m2: vec![diffuse_horizontal_w_m2; n],
+            sky_longwave_w_m2: vec![sky_longwave_w_m2; n],
+        }
+    }
+
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.times_s.len()
+    }
+
+    /// Whether there are no records.
+    pub fn is_empty(&self) -> bool {
+        self.times_s.is_empty()
+    }
+
+    /// Time-weighted (trapezoidal) mean air temperature, K.
+    pub fn mean_air_temperature_k(&self) -> f64 {
+        let n = self.len();
+        if n == 1 {
+            return self.air_temperature_k[0];
+        }
+        let mut num = 0.0;
+        for k in 0..n - 1 {
+            let dt = self.times_s[k + 1] - self.times_s[k];
+            num += 0.5 * dt * (self.air_temperature_k[k] + self.air_temperature_k[k + 1]);
+        }
+        num / (self.times_s[n - 1] - self.times_s[0])
+    }
+
+    /// Check lengths, time order and physical ranges; errors name the
+    /// record (`records[i].field`).
+    pub fn validate(&self) -> Result<()> {
+        let n = self.len();
+        if n == 0 {
+            return Err(Error::invalid(
+                "records",
+                "the weather history is empty; at least one record is needed",
+            ));
+        }
+        let cols: [(&str, &Vec<f64>, f64, &str); 5] = [
+            ("air_temperature_k", &self.air_temperature_k, 1.0, "K, > 0"),
+            ("wind_speed_m_s", &self.wind_speed_m_s, 0.0, "m/s, ≥ 0"),
+            (
+                "direct_normal_w_m2",
+                &self.direct_normal_w_m2,
+                0.0,
+                "W/m², ≥ 0",
+            ),
+            (
+                "diffuse_horizontal_w_m2",
+                &self.diffuse_horizontal_w_m2,
+                0.0,
+                "W/m², ≥ 0",
+            ),
+            (
+                "sky_longwave_w_m2",
+                &self.sky_longwave_w_m2,
+                0.0,
+                "W/m², ≥ 0",
+            ),
+        ];
+        for (name, col, min, what) in cols {
+            if col.len() != n {
+                return Err(Error::invalid(
+                    name,
+                    format!("has {} values but there are {n} record times", col.len()),
+                ));
+            }
+            if let Some((i, v)) = col
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !(v.is_finite() && **v >= min))
+            {
+                return Err(Error::invalid(
+                    format!("records[{i}].{name}"),
+                    format!("expected a finite value ({what}), got {v}"),
+                ));
+            }
+        }
+        for i in 1..n {
+            let (a, b) = (self.times_s[i - 1], self.times_s[i]);
+            if !(b.is_finite() && b > a) {
+                return Err(Error::invalid(
+                    format!("records[{i}].time"),
+                    format!(
+                        "record times must increase strictly; record {i} is {b} s after the first, \
+                         record {} is {a} s",
+                        i - 1
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Temperature of what a facet sees where it does not see sky.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Background<'a> {
+    /// The air temperature of each record (no neighbour information).
+    Air,
+    /// A constant temperature, K.
+    Constant(f64),
+    /// One temperature per record, K (e.g. the area-weighted σT⁴-mean of the
+    /// neighbours hit by the blocked hemisphere rays, from a previous pass).
+    PerRecord(&'a [f32]),
+}
+
+/// The per-facet inputs of the thermal model (computed by ray tracing in a
+/// scene; by geometry alone in one-facet mode). Slices are borrowed so the
+/// caller can keep all facets' histories in flat arrays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FacetInputs<'a> {
+    /// Sunlit fraction of the facet at each record, 0–1.
+    pub sun_fraction: &'a [f32],
+    /// Cosine of the solar incidence angle on the facet at each record
+    /// (values ≤ 0: sun behind the facet or below the horizon).
+    pub cos_incidence: &'a [f32],
+    /// Sky shape factor `F` of the front face, 0–1.
+    pub shape_factor: f64,
+    /// Sky shape factor of the back face, used only with
+    /// [`BackBoundary::Exposed`]; None: `1 − F`, exact for an unobstructed
+    /// plane (a plane tilted β sees `(1+cos β)/2` of the sky from the front
+    /// and `(1−cos β)/2` from the back).
+    pub back_shape_factor: Option<f64>,
+    /// Background temperature.
+    pub background: Background<'a>,
+}
+
+impl<'a> FacetInputs<'a> {
+    /// Inputs with the background at air temperature and the default back
+    /// shape factor.
+    pub fn new(sun_fraction: &'a [f32], cos_incidence: &'a [f32], shape_factor: f64) -> Self {
+        FacetInputs {
+            sun_fraction,
+            cos_incidence,
+            shape_factor,
+            back_shape_factor: None,
+            background: Background::Air,
+        }
+    }
+
+    fn validate(&self, n: usize) -> Result<()> {
+        for (name, col) in [
+            ("sun_fraction", self.sun_fraction),
+            ("cos_incidence", self.cos_incidence),
+        ] {
+            if col.len() != n {
+                return Err(Error::invalid(
+                    name,
+                    format!(
+                        "has {} values; expected one per weather record ({n})",
+                        col.len()
+                    ),
+                ));
+            }
+        }
+        if let Some(i) = self
+            .sun_fraction
+            .iter()
+            .position(|v| !(0.0..=1.0).contains(v))
+        {
+            return Err(Error::invalid(
+                format!("sun_fraction[{i}]"),
+                format!(
+                    "expected a fraction in [0, 1], got {}",
+                    self.sun_fraction[i]
+                ),
+            ));
+        }
+        if let Some(i) = self
+            .cos_incidence
+            .iter()
+            .position(|v| !(-1.0..=1.0).contains(v))
+        {
+            return Err(Error::invalid(
+                format!("cos_incidence[{i}]"),
+                format!(
+                    "expected a cosine in [-1, 1], got {}",
+                    self.cos_incidence[i]
+                ),
+            ));
+        }
+        for (name, v) in [
+            ("shape_factor", Some(self.shape_factor)),
+            ("back_shape_factor", self.back_shape_factor),
+        ] {
+            if let Some(v) = v
+                && !(0.0..=1.0).contains(&v)
+            {
+                return Err(Error::invalid(
+                    name,
+                    format!("expected a fraction in [0, 1], got {v}"),
+                ));
+            }
+        }
+        match self.background {
+            Background::Air => {}
+            Background::Constant(t) => {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(Error::invalid(
+                        "background",
+                        format!("expected a positive temperature (K), got {t}"),
+                    ));
+                }
+            }
+            Background::PerRecord(ts) => {
+                if ts.len() != n {
+                    return Err(Error::invalid(
+                        "background",
+                        format!(
+                            "has {} values; expected one per weather record ({n})",
+                            ts.len()
+                        ),
+                    ));
+                }
+                if let Some(i) = ts.iter().position(|t| !(t.is_finite() && *t > 0.0)) {
+                    return Err(Error::invalid(
+                        format!("background[{i}]"),
+                        format!("expected a positive temperature (K), got {}", ts[i]),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Spin-up by repeating the first period of the history.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spinup {
+    /// Most repetitions of the first period before the real run (0 = none:
+    /// the history itself is the spin-up).
+    pub max_cycles: u32,
+    /// Length of the repeated period, s (a day).
+    pub period_s: f64,
+    /// Stop repeating once a cycle ends within this of the state it started
+    /// from, at every node (the state is then periodic), K.
+    pub tolerance_k: f64,
+}
+
+impl Default for Spinup {
+    /// Up to 3 repetitions of the first 24 h, until a day ends within
+    /// 0.05 K of its start state.
+    fn default() -> Self {
+        Spinup {
+            max_cycles: 3,
+            period_s: 86_400.0,
+            tolerance_k: 0.05,
+        }
+    }
+}
+
+impl Spinup {
+    /// No repetition: the history itself is the spin-up.
+    pub fn none() -> Self {
+        Spinup {
+            max_cycles: 0,
+            ..Spinup::default()
+        }
+    }
+}
+
+/// Numerical options of [`solve`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolveOptions {
+    /// Finite-volume grid through the slab.
+    pub grid: Grid,
+    /// Longest time step, s; each interval between records is split into
+    /// equal sub-steps no longer than this.
+    pub max_substep_s: f64,
+    /// Spin-up.
+    pub spinup: Spinup,
+    /// Newton tolerance on the surface temperature within a stage, K.
+    pub newton_tolerance_k: f64,
+}
+
+impl Default for SolveOptions {
+    /// 12 cells (growth 1.3), sub-steps ≤ 900 s (one per 15-min record), up
+    /// to 3 spin-up days.
+    fn default() -> Self {
+        SolveOptions {
+            grid: Grid::default(),
+            max_substep_s: 900.0,
+            spinup: Spinup::default(),
+            newton_tolerance_k: 1e-4,
+        }
+    }
+}
+
+impl SolveOptions {
+    /// The fast preset for large scenes and parameter sweeps: 8 cells,
+    /// sub-steps ≤ 900 s, no spin-up repetitions (the history itself is the
+    /// spin-up, which leaves thick slabs and ground up to ~1 K from their
+    /// periodic state after one day; see the README).
+    pub fn fast() -> Self {
+        SolveOptions {
+            grid: Grid {
+                cells: 8,
+                growth: 1.6,
+            },
+            max_substep_s: 900.0,
+            spinup: Spinup::none(),
+            newton_tolerance_k: 1e-3,
+        }
+    }
+
+    /// The accurate preset, for verification: 24 cells (growth 1.15),
+    /// sub-steps ≤ 120 s, up to 6 spin-up days to 0.01 K.
+    pub fn accurate() -> Self {
+        SolveOptions {
+            grid: Grid {
+                cells: 24,
+                growth: 1.15,
+            },
+            max_substep_s: 120.0,
+            spinup: Spinup {
+                max_cycles: 6,
+                period_s: 86_400.0,
+                tolerance_k: 0.01,
+            },
+            newton_tolerance_k: 1e-6,
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.grid.cells == 0 || self.grid.cells > 1000 {
+            return Err(Error::invalid(
+                "grid.cells",
+                format!("expected 1..=1000 cells, got {}", self.grid.cells),
+            ));
+        }
+        if !(self.grid.growth.is_finite() && (1.0..=4.0).contains(&self.grid.growth)) {
+            return Err(Error::invalid(
+                "grid.growth",
+                format!("expected a ratio in [1, 4], got {}", self.grid.growth),
+            ));
+        }
+        if !(self.max_substep_s.is_finite() && self.max_substep_s > 0.0) {
+            return Err(Error::invalid(
+                "max_substep_s",
+                format!("expected a positive time (s), got {}", self.max_substep_s),
+            ));
+        }
+        if !(self.spinup.period_s.is_finite() && self.spinup.period_s > 0.0) {
+            return Err(Error::invalid(
+                "spinup.period_s",
+                format!("expected a positive time (s), got {}", self.spinup.period_s),
+            ));
+        }
+        if !(self.newton_tolerance_k.is_finite() && self.newton_tolerance_k > 0.0) {
+            return Err(Error::invalid(
+                "newton_tolerance_k",
+                format!(
+                    "expected a positive tolerance (K), got {}",
+                    self.newton_tolerance_k
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Energy budget of the final run (after spin-up), J m⁻², with the time
+/// scheme's own quadrature: `front_in + back_in = stored_change` for flux
+/// boundaries (for [`BackBoundary::Ground`] the deep boundary is held at a
+/// fixed temperature and `back_in` is what crossed it, by difference).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EnergyBudget {
+    /// Net energy in through the front surface, J m⁻².
+    pub front_in_j_m2: f64,
+    /// Net energy in through the back face, J m⁻².
+    pub back_in_j_m2: f64,
+    /// Change of the heat stored in the slab, J m⁻².
+    pub stored_change_j_m2: f64,
+}
+
+/// Result of [`solve`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThermalSolution {
+    /// Front-surface temperature at each weather record, K.
+    pub surface_temperature_k: Vec<f64>,
+    /// Back-face (or, for ground, deep-column) temperature at each record, K.
+    pub back_temperature_k: Vec<f64>,
+    /// Net heat flux into the front surface at each record (sum of the
+    /// balance terms at the surface temperature), W m⁻².
+    pub net_front_flux_w_m2: Vec<f64>,
+    /// Spin-up repetitions of the first period actually run.
+    pub spinup_cycles: u32,
+    /// Largest change of any node temperature over the last spin-up cycle
+    /// (end state − start state), K; None when no spin-up ran. Below the
+    /// tolerance, the first period's solution is periodic to within it.
+    pub spinup_change_k: Option<f64>,
+    /// Change over the last period: largest |T_s(t) − T_s(t − P)| over the
+    /// records of the last period `P` of the history, K (None when the
+    /// history is shorter than two periods). It mixes incomplete spin-up
+    /// with genuine day-to-day weather change.
+    pub last_period_change_k: Option<f64>,
+    /// Energy budget of the final run.
+    pub energy: EnergyBudget,
+    /// Work counters of the final run and spin-up.
+    pub stats: StepStats,
+}
+
+/// The flux laws at each record for one facet, and the column to solve.
+struct Prepared {
+    front: Vec<SurfaceFlux>,
+    back: Vec<Boundary>,
+    initial_surface_k: f64,
+    deep_k: Option<f64>,
+}
+
+fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> Prepared {
+    let n = forcing.len();
+    let mut front = Vec::with_capacity(n);
+    let mut back = Vec::with_capacity(n);
+    let f_back = inputs
+        .back_shape_factor
+        .unwrap_or(1.0 - inputs.shape_factor);
+    let deep_k = match props.back {
+        BackBoundary::Ground {
+            deep_temperature_k, ..
+        } => Some(deep_temperature_k.unwrap_or_else(|| forcing.mean_air_temperature_k())),
+        _ => None,
+    };
+    for k in 0..n {
+        let air = forcing.air_temperature_k[k];
+        let bg = match inputs.background {
+            Background::Air => air,
+            Background::Constant(t) => t,
+            Background::PerRecord(ts) => ts[k] as f64,
+        };
+        let ff = balance::FrontForcing {
+            air_temperature_k: air,
+            convection_w_m2_k: mcadams_h_w_m2_k(forcing.wind_speed_m_s[k]),
+            direct_normal_w_m2: forcing.direct_normal_w_m2[k],
+            diffuse_horizontal_w_m2: forcing.diffuse_horizontal_w_m2[k],
+            sky_longwave_w_m2: forcing.sky_longwave_w_m2[k],
+            sun_fraction: inputs.sun_fraction[k] as f64,
+            cos_incidence: inputs.cos_incidence[k] as f64,
+            shape_factor: inputs.shape_factor,
+            background_temperature_k: bg,
+        };
+        front.push(balance::front_flux(
+            &ff,
+            props.solar_absorptivity,
+            props.thermal_emissivity,
+            props.self_power_w_m2,
+        ));
+        back.push(match props.back {
+            BackBoundary::Insulated => Boundary::Flux(SurfaceFlux::default()),
+            BackBoundary::Exposed => Boundary::Flux(balance::exposed_back_flux(
+                &ff,
+                props.thermal_emissivity,
+                f_back,
+            )),
+            BackBoundary::Ground { .. } => Boundary::Temperature(deep_k.unwrap_or(air)),
+            BackBoundary::Interior {
+                air_temperature_k,
+                film_coefficient_w_m2_k,
+            } => Boundary::Flux(balance::film_flux(
+                air_temperature_k,
+                film_coefficient_w_m2_k,
+            )),
+        });
+    }
+    Prepared {
+        front,
+        back,
+        initial_surface_k: forcing.air_temperature_k[0],
+        deep_k,
+    }
+}
+
+#[inline]
+fn lerp_boundary(a: &Boundary, b: &Boundary, f: f64) -> Boundary {
+    match (a, b) {
+        (Boundary::Flux(x), Boundary::Flux(y)) => Boundary::Flux(x.lerp(y, f)),
+        (Boundary::Temperature(x), Boundary::Temperature(y)) => {
+            Boundary::Temperature(x + f * (y - x))
+        }
+        // Mixed kinds do not occur (one back boundary per facet).
+        _ => *a,
+    }
+}
+
+/// Advance the slab from record `k` to record `k + 1`.
+fn advance(slab: &mut Slab, p: &Prepared, times: &[f64], k: usize, max_substep_s: f64) {
+    let span = times[k + 1] - times[k];
+    let m = (span / max_substep_s).ceil().max(1.0) as usize;
+    let dt = span / m as f64;
+    let (fa, fb) = (&p.front[k], &p.front[k + 1]);
+    let (ba, bb) = (&p.back[k], &p.back[k + 1]);
+    for j in 0..m {
+        let base = j as f64 / m as f64;
+        let scale = 1.0 / m as f64;
+        slab.step(
+            dt,
+            |f| Boundary::Flux(fa.lerp(fb, base + f * scale)),
+            |f| lerp_boundary(ba, bb, base + f * scale),
+        );
+    }
+}
+
+/// Solve the thermal model of one facet over the whole weather history.
+///
+/// The slab starts at the air temperature of the first record (a ground
+/// column: linear from it to the deep temperature), is optionally spun up by
+/// repeating the first period ([`Spinup`]), then is stepped through every
+/// record. Returns the front-surface temperature at each record.
+///
+/// Errors (bad property, input lengths that do not match the history,
+/// out-of-range values) name the offending field.
+pub fn solve(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    inputs: &FacetInputs,
+    opts: &SolveOptions,
+) -> Result<ThermalSolution> {
+    props.validate()?;
+    forcing.validate()?;
+    inputs.validate(forcing.len())?;
+    opts.validate()?;
+    let p = prepare(props, forcing, inputs);
+    let depth = props.column_depth_m();
+    let mut slab = Slab::new(
+        depth,
+        props.conductivity_w_m_k,
+        props.density_kg_m3 * props.specific_heat_j_kg_k,
+        opts.grid,
+        p.initial_surface_k,
+    );
+    slab.set_newton(opts.newton_tolerance_k, 30);
+    if let Some(deep) = p.deep_k {
+        let top = p.initial_surface_k;
+        slab.set_temperatures(|x| top + (deep - top) * x / depth);
+    }
+    let n = forcing.len();
+    let times = &forcing.times_s;
+
+    // Spin-up: repeat records 0..=k_p (the first period) while it changes.
+    let period = opts.spinup.period_s;
+    let k_p = times.partition_point(|&t| t <= times[0] + period + 1e-6) - 1;
+    let mut spinup_cycles = 0;
+    let mut spinup_change_k = None;
+    if opts.spinup.max_cycles > 0 && k_p > 0 && times[k_p] - times[0] >= period - 1e-6 {
+        let mut start_state = slab.temperatures_k().to_vec();
+        for _ in 0..opts.spinup.max_cycles {
+            for k in 0..k_p {
+                advance(&mut slab, &p, times, k, opts.max_substep_s);
+            }
+            spinup_cycles += 1;
+            // Periodicity: how much the state changed over the cycle.
+            let change = slab
+                .temperatures_k()
+                .iter()
+                .zip(&start_state)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            spinup_change_k = Some(change);
+            if change < opts.spinup.tolerance_k {
+                break;
+            }
+            start_state.copy_from_slice(slab.temperatures_k());
+        }
+    }
+
+    // The real run.
+    slab.reset_energy();
+    let e0 = slab.stored_energy_j_m2();
+    let mut surface = Vec::with_capacity(n);
+    let mut back = Vec::with_capacity(n);
+    let mut flux = Vec::with_capacity(n);
+    surface.push(slab.front_k());
+    back.push(slab.back_k());
+    flux.push(p.front[0].flux(slab.front_k()));
+    for k in 0..n - 1 {
+        advance(&mut slab, &p, times, k, opts.max_substep_s);
+        surface.push(slab.front_k());
+        back.push(slab.back_k());
+        flux.push(p.front[k + 1].flux(slab.front_k()));
+    }
+    let (front_in, back_in) = slab.boundary_energy_j_m2();
+    let stored_change = slab.stored_energy_j_m2() - e0;
+    let back_in = if p.deep_k.is_some() {
+        stored_change - front_in
+    } else {
+        back_in
+    };
+
+    // Change over the last period.
+    let t_end = times[n - 1];
+    let last_period_change_k = if t_end - times[0] >= 2.0 * period - 1e-6 {
+        let start = times.partition_point(|&t| t < t_end - period);
+        let mut worst: f64 = 0.0;
+        for k in start..n {
+            let t = times[k] - period;
+            let j = times.partition_point(|&x| x < t).min(n - 1);
+            let then = if j == 0 || (times[j] - t).abs() < 1e-6 {
+                surface[j]
+            } else {
+                let f = (t - times[j - 1]) / (times[j] - times[j - 1]);
+                surface[j - 1] + f * (surface[j] - surface[j - 1])
+            };
+            worst = worst.max((surface[k] - then).abs());
+        }
+        Some(worst)
+    } else {
+        None
+    };
+
+    Ok(ThermalSolution {
+        surface_temperature_k: surface,
+        back_temperature_k: back,
+        net_front_flux_w_m2: flux,
+        spinup_cycles,
+        spinup_change_k,
+        last_period_change_k,
+        energy: EnergyBudget {
+            front_in_j_m2: front_in,
+            back_in_j_m2: back_in,
+            stored_change_j_m2: stored_change,
+        },
+        stats: slab.stats(),
+    })
+}
