@@ -174,3 +174,384 @@ fn tape7_errors_name_file_and_line() {
         .to_string();
     assert!(e.contains("t7:line 3") && e.contains("blank"), "{e}");
 }
+
+mod builtin {
+    use super::*;
+    use irsig::atmosphere::{
+        Atmosphere, BuiltinAtmosphere, PathGeometry, SkyConditions, SurfaceMet,
+    };
+    use irsig::radiometry::SpectralGrid;
+
+    fn met(rh: f64) -> SurfaceMet {
+        SurfaceMet {
+            air_temperature_k: 295.0,
+            relative_humidity: rh,
+            pressure_pa: 101_325.0,
+            ground_altitude_m: 100.0,
+        }
+    }
+
+    fn band_values(a: &Atmosphere, g: &PathGeometry, band: &Band) -> (f64, f64) {
+        let p = a.path(g, band.grid()).unwrap();
+        (
+            band.mean(&p.transmittance),
+            band.integrate(&p.path_radiance),
+        )
+    }
+
+    #[test]
+    fn monotone_in_range_and_water_vapour_with_zero_range_limit() {
+        for (lo, hi) in [(8.0, 14.0), (3.0, 5.0)] {
+            let band = Band::flat(lo, hi, 0.02).unwrap();
+            let atmos = |rh| Atmosphere::Builtin(BuiltinAtmosphere::new(met(rh)).unwrap());
+            // Zero range: τ = 1 and L_u = 0 exactly; 1 cm: close to it (the
+            // CO₂ 4.3 µm band centre absorbs measurably even over 1 cm).
+            let a = atmos(0.6);
+            let g0 = PathGeometry {
+                sensor_altitude_m: 101.5,
+                target_altitude_m: 101.5,
+                range_m: 0.0,
+            };
+            assert_eq!(band_values(&a, &g0, &band), (1.0, 0.0));
+            let g1 = PathGeometry {
+                range_m: 0.01,
+                ..g0
+            };
+            let (t, l) = band_values(&a, &g1, &band);
+            assert!(
+                t > 0.999 && l < 1e-3 * band.blackbody_radiance(295.0),
+                "{t} {l}"
+            );
+            // Range: horizontal near the ground, and slant down from 2 km.
+            for slant in [false, true] {
+                let mut last = (1.0, 0.0);
+                for r in [10.0, 100.0, 500.0, 1000.0, 2000.0, 2500.0, 5000.0, 20_000.0] {
+                    let g = if slant {
+                        // Sensor at 2.1 km looking down 60° off nadir, growing range.
+                        PathGeometry {
+                            sensor_altitude_m: 2100.0,
+                            target_altitude_m: 2100.0 - 0.5 * r,
+                            range_m: r,
+                        }
+                    } else {
+                        PathGeometry { range_m: r, ..g0 }
+                    };
+                    if g.target_altitude_m < 100.0 {
+                        continue;
+                    }
+                    let (t, l) = band_values(&a, &g, &band);
+                    assert!(
+                        t < last.0 && l > last.1,
+                        "{lo}-{hi} µm slant={slant} r={r}: τ {t} L_u {l} after {last:?}"
+                    );
+                    assert!((0.0..=1.0).contains(&t));
+                    last = (t, l);
+                }
+            }
+            // Water vapour at 1 km horizontal.
+            let g = PathGeometry {
+                range_m: 1000.0,
+                ..g0
+            };
+            let mut last = (1.1, -1.0);
+            for rh in [0.0, 0.2, 0.5, 0.8, 1.0] {
+                let (t, l) = band_values(&atmos(rh), &g, &band);
+                assert!(
+                    t < last.0 && l > last.1,
+                    "{lo}-{hi} µm rh {rh}: τ {t} L_u {l}"
+                );
+                last = (t, l);
+            }
+        }
+    }
+
+    #[test]
+    fn long_opaque_path_radiates_like_a_blackbody_at_air_temperature() {
+        // 50 km horizontal in humid air: the 13.5–14 µm CO₂/H₂O region is
+        // opaque, so L_u → B(T_air) there (Kirchhoff for an isothermal path).
+        let a = BuiltinAtmosphere::new(SurfaceMet {
+            relative_humidity: 0.9,
+            ..met(0.9)
+        })
+        .unwrap();
+        let band = Band::flat(13.5, 14.0, 0.01).unwrap();
+        let p = a.path(100.0, 100.0, 50_000.0, band.grid()).unwrap();
+        let t_air = a.state(100.0).temperature_k;
+        assert!((t_air - 295.0).abs() < 1e-9);
+        assert!(band.mean(&p.transmittance) < 1e-3);
+        assert!(
+            rel(
+                band.integrate(&p.path_radiance),
+                band.blackbody_radiance(t_air)
+            ) < 1e-3
+        );
+    }
+
+    #[test]
+    fn zenith_path_compares_with_modtran_tropical() {
+        // tape7.LWIRSun: MODTRAN tropical model, ground to space at zenith,
+        // 4.11 g/cm² water. The built-in model with the same surface state
+        // (299.7 K, 81 % RH → 4.06 g/cm²) is within 0.1 in band-mean
+        // transmittance and 20 % in path radiance over 8–12 µm (it lacks
+        // ozone, which MODTRAN has at 9.6 µm).
+        let Some(dir) = util::shared_data("modtran") else {
+            return;
+        };
+        let t = Tape7::read(dir.join("tape7.LWIRSun")).unwrap();
+        let band = Band::flat(8.0, 12.0, 0.01).unwrap();
+        let g = band.grid();
+        let (wl, tau) = t.transmittance_um();
+        let tau_m = band.mean(&g.resample_mean(&wl, &tau, 0.02).unwrap());
+        let (wl, lu) = t.path_radiance_um().unwrap();
+        let lu_m = band.integrate(&g.resample_mean(&wl, &lu, 0.02).unwrap());
+        let a = BuiltinAtmosphere::new(SurfaceMet {
+            air_temperature_k: 299.7,
+            relative_humidity: 0.81,
+            pressure_pa: 101_300.0,
+            ground_altitude_m: 0.0,
+        })
+        .unwrap();
+        assert!((a.water_column_g_cm2() - 4.11).abs() < 0.1);
+        let p = a.path_to_space(0.0, g).unwrap();
+        let (tau_b, lu_b) = (
+            band.mean(&p.transmittance),
+            band.integrate(&p.path_radiance),
+        );
+        println!(
+            "8–12 µm zenith: MODTRAN τ̄ {tau_m:.3} L_u {lu_m:.2}; built-in τ̄ {tau_b:.3} L_u {lu_b:.2}"
+        );
+        assert!((tau_b - tau_m).abs() < 0.1);
+        assert!(rel(lu_b, lu_m) < 0.2);
+    }
+
+    #[test]
+    fn sky_radiance_matches_weather_longwave() {
+        let a = BuiltinAtmosphere::new(met(0.6)).unwrap();
+        // Integrated over 3–100 µm (with a Rayleigh–Jeans tail) the scaled sky
+        // radiance equals E_sky/π.
+        let g = SpectralGrid::uniform(3.0, 100.0, 0.02).unwrap();
+        let e_sky = 350.0;
+        let l = a.sky_radiance(e_sky, &g).unwrap();
+        let c = irsig::radiometry::Constants::CODATA_2018;
+        let t = 295.0;
+        let scale = l[l.len() - 1] / irsig::radiometry::planck_radiance(100.0, t);
+        let tail = scale * c.c1l_w_um4_m2_sr() * t / (3.0 * c.c2_um_k() * 100f64.powi(3));
+        let total = g.integrate(&l) + tail;
+        assert!(rel(total, e_sky / std::f64::consts::PI) < 2e-3, "{total}");
+        // The window is darker than the opaque bands (relative to B(T_air)).
+        let p = irsig::radiometry::Planck::default();
+        let i10 = g.wavelengths_um().iter().position(|&x| x >= 10.0).unwrap();
+        let i20 = g.wavelengths_um().iter().position(|&x| x >= 20.0).unwrap();
+        assert!(l[i10] / p.radiance(10.0, t) < 0.7 * l[i20] / p.radiance(20.0, t));
+        // Through the Atmosphere enum; None gives a grey body of the same flux.
+        let sky = SkyConditions {
+            air_temperature_k: t,
+            sky_longwave_w_m2: e_sky,
+        };
+        let none = Atmosphere::None.sky_radiance(&sky, &g).unwrap();
+        let eps = e_sky / (c.stefan_boltzmann_w_m2_k4() * t.powi(4));
+        assert!(rel(none[i10], eps * p.radiance(10.0, t)) < 1e-12);
+        // Solar transmittance: 1 with no atmosphere, 0 below the horizon,
+        // lower at a lower sun.
+        let b = Atmosphere::Builtin(a);
+        let g = SpectralGrid::uniform(3.0, 5.0, 0.02).unwrap();
+        let m = |v: Vec<f64>| v.iter().sum::<f64>() / v.len() as f64;
+        assert_eq!(
+            m(Atmosphere::None.solar_transmittance(30.0, &g).unwrap()),
+            1.0
+        );
+        assert_eq!(m(b.solar_transmittance(95.0, &g).unwrap()), 0.0);
+        let t30 = m(b.solar_transmittance(30.0, &g).unwrap());
+        let t70 = m(b.solar_transmittance(70.0, &g).unwrap());
+        assert!(t30 > t70 && t70 > 0.0 && t30 < 1.0, "{t30} {t70}");
+    }
+
+    #[test]
+    fn rejects_bad_conditions() {
+        let e = BuiltinAtmosphere::new(SurfaceMet {
+            relative_humidity: 1.5,
+            ..met(0.5)
+        })
+        .unwrap_err();
+        assert!(e.to_string().contains("relative_humidity"));
+        let a = BuiltinAtmosphere::new(met(0.5)).unwrap();
+        let g = SpectralGrid::uniform(8.0, 9.0, 0.1).unwrap();
+        assert!(a.path(1000.0, 0.0, 500.0, &g).is_err()); // range shorter than the drop
+        assert!(a.path(0.0, 0.0, -1.0, &g).is_err());
+    }
+}
+
+mod lut {
+    use super::*;
+    use irsig::atmosphere::{Atmosphere, PathGeometry, SkyConditions, Tape7Lut};
+    use std::fmt::Write;
+
+    /// A radiance-mode tape7 text with constant τ and path radiance L_ν
+    /// (W cm⁻² sr⁻¹ / cm⁻¹) over 700–1300 cm⁻¹.
+    fn tape7_text(tau: f64, l_nu: f64) -> String {
+        let mut s = String::from(
+            "synthetic\n    FREQ  TOT_TRANS  PTH_THRML  THRML_SCT  SURF_EMIS   SOL_SCAT  TOTAL_RAD\n",
+        );
+        for nu in (700..=1300).step_by(5) {
+            writeln!(
+                s,
+                "{:8.2}{:11.8}{:11.4E}{:11}{:11.4E}{:11.4E}{:11.4E}",
+                nu as f64, tau, l_nu, "", 0.0, 0.0, l_nu
+            )
+            .unwrap();
+        }
+        s.push_str(" -9999.\n");
+        s
+    }
+
+    #[test]
+    fn interpolates_in_range_and_zenith_with_zero_range_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let w = |name: &str, tau: f64, l: f64| {
+            std::fs::write(dir.path().join(name), tape7_text(tau, l)).unwrap()
+        };
+        w("z0_1k", 0.8, 1e-7);
+        w("z0_2k", 0.6, 2e-7);
+        w("z60_1k", 0.7, 1.5e-7);
+        w("z60_2k", 0.5, 3e-7);
+        let index = dir.path().join("atm.json");
+        std::fs::write(
+            &index,
+            r#"{"path": [
+                {"file": "z0_1k", "view_zenith_deg": 0, "range_m": 1000},
+                {"file": "z0_2k", "view_zenith_deg": 0, "range_m": 2000},
+                {"file": "z60_1k", "view_zenith_deg": 60, "range_m": 1000},
+                {"file": "z60_2k", "view_zenith_deg": 60, "range_m": 2000}]}"#,
+        )
+        .unwrap();
+        let lut = Tape7Lut::read_index(&index).unwrap();
+        let a = Atmosphere::Tape7Lut(lut);
+        let band = Band::flat(8.0, 12.0, 0.01).unwrap();
+        let at = |zen_deg: f64, r: f64| {
+            let h = r * zen_deg.to_radians().cos();
+            band_values(
+                &a,
+                &PathGeometry {
+                    sensor_altitude_m: h,
+                    target_altitude_m: 0.0,
+                    range_m: r,
+                },
+                &band,
+            )
+        };
+        // L_ν constant → L_λ = L_ν ν², ∫ over 8–12 µm = 1e4 ∫ L_ν dν = 1e4 L_ν (1250 − 833.33).
+        let lu = |l_nu: f64| 1e4 * l_nu * (1250.0 - 1e4 / 12.0);
+        // (1e-4: L_λ ∝ ν² is resampled as piecewise linear in λ between 5 cm⁻¹ rows.)
+        let (t, l) = at(0.0, 1500.0);
+        assert!(
+            (t - 0.7).abs() < 1e-9 && rel(l, lu(1.5e-7)) < 1e-4,
+            "{t} {l}"
+        );
+        let (t, l) = at(0.0, 500.0);
+        assert!(
+            (t - 0.9).abs() < 1e-9 && rel(l, lu(0.5e-7)) < 1e-4,
+            "{t} {l}"
+        );
+        let (t, l) = at(0.0, 0.0);
+        assert!(t == 1.0 && l == 0.0);
+        let (t, l) = at(30.0, 2000.0);
+        assert!(
+            (t - 0.55).abs() < 1e-6 && rel(l, lu(2.5e-7)) < 1e-4,
+            "{t} {l}"
+        );
+        let (t, _) = at(0.0, 9000.0); // held beyond the longest run
+        assert!((t - 0.6).abs() < 1e-9);
+        // No sky runs: solar transmittance is an error, the sky a grey body.
+        assert!(a.solar_transmittance(30.0, band.grid()).is_err());
+        let sky = SkyConditions {
+            air_temperature_k: 290.0,
+            sky_longwave_w_m2: 300.0,
+        };
+        assert!(a.sky_radiance(&sky, band.grid()).is_ok());
+        // A band outside the runs' coverage is an error naming the file.
+        let mw = Band::flat(3.0, 5.0, 0.01).unwrap();
+        let e = a
+            .path(
+                &PathGeometry {
+                    sensor_altitude_m: 1000.0,
+                    target_altitude_m: 0.0,
+                    range_m: 1000.0,
+                },
+                mw.grid(),
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("z0_1k") && e.contains("µm"), "{e}");
+    }
+
+    #[test]
+    fn sky_runs_from_real_tape7_and_index_errors() {
+        let Some(data) = util::shared_data("modtran") else {
+            return;
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let index = dir.path().join("atm.json");
+        let lw = data.join("tape7.LWIRSun");
+        std::fs::write(
+            &index,
+            format!(
+                r#"{{"sky": [{{"file": "{}", "zenith_deg": 0}}]}}"#,
+                lw.display()
+            ),
+        )
+        .unwrap();
+        let a = Atmosphere::Tape7Lut(Tape7Lut::read_index(&index).unwrap());
+        let band = Band::flat(8.0, 12.0, 0.01).unwrap();
+        let t7 = Tape7::read(&lw).unwrap();
+        let (wl, lu) = t7.path_radiance_um().unwrap();
+        let direct = band.integrate(&band.grid().resample_mean(&wl, &lu, 0.02).unwrap());
+        let sky = SkyConditions {
+            air_temperature_k: 299.7,
+            sky_longwave_w_m2: 400.0,
+        };
+        let l = band.integrate(&a.sky_radiance(&sky, band.grid()).unwrap());
+        assert!(rel(l, direct) < 1e-12);
+        let tau = band.mean(&a.solar_transmittance(10.0, band.grid()).unwrap());
+        assert!(tau > 0.3 && tau < 0.9);
+        // Errors name the index file and field.
+        for (json, what) in [
+            (
+                r#"{"sky": [{"file": "nope", "zenith_deg": 0}]}"#,
+                "sky[0].file",
+            ),
+            (
+                r#"{"path": [{"file": "x", "view_zenith_deg": 95, "range_m": 1}]}"#,
+                "path[0].view_zenith_deg",
+            ),
+            (
+                r#"{"path": [{"file": "x", "view_zenith_deg": 0, "range_m": -1}]}"#,
+                "path[0].range_m",
+            ),
+            ("{\n\"path\": 3}", "atm.json:line 2"),
+            (r#"{}"#, "no `path` or `sky`"),
+        ] {
+            std::fs::write(&index, json).unwrap();
+            let e = Tape7Lut::read_index(&index).unwrap_err().to_string();
+            assert!(e.contains("atm.json") && e.contains(what), "{json}: {e}");
+        }
+        let tb = data.join("tape7-01b");
+        std::fs::write(
+            &index,
+            format!(
+                r#"{{"sky": [{{"file": "{}", "zenith_deg": 0}}]}}"#,
+                tb.display()
+            ),
+        )
+        .unwrap();
+        let e = Tape7Lut::read_index(&index).unwrap_err().to_string();
+        assert!(e.contains("radiance-mode"), "{e}");
+    }
+
+    fn band_values(a: &Atmosphere, g: &PathGeometry, band: &Band) -> (f64, f64) {
+        let p = a.path(g, band.grid()).unwrap();
+        (
+            band.mean(&p.transmittance),
+            band.integrate(&p.path_radiance),
+        )
+    }
+}

@@ -296,3 +296,253 @@ mod cli {
         assert!(!ok);
     }
 }
+
+mod emissivity {
+    use irsig::material::EmissivityCurve;
+    use irsig::radiometry::{AngularFalloff, Emissivity, fresnel_emissivity};
+
+    #[test]
+    fn fresnel_default_falls_toward_grazing_and_keeps_normal_value() {
+        // (For ε₀ ≲ 0.8, n is large and ε first rises a little toward the
+        // Brewster angle, as for metals; the fall-off is monotone above.)
+        for e0 in [0.5, 0.9, 0.95, 0.98] {
+            assert!((fresnel_emissivity(e0, 0.0) - e0).abs() < 1e-12);
+            assert!(fresnel_emissivity(e0, 90.0) < 1e-9);
+            if e0 < 0.85 {
+                continue;
+            }
+            assert!(fresnel_emissivity(e0, 85.0) < 0.8 * e0);
+            let mut prev = e0 + 1e-12;
+            for th in [10.0, 30.0, 50.0, 60.0, 70.0, 80.0, 85.0, 89.0] {
+                let e = fresnel_emissivity(e0, th);
+                assert!(e < prev, "e0 {e0}: ε({th}) = {e} not below {prev}");
+                prev = e;
+            }
+            assert!(fresnel_emissivity(e0, 90.0) < 1e-9);
+        }
+        // Water-like n = 1.33 (ε₀ = 0.9799): by hand at 60°, cos θ_t =
+        // √(1 − 0.75/1.33²) = 0.75895, r_s = −0.33749, r_p = 0.06598,
+        // R = (0.113898 + 0.004353)/2 = 0.059126, ε = 0.940874.
+        let n = 1.33_f64;
+        let e0 = 1.0 - ((n - 1.0) / (n + 1.0)).powi(2);
+        assert!((fresnel_emissivity(e0, 60.0) - 0.940874).abs() < 2e-6);
+        assert_eq!(fresnel_emissivity(1.0, 80.0), 1.0);
+    }
+
+    #[test]
+    fn angular_curve_interpolates_in_wavelength_and_angle() {
+        let curve = EmissivityCurve {
+            wavelengths_um: vec![8.0, 12.0],
+            emissivity: vec![vec![0.9, 0.95], vec![0.8, 0.85], vec![0.4, 0.45]],
+            angles_deg: vec![0.0, 60.0, 80.0],
+        };
+        let e = Emissivity::from_curve(&curve).unwrap();
+        assert!((e.eval(10.0, 0.0) - 0.925).abs() < 1e-12);
+        assert!((e.eval(10.0, 30.0) - 0.875).abs() < 1e-12);
+        assert!((e.eval(8.0, 70.0) - 0.6).abs() < 1e-12);
+        assert!((e.eval(12.0, 89.0) - 0.45).abs() < 1e-12); // held beyond 80°
+        assert!((e.eval(20.0, 0.0) - 0.95).abs() < 1e-12); // held beyond 12 µm
+        // Normal-only curve: Fresnel fall-off, or none on request.
+        let normal = EmissivityCurve {
+            wavelengths_um: vec![8.0, 12.0],
+            emissivity: vec![vec![0.9, 0.95]],
+            angles_deg: vec![],
+        };
+        let e = Emissivity::from_curve(&normal).unwrap();
+        assert!((e.eval(8.0, 70.0) - fresnel_emissivity(0.9, 70.0)).abs() < 1e-12);
+        let flat = e.clone().with_falloff(AngularFalloff::None);
+        assert_eq!(flat.eval(8.0, 70.0), 0.9);
+        // Invalid curves are rejected with the field named.
+        let bad = EmissivityCurve {
+            wavelengths_um: vec![8.0, 12.0],
+            emissivity: vec![vec![0.9, 1.5]],
+            angles_deg: vec![],
+        };
+        let err = Emissivity::from_curve(&bad).unwrap_err().to_string();
+        assert!(err.contains("emissivity[0][1]"), "{err}");
+    }
+}
+
+mod equation {
+    use super::*;
+    use irsig::atmosphere::{Atmosphere, PathGeometry};
+    use irsig::radiometry::{
+        AngularFalloff, Emissivity, SurfaceInputs, at_sensor, leaving_radiance,
+        solar_irradiance_toa,
+    };
+
+    fn band() -> Band {
+        Band::flat(8.0, 14.0, 0.01).unwrap()
+    }
+
+    #[test]
+    fn blackbody_without_atmosphere_is_exactly_planck() {
+        let b = band();
+        let n = b.len();
+        let ones = vec![1.0; n];
+        let sky = vec![3.0; n];
+        let sun = vec![50.0; n];
+        let inputs = SurfaceInputs {
+            temperature_k: 310.0,
+            emissivity: &ones,
+            specular_fraction: 0.3,
+            transmissivity: 0.0,
+            shape_factor: 0.7,
+            sky_radiance: &sky,
+            background_radiance: &sky,
+            solar_irradiance: Some(&sun),
+            cos_sun: 0.8,
+            specular_radiance: None,
+        };
+        let mut out = vec![0.0; n];
+        leaving_radiance(&inputs, &b, &mut out);
+        let path = Atmosphere::None
+            .path(
+                &PathGeometry {
+                    sensor_altitude_m: 500.0,
+                    target_altitude_m: 0.0,
+                    range_m: 700.0,
+                },
+                b.grid(),
+            )
+            .unwrap();
+        let l = at_sensor(&out, &path.transmittance, &path.path_radiance, &b);
+        assert_eq!(l, b.blackbody_radiance(310.0));
+    }
+
+    #[test]
+    fn grey_half_emissivity_facet_under_known_sky_matches_hand_computation() {
+        // ε = 0.5, T = 300 K, diffuse, F = 1 (open sky), sky radiance a grey
+        // body: 0.8·B(λ, 260 K); no sun. Hand: L = 0.5·∫B(300) + 0.5·0.8·∫B(260).
+        let b = band();
+        let n = b.len();
+        let p = Planck::default();
+        let eps = vec![0.5; n];
+        let sky: Vec<f64> = b
+            .wavelengths_um()
+            .iter()
+            .map(|&l| 0.8 * p.radiance(l, 260.0))
+            .collect();
+        let bg = vec![0.0; n];
+        let inputs = SurfaceInputs {
+            temperature_k: 300.0,
+            emissivity: &eps,
+            specular_fraction: 0.0,
+            transmissivity: 0.0,
+            shape_factor: 1.0,
+            sky_radiance: &sky,
+            background_radiance: &bg,
+            solar_irradiance: None,
+            cos_sun: 0.0,
+            specular_radiance: None,
+        };
+        let mut out = vec![0.0; n];
+        leaving_radiance(&inputs, &b, &mut out);
+        let tau = vec![1.0; n];
+        let zero = vec![0.0; n];
+        let got = at_sensor(&out, &tau, &zero, &b);
+        let brute = |t: f64| simpson(|l| p.radiance(l, t), 8.0, 14.0, 20_000);
+        let hand = 0.5 * brute(300.0) + 0.5 * 0.8 * brute(260.0);
+        assert!(rel(got, hand) < 1e-6, "{got} vs {hand}");
+        // Through a path with τ = 0.7 and L_u = 2 W/m²/sr/µm (6 µm wide band).
+        let tau = vec![0.7; n];
+        let lu = vec![2.0; n];
+        let got = at_sensor(&out, &tau, &lu, &b);
+        assert!(rel(got, 0.7 * hand + 12.0) < 1e-6);
+        // Half of the sky view replaced by a 300 K blackbody background:
+        let bg: Vec<f64> = b
+            .wavelengths_um()
+            .iter()
+            .map(|&l| p.radiance(l, 300.0))
+            .collect();
+        let inputs = SurfaceInputs {
+            shape_factor: 0.5,
+            background_radiance: &bg,
+            ..inputs
+        };
+        leaving_radiance(&inputs, &b, &mut out);
+        let got = b.integrate(&out);
+        let hand = 0.5 * brute(300.0) + 0.5 * (0.5 * 0.8 * brute(260.0) + 0.5 * brute(300.0));
+        assert!(rel(got, hand) < 1e-6, "{got} vs {hand}");
+        // Specular: all reflectance specular, the traced ray sees 5 W/m²/sr/µm.
+        let spec = vec![5.0; n];
+        let inputs = SurfaceInputs {
+            specular_fraction: 1.0,
+            specular_radiance: Some(&spec),
+            ..inputs
+        };
+        leaving_radiance(&inputs, &b, &mut out);
+        let got = b.integrate(&out);
+        assert!(rel(got, 0.5 * brute(300.0) + 0.5 * 5.0 * 6.0) < 1e-6);
+    }
+
+    #[test]
+    fn direct_sun_term_in_mwir() {
+        // ε = 0.2 diffuse, cold (T → 1 K) facet, sun at cos σ = 0.5, τ₁ = 1:
+        // L = 0.8 · E_toa · 0.5 / π.
+        let b = Band::flat(3.0, 5.0, 0.01).unwrap();
+        let n = b.len();
+        let eps = vec![0.2; n];
+        let zero = vec![0.0; n];
+        let sun = solar_irradiance_toa(b.grid(), 1.0);
+        let inputs = SurfaceInputs {
+            temperature_k: 1.0,
+            emissivity: &eps,
+            specular_fraction: 0.0,
+            transmissivity: 0.0,
+            shape_factor: 1.0,
+            sky_radiance: &zero,
+            background_radiance: &zero,
+            solar_irradiance: Some(&sun),
+            cos_sun: 0.5,
+            specular_radiance: None,
+        };
+        let mut out = vec![0.0; n];
+        leaving_radiance(&inputs, &b, &mut out);
+        let e_band = b.integrate(&sun);
+        // A 5772 K blackbody has 1.603 % of its flux in 3–5 µm: 21.81 W/m²
+        // of the 1360.8 W/m² solar constant.
+        assert!((e_band - 21.81).abs() < 0.01, "{e_band}");
+        assert!(rel(b.integrate(&out), 0.8 * e_band * 0.5 / std::f64::consts::PI) < 1e-12);
+    }
+
+    #[test]
+    fn angular_emissivity_shows_in_radiance() {
+        // A facet at 320 K under a cold sky (0 radiance), viewed at 0°, 60°,
+        // 80°: band radiance = ∫ ε(λ, θ) B(λ, 320) dλ, falling with θ.
+        let b = band();
+        let n = b.len();
+        let p = Planck::default();
+        let em = Emissivity::grey(0.95)
+            .unwrap()
+            .with_falloff(AngularFalloff::Fresnel);
+        let zero = vec![0.0; n];
+        let mut eps = vec![0.0; n];
+        let mut out = vec![0.0; n];
+        let mut last = f64::INFINITY;
+        for theta in [0.0, 60.0, 80.0] {
+            em.eval_into(b.wavelengths_um(), theta, &mut eps);
+            let inputs = SurfaceInputs {
+                temperature_k: 320.0,
+                emissivity: &eps,
+                specular_fraction: 0.0,
+                transmissivity: 0.0,
+                shape_factor: 1.0,
+                sky_radiance: &zero,
+                background_radiance: &zero,
+                solar_irradiance: None,
+                cos_sun: 0.0,
+                specular_radiance: None,
+            };
+            leaving_radiance(&inputs, &b, &mut out);
+            let got = b.integrate(&out);
+            let expect =
+                em.eval(11.0, theta) * simpson(|l| p.radiance(l, 320.0), 8.0, 14.0, 20_000);
+            assert!(rel(got, expect) < 1e-6, "θ = {theta}: {got} vs {expect}");
+            assert!(got < last);
+            last = got;
+        }
+        // ε(80°) for ε₀ = 0.95 under Fresnel: well below normal.
+        assert!(em.eval(11.0, 80.0) < 0.75 && em.eval(11.0, 60.0) > 0.88);
+    }
+}

@@ -1,8 +1,160 @@
-//! Atmosphere: path transmittance and path radiance between a surface and
-//! the sensor, and sky downwelling radiance.
+//! Atmosphere: path transmittance τ₂ and path radiance L_u between a surface
+//! and the sensor, sky downwelling radiance, and solar transmittance τ₁ —
+//! spectral, on the caller's [`SpectralGrid`].
 //!
+//! - [`Atmosphere`] is the closed set of models the render integrator calls:
+//!   `None` (vacuum), [`BuiltinAtmosphere`] (needs nothing external; see
+//!   [`builtin`] for the model and its sources) and [`Tape7Lut`] (a table of
+//!   MODTRAN runs, see [`lut`]).
 //! - [`tape7`]: the MODTRAN tape7 reader (radiance and transmittance modes).
+//!
+//! Geometry is flat-earth: a straight path from the sensor to the target,
+//! view zenith at the target cos θ = (h_sensor − h_target)/range.
 
+pub mod builtin;
+pub mod lut;
 pub mod tape7;
 
+pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
+pub use lut::{Tape7Lut, Tape7Run};
 pub use tape7::{Tape7, Tape7Column, Tape7Mode};
+
+use crate::radiometry::{Constants, Planck, SpectralGrid};
+use crate::{Error, Result};
+
+/// Transmittance and path radiance of one path, on a spectral grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathSpectra {
+    /// Path transmittance τ(λ), 0–1.
+    pub transmittance: Vec<f64>,
+    /// Path radiance L_u(λ) toward the sensor, W·m⁻²·sr⁻¹·µm⁻¹.
+    pub path_radiance: Vec<f64>,
+}
+
+/// A sensor-to-target path. Altitudes above sea level, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathGeometry {
+    /// Sensor altitude, m.
+    pub sensor_altitude_m: f64,
+    /// Target (hit point) altitude, m.
+    pub target_altitude_m: f64,
+    /// Straight-line distance, m (≥ |altitude difference|).
+    pub range_m: f64,
+}
+
+impl PathGeometry {
+    /// View zenith angle at the target, degrees (0 = sensor straight above).
+    pub fn view_zenith_deg(&self) -> f64 {
+        if self.range_m <= 0.0 {
+            return 0.0;
+        }
+        ((self.sensor_altitude_m - self.target_altitude_m) / self.range_m)
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    }
+}
+
+/// Conditions for the sky radiance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkyConditions {
+    /// Air temperature at the ground, K.
+    pub air_temperature_k: f64,
+    /// Broadband downwelling sky longwave on a horizontal surface, W/m².
+    pub sky_longwave_w_m2: f64,
+}
+
+/// The atmosphere between the scene and the sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Atmosphere {
+    /// No atmosphere: τ = 1, L_u = 0, τ₁ = 1; the sky is a grey body at the
+    /// air temperature with the weather's broadband sky longwave.
+    None,
+    /// The built-in model.
+    Builtin(BuiltinAtmosphere),
+    /// A table of MODTRAN tape7 runs.
+    Tape7Lut(Tape7Lut),
+}
+
+fn grey_sky(sky: &SkyConditions, grid: &SpectralGrid) -> Result<Vec<f64>> {
+    let t = sky.air_temperature_k;
+    if !(t.is_finite() && t > 0.0) {
+        return Err(Error::invalid(
+            "air_temperature_k",
+            format!("expected a positive temperature, got {t}"),
+        ));
+    }
+    let sigma = Constants::CODATA_2018.stefan_boltzmann_w_m2_k4();
+    let eps = if sky.sky_longwave_w_m2.is_finite() && sky.sky_longwave_w_m2 > 0.0 {
+        sky.sky_longwave_w_m2 / (sigma * t.powi(4))
+    } else {
+        1.0
+    };
+    Ok(grid
+        .blackbody(&Planck::default(), t)
+        .into_iter()
+        .map(|b| eps * b)
+        .collect())
+}
+
+impl Atmosphere {
+    /// τ₂(λ) and L_u(λ) along `geom` on `grid`.
+    pub fn path(&self, geom: &PathGeometry, grid: &SpectralGrid) -> Result<PathSpectra> {
+        if !(geom.range_m.is_finite() && geom.range_m >= 0.0) {
+            return Err(Error::invalid(
+                "range_m",
+                format!("expected a range ≥ 0 m, got {}", geom.range_m),
+            ));
+        }
+        match self {
+            Atmosphere::None => Ok(PathSpectra {
+                transmittance: vec![1.0; grid.len()],
+                path_radiance: vec![0.0; grid.len()],
+            }),
+            Atmosphere::Builtin(b) => b.path(
+                geom.sensor_altitude_m,
+                geom.target_altitude_m,
+                geom.range_m,
+                grid,
+            ),
+            Atmosphere::Tape7Lut(l) => l.path(geom.view_zenith_deg(), geom.range_m, grid),
+        }
+    }
+
+    /// Sky radiance (E_ds + E_de)/π, W·m⁻²·sr⁻¹·µm⁻¹, on `grid`. The tape7
+    /// table uses its sky runs at the diffusivity zenith (52.96°) as given
+    /// (their band coverage does not allow broadband scaling), or the grey
+    /// sky where it has none.
+    pub fn sky_radiance(&self, sky: &SkyConditions, grid: &SpectralGrid) -> Result<Vec<f64>> {
+        match self {
+            Atmosphere::None => grey_sky(sky, grid),
+            Atmosphere::Builtin(b) => b.sky_radiance(sky.sky_longwave_w_m2, grid),
+            Atmosphere::Tape7Lut(l) if !l.sky_runs.is_empty() => {
+                Ok(l.sky(builtin::DIFFUSIVITY_ZENITH_DEG, grid)?.path_radiance)
+            }
+            Atmosphere::Tape7Lut(_) => grey_sky(sky, grid),
+        }
+    }
+
+    /// Solar transmittance τ₁(λ) from the top of the atmosphere to the
+    /// ground for the sun at `sun_zenith_deg` (0 for the sun at or below the
+    /// horizon).
+    pub fn solar_transmittance(
+        &self,
+        sun_zenith_deg: f64,
+        grid: &SpectralGrid,
+    ) -> Result<Vec<f64>> {
+        if !(sun_zenith_deg.is_finite()) {
+            return Err(Error::invalid("sun_zenith_deg", "not a number"));
+        }
+        if sun_zenith_deg >= 90.0 {
+            return Ok(vec![0.0; grid.len()]);
+        }
+        let z = sun_zenith_deg.max(0.0);
+        match self {
+            Atmosphere::None => Ok(vec![1.0; grid.len()]),
+            Atmosphere::Builtin(b) => Ok(b.path_to_space(z.min(89.0), grid)?.transmittance),
+            Atmosphere::Tape7Lut(l) => Ok(l.sky(z, grid)?.transmittance),
+        }
+    }
+}

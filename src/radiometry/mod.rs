@@ -8,14 +8,25 @@
 //!   [`Band`] (grid + relative response R, peak 1). Band radiance is
 //!   ∫ R L dλ in W·m⁻²·sr⁻¹; [`Band::brightness_temperature`] inverts it.
 //! - [`response`]: the spectral response CSV reader.
+//! - [`emissivity`]: ε(λ, θ) from material curves, with a Fresnel default
+//!   fall-off toward grazing view.
+//! - [`equation`]: the per-hit leaving radiance ([`leaving_radiance`], the
+//!   "big equation") and the sensor-reaching band radiance ([`at_sensor`]).
 //!
 //! Internal units: wavelength µm, temperature K, spectral radiance
 //! W·m⁻²·sr⁻¹·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
 
 pub mod band;
+pub mod emissivity;
+pub mod equation;
 pub mod planck;
 pub mod response;
 
 pub use band::{Band, DEFAULT_STEP_UM, SpectralGrid};
+pub use emissivity::{AngularFalloff, Emissivity, fresnel_emissivity};
+pub use equation::{
+    ReflectanceSplit, SurfaceInputs, at_sensor, leaving_radiance, reflectance_split,
+    solar_irradiance_toa,
+};
 pub use planck::{Constants, Planck, planck_radiance};
 pub use response::{SpectralResponse, read_response_csv};
