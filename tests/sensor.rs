@@ -303,3 +303,473 @@ fn info_json_reports_layer_statistics() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.exr"));
 }
+
+// ---------------------------------------------------------------------------
+// Sensor geometry
+// ---------------------------------------------------------------------------
+
+use glam::{DVec2, DVec3};
+use irsig::Location;
+use irsig::sensor::effects::{self, Mtf, Psf};
+use irsig::sensor::{Geometry, LineScanner, Sensor, SensorConfig};
+
+fn sensor_from_json(json: &str) -> irsig::Result<Sensor> {
+    let cfg: SensorConfig = serde_json::from_str(json).expect("valid sensor JSON");
+    Sensor::from_config(&cfg, &Location::file("scene.json").with_field("sensors[0]"))
+}
+
+fn frame(json_extra: &str) -> Sensor {
+    sensor_from_json(&format!(
+        r#"{{"type": "frame", "name": "cam", "width": 64, "height": 48,
+            "position": [10, -20, 30], "look_at": [40, 60, 2], "up": [0, 0, 1],
+            "bands": [{{"name": "lwir", "response": [8.0, 12.0]}}] {json_extra}}}"#
+    ))
+    .unwrap()
+}
+
+fn camera(s: &Sensor) -> &irsig::sensor::FrameCamera {
+    match &s.geometry {
+        Geometry::Frame(c) => c,
+        _ => panic!("not a frame camera"),
+    }
+}
+
+fn scanner(s: &Sensor) -> &LineScanner {
+    match &s.geometry {
+        Geometry::LineScanner(c) => c,
+        _ => panic!("not a line scanner"),
+    }
+}
+
+fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
+    (a - b).length() <= tol
+}
+
+#[test]
+fn camera_centre_looks_at_target_and_fov_edges_are_at_half_fov() {
+    let s = frame(r#", "focal_length_m": 0.05, "pixel_pitch_m": 25e-6, "oversample": 3"#);
+    let c = camera(&s);
+    let pos = DVec3::new(10.0, -20.0, 30.0);
+    let target = DVec3::new(40.0, 60.0, 2.0);
+    let axis = (target - pos).normalize();
+    // The array centre (W/2, H/2) looks along the optical axis at the target.
+    assert!(close(c.direction(32.0, 24.0), axis, 1e-12));
+    let p = c.project(target).unwrap();
+    assert!((p - DVec2::new(32.0, 24.0)).length() < 1e-9, "{p}");
+    // f/p = 2000 px: the column edge u = 0 is atan(32/2000) off axis.
+    assert!((c.focal_px - 2000.0).abs() < 1e-9);
+    let edge = c.direction(0.0, 24.0).angle_between(axis);
+    assert!((edge - (32.0f64 / 2000.0).atan()).abs() < 1e-12);
+
+    // Field of view given directly: edges at ±fov/2, left edge to the west
+    // for a camera looking north with z up.
+    let s = sensor_from_json(
+        r#"{"type": "frame", "name": "c2", "width": 101, "height": 51, "fov_deg": 40,
+            "position": [0, 0, 5], "look_at": [0, 100, 5],
+            "bands": [{"name": "b", "response": [8, 12]}]}"#,
+    )
+    .unwrap();
+    let c = camera(&s);
+    let fwd = DVec3::Y;
+    for u in [0.0, 101.0] {
+        let a = c.direction(u, 25.5).angle_between(fwd);
+        assert!((a.to_degrees() - 20.0).abs() < 1e-9, "{}", a.to_degrees());
+    }
+    assert!(c.direction(0.0, 25.5).x < 0.0 && c.direction(101.0, 25.5).x > 0.0);
+    // Row 0 is at the top of the image: it looks up.
+    assert!(c.direction(50.5, 0.0).z > 0.0);
+    assert!((c.horizontal_fov().to_degrees() - 40.0).abs() < 1e-9);
+}
+
+#[test]
+fn camera_projection_inverts_ray_generation() {
+    let s = frame(r#", "fov_deg": 55, "oversample": 2"#);
+    let c = camera(&s);
+    for (u, v) in [(0.5, 0.5), (63.5, 47.5), (17.25, 40.75), (32.0, 3.0)] {
+        let d = c.direction(u, v);
+        for dist in [1.0, 37.0, 2500.0] {
+            let p = c.position() + d * dist;
+            let back = c.project(p).unwrap();
+            assert!(
+                (back - DVec2::new(u, v)).length() < 1e-8,
+                "{u},{v} → {back}"
+            );
+        }
+    }
+    // Points behind the camera are not seen.
+    let behind = c.position() - c.direction(32.0, 24.0) * 10.0;
+    assert!(c.project(behind).is_none());
+    // Oversampled row layout: N sub-rows of W·N rays, stratified.
+    let mut rays = Vec::new();
+    s.rays_for_row(5, &mut rays);
+    assert_eq!(rays.len(), 64 * 4);
+    assert_eq!(rays.len(), s.rays_per_row());
+    let expect = |u: f64, v: f64| c.direction(u, v).as_vec3();
+    assert!((rays[0].dir - expect(0.25, 5.25)).length() < 1e-6);
+    assert!((rays[1].dir - expect(0.75, 5.25)).length() < 1e-6);
+    assert!((rays[128].dir - expect(0.25, 5.75)).length() < 1e-6);
+    assert!((rays[255].dir - expect(63.75, 5.75)).length() < 1e-6);
+    assert!(rays.iter().all(|r| (r.dir.length() - 1.0).abs() < 1e-6));
+}
+
+#[test]
+fn sensor_config_errors_name_the_field() {
+    let e = sensor_from_json(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "position": [0,0,1],
+            "look_at": [0,1,1], "bands": [{"name": "b", "response": [8, 12]}]}"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("scene.json") && e.contains("sensors[0].focal_length_m"),
+        "{e}"
+    );
+    let e = sensor_from_json(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30,
+            "position": [0,0,1], "look_at": [0,0,1], "bands": [{"name": "b", "response": [8, 12]}]}"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("sensors[0].look_at"), "{e}");
+    let e = sensor_from_json(
+        r#"{"type": "line_scanner", "name": "s", "ifov_rad": 0.002, "scan_angle_deg": 200,
+            "samples_per_line": 10, "lines": 5, "scan_rate_hz": 10, "altitude_m": 500,
+            "ground_speed_m_s": 60, "heading_deg": 0, "start": [0, 0],
+            "bands": [{"name": "b", "response": [8, 12]}]}"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("sensors[0].scan_angle_deg") && e.contains("180"),
+        "{e}"
+    );
+    let e = sensor_from_json(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30,
+            "position": [0,0,1], "look_at": [0,1,1], "bands": [{"name": "b", "response": [12, 8]}]}"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("sensors[0].bands") && e.contains("lo < hi"),
+        "{e}"
+    );
+    // Unknown keys are rejected, not ignored.
+    let r: Result<SensorConfig, _> = serde_json::from_str(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30, "colour": 1,
+            "position": [0,0,1], "look_at": [0,1,1], "bands": []}"#,
+    );
+    assert!(r.unwrap_err().to_string().contains("colour"));
+    // A response given as a file name.
+    let cfg: SensorConfig = serde_json::from_str(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30,
+            "position": [0,0,1], "look_at": [0,1,1],
+            "bands": [{"name": "b", "response": "resp/lwir.csv"}]}"#,
+    )
+    .unwrap();
+    let SensorConfig::Frame(f) = cfg else {
+        panic!()
+    };
+    assert_eq!(
+        f.bands[0].response,
+        irsig::sensor::ResponseSpec::File("resp/lwir.csv".into())
+    );
+}
+
+fn scanner_json(extra: &str) -> Sensor {
+    sensor_from_json(&format!(
+        r#"{{"type": "line_scanner", "name": "bendix", "ifov_rad": 0.0157079632679,
+            "scan_angle_deg": 90, "samples_per_line": 100, "lines": 40, "scan_rate_hz": 10,
+            "altitude_m": 1000, "ground_speed_m_s": 50, "start": [0, 0],
+            "bands": [{{"name": "b", "response": [8, 14]}}] {extra}}}"#
+    ))
+    .unwrap()
+}
+
+/// Where a ray meets the ground plane z = 0.
+fn ground(r: &irsig::trace::Ray) -> DVec3 {
+    let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
+    o + d * (-o.z / d.z)
+}
+
+#[test]
+fn line_scanner_nadir_edges_and_panoramic_geometry() {
+    let s = scanner_json(r#", "heading_deg": 0"#);
+    let sc = scanner(&s);
+    // Line l is flown at y = v·l/rate = 5 m per line; the point straight
+    // below lands on the middle of the line (sample S/2, line l + ½).
+    for l in [0usize, 7, 39] {
+        let below = DVec3::new(0.0, 5.0 * l as f64, 0.0);
+        let p = sc.project(below).unwrap();
+        assert!(
+            (p - DVec2::new(l as f64 + 0.5, 50.0)).length() < 1e-9,
+            "{p}"
+        );
+        let nadir = sc.ray(l, 50.0, 0.0);
+        assert!(close(nadir.dir.as_dvec3(), -DVec3::Z, 1e-7));
+        assert!(close(
+            nadir.origin.as_dvec3(),
+            DVec3::new(0.0, 5.0 * l as f64, 1000.0),
+            1e-3
+        ));
+    }
+    // Scan edges at ±45° from nadir; flying north, sample 0 looks west.
+    let west = sc.ray(3, 0.0, 0.0).dir.as_dvec3();
+    let east = sc.ray(3, 100.0, 0.0).dir.as_dvec3();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    assert!(close(west, DVec3::new(-h, 0.0, -h), 1e-7), "{west}");
+    assert!(close(east, DVec3::new(h, 0.0, -h), 1e-7), "{east}");
+    // Ground point 405 m east of track at line 12: θ = atan(405/1000) →
+    // sample S/2 + θ/Δθ (Δθ = 0.9°).
+    let p = sc.project(DVec3::new(405.0, 60.0, 0.0)).unwrap();
+    let theta = (405.0f64 / 1000.0).atan().to_degrees();
+    assert!((p.y - (50.0 + theta / 0.9)).abs() < 1e-9);
+    assert!((p.x - 12.5).abs() < 1e-9);
+    // Panoramic distortion: ground step between samples grows as 1/cos²θ.
+    let step = |s0: f64| {
+        let a = ground(&sc.ray(0, s0, 0.0));
+        let b = ground(&sc.ray(0, s0 + 1.0, 0.0));
+        (b - a).length()
+    };
+    let nadir_step = step(49.5);
+    let theta_edge = sc.scan_angle(95.0);
+    let ratio = step(94.5) / nadir_step;
+    assert!(
+        (ratio - 1.0 / theta_edge.cos().powi(2)).abs() < 2e-3,
+        "{ratio}"
+    );
+    assert!((nadir_step - 1000.0 * 0.9f64.to_radians()).abs() < 0.01);
+}
+
+#[test]
+fn line_scanner_heading_roll_and_mirror_sweep() {
+    // Flying east: starboard is south, so a point north of track (left)
+    // is at negative scan angle.
+    let s = scanner_json(r#", "heading_deg": 90"#);
+    let sc = scanner(&s);
+    let p = sc.project(DVec3::new(50.0, 300.0, 0.0)).unwrap();
+    let theta = -(300.0f64 / 1000.0).atan();
+    assert!(
+        (p.y - (50.0 + theta.to_degrees() / 0.9)).abs() < 1e-9,
+        "{p}"
+    );
+    assert!((p.x - 10.5).abs() < 1e-9);
+
+    // Roll 2° right wing down: the body's down axis tilts to port, so the
+    // point straight below is seen 2° to starboard of the scan centre.
+    let s = scanner_json(r#", "heading_deg": 0, "roll_deg": 2"#);
+    let p = scanner(&s).project(DVec3::new(0.0, 100.0, 0.0)).unwrap();
+    assert!((p.y - (50.0 + 2.0 / 0.9)).abs() < 1e-9, "{p}");
+
+    // Mirror sweep: one revolution per line; the nadir sample comes
+    // (A/2)/(2π) = 1/8 of a line period after the line start.
+    let s = scanner_json(r#", "heading_deg": 0, "mirror_sweep": true"#);
+    let p = scanner(&s).project(DVec3::new(0.0, 50.0, 0.0)).unwrap();
+    assert!((p.x - (10.5 - 0.125)).abs() < 1e-9, "{p}");
+    let r = scanner(&s).ray(10, 50.0, 0.0);
+    assert!((r.origin.y as f64 - (50.0 + 5.0 / 8.0)).abs() < 1e-4);
+}
+
+#[test]
+fn line_scanner_ground_points_land_on_predicted_pixels_with_attitude() {
+    let s = scanner_json(
+        r#", "heading_deg": 30, "roll_deg": 3, "pitch_deg": -2, "yaw_deg": 4,
+           "mirror_sweep": true, "start_time": 12.5, "oversample": 3"#,
+    );
+    let sc = scanner(&s);
+    for (l, smp) in [(0usize, 0usize), (5, 50), (17, 3), (39, 99), (22, 71)] {
+        let r = sc.ray(l, smp as f64 + 0.5, 0.0);
+        let g = ground(&r);
+        let p = sc.project(g).unwrap();
+        assert!(
+            (p - DVec2::new(l as f64 + 0.5, smp as f64 + 0.5)).length() < 1e-4,
+            "({l}, {smp}) → {p}"
+        );
+        // Sensor::project reports (column, row) = (sample, line).
+        let q = s.project(g).unwrap();
+        assert!((q - DVec2::new(p.y, p.x)).length() < 1e-12);
+    }
+    assert_eq!(s.row_time(4), 12.5 + 0.4);
+    let mut rays = Vec::new();
+    s.rays_for_row(2, &mut rays);
+    assert_eq!(rays.len(), 100 * 9);
+    // The middle sub-ray of sample 10 (sub-line 1, i = 1) is its centre ray.
+    let centre = sc.ray(2, 10.5, 0.0);
+    let mid = rays[300 + 10 * 3 + 1];
+    assert!((mid.dir - centre.dir).length() < 1e-6);
+    assert!((mid.origin - centre.origin).length() < 1e-3);
+}
+
+// ---------------------------------------------------------------------------
+// Sensor effects
+// ---------------------------------------------------------------------------
+
+#[test]
+fn psf_reduction_preserves_flat_fields_block_means_and_energy() {
+    let (w, h, n) = (13, 9, 3);
+    let flat = vec![7.25f32; w * n * h * n];
+    for psf in [Psf::Box, Psf::Gaussian { sigma_px: 0.7 }] {
+        let out = effects::reduce_oversampled(&flat, w, h, n, psf).unwrap();
+        assert!(out.iter().all(|v| (v - 7.25).abs() < 1e-5), "{psf:?}");
+    }
+    // Box: the mean of each pixel's own N×N block.
+    let ramp: Vec<f32> = (0..w * n * h * n).map(|i| (i % 97) as f32).collect();
+    let out = effects::reduce_oversampled(&ramp, w, h, n, Psf::Box).unwrap();
+    let (x, y) = (4, 6);
+    let mut s = 0.0;
+    for j in 0..n {
+        for i in 0..n {
+            s += ramp[(y * n + j) * w * n + x * n + i];
+        }
+    }
+    assert!((out[y * w + x] - s / 9.0).abs() < 1e-4);
+    // Energy: an interior impulse of E on the sub-sample grid spreads into
+    // pixels summing to E/N² (the radiance of one sub-sample's share).
+    let (w, h, n) = (21, 21, 4);
+    let mut imp = vec![0f32; w * n * h * n];
+    imp[(42) * w * n + 41] = 16.0;
+    for psf in [Psf::Box, Psf::Gaussian { sigma_px: 0.8 }] {
+        let out = effects::reduce_oversampled(&imp, w, h, n, psf).unwrap();
+        let total: f64 = out.iter().map(|&v| v as f64).sum();
+        assert!((total - 1.0).abs() < 1e-4, "{psf:?}: {total}");
+        if let Psf::Gaussian { .. } = psf {
+            // Spread over neighbours, peak at the impulse's pixel (10, 10).
+            let peak = out.iter().cloned().fold(0f32, f32::max);
+            assert_eq!(out[10 * w + 10], peak);
+            assert!(out[10 * w + 11] > 0.0 && out[9 * w + 10] > 0.0);
+        }
+    }
+    assert!(effects::reduce_oversampled(&imp[1..], w, h, n, Psf::Box).is_err());
+}
+
+#[test]
+fn mtf_scales_a_cosine_by_the_transfer_at_its_frequency() {
+    // Published point: diffraction MTF at half the cutoff = 0.3910.
+    assert!((effects::diffraction_mtf(0.5) - 0.391_002).abs() < 1e-6);
+    assert_eq!(effects::diffraction_mtf(0.0), 1.0);
+    assert_eq!(effects::diffraction_mtf(1.2), 0.0);
+    let (w, h) = (64, 8);
+    let mtf = Mtf {
+        optics_cutoff_cycles_per_px: Some(0.4),
+        fill_factor: Some(0.8),
+    };
+    for k in [8usize, 16, 40] {
+        let f = k as f64 / (2 * w) as f64;
+        let pat: Vec<f64> = (0..w * h)
+            .map(|i| (std::f64::consts::TAU * f * ((i % w) as f64 + 0.5)).cos())
+            .collect();
+        let mut img: Vec<f32> = pat.iter().map(|&c| (300.0 + 10.0 * c) as f32).collect();
+        effects::apply_mtf(&mut img, w, h, &mtf).unwrap();
+        let mean: f64 = img.iter().map(|&v| v as f64).sum::<f64>() / (w * h) as f64;
+        let amp: f64 = img
+            .iter()
+            .zip(&pat)
+            .map(|(&v, c)| (v as f64 - mean) * c)
+            .sum::<f64>()
+            / pat.iter().map(|c| c * c).sum::<f64>();
+        let expect = 10.0 * effects::diffraction_mtf(f / 0.4) * effects::sinc(0.8 * f);
+        assert!((mean - 300.0).abs() < 1e-4, "DC changed: {mean}");
+        assert!((amp - expect).abs() < 2e-4, "k={k}: {amp} vs {expect}");
+    }
+}
+
+/// Planck spectral radiance, W·m⁻²·sr⁻¹·m⁻¹ (λ in m, T in K).
+fn planck(lambda: f64, t: f64) -> f64 {
+    const H: f64 = 6.626_070_15e-34;
+    const C: f64 = 299_792_458.0;
+    const K: f64 = 1.380_649e-23;
+    2.0 * H * C * C / lambda.powi(5) / ((H * C / (lambda * K * t)).exp() - 1.0)
+}
+
+#[test]
+fn nedt_noise_has_the_predicted_sigma_and_is_deterministic() {
+    let lambda = 10e-6;
+    let t = 300.0;
+    // dL/dT analytically: L·x·eˣ/((eˣ − 1)·T), x = hc/(λkT).
+    let x = 6.626_070_15e-34 * 299_792_458.0 / (lambda * 1.380_649e-23 * t);
+    let dldt = planck(lambda, t) * x * x.exp() / ((x.exp() - 1.0) * t);
+    let sigma = effects::radiance_sigma_from_nedt(0.05, t, |tt| planck(lambda, tt) * 1e-6);
+    assert!((sigma / (0.05 * dldt * 1e-6) - 1.0).abs() < 1e-6);
+
+    let (w, h) = (256, 256);
+    let base = vec![9.0f32; w * h];
+    let mut img = base.clone();
+    effects::add_noise(&mut img, w, 0, sigma, 42, 0);
+    let n = (w * h) as f64;
+    let mean = img.iter().map(|&v| v as f64).sum::<f64>() / n;
+    let sd = (img.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    assert!((mean - 9.0).abs() < 4.0 * sigma / n.sqrt(), "{mean}");
+    // Standard error of a sample σ is σ/√(2n) ≈ 0.28 %.
+    assert!((sd / sigma - 1.0).abs() < 0.012, "{sd} vs {sigma}");
+
+    // Bit-identical for 1 and 2 threads and for row-band tiling.
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut v = base.clone();
+            effects::add_noise(&mut v, w, 0, sigma, 42, 0);
+            v
+        })
+    };
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&run(1)), bits(&img));
+    assert_eq!(bits(&run(2)), bits(&img));
+    let mut tiled = base.clone();
+    let (top, bottom) = tiled.split_at_mut(100 * w);
+    effects::add_noise(top, w, 0, sigma, 42, 0);
+    effects::add_noise(bottom, w, 100, sigma, 42, 0);
+    assert_eq!(bits(&tiled), bits(&img));
+    let mut other = base.clone();
+    effects::add_noise(&mut other, w, 0, sigma, 43, 0);
+    assert_ne!(bits(&other), bits(&img));
+    let mut band1 = base;
+    effects::add_noise(&mut band1, w, 0, sigma, 42, 1);
+    assert_ne!(bits(&band1), bits(&img));
+}
+
+#[test]
+fn quantisation_step_offset_and_saturation() {
+    let (gain, offset) = (100.0, 10.0);
+    let l: Vec<f32> = vec![0.5, 0.51, 0.52, -1.0, 2.44, 2.46, 50.0, f32::NAN];
+    let c = effects::quantise(&l, 8, gain, offset);
+    assert_eq!(&c[..7], &[60.0, 61.0, 62.0, 0.0, 254.0, 255.0, 255.0]);
+    assert!(c[7].is_nan());
+    // One count per 1/gain of radiance over the whole 12-bit range.
+    let ramp: Vec<f32> = (0..4000).map(|i| i as f32 / 100.0).collect();
+    let c = effects::quantise(&ramp, 12, gain, 0.0);
+    for (i, v) in c.iter().enumerate() {
+        assert_eq!(*v, (i as f32).min(4095.0));
+    }
+}
+
+#[test]
+fn effects_chain_from_config_is_deterministic() {
+    let s = frame(
+        r#", "fov_deg": 30, "oversample": 2, "psf": {"type": "gaussian", "sigma_px": 0.6},
+           "mtf": {"aperture_diameter_m": 0.05, "fill_factor": 1.0},
+           "nedt_k": 0.05, "bits": 14, "gain": 500, "offset": 100, "seed": 7"#,
+    );
+    let m = s.effects.mtf.unwrap();
+    // Cutoff D/λ · (pixel angle): λ = 10 µm (band centre), pixel angle =
+    // 1/focal_px.
+    let c = camera(&s);
+    let expect = 0.05 / 10e-6 / c.focal_px;
+    assert!((m.optics_cutoff_cycles_per_px.unwrap() - expect).abs() < 1e-12);
+    let (w, h, n) = (64, 48, 2);
+    let over: Vec<f32> = (0..w * n * h * n)
+        .map(|i| 8.0 + (i % 13) as f32 * 0.01)
+        .collect();
+    let a = s.effects.apply(&over, w, h, n, 0, 0.01).unwrap();
+    let b = s.effects.apply(&over, w, h, n, 0, 0.01).unwrap();
+    assert_eq!(a, b);
+    let counts = a.counts.unwrap();
+    assert!(
+        counts
+            .iter()
+            .all(|&v| (0.0..=16383.0).contains(&v) && v.fract() == 0.0)
+    );
+    let mean: f64 = counts.iter().map(|&v| v as f64).sum::<f64>() / counts.len() as f64;
+    assert!((mean - (500.0 * 8.06 + 100.0)).abs() < 2.0, "{mean}");
+}

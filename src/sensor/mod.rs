@@ -1,1 +1,488 @@
-//! (sensor: being written.)
+//! Sensors: where primary rays come from, and what the sensor does to the
+//! radiance image.
+//!
+//! - [`SensorConfig`] is one entry of a scene file's `sensors` array
+//!   (serde, `"type": "frame"` or `"line_scanner"`); [`Sensor::from_config`]
+//!   validates it into a [`Sensor`]: a [`Geometry`] ([`FrameCamera`] or
+//!   [`LineScanner`]), its spectral [`BandConfig`]s and its [`Effects`].
+//! - [`Sensor::rays_for_row`] gives the primary rays of one image row (a
+//!   camera row or a scanner line), `N×N` per pixel, laid out as rows of the
+//!   oversampled image; the render loop traces them, turns hits into
+//!   radiance, and the [`effects`] chain turns the oversampled radiance image
+//!   into the sensor's image: [`effects::reduce_oversampled`] (PSF) →
+//!   [`effects::apply_mtf`] → [`effects::add_noise`] (NEdT) →
+//!   [`effects::quantise`] (digital counts).
+//! - [`Sensor::project`] maps a world point to continuous image coordinates
+//!   (tests, ground-truth overlays).
+//!
+//! Transforms are named `<to>_from_<from>`; world space is ENU metres.
+
+pub mod camera;
+pub mod effects;
+pub mod scanner;
+
+use std::path::PathBuf;
+
+use glam::{DVec2, DVec3};
+use serde::Deserialize;
+
+pub use camera::FrameCamera;
+pub use effects::{Effects, Mtf, Psf};
+pub use scanner::{LineScanner, LineScannerParams};
+
+use crate::trace::Ray;
+use crate::{Error, Location, Result};
+
+/// A spectral band as given in the scene file. The response is resolved by
+/// the radiometry module (CSV reader, band integration).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BandConfig {
+    /// Band name (used in layer names).
+    pub name: String,
+    /// Relative spectral response: a CSV file (µm, response; relative to the
+    /// scene file) or a rectangular band `[lo_um, hi_um]`.
+    pub response: ResponseSpec,
+}
+
+/// A band's spectral response as written in the scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum ResponseSpec {
+    /// A rectangular response from `lo` to `hi`, µm.
+    Range([f64; 2]),
+    /// A CSV file of wavelength (µm) and relative response.
+    File(PathBuf),
+}
+
+impl BandConfig {
+    /// The band centre for a rectangular band, µm (`None` for a file, whose
+    /// centre the radiometry module computes).
+    pub fn range_centre_um(&self) -> Option<f64> {
+        match self.response {
+            ResponseSpec::Range([lo, hi]) => Some(0.5 * (lo + hi)),
+            ResponseSpec::File(_) => None,
+        }
+    }
+}
+
+fn one() -> usize {
+    1
+}
+fn unit_gain() -> f64 {
+    1.0
+}
+fn default_up() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+fn default_reference_temperature() -> f64 {
+    300.0
+}
+
+/// One sensor of the scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum SensorConfig {
+    /// A frame camera.
+    Frame(FrameCameraConfig),
+    /// An airborne whiskbroom line scanner.
+    LineScanner(LineScannerConfig),
+}
+
+/// Sensor-effects settings shared by both sensor types (see [`Effects`]).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MtfConfig {
+    /// Entrance-pupil (aperture) diameter for the diffraction-limited optics
+    /// MTF, m (omit for no optics MTF).
+    pub aperture_diameter_m: Option<f64>,
+    /// Wavelength for the optics MTF, µm (default: the first band's centre).
+    pub wavelength_um: Option<f64>,
+    /// Detector fill factor (active width / pitch, 0–1) for the detector
+    /// sinc MTF (omit for none).
+    pub fill_factor: Option<f64>,
+}
+
+/// `{"type": "frame", ...}`: a frame camera. Give `focal_length_m` with
+/// `pixel_pitch_m`, or `fov_deg` (full horizontal field of view); point it
+/// with `look_at` (+ `up`), or with `yaw_deg`/`pitch_deg`/`roll_deg`
+/// (azimuth clockwise from north, elevation, roll; see
+/// [`camera::yaw_pitch_roll_axes`]).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameCameraConfig {
+    /// Sensor name (output file stem).
+    pub name: String,
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Pixel pitch, m.
+    pub pixel_pitch_m: Option<f64>,
+    /// Focal length, m.
+    pub focal_length_m: Option<f64>,
+    /// Full horizontal field of view, degrees.
+    pub fov_deg: Option<f64>,
+    /// Position, world metres.
+    pub position: [f64; 3],
+    /// Point looked at, world metres.
+    pub look_at: Option<[f64; 3]>,
+    /// Up direction for `look_at`.
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Pointing azimuth, degrees clockwise from north (without `look_at`).
+    pub yaw_deg: Option<f64>,
+    /// Pointing elevation, degrees (−90 = nadir).
+    pub pitch_deg: Option<f64>,
+    /// Roll about the viewing axis, degrees.
+    pub roll_deg: Option<f64>,
+    /// Spectral bands.
+    pub bands: Vec<BandConfig>,
+    /// Sub-pixel rays per side.
+    #[serde(default = "one")]
+    pub oversample: usize,
+    /// Point-spread function for the oversampling reduction.
+    #[serde(default)]
+    pub psf: Psf,
+    /// Optics/detector MTF.
+    pub mtf: Option<MtfConfig>,
+    /// Noise-equivalent temperature difference, K.
+    pub nedt_k: Option<f64>,
+    /// Scene temperature at which the NEdT is quoted, K.
+    #[serde(default = "default_reference_temperature")]
+    pub nedt_reference_k: f64,
+    /// Quantisation bits (omit for no digital-count layer).
+    pub bits: Option<u32>,
+    /// Counts per radiance unit (W·m⁻²·sr⁻¹·µm⁻¹).
+    #[serde(default = "unit_gain")]
+    pub gain: f64,
+    /// Counts offset.
+    #[serde(default)]
+    pub offset: f64,
+    /// Noise seed.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+/// `{"type": "line_scanner", ...}`: an airborne whiskbroom scanner (see
+/// [`scanner`] for the geometry and conventions).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LineScannerConfig {
+    /// Sensor name.
+    pub name: String,
+    /// Instantaneous field of view, rad.
+    pub ifov_rad: f64,
+    /// Total scan angle, degrees.
+    pub scan_angle_deg: f64,
+    /// Samples per line.
+    pub samples_per_line: usize,
+    /// Lines.
+    pub lines: usize,
+    /// Lines per second.
+    pub scan_rate_hz: f64,
+    /// Altitude above `z = 0`, m.
+    pub altitude_m: f64,
+    /// Ground speed, m/s.
+    pub ground_speed_m_s: f64,
+    /// Ground track, degrees clockwise from north.
+    pub heading_deg: f64,
+    /// Roll (right wing down +), degrees.
+    #[serde(default)]
+    pub roll_deg: f64,
+    /// Pitch (nose up +), degrees.
+    #[serde(default)]
+    pub pitch_deg: f64,
+    /// Yaw / crab (nose right +), degrees.
+    #[serde(default)]
+    pub yaw_deg: f64,
+    /// Ground position (east, north) of line 0, m.
+    pub start: [f64; 2],
+    /// Time of line 0 after the scene time, s.
+    #[serde(default)]
+    pub start_time: f64,
+    /// Model the mirror sweep time within each line.
+    #[serde(default)]
+    pub mirror_sweep: bool,
+    /// Spectral bands.
+    pub bands: Vec<BandConfig>,
+    /// Sub-sample rays per side.
+    #[serde(default = "one")]
+    pub oversample: usize,
+    /// Point-spread function.
+    #[serde(default)]
+    pub psf: Psf,
+    /// Optics/detector MTF.
+    pub mtf: Option<MtfConfig>,
+    /// NEdT, K.
+    pub nedt_k: Option<f64>,
+    /// Scene temperature at which the NEdT is quoted, K.
+    #[serde(default = "default_reference_temperature")]
+    pub nedt_reference_k: f64,
+    /// Quantisation bits.
+    pub bits: Option<u32>,
+    /// Counts per radiance unit.
+    #[serde(default = "unit_gain")]
+    pub gain: f64,
+    /// Counts offset.
+    #[serde(default)]
+    pub offset: f64,
+    /// Noise seed.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+/// The imaging geometry of a sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry {
+    /// Frame camera.
+    Frame(FrameCamera),
+    /// Line scanner.
+    LineScanner(LineScanner),
+}
+
+/// A validated sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sensor {
+    /// Name (output file stem).
+    pub name: String,
+    /// Imaging geometry.
+    pub geometry: Geometry,
+    /// Spectral bands (responses still to be resolved by radiometry).
+    pub bands: Vec<BandConfig>,
+    /// Sensor effects applied to each band's radiance image.
+    pub effects: Effects,
+}
+
+fn vec3(a: [f64; 3]) -> DVec3 {
+    DVec3::from_array(a)
+}
+
+impl Sensor {
+    /// Validate a scene-file sensor. `location` names the sensor in the
+    /// scene file (e.g. `scene.json`, field `sensors[0]`); errors name the
+    /// offending field below it.
+    pub fn from_config(config: &SensorConfig, location: &Location) -> Result<Self> {
+        let at = |field: &str, e: Error| -> Error {
+            let msg = match e {
+                Error::Invalid { message, .. } => message,
+                other => other.to_string(),
+            };
+            let base = location.field.clone().unwrap_or_else(|| "sensor".into());
+            Error::parse(location.clone().with_field(format!("{base}.{field}")), msg)
+        };
+        let bad = |field: &str, msg: String| at(field, Error::invalid(field, msg));
+        match config {
+            SensorConfig::Frame(c) => {
+                let focal_px = match (c.focal_length_m, c.pixel_pitch_m, c.fov_deg) {
+                    (Some(f), Some(p), None) => {
+                        if !(f > 0.0 && p > 0.0 && f.is_finite() && p.is_finite()) {
+                            return Err(bad(
+                                "focal_length_m",
+                                format!("{f} m with pitch {p} m: expected positive lengths"),
+                            ));
+                        }
+                        f / p
+                    }
+                    (None, _, Some(fov)) => {
+                        if !(fov > 0.0 && fov < 180.0) {
+                            return Err(bad(
+                                "fov_deg",
+                                format!("{fov}: expected a field of view between 0 and 180°"),
+                            ));
+                        }
+                        0.5 * c.width as f64 / (0.5 * fov.to_radians()).tan()
+                    }
+                    _ => {
+                        return Err(bad(
+                            "focal_length_m",
+                            "expected either `focal_length_m` with `pixel_pitch_m`, or `fov_deg`"
+                                .into(),
+                        ));
+                    }
+                };
+                let position = vec3(c.position);
+                let axes = match (c.look_at, c.yaw_deg, c.pitch_deg) {
+                    (Some(l), None, None) => camera::look_at_axes(position, vec3(l), vec3(c.up))
+                        .map_err(|e| at("look_at", e))?,
+                    (None, Some(y), Some(p)) => camera::yaw_pitch_roll_axes(
+                        y.to_radians(),
+                        p.to_radians(),
+                        c.roll_deg.unwrap_or(0.0).to_radians(),
+                    ),
+                    _ => {
+                        return Err(bad(
+                            "look_at",
+                            "expected either `look_at` (with optional `up`), or `yaw_deg` and \
+                             `pitch_deg`"
+                                .into(),
+                        ));
+                    }
+                };
+                let geometry =
+                    FrameCamera::new(c.width, c.height, focal_px, axes, position, c.oversample)
+                        .map_err(|e| at("width", e))?;
+                let effects = Effects::from_parts(
+                    &c.bands,
+                    c.psf,
+                    c.mtf.as_ref(),
+                    c.pixel_pitch_m
+                        .zip(c.focal_length_m)
+                        .map(|(p, f)| p / f)
+                        .unwrap_or(1.0 / focal_px),
+                    (
+                        c.nedt_k,
+                        c.nedt_reference_k,
+                        c.bits,
+                        c.gain,
+                        c.offset,
+                        c.seed,
+                    ),
+                )
+                .map_err(|e| at("mtf", e))?;
+                check_bands(&c.bands).map_err(|e| at("bands", e))?;
+                Ok(Sensor {
+                    name: c.name.clone(),
+                    geometry: Geometry::Frame(geometry),
+                    bands: c.bands.clone(),
+                    effects,
+                })
+            }
+            SensorConfig::LineScanner(c) => {
+                let p = LineScannerParams {
+                    ifov_rad: c.ifov_rad,
+                    scan_angle_rad: c.scan_angle_deg.to_radians(),
+                    samples_per_line: c.samples_per_line,
+                    lines: c.lines,
+                    scan_rate_hz: c.scan_rate_hz,
+                    altitude_m: c.altitude_m,
+                    ground_speed_m_s: c.ground_speed_m_s,
+                    heading_rad: c.heading_deg.to_radians(),
+                    roll_pitch_yaw_rad: [
+                        c.roll_deg.to_radians(),
+                        c.pitch_deg.to_radians(),
+                        c.yaw_deg.to_radians(),
+                    ],
+                    start: DVec2::from_array(c.start),
+                    start_time_s: c.start_time,
+                    mirror_sweep: c.mirror_sweep,
+                    oversample: c.oversample,
+                };
+                let geometry = LineScanner::new(&p).map_err(|e| {
+                    let field = match &e {
+                        Error::Invalid { field, .. } => field.clone(),
+                        _ => "ifov_rad".into(),
+                    };
+                    at(&field, e)
+                })?;
+                let effects = Effects::from_parts(
+                    &c.bands,
+                    c.psf,
+                    c.mtf.as_ref(),
+                    geometry.sample_step_rad(),
+                    (
+                        c.nedt_k,
+                        c.nedt_reference_k,
+                        c.bits,
+                        c.gain,
+                        c.offset,
+                        c.seed,
+                    ),
+                )
+                .map_err(|e| at("mtf", e))?;
+                check_bands(&c.bands).map_err(|e| at("bands", e))?;
+                Ok(Sensor {
+                    name: c.name.clone(),
+                    geometry: Geometry::LineScanner(geometry),
+                    bands: c.bands.clone(),
+                    effects,
+                })
+            }
+        }
+    }
+
+    /// Image width: columns / samples per line.
+    pub fn width(&self) -> usize {
+        match &self.geometry {
+            Geometry::Frame(c) => c.width,
+            Geometry::LineScanner(s) => s.samples_per_line,
+        }
+    }
+
+    /// Image height: rows / lines.
+    pub fn height(&self) -> usize {
+        match &self.geometry {
+            Geometry::Frame(c) => c.height,
+            Geometry::LineScanner(s) => s.lines,
+        }
+    }
+
+    /// Oversampling factor `N` (`N×N` rays per pixel).
+    pub fn oversample(&self) -> usize {
+        match &self.geometry {
+            Geometry::Frame(c) => c.oversample,
+            Geometry::LineScanner(s) => s.oversample,
+        }
+    }
+
+    /// Rays per image row: `width · N²`.
+    pub fn rays_per_row(&self) -> usize {
+        self.width() * self.oversample() * self.oversample()
+    }
+
+    /// Append the primary rays of image row `row` to `out` (see
+    /// [`FrameCamera::rays_for_row`], [`LineScanner::rays_for_line`]).
+    pub fn rays_for_row(&self, row: usize, out: &mut Vec<Ray>) {
+        match &self.geometry {
+            Geometry::Frame(c) => c.rays_for_row(row, out),
+            Geometry::LineScanner(s) => s.rays_for_line(row, out),
+        }
+    }
+
+    /// Time offset (s, after the scene time) at which row `row` is imaged:
+    /// 0 for a frame camera, the line start for a scanner.
+    pub fn row_time(&self, row: usize) -> f64 {
+        match &self.geometry {
+            Geometry::Frame(_) => 0.0,
+            Geometry::LineScanner(s) => s.line_time(row),
+        }
+    }
+
+    /// Continuous image coordinates `(column, row)` — for a scanner
+    /// `(sample, line)` — of world point `p`, or `None` where it is not seen.
+    pub fn project(&self, p: DVec3) -> Option<DVec2> {
+        match &self.geometry {
+            Geometry::Frame(c) => c.project(p),
+            Geometry::LineScanner(s) => s.project(p).map(|ls| DVec2::new(ls.y, ls.x)),
+        }
+    }
+}
+
+fn check_bands(bands: &[BandConfig]) -> Result<()> {
+    if bands.is_empty() {
+        return Err(Error::invalid("bands", "empty: expected at least one band"));
+    }
+    for (i, b) in bands.iter().enumerate() {
+        if bands[..i].iter().any(|o| o.name == b.name) {
+            return Err(Error::invalid(
+                "bands",
+                format!(
+                    "band name `{}` is used twice: expected unique names",
+                    b.name
+                ),
+            ));
+        }
+        if let ResponseSpec::Range([lo, hi]) = b.response {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
+                return Err(Error::invalid(
+                    "bands",
+                    format!(
+                        "band `{}`: response [{lo}, {hi}] µm: expected 0 < lo < hi",
+                        b.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}

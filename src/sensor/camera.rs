@@ -1,0 +1,163 @@
+//! Pinhole frame camera: a `width × height` detector array behind a lens of
+//! focal length `f`, pixel pitch `p` (only `f/p` matters for geometry).
+//!
+//! Camera frame (pbrt / OpenCV convention): `x` right, `y` down (image rows
+//! grow downwards), `z` forward along the optical axis. Pixel `(col, row)`
+//! covers continuous image coordinates `[col, col+1) × [row, row+1)`, its
+//! centre at `(col + ½, row + ½)`; the optical axis pierces the array centre
+//! `(W/2, H/2)`. A point at camera coordinates `(x, y, z)`, `z > 0`, images
+//! at `u = W/2 + (f/p)·x/z`, `v = H/2 + (f/p)·y/z` (the pinhole projection,
+//! e.g. Hartley & Zisserman, *Multiple View Geometry*, 2nd ed., eq. 6.1).
+
+use glam::{DAffine3, DMat3, DVec2, DVec3};
+
+use crate::trace::Ray;
+use crate::{Error, Result};
+
+/// A built frame camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameCamera {
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Focal length in pixels, `f / pitch`.
+    pub focal_px: f64,
+    /// Camera → world: columns are the camera's right, down and forward axes
+    /// in world (ENU) coordinates; translation is the camera position, m.
+    pub world_from_camera: DAffine3,
+    /// Sub-pixel rays per pixel side (`N` → `N×N` rays per pixel).
+    pub oversample: usize,
+}
+
+/// Orthonormal right/down/forward axes for a camera at `position` looking at
+/// `look_at`, with `up` giving the image's up direction.
+pub fn look_at_axes(position: DVec3, look_at: DVec3, up: DVec3) -> Result<DMat3> {
+    let forward = (look_at - position).normalize_or_zero();
+    if forward == DVec3::ZERO {
+        return Err(Error::invalid(
+            "look_at",
+            "equals the camera position: expected a distinct point to look at",
+        ));
+    }
+    let right = forward.cross(up).normalize_or_zero();
+    if right == DVec3::ZERO {
+        return Err(Error::invalid(
+            "up",
+            "is parallel to the viewing direction: expected an up vector not along it",
+        ));
+    }
+    let down = forward.cross(right);
+    Ok(DMat3::from_cols(right, down, forward))
+}
+
+/// Right/down/forward axes from a pointing azimuth (`yaw`, clockwise from
+/// north), elevation (`pitch`, negative below the horizon, −90° = nadir) and a
+/// roll about the viewing axis (positive turns the camera's right axis
+/// towards its down axis: clockwise as seen from behind the camera), radians.
+pub fn yaw_pitch_roll_axes(yaw: f64, pitch: f64, roll: f64) -> DMat3 {
+    let forward = DVec3::new(
+        yaw.sin() * pitch.cos(),
+        yaw.cos() * pitch.cos(),
+        pitch.sin(),
+    );
+    let right0 = DVec3::new(yaw.cos(), -yaw.sin(), 0.0);
+    let down0 = forward.cross(right0);
+    let (s, c) = roll.sin_cos();
+    let right = right0 * c + down0 * s;
+    let down = down0 * c - right0 * s;
+    DMat3::from_cols(right, down, forward)
+}
+
+impl FrameCamera {
+    /// A camera of `width × height` pixels with focal length `focal_px`
+    /// pixels, camera→world axes `axes` (right, down, forward) at `position`.
+    pub fn new(
+        width: usize,
+        height: usize,
+        focal_px: f64,
+        axes: DMat3,
+        position: DVec3,
+        oversample: usize,
+    ) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(Error::invalid(
+                "width/height",
+                format!("{width}×{height}: expected at least 1×1 pixels"),
+            ));
+        }
+        if !(focal_px.is_finite() && focal_px > 0.0) {
+            return Err(Error::invalid(
+                "focal length",
+                format!("{focal_px} pixels: expected a positive focal length"),
+            ));
+        }
+        if oversample == 0 {
+            return Err(Error::invalid("oversample", "0: expected at least 1"));
+        }
+        Ok(FrameCamera {
+            width,
+            height,
+            focal_px,
+            world_from_camera: DAffine3::from_mat3_translation(axes, position),
+            oversample,
+        })
+    }
+
+    /// The camera position, world metres.
+    pub fn position(&self) -> DVec3 {
+        self.world_from_camera.translation
+    }
+
+    /// Full horizontal field of view, radians.
+    pub fn horizontal_fov(&self) -> f64 {
+        2.0 * (0.5 * self.width as f64 / self.focal_px).atan()
+    }
+
+    /// Unit world direction of the ray through continuous image point
+    /// `(u, v)` (pixel centres at `+½`).
+    pub fn direction(&self, u: f64, v: f64) -> DVec3 {
+        let d = DVec3::new(
+            (u - 0.5 * self.width as f64) / self.focal_px,
+            (v - 0.5 * self.height as f64) / self.focal_px,
+            1.0,
+        );
+        self.world_from_camera.transform_vector3(d).normalize()
+    }
+
+    /// The primary ray through continuous image point `(u, v)`; `t` is the
+    /// distance in metres.
+    pub fn ray(&self, u: f64, v: f64) -> Ray {
+        Ray::new(self.position().as_vec3(), self.direction(u, v).as_vec3())
+    }
+
+    /// Primary rays of pixel row `row`, appended to `out`: `N` sub-rows (at
+    /// `v = row + (j+½)/N`), each of `width·N` rays (at `u = col + (i+½)/N`),
+    /// so rows of results laid end to end form the `(width·N) × (height·N)`
+    /// oversampled image that [`super::effects::reduce_oversampled`] takes.
+    pub fn rays_for_row(&self, row: usize, out: &mut Vec<Ray>) {
+        let n = self.oversample;
+        out.reserve(self.width * n * n);
+        for j in 0..n {
+            let v = row as f64 + (j as f64 + 0.5) / n as f64;
+            for k in 0..self.width * n {
+                let u = (k as f64 + 0.5) / n as f64;
+                out.push(self.ray(u, v));
+            }
+        }
+    }
+
+    /// Continuous image coordinates `(u, v)` of world point `p`, or `None`
+    /// if it is behind the camera (or on its plane). The point may fall
+    /// outside the array.
+    pub fn project(&self, p: DVec3) -> Option<DVec2> {
+        let c = self.world_from_camera.inverse().transform_point3(p);
+        if c.z <= 0.0 {
+            return None;
+        }
+        Some(DVec2::new(
+            0.5 * self.width as f64 + self.focal_px * c.x / c.z,
+            0.5 * self.height as f64 + self.focal_px * c.y / c.z,
+        ))
+    }
+}
