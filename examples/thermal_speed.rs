@@ -47,7 +47,7 @@ fn main() {
         density_kg_m3: 2700.0,
         specific_heat_j_kg_k: 900.0,
         thickness_m: 0.002,
-        back: BackBoundary::Exposed,
+        back: BackBoundary::BOTH_FACES,
         ..concrete(BackBoundary::Insulated, 0.002)
     };
     let materials = [

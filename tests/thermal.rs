@@ -210,7 +210,7 @@ fn solve_energy_budget_closes() {
     let inputs = FacetInputs::new(&sun, &cos, 0.8);
     for back in [
         BackBoundary::Insulated,
-        BackBoundary::Exposed,
+        BackBoundary::BOTH_FACES,
         BackBoundary::BUILDING,
         BackBoundary::GROUND,
     ] {
@@ -348,7 +348,7 @@ fn panel_and_wall() -> (SlabProperties, SlabProperties) {
         solar_absorptivity: 0.7,
         thermal_emissivity: 0.9,
         self_power_w_m2: 0.0,
-        back: BackBoundary::Exposed,
+        back: BackBoundary::BOTH_FACES,
     };
     let wall = SlabProperties {
         conductivity_w_m_k: 0.15,
@@ -580,11 +580,237 @@ fn invalid_inputs_name_the_field() {
 /// `BackBoundary::from_exposed_area`.
 #[test]
 fn exposed_area_maps_to_back_boundary() {
-    assert_eq!(BackBoundary::from_exposed_area(-0.5), BackBoundary::GROUND);
     assert_eq!(
         BackBoundary::from_exposed_area(0.0),
         BackBoundary::Insulated
     );
-    assert_eq!(BackBoundary::from_exposed_area(0.5), BackBoundary::BUILDING);
-    assert_eq!(BackBoundary::from_exposed_area(1.0), BackBoundary::Exposed);
+    assert_eq!(
+        BackBoundary::from_exposed_area(0.5),
+        BackBoundary::Exposed { fraction: 0.5 }
+    );
+    // DIRSIG's negative values: the magnitude (see `Material::exposed_fraction`).
+    assert_eq!(
+        BackBoundary::from_exposed_area(-0.5),
+        BackBoundary::Exposed { fraction: 0.5 }
+    );
+    assert_eq!(
+        BackBoundary::from_exposed_area(1.0),
+        BackBoundary::BOTH_FACES
+    );
+}
+
+// ---- One-facet mode (`irsig thermal`) ----
+
+use crate::util::{irsig_bin, repo_path};
+use std::process::Command;
+
+/// Write a night-time (no sun) irsig CSV history with constant weather,
+/// hourly for `days` days, without a site line.
+fn write_constant_night_csv(path: &std::path::Path, days: u32, t_air: f64, wind: f64, sky: f64) {
+    let mut s = String::from(
+        "time,air_temperature_k,dew_point_k,relative_humidity,pressure_pa,wind_speed_m_s,\
+         wind_direction_deg,direct_normal_w_m2,diffuse_horizontal_w_m2,global_horizontal_w_m2,\
+         sky_longwave_w_m2,total_sky_cover,opaque_sky_cover\n",
+    );
+    let start = chrono::DateTime::parse_from_rfc3339("2025-01-10T00:00:00+00:00").unwrap();
+    for h in 0..=days * 24 {
+        let t = start + chrono::TimeDelta::hours(h as i64);
+        s += &format!(
+            "{},{t_air},{},0.7,101325,{wind},180,0,0,0,{sky},0,0\n",
+            t.to_rfc3339(),
+            t_air - 5.0
+        );
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn run_irsig(args: &[&str]) -> std::process::Output {
+    Command::new(irsig_bin()).args(args).output().unwrap()
+}
+
+/// `irsig thermal --json` under constant weather without sun reaches the
+/// root of the balance of a plane tilted 60°, whose default sky shape factor
+/// is (1 + cos 60°)/2 = 0.75; the output has one record per weather record.
+#[test]
+fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    let weather = dir.path().join("night.csv");
+    let (t_air, wind, sky) = (285.0, 1.0, 280.0);
+    write_constant_night_csv(&weather, 4, t_air, wind, sky);
+    let mat = dir.path().join("m.json");
+    std::fs::write(
+        &mat,
+        r#"{"materials": [{"id": 7, "name": "slab", "specific_heat_j_kg_k": 900,
+            "conductivity_w_m_k": 1.0, "density_kg_m3": 2000, "thickness_m": 0.02,
+            "solar_absorptivity": 0.5, "thermal_emissivity": 0.95, "exposed_area": 0}]}"#,
+    )
+    .unwrap();
+    let out = run_irsig(&[
+        "thermal",
+        "--material",
+        mat.to_str().unwrap(),
+        "--weather",
+        weather.to_str().unwrap(),
+        "--time",
+        "2025-01-14T00:00:00+00:00",
+        "--tilt",
+        "60",
+        "--azimuth",
+        "90",
+        "--site",
+        "43.16,-77.61,170",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let recs = v["records"].as_array().unwrap();
+    assert_eq!(recs.len(), 4 * 24 + 1);
+    assert_eq!(recs[0]["time"], "2025-01-10T00:00:00+00:00");
+    assert_eq!(recs[96]["time"], "2025-01-14T00:00:00+00:00");
+    let got = recs[96]["surface_temperature_k"].as_f64().unwrap();
+    let (eps, f, sigma) = (0.95, 0.75, STEFAN_BOLTZMANN_W_M2_K4);
+    let h = 5.7 + 3.8 * wind;
+    let expected = bisect(
+        |t| {
+            eps * f * sky + eps * (1.0 - f) * sigma * t_air.powi(4) - eps * sigma * t.powi(4)
+                + h * (t_air - t)
+        },
+        200.0,
+        400.0,
+    );
+    assert!((got - expected).abs() < 1e-3, "{got} vs {expected}");
+    // With --shape-factor 1 the facet sees a colder sky: cooler.
+    let out = run_irsig(&[
+        "thermal",
+        "--material",
+        mat.to_str().unwrap(),
+        "--weather",
+        weather.to_str().unwrap(),
+        "--time",
+        "2025-01-14T00:00:00+00:00",
+        "--site",
+        "43.16,-77.61,170",
+        "--shape-factor",
+        "1",
+        "--csv",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("time,surface_temperature_k"));
+    let last: f64 = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(last < got - 1.0, "F = 1: {last} K, F = 0.75: {got} K");
+}
+
+/// A sunlit day of the bundled town weather: a south-facing wall is warmer
+/// at noon than a north-facing one, and the time between records is
+/// interpolated for an image time between records.
+#[test]
+fn cli_south_wall_warmer_than_north_wall_at_noon() {
+    let weather = repo_path("scenes/town/weather.csv");
+    let db = repo_path("scenes/materials.json");
+    if !weather.exists() || !db.exists() {
+        eprintln!("notice: bundled town weather or materials absent; skipping");
+        return;
+    }
+    let noon = |az: &str| {
+        let out = run_irsig(&[
+            "thermal",
+            "--material",
+            "brick",
+            "--materials",
+            db.to_str().unwrap(),
+            "--weather",
+            weather.to_str().unwrap(),
+            "--time",
+            "2025-06-20T13:07:00-04:00",
+            "--tilt",
+            "90",
+            "--azimuth",
+            az,
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let recs = v["records"].as_array().unwrap().clone();
+        assert_eq!(recs.last().unwrap()["time"], "2025-06-20T13:07:00-04:00");
+        recs.last().unwrap()["surface_temperature_k"]
+            .as_f64()
+            .unwrap()
+    };
+    let (south, north) = (noon("180"), noon("0"));
+    assert!(south > north + 3.0, "south {south} K, north {north} K");
+}
+
+/// Errors name what is wrong: an unknown material lists the names, a bad
+/// site says what was expected, a time outside the history names the file.
+#[test]
+fn cli_errors_are_clear() {
+    let dir = tempfile::tempdir().unwrap();
+    let weather = dir.path().join("w.csv");
+    write_constant_night_csv(&weather, 1, 285.0, 1.0, 280.0);
+    let db = repo_path("scenes/materials.json");
+    let base = |extra: &[&str]| {
+        let mut a = vec![
+            "thermal",
+            "--weather",
+            weather.to_str().unwrap(),
+            "--materials",
+            db.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        let out = run_irsig(&a);
+        assert!(!out.status.success());
+        String::from_utf8(out.stderr).unwrap()
+    };
+    if db.exists() {
+        let e = base(&[
+            "--material",
+            "unobtainium",
+            "--time",
+            "2025-01-10T12:00:00Z",
+            "--site",
+            "43,-77,0",
+        ]);
+        assert!(e.contains("unobtainium") && e.contains("asphalt"), "{e}");
+        let e = base(&[
+            "--material",
+            "asphalt",
+            "--time",
+            "2025-01-10T12:00:00Z",
+            "--site",
+            "43;-77",
+        ]);
+        assert!(e.contains("--site"), "{e}");
+        let e = base(&[
+            "--material",
+            "asphalt",
+            "--time",
+            "2025-03-01T00:00:00Z",
+            "--site",
+            "43,-77,0",
+        ]);
+        assert!(e.contains("w.csv"), "{e}");
+        let e = base(&["--material", "asphalt", "--time", "2025-01-10T12:00:00Z"]);
+        assert!(e.contains("--site"), "{e}");
+    }
 }

@@ -1,10 +1,285 @@
-//! `irsig thermal` (being written).
+//! `irsig thermal`: solve the thermal model for one free-standing facet
+//! (THERM alone): no ray tracing, the sun unshadowed, the sky shape factor
+//! of an unobstructed tilted plane, the background at air temperature.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use chrono::{DateTime, FixedOffset};
+use irsig::material::{Material, MaterialDb};
+use irsig::sun::{self, Site};
+use irsig::thermal::{
+    self, BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions, Spinup,
+};
+use irsig::weather::{self, LoadOptions, WeatherRecord};
 
 /// Arguments of `irsig thermal`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Material: a name in the material database (--materials), or a material
+    /// file (irsig JSON or DIRSIG .mat) holding one material, or
+    /// FILE#NAME for one material of a file.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub material: String,
+    /// Material database for --material NAME.
+    #[arg(long, value_name = "FILE", default_value = "scenes/materials.json")]
+    pub materials: PathBuf,
+    /// Weather file: irsig CSV/JSON, EPW, TMY3 CSV or DIRSIG .wth.
+    #[arg(long, value_name = "FILE")]
+    pub weather: PathBuf,
+    /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
+    #[arg(long, value_name = "RFC3339")]
+    pub start: Option<String>,
+    /// Image time (RFC 3339 with offset): the history is solved from its
+    /// first record up to this time.
+    #[arg(long, value_name = "RFC3339")]
+    pub time: String,
+    /// Facet tilt from horizontal, degrees (0 = facing up, 90 = vertical).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    pub tilt: f64,
+    /// Direction the facet faces, degrees clockwise from north (180 = south).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 180.0,
+        allow_negative_numbers = true
+    )]
+    pub azimuth: f64,
+    /// Sky shape factor of the front face, 0–1 (default: (1 + cos tilt)/2,
+    /// an unobstructed plane).
+    #[arg(long, value_name = "F")]
+    pub shape_factor: Option<f64>,
+    /// Site as LAT,LON,ALT (degrees north, degrees east, metres); default:
+    /// the weather file's site.
+    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
+    pub site: Option<String>,
+    /// Back boundary, overriding the material's exposed area:
+    /// insulated | exposed | ground | building.
+    #[arg(long, value_name = "KIND")]
+    pub back: Option<String>,
+    /// Repeat the first day up to N times before the run (spin-up).
+    #[arg(long, value_name = "N", default_value_t = Spinup::default().max_cycles)]
+    pub spinup_days: u32,
+    /// Print JSON: {"records": [{"time", "surface_temperature_k"}, …]}.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Print CSV: time,surface_temperature_k.
+    #[arg(long)]
+    pub csv: bool,
+}
 
 /// Run `irsig thermal`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`irsig thermal` is not available in this build yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let time = parse_time("--time", &args.time)?;
+    let site = args.site.as_deref().map(parse_site).transpose()?;
+    let material = find_material(&args.material, &args.materials)?;
+    let mut props = SlabProperties::from_material(&material)?;
+    if let Some(kind) = &args.back {
+        props = props.with_back(parse_back(kind)?);
+    }
+    anyhow::ensure!(
+        args.tilt.is_finite() && (0.0..=180.0).contains(&args.tilt),
+        "--tilt: {} is not a tilt in 0..=180 degrees",
+        args.tilt
+    );
+    anyhow::ensure!(
+        args.azimuth.is_finite(),
+        "--azimuth: {} is not a direction in degrees",
+        args.azimuth
+    );
+    let tilt = args.tilt.to_radians();
+    let shape_factor = args.shape_factor.unwrap_or((1.0 + tilt.cos()) / 2.0);
+    anyhow::ensure!(
+        (0.0..=1.0).contains(&shape_factor),
+        "--shape-factor: {shape_factor} is not a fraction in 0..=1"
+    );
+
+    let mut opts = LoadOptions::default();
+    if let Some(s) = site {
+        opts = opts.with_site(s);
+    }
+    if let Some(s) = &args.start {
+        opts = opts.with_start(parse_time("--start", s)?);
+    }
+    let history = weather::load_with(&args.weather, &opts)?;
+    let site = site.or(history.site().copied()).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: the weather file names no site; give one with --site LAT,LON,ALT",
+            args.weather.display()
+        )
+    })?;
+    let records = records_until(history.records(), time, |t| history.at(t))
+        .with_context(|| format!("{}: --time", args.weather.display()))?;
+
+    // One free plane: facet normal (ENU) from tilt and azimuth.
+    let az = args.azimuth.to_radians();
+    let normal = glam::DVec3::new(tilt.sin() * az.sin(), tilt.sin() * az.cos(), tilt.cos());
+    let mut sun_fraction = Vec::with_capacity(records.len());
+    let mut cos_incidence = Vec::with_capacity(records.len());
+    for r in &records {
+        let p = sun::position_standard(&site, r.time)?;
+        let cos = normal.dot(p.direction_enu()).clamp(-1.0, 1.0);
+        let lit = p.is_up() && cos > 0.0;
+        sun_fraction.push(if lit { 1.0f32 } else { 0.0 });
+        cos_incidence.push(cos as f32);
+    }
+    let forcing = Forcing::from_records(&records)?;
+    let inputs = FacetInputs::new(&sun_fraction, &cos_incidence, shape_factor);
+    let options = SolveOptions {
+        spinup: Spinup {
+            max_cycles: args.spinup_days,
+            ..Spinup::default()
+        },
+        ..SolveOptions::default()
+    };
+    let sol = thermal::solve(&props, &forcing, &inputs, &options)?;
+
+    let mut out = std::io::stdout().lock();
+    let times = records.iter().map(|r| r.time);
+    if args.json {
+        let records: Vec<JsonRecord> = times
+            .zip(&sol.surface_temperature_k)
+            .map(|(t, &k)| JsonRecord {
+                time: t.to_rfc3339(),
+                surface_temperature_k: k,
+            })
+            .collect();
+        serde_json::to_writer(&mut out, &JsonOutput { records })?;
+        writeln!(out)?;
+    } else if args.csv {
+        writeln!(out, "time,surface_temperature_k")?;
+        for (t, k) in times.zip(&sol.surface_temperature_k) {
+            writeln!(out, "{},{k:.4}", t.to_rfc3339())?;
+        }
+    } else {
+        writeln!(
+            out,
+            "material {} ({:?}), tilt {:.1}°, azimuth {:.1}°, shape factor {shape_factor:.4}",
+            material.name, props.back, args.tilt, args.azimuth
+        )?;
+        match sol.spinup_change_k {
+            Some(c) => writeln!(
+                out,
+                "spin-up: {} day(s), last day changed the state by {c:.3} K",
+                sol.spinup_cycles
+            )?,
+            None => writeln!(
+                out,
+                "spin-up: none (history shorter than a day or disabled)"
+            )?,
+        }
+        writeln!(out, "{:<26} {:>10} {:>8}", "time", "T_s (K)", "T_s (°C)")?;
+        for (t, k) in times.zip(&sol.surface_temperature_k) {
+            writeln!(out, "{:<26} {k:>10.2} {:>8.2}", t.to_rfc3339(), k - 273.15)?;
+        }
+    }
+    Ok(())
+}
+
+/// `--json` output: `{"records": [{"time", "surface_temperature_k"}, …]}`.
+#[derive(serde::Serialize)]
+struct JsonOutput {
+    records: Vec<JsonRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct JsonRecord {
+    time: String,
+    surface_temperature_k: f64,
+}
+
+fn parse_time(flag: &str, s: &str) -> anyhow::Result<DateTime<FixedOffset>> {
+    DateTime::<FixedOffset>::parse_from_rfc3339(s).map_err(|e| {
+        anyhow::anyhow!(
+            "{flag}: `{s}` is not an RFC 3339 time with offset (e.g. 2025-06-21T14:00:00-04:00): {e}"
+        )
+    })
+}
+
+/// `LAT,LON,ALT` (ALT optional, default 0 m).
+fn parse_site(s: &str) -> anyhow::Result<Site> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let num = |i: usize, what: &str| -> anyhow::Result<f64> {
+        parts[i].parse::<f64>().map_err(|_| {
+            anyhow::anyhow!(
+                "--site: `{}` is not a number ({what}); expected LAT,LON,ALT",
+                parts[i]
+            )
+        })
+    };
+    anyhow::ensure!(
+        parts.len() == 2 || parts.len() == 3,
+        "--site: `{s}`: expected LAT,LON,ALT (degrees north, degrees east, metres)"
+    );
+    let alt = if parts.len() == 3 {
+        num(2, "altitude, m")?
+    } else {
+        0.0
+    };
+    Ok(Site::new(
+        num(0, "latitude, °")?,
+        num(1, "longitude, °")?,
+        alt,
+    )?)
+}
+
+fn parse_back(kind: &str) -> anyhow::Result<BackBoundary> {
+    Ok(match kind {
+        "insulated" => BackBoundary::Insulated,
+        "exposed" => BackBoundary::BOTH_FACES,
+        "ground" => BackBoundary::GROUND,
+        "building" => BackBoundary::BUILDING,
+        _ => anyhow::bail!("--back: `{kind}` is not one of insulated, exposed, ground, building"),
+    })
+}
+
+/// A material by name in `db_path`, or from a file (`FILE` with one
+/// material, or `FILE#NAME`).
+fn find_material(spec: &str, db_path: &Path) -> anyhow::Result<Material> {
+    let (file, name) = match spec.split_once('#') {
+        Some((f, n)) => (Some(PathBuf::from(f)), Some(n)),
+        None if Path::new(spec).is_file() => (Some(PathBuf::from(spec)), None),
+        None => (None, Some(spec)),
+    };
+    let path = file.unwrap_or_else(|| db_path.to_path_buf());
+    let db = MaterialDb::load(&path)?;
+    match name {
+        Some(n) => db.get(n).cloned().ok_or_else(|| {
+            let names: Vec<&str> = db.materials().iter().map(|m| m.name.as_str()).collect();
+            anyhow::anyhow!(
+                "{}: no material named `{n}`; it has: {}",
+                path.display(),
+                names.join(", ")
+            )
+        }),
+        None => match db.materials() {
+            [m] => Ok(m.clone()),
+            ms => anyhow::bail!(
+                "{}: holds {} materials; choose one with {}#NAME (names: {})",
+                path.display(),
+                ms.len(),
+                path.display(),
+                ms.iter()
+                    .map(|m| m.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        },
+    }
+}
+
+/// The records up to `time`; when `time` falls between records, the weather
+/// interpolated at `time` ends the list.
+fn records_until(
+    all: &[WeatherRecord],
+    time: DateTime<FixedOffset>,
+    at: impl Fn(DateTime<FixedOffset>) -> irsig::Result<WeatherRecord>,
+) -> anyhow::Result<Vec<WeatherRecord>> {
+    let mut out: Vec<WeatherRecord> = all.iter().take_while(|r| r.time <= time).copied().collect();
+    if out.last().is_none_or(|r| r.time < time) {
+        // Outside the history, `at` says so with the span.
+        out.push(at(time)?);
+    }
+    Ok(out)
 }

@@ -100,20 +100,27 @@ pub fn front_flux(f: &FrontForcing, alpha: f64, eps: f64, p_w_m2: f64) -> Surfac
     }
 }
 
-/// An exposed back face (thin objects: leaves, fences, vehicle panels):
-/// convection `h(u)(T_air − T)`, sky longwave `ε F_b E_sky`, background
-/// longwave `ε (1 − F_b) σ T_bg⁴`, emission `−εσT⁴`; no sunlight (the back
-/// face is taken to be shaded), W m⁻².
+/// An exposed back face (thin objects: leaves, fences, vehicle panels), a
+/// fraction `a` of whose area is in the air: `a` times [convection
+/// `h(u)(T_air − T)`, sky longwave `ε F_b E_sky`, background longwave
+/// `ε (1 − F_b) σ T_bg⁴`, emission `−εσT⁴`]; no sunlight (the back face is
+/// taken to be shaded), W m⁻².
 #[inline]
-pub fn exposed_back_flux(f: &FrontForcing, eps: f64, back_shape_factor: f64) -> SurfaceFlux {
+pub fn exposed_back_flux(
+    f: &FrontForcing,
+    eps: f64,
+    back_shape_factor: f64,
+    a: f64,
+) -> SurfaceFlux {
     let sigma = STEFAN_BOLTZMANN_W_M2_K4;
     let tb2 = f.background_temperature_k * f.background_temperature_k;
     SurfaceFlux {
-        source_w_m2: eps * back_shape_factor * f.sky_longwave_w_m2
-            + eps * (1.0 - back_shape_factor) * sigma * tb2 * tb2
-            + f.convection_w_m2_k * f.air_temperature_k,
-        linear_w_m2_k: f.convection_w_m2_k,
-        radiative_w_m2_k4: eps * sigma,
+        source_w_m2: a
+            * (eps * back_shape_factor * f.sky_longwave_w_m2
+                + eps * (1.0 - back_shape_factor) * sigma * tb2 * tb2
+                + f.convection_w_m2_k * f.air_temperature_k),
+        linear_w_m2_k: a * f.convection_w_m2_k,
+        radiative_w_m2_k4: a * eps * sigma,
     }
 }
 

@@ -61,19 +61,23 @@ pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
 ///
 /// | variant      | typical objects                  | back-face flux into the slab                |
 /// |--------------|----------------------------------|---------------------------------------------|
-/// | `Exposed`    | leaves, fences, vehicle panels   | `h(u)(T_air−T) + ε F_b E_sky + ε(1−F_b)σT_bg⁴ − εσT⁴` |
-/// | `Ground`     | soil, asphalt, concrete slabs on grade | none: the column extends to `depth_m`, held at `T_deep` |
+/// | `Insulated`  | roads, lawns, soil, insulated roofs (exposed area 0) | 0                        |
+/// | `Exposed`    | leaves, fences, vehicle panels (1); walls with a ventilated cavity (0.5) | `a·[h(u)(T_air−T) + ε F_b E_sky + ε(1−F_b)σT_bg⁴ − εσT⁴]` |
+/// | `Ground`     | soil and pavements as a deep column | none: the column extends to `depth_m`, held at `T_deep` |
 /// | `Interior`   | building walls and roofs         | `h_i (T_interior − T)`                      |
-/// | `Insulated`  | objects backed by insulation     | 0                                           |
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BackBoundary {
     /// Adiabatic back face: no heat flows through it.
     Insulated,
-    /// Both faces exposed to the environment: the back face convects to the
-    /// air with the same `h(u)` as the front, and exchanges longwave with the
-    /// sky (shape factor `F_b`, [`FacetInputs::back_shape_factor`]) and the
-    /// background. It receives no sunlight.
-    Exposed,
+    /// The back face is (partly) in the open air: a fraction `fraction` of
+    /// its area convects to the air with the same `h(u)` as the front and
+    /// exchanges longwave with the sky (shape factor `F_b`,
+    /// [`FacetInputs::back_shape_factor`]) and the background. It receives
+    /// no sunlight.
+    Exposed {
+        /// Fraction of the back face exchanging heat with the air, (0, 1].
+        fraction: f64,
+    },
     /// Ground: the slab is a column of the material down to `depth_m` (None:
     /// the larger of the thickness and five diurnal damping depths
     /// `5·√(2κ/ω)`, where the diurnal wave has decayed to e⁻⁵ < 1 %), whose
@@ -109,29 +113,25 @@ impl BackBoundary {
         depth_m: None,
     };
 
-    /// irsig's reading of THERM's `EXPOSED_AREA` (DIRSIG does not document
-    /// it publicly; the values in DIRSIG material files are −0.5 for terrain,
-    /// 0.5 for water and one-sided objects, 0.1–0.5 for others, and 1 is the
-    /// usual value for thin plates exposed on both sides):
-    ///
-    /// - `a < 0` → [`BackBoundary::Ground`] (the negative sign marks
-    ///   material lying on the earth: DIRSIG's terrain classes use −0.5);
-    /// - `a = 0` → [`BackBoundary::Insulated`];
-    /// - `0 < a < 0.75` → [`BackBoundary::BUILDING`] (one face exposed, the
-    ///   other facing a conditioned interior);
-    /// - `a ≥ 0.75` → [`BackBoundary::Exposed`] (both faces exposed, i.e.
-    ///   about twice the one-sided area).
-    ///
-    /// Non-finite values are rejected by [`SlabProperties::from_material`].
+    /// Both faces fully in the air (thin objects).
+    pub const BOTH_FACES: BackBoundary = BackBoundary::Exposed { fraction: 1.0 };
+
+    /// The back boundary for a material's `exposed_area`, following irsig's
+    /// reading of THERM's `EXPOSED_AREA` (documented in [`crate::material`]):
+    /// the fraction `a = |exposed_area|` of the back face that exchanges heat
+    /// with the air. `a = 0` → [`BackBoundary::Insulated`] (heat leaves only
+    /// through the front face: pavements, soil, insulated roofs);
+    /// `0 < a ≤ 1` → [`BackBoundary::Exposed`] with that fraction. Ground
+    /// columns and building interiors are not expressed by `exposed_area`;
+    /// callers that know an object is a building or the terrain choose
+    /// [`BackBoundary::BUILDING`] / [`BackBoundary::GROUND`] with
+    /// [`SlabProperties::with_back`].
     pub fn from_exposed_area(a: f64) -> BackBoundary {
-        if a < 0.0 {
-            BackBoundary::GROUND
-        } else if a == 0.0 {
-            BackBoundary::Insulated
-        } else if a < 0.75 {
-            BackBoundary::BUILDING
+        let a = a.abs().min(1.0);
+        if a > 0.0 {
+            BackBoundary::Exposed { fraction: a }
         } else {
-            BackBoundary::Exposed
+            BackBoundary::Insulated
         }
     }
 }
@@ -183,7 +183,8 @@ impl SlabProperties {
     }
 
     /// Thermal properties of a material; the back boundary follows
-    /// [`BackBoundary::from_exposed_area`]. Errors name the material and the
+    /// [`BackBoundary::from_exposed_area`] (override with
+    /// [`SlabProperties::with_back`]). Errors name the material and the
     /// offending field.
     pub fn from_material(m: &Material) -> Result<SlabProperties> {
         let field = |f: &str| format!("material `{}` (id {}): {f}", m.name, m.id);
@@ -205,6 +206,11 @@ impl SlabProperties {
         };
         p.validate_with(&field)?;
         Ok(p)
+    }
+
+    /// The same properties with another back boundary.
+    pub fn with_back(self, back: BackBoundary) -> SlabProperties {
+        SlabProperties { back, ..self }
     }
 
     /// Check every property is in its physical domain.
@@ -292,7 +298,15 @@ impl SlabProperties {
                     ));
                 }
             }
-            BackBoundary::Insulated | BackBoundary::Exposed => {}
+            BackBoundary::Exposed { fraction } => {
+                if !(fraction > 0.0 && fraction <= 1.0) {
+                    return Err(Error::invalid(
+                        field("back.fraction"),
+                        format!("expected an exposed fraction in (0, 1], got {fraction}"),
+                    ));
+                }
+            }
+            BackBoundary::Insulated => {}
         }
         Ok(())
     }
@@ -808,10 +822,11 @@ fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> P
         ));
         back.push(match props.back {
             BackBoundary::Insulated => Boundary::Flux(SurfaceFlux::default()),
-            BackBoundary::Exposed => Boundary::Flux(balance::exposed_back_flux(
+            BackBoundary::Exposed { fraction } => Boundary::Flux(balance::exposed_back_flux(
                 &ff,
                 props.thermal_emissivity,
                 f_back,
+                fraction,
             )),
             BackBoundary::Ground { .. } => Boundary::Temperature(deep_k.unwrap_or(air)),
             BackBoundary::Interior {
