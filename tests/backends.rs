@@ -430,3 +430,70 @@ fn backend_names_round_trip_and_bad_input_is_reported() {
         assert_eq!(out[0], None, "{b}");
     }
 }
+
+#[test]
+fn bench_trace_cli_prints_the_documented_json() {
+    let out = std::process::Command::new(crate::util::irsig_bin())
+        .args(["bench", "trace", "--triangles", "10000", "--rays", "4000"])
+        .args(["--rounds", "1", "--threads", "2", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let tris = v["triangles"].as_u64().unwrap();
+    assert!(tris.abs_diff(10_000) <= 100, "{tris}");
+    for b in ["embree_packet", "embree_single", "obvhs"] {
+        for k in [
+            "build_s",
+            "primary_mrays_s",
+            "shadow_mrays_s",
+            "diffuse_mrays_s",
+        ] {
+            let x = v["backends"][b][k].as_f64().unwrap_or(-1.0);
+            assert!(x > 0.0 && x.is_finite(), "{b}.{k} = {x}");
+        }
+    }
+    let rays = v["agreement"]["rays"].as_u64().unwrap();
+    assert!((11_900..=12_100).contains(&rays), "{rays}");
+    let bad = v["agreement"]["mismatched_rays"].as_u64().unwrap();
+    assert!(bad * 1000 <= rays, "{bad} of {rays} rays disagree");
+}
+
+#[test]
+fn bench_trace_cli_reads_an_obj_scene_and_reports_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("cube.obj");
+    // A 10 m cube of quads: 12 triangles once triangulated.
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 10 0 0\nv 10 10 0\nv 0 10 0\nv 0 0 10\nv 10 0 10\nv 10 10 10\nv 0 10 10\n\
+         f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+    )
+    .unwrap();
+    let run = |extra: &[&str]| {
+        std::process::Command::new(crate::util::irsig_bin())
+            .args(["bench", "trace", "--rays", "2000", "--rounds", "1"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--scene", obj.to_str().unwrap(), "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["triangles"], 12);
+    assert_eq!(v["agreement"]["mismatched_rays"], 0);
+    let out = run(&["--scene", dir.path().join("missing.obj").to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.obj"));
+    let out = run(&["--tile", "4by2"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("expected WxH"));
+}
