@@ -7,16 +7,21 @@
 //!   [`builtin`] for the model and its sources) and [`Tape7Lut`] (a table of
 //!   MODTRAN runs, see [`lut`]).
 //! - [`tape7`]: the MODTRAN tape7 reader (radiance and transmittance modes).
+//! - [`PathTable`]: path spectra tabulated over view zenith and range for one
+//!   sensor position — what a renderer should look up per hit (the built-in
+//!   model integrates tens of layers per call, ~0.5 ms for 600 wavelengths).
 //!
 //! Geometry is flat-earth: a straight path from the sensor to the target,
 //! view zenith at the target cos θ = (h_sensor − h_target)/range.
 
 pub mod builtin;
 pub mod lut;
+pub mod table;
 pub mod tape7;
 
 pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 pub use lut::{Tape7Lut, Tape7Run};
+pub use table::PathTable;
 pub use tape7::{Tape7, Tape7Column, Tape7Mode};
 
 use crate::radiometry::{Constants, Planck, SpectralGrid};
@@ -98,6 +103,21 @@ fn grey_sky(sky: &SkyConditions, grid: &SpectralGrid) -> Result<Vec<f64>> {
 }
 
 impl Atmosphere {
+    /// The built-in model for a weather record at a site altitude.
+    pub fn builtin(
+        weather: &crate::weather::WeatherRecord,
+        ground_altitude_m: f64,
+    ) -> Result<Self> {
+        Ok(Atmosphere::Builtin(BuiltinAtmosphere::new(
+            SurfaceMet::from_weather(weather, ground_altitude_m),
+        )?))
+    }
+
+    /// A tape7 lookup table from its JSON index file.
+    pub fn tape7_index(path: impl AsRef<std::path::Path>) -> Result<Self> {
+        Ok(Atmosphere::Tape7Lut(Tape7Lut::read_index(path)?))
+    }
+
     /// τ₂(λ) and L_u(λ) along `geom` on `grid`.
     pub fn path(&self, geom: &PathGeometry, grid: &SpectralGrid) -> Result<PathSpectra> {
         if !(geom.range_m.is_finite() && geom.range_m >= 0.0) {
