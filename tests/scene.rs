@@ -90,3 +90,415 @@ fn obj_errors_name_line() {
         .to_string();
     assert!(e.contains("absent.obj"), "{e}");
 }
+
+use glam::Vec3;
+use irsig::geometry::{TriangleMesh, triangle_normal_area};
+use irsig::scene::{Scene, primitives, schema_json, town};
+
+use crate::util::{irsig_bin, repo_path};
+
+/// Signed volume enclosed by a triangle mesh (divergence theorem): positive
+/// when every face is counter-clockwise seen from outside.
+fn signed_volume(positions: &[Vec3], indices: &[[u32; 3]]) -> f64 {
+    indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
+#[test]
+fn primitives_are_closed_and_outward() {
+    let b = primitives::box_mesh(Vec3::new(2.0, 3.0, 4.0), Some(0.7), true);
+    let v = signed_volume(&b.positions, &b.indices);
+    assert!((v - 24.0).abs() < 1e-4, "{v}");
+    let n = 24;
+    let c = primitives::cylinder_mesh(1.5, 2.0, n, true);
+    let exact = 0.5 * n as f64 * 1.5f64.powi(2) * (std::f64::consts::TAU / n as f64).sin() * 2.0;
+    assert!((signed_volume(&c.positions, &c.indices) - exact).abs() < 1e-4);
+    let k = primitives::cone_mesh(1.0, 3.0, n, true);
+    assert!((signed_volume(&k.positions, &k.indices) - exact / 1.5f64.powi(2) / 2.0).abs() < 1e-4);
+    // A fine UV sphere approaches 4/3 π r³ from below.
+    let s = primitives::sphere_mesh(2.0, 64, 32);
+    let vs = signed_volume(&s.positions, &s.indices);
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * 8.0;
+    assert!(vs < exact && vs > 0.99 * exact, "{vs} vs {exact}");
+    // Gable roof + the box below it close a house: volume = box + prism.
+    let mut h = primitives::box_mesh(Vec3::new(8.0, 10.0, 3.0), None, true);
+    let mut r = primitives::gable_roof_mesh(8.0, 10.0, 2.0, 0.0);
+    r.positions.iter_mut().for_each(|p| p.z += 3.0);
+    h.append(&r);
+    // The box's top is inside; remove it to close the shape.
+    let top = h.group("top");
+    let keep: Vec<[u32; 3]> = h
+        .indices
+        .iter()
+        .zip(&h.group_of)
+        .filter(|(_, g)| **g != top)
+        .map(|(t, _)| *t)
+        .collect();
+    let v = signed_volume(&h.positions, &keep);
+    assert!((v - (240.0 + 0.5 * 8.0 * 2.0 * 10.0)).abs() < 1e-3, "{v}");
+}
+
+fn area(m: &TriangleMesh) -> f64 {
+    (0..m.triangle_count())
+        .map(|t| triangle_normal_area(&m.triangle(t)).1 as f64)
+        .sum()
+}
+
+const SMALL: &str = r#"{
+  "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4},
+  "time": "2025-06-21T14:00:00-04:00",
+  "materials": ["../materials.json"],
+  "objects": [
+    {"name": "ground",
+     "shapes": [{"heightmap": {"size": [20, 10], "cells": [2, 1],
+                  "heights": [[0, 1, 2], [0, 0, 0]],
+                  "classes": {"legend": {"a": "asphalt", "g": "lawn"}, "rows": ["ag"]}}}],
+     "parts": [{"name": "lawn", "material": "grass", "shape_factor": 0.9}]},
+    {"name": "shed",
+     "shapes": [{"box": {"size": [2, 3, 4], "bottom": false}}],
+     "material": "painted_steel",
+     "parts": [{"name": "top", "material": "painted_steel", "thickness_m": 0.01, "self_power_w_m2": 50}],
+     "instances": [{"translate": [100, 0, 0]},
+                   {"translate": [0, 100, 0], "rotate_deg": [0, 0, 90], "scale": 2}]},
+    {"name": "thing", "shapes": [{"obj": "geo/two.obj"}],
+     "parts": [{"name": "glass", "material": "glass", "fixed_temperature_k": 300}],
+     "material": "concrete"}
+  ],
+  "sensors": [{"type": "frame", "name": "cam", "width": 4}]
+}"#;
+
+/// A scene in `dir/scenes_x/` whose material library is the repo's.
+fn small_scene(dir: &Path, text: &str) -> std::path::PathBuf {
+    let sd = dir.join("s");
+    std::fs::create_dir_all(sd.join("geo")).unwrap();
+    std::fs::copy(
+        repo_path("scenes/materials.json"),
+        dir.join("materials.json"),
+    )
+    .unwrap();
+    write(&sd.join("geo"), "two.obj", TWO_GROUPS);
+    write(&sd, "scene.json", text)
+}
+
+#[test]
+fn small_scene_instancing_parts_and_bounds() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let s = Scene::load(&p).unwrap();
+    assert_eq!(s.objects.len(), 3);
+    assert_eq!(s.geometry.meshes.len(), 3);
+    assert_eq!(s.geometry.instances.len(), 4);
+    // Heightmap 2×1 cells = 4; box without bottom = 10; OBJ = 5.
+    assert_eq!(s.geometry.stored_triangle_count(), 4 + 10 + 5);
+    assert_eq!(s.geometry.facet_count(), 4 + 2 * 10 + 5);
+    assert_eq!(s.facet_parts().len(), s.geometry.facet_count());
+    // Box areas: 2·3 + 2·(2·4) + 2·(3·4) = 46 m²; the second instance is
+    // scaled by 2 (area × 4).
+    let sh = &s.objects[1];
+    assert_eq!(sh.instances, 1..3);
+    assert!((area(&s.geometry.meshes[sh.mesh]) - 46.0).abs() < 1e-4);
+    let w = s.geometry.flatten();
+    let off = &s.facet_offsets;
+    let world_area: f64 = (off[2]..off[3])
+        .map(|f| triangle_normal_area(&w.triangle(f)).1 as f64)
+        .sum();
+    assert!((world_area - 4.0 * 46.0).abs() < 1e-3);
+    // Bounds: the shed scaled ×2 (4 × 6 × 8 m) and turned 90° spans
+    // x ∈ [−3, 3], y ∈ [98, 102], z ≤ 8.
+    let (lo, hi) = s.geometry.bounds().unwrap();
+    assert!(
+        (hi.y - 102.0).abs() < 1e-4 && (hi.z - 8.0).abs() < 1e-4,
+        "{hi}"
+    );
+    assert!(
+        (lo.x + 10.0).abs() < 1e-4 && (hi.x - 101.0).abs() < 1e-4,
+        "{lo} {hi}"
+    );
+    // Heightmap: first row is the north edge; the NE vertex is at z = 2.
+    let g = &s.geometry.meshes[0];
+    let ne = g
+        .positions
+        .iter()
+        .find(|p| p.x == 10.0 && p.y == 5.0)
+        .unwrap();
+    assert_eq!(ne.z, 2.0);
+    // West cell is asphalt (implicit part from the material name), east
+    // cell the `lawn` part with its grass material and shape factor.
+    let mat = |f: usize| {
+        s.materials.materials()[s.facet_part(f).material]
+            .name
+            .clone()
+    };
+    for f in 0..4 {
+        let c = irsig::geometry::triangle_normal_area(&w.triangle(f));
+        let cx: f32 = w.triangle(f).iter().map(|p| p.x).sum::<f32>() / 3.0;
+        assert!(c.1 > 0.0);
+        if cx < 0.0 {
+            assert_eq!(mat(f), "asphalt");
+        } else {
+            assert_eq!(mat(f), "grass");
+            assert_eq!(s.facet_part(f).shape_factor, Some(0.9));
+            assert_eq!(s.facet_part(f).name, "lawn");
+        }
+    }
+    // Shed: the `top` part overrides thickness and power; walls use the
+    // object's material as is.
+    let tops: Vec<usize> = (off[1]..off[3])
+        .filter(|&f| s.facet_part(f).name == "top")
+        .collect();
+    assert_eq!(tops.len(), 4);
+    for &f in &tops {
+        let n = triangle_normal_area(&w.triangle(f)).0;
+        assert!(n.z > 0.999);
+        let pi = s.part_index(
+            s.facet_offsets.partition_point(|&o| o <= f) - 1,
+            (f - off[1]) % 10,
+        );
+        let m = s.part_material(pi);
+        assert_eq!((m.thickness_m, m.self_power_w_m2), (0.01, 50.0));
+    }
+    let wall = (off[1]..off[2])
+        .find(|&f| s.facet_part(f).name == "sides")
+        .unwrap();
+    let wm = s.part_material(
+        s.parts
+            .iter()
+            .position(|p| p == s.facet_part(wall))
+            .unwrap(),
+    );
+    assert_eq!(wm, s.materials.get("painted_steel").unwrap().clone());
+    // OBJ groups by usemtl: asphalt (implicit from the object's material
+    // `concrete`), painted_steel, glass (explicit part).
+    let obj_parts: Vec<(String, String)> = (off[3]..off[4])
+        .map(|f| (s.facet_part(f).name.clone(), mat(f)))
+        .collect();
+    assert_eq!(obj_parts[0], ("asphalt".into(), "concrete".into()));
+    assert_eq!(obj_parts[2], ("painted_steel".into(), "concrete".into()));
+    assert_eq!(obj_parts[4], ("glass".into(), "glass".into()));
+    assert_eq!(s.facet_part(off[3] + 4).fixed_temperature_k, Some(300.0));
+    assert_eq!(s.instance_object, vec![0, 1, 1, 2]);
+    assert_eq!(s.sensors.len(), 1);
+    assert_eq!(s.sensors[0]["type"], "frame");
+}
+
+/// Every problem is reported, each with file, line and JSON path.
+#[test]
+fn scene_errors_collected_with_lines() {
+    let bad = r#"{
+  "site": {"latitude_deg": 95, "longitude_deg": -77.61, "utc_offset_hours": -4},
+  "time": "2025-06-21 14:00",
+  "weather": {"file": "nowhere.csv"},
+  "materials": ["../materials.json"],
+  "objects": [
+    {"name": "a",
+     "shapes": [{"box": {"size": [1, 1, 1]}, "plane": {"size": [1, 1]}}]},
+    {"name": "b",
+     "shapes": [{"obj": "geo/missing.obj"}]},
+    {"name": "c",
+     "shapes": [{"box": {"size": [1, 1, 1]}}],
+     "parts": [{"name": "top", "material": "asphalt_roof"},
+               {"name": "sides", "material": "brick",
+                "thickness_m": -0.2},
+               {"name": "roof", "material": "brick"}],
+     "material": "brick"}
+  ]
+}"#;
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), bad);
+    let errs: Vec<String> = Scene::check(&p)
+        .unwrap_err()
+        .iter()
+        .map(|e| e.to_string())
+        .collect();
+    let has = |line: usize, field: &str, what: &str| {
+        assert!(
+            errs.iter().any(
+                |e| e.contains(&format!("scene.json:line {line}: field `{field}`"))
+                    && e.contains(what)
+            ),
+            "no error at line {line} `{field}` about {what}: {errs:#?}"
+        )
+    };
+    has(2, "site.latitude_deg", "−90..=90");
+    has(3, "time", "RFC 3339");
+    has(4, "weather.file", "not found");
+    has(8, "objects[0].shapes[0]", "exactly one");
+    has(10, "objects[1].shapes[0].obj", "missing.obj");
+    has(
+        13,
+        "objects[2].parts[0].material",
+        "unknown material `asphalt_roof`",
+    );
+    assert!(
+        errs.iter()
+            .any(|e| e.contains("similar: asphalt_shingle_roof")),
+        "{errs:#?}"
+    );
+    has(15, "objects[2].parts[1].thickness_m", "> 0 m");
+    has(16, "objects[2].parts[2].name", "matches no face group");
+    assert_eq!(errs.len(), 8, "{errs:#?}");
+    // `load` reports them all in one error.
+    let one = Scene::load(&p).unwrap_err().to_string();
+    assert!(one.contains("8 problems"), "{one}");
+
+    // Syntax and unknown keys: serde's line.
+    let p = small_scene(d.path(), &SMALL.replace("\"cells\"", "\"celss\""));
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("scene.json:line 7") && e.contains("celss"),
+        "{e}"
+    );
+    let p = small_scene(d.path(), &SMALL.replace("\"ag\"", "\"ax\""));
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("line 9") && e.contains("`x`"), "{e}");
+}
+
+/// The bundled town; where `weather.csv` has not been written yet, a copy
+/// without the weather reference is checked (notice printed).
+fn town_path() -> (Option<tempfile::TempDir>, std::path::PathBuf) {
+    let p = repo_path("scenes/town/scene.json");
+    if repo_path("scenes/town/weather.csv").exists() {
+        return (None, p);
+    }
+    eprintln!("notice: scenes/town/weather.csv absent; checking the town without weather");
+    let d = tempfile::tempdir().unwrap();
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    v.as_object_mut().unwrap().remove("weather");
+    v["materials"] = serde_json::json!([repo_path("scenes/materials.json")]);
+    let q = d.path().join("scene.json");
+    std::fs::write(&q, serde_json::to_string(&v).unwrap()).unwrap();
+    (Some(d), q)
+}
+
+#[test]
+fn town_loads_with_expected_content() {
+    let (_keep, p) = town_path();
+    let s = Scene::load(&p).unwrap();
+    let sum = s.summary();
+    assert_eq!(sum.time, "2025-06-21T14:00:00-04:00");
+    assert_eq!((s.site.latitude_deg, s.site.longitude_deg), (43.16, -77.61));
+    // 300 × 300 terrain cells, 2 triangles each.
+    let terrain = &s.objects[0];
+    assert_eq!(s.geometry.meshes[terrain.mesh].triangle_count(), 180_000);
+    assert!(
+        (200_000..=400_000).contains(&sum.triangles_placed),
+        "{} placed",
+        sum.triangles_placed
+    );
+    assert!(sum.triangles_placed > sum.triangles_stored);
+    // Trees and cars are instanced: one mesh, many placements.
+    for name in [
+        "deciduous_tree",
+        "coniferous_tree",
+        "car_parked",
+        "car_running",
+        "house_clapboard",
+    ] {
+        let o = s.objects.iter().find(|o| o.name == name).unwrap();
+        assert!(o.instances.len() >= 5, "{name}: {}", o.instances.len());
+    }
+    // Every material of the library is used, and running engines exist.
+    assert_eq!(sum.materials_used.len(), s.materials.len());
+    assert!(
+        s.parts
+            .iter()
+            .any(|p| p.self_power_w_m2.is_some_and(|q| q > 0.0)
+                && s.objects[p.object].name == "car_running")
+    );
+    let av = s
+        .objects
+        .iter()
+        .position(|o| o.name == "armoured_vehicle")
+        .unwrap();
+    assert!(
+        s.parts
+            .iter()
+            .any(|p| p.object == av && p.thickness_m == Some(0.025))
+    );
+    // Bounds: the 600 m square, heights of a few metres, the stack on top.
+    assert!(sum.bounds_min[0] >= -302.0 && sum.bounds_max[0] <= 302.0);
+    assert!(sum.bounds_min[2] > -5.0 && sum.bounds_max[2] < 60.0 && sum.bounds_max[2] > 40.0);
+    // Sensors: a frame camera and a line scanner.
+    let types: Vec<&str> = s
+        .sensors
+        .iter()
+        .map(|v| v["type"].as_str().unwrap())
+        .collect();
+    assert_eq!(types, vec!["frame", "line_scanner"]);
+    assert_eq!(s.sensors[0]["width"], 640);
+    assert_eq!(s.sensors[1]["altitude_m"], 600.0);
+}
+
+#[test]
+fn town_file_matches_generator_and_schema_is_current() {
+    let file: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(repo_path("scenes/town/scene.json")).unwrap(),
+    )
+    .unwrap();
+    assert!(
+        file == town::town_scene(),
+        "scenes/town/scene.json is stale: run `irsig scene town --out scenes/town/scene.json`"
+    );
+    let schema = std::fs::read_to_string(repo_path("scenes/scene.schema.json")).unwrap();
+    assert_eq!(
+        schema,
+        schema_json(),
+        "scenes/scene.schema.json is stale: run `irsig scene schema --out scenes/scene.schema.json`"
+    );
+    let v: serde_json::Value = serde_json::from_str(&schema).unwrap();
+    for key in [
+        "site",
+        "time",
+        "objects",
+        "materials",
+        "sensors",
+        "atmosphere",
+        "render",
+    ] {
+        assert!(v["properties"].get(key).is_some(), "schema lacks {key}");
+    }
+}
+
+#[test]
+fn cli_scene_check() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let out = std::process::Command::new(irsig_bin())
+        .args(["scene", "check", "--json"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["triangles_placed"], 29);
+    assert_eq!(v["instances"], 4);
+    let p = small_scene(
+        d.path(),
+        &SMALL
+            .replace("43.16", "95")
+            .replace("\"grass\"", "\"gras\""),
+    );
+    let out = std::process::Command::new(irsig_bin())
+        .args(["scene", "check"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("latitude_deg")
+            && err.contains("unknown material `gras`")
+            && err.contains("2 problem"),
+        "{err}"
+    );
+}

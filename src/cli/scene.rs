@@ -1,10 +1,134 @@
-//! `irsig scene` (being written).
+//! `irsig scene`: check a scene file, print the scene JSON Schema, write the
+//! bundled town.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use irsig::scene::{Scene, schema_json, town};
 
 /// Arguments of `irsig scene`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    #[command(subcommand)]
+    command: SceneCommand,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum SceneCommand {
+    /// Load a scene (materials, geometry, weather reference) and print a
+    /// summary, or every problem found (exit status 2).
+    Check {
+        /// The scene file (JSON).
+        file: PathBuf,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the JSON Schema of the scene file format.
+    Schema {
+        /// Write it to this file instead of standard output.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
+    /// Write the bundled town scene (deterministic generator).
+    Town {
+        /// Output file, e.g. scenes/town/scene.json.
+        #[arg(long, value_name = "FILE")]
+        out: PathBuf,
+    },
+}
+
+fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
+    irsig::output::write_atomic(path, |w| {
+        w.write_all(text.as_bytes())
+            .map_err(|e| irsig::Error::io(path, e))
+    })?;
+    Ok(())
+}
 
 /// Run `irsig scene`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`irsig scene` is not available in this build yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    match args.command {
+        SceneCommand::Check { file, json } => check(&file, json),
+        SceneCommand::Schema { out } => {
+            let s = schema_json();
+            match out {
+                Some(p) => write_file(&p, &s),
+                None => {
+                    std::io::stdout().write_all(s.as_bytes())?;
+                    Ok(())
+                }
+            }
+        }
+        SceneCommand::Town { out } => {
+            let s = serde_json::to_string_pretty(&town::town_scene())? + "\n";
+            write_file(&out, &s)
+        }
+    }
+}
+
+fn check(file: &Path, json: bool) -> anyhow::Result<()> {
+    let scene = match Scene::check(file) {
+        Ok(s) => s,
+        Err(errs) => {
+            let mut err = std::io::stderr().lock();
+            for e in &errs {
+                writeln!(err, "{e}")?;
+            }
+            anyhow::bail!("{}: {} problem(s) found", file.display(), errs.len());
+        }
+    };
+    let s = scene.summary();
+    let mut out = std::io::stdout().lock();
+    if json {
+        serde_json::to_writer_pretty(&mut out, &s)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(out, "scene      {}", s.path.display())?;
+    writeln!(
+        out,
+        "site       {:.4}°, {:.4}°, {:.0} m; time {}",
+        s.site[0], s.site[1], s.site[2], s.time
+    )?;
+    if let Some(w) = &s.weather {
+        writeln!(out, "weather    {}", w.display())?;
+    }
+    writeln!(
+        out,
+        "objects    {}  instances {}  parts {}  sensors {}",
+        s.objects, s.instances, s.parts, s.sensors
+    )?;
+    writeln!(
+        out,
+        "triangles  {} stored, {} placed",
+        s.triangles_stored, s.triangles_placed
+    )?;
+    writeln!(
+        out,
+        "bounds     [{:.1}, {:.1}, {:.1}] .. [{:.1}, {:.1}, {:.1}] m",
+        s.bounds_min[0],
+        s.bounds_min[1],
+        s.bounds_min[2],
+        s.bounds_max[0],
+        s.bounds_max[1],
+        s.bounds_max[2]
+    )?;
+    writeln!(
+        out,
+        "materials  {} used of {}:",
+        s.materials_used.len(),
+        s.materials_available
+    )?;
+    for (m, n) in &s.materials_used {
+        writeln!(out, "  {m:<24} {n:>9} facets")?;
+    }
+    writeln!(out, "objects:")?;
+    for (name, inst, tris) in &s.object_list {
+        writeln!(out, "  {name:<24} {inst:>5} × {tris:>7} triangles")?;
+    }
+    for w in &scene.materials.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
+    Ok(())
 }

@@ -138,12 +138,8 @@ pub struct MaterialEntry {
 /// naming the file, line and JSON path).
 pub fn load_json_all(path: &Path) -> std::result::Result<MaterialDb, Vec<Error>> {
     let text = std::fs::read_to_string(path).map_err(|e| vec![Error::io(path, e)])?;
-    let file: MaterialFile = serde_json::from_str(&text).map_err(|e| {
-        vec![Error::parse(
-            Location::file(path).at_line(e.line()),
-            format!("column {}: {e}", e.column()),
-        )]
-    })?;
+    let file: MaterialFile = serde_json::from_str(&text)
+        .map_err(|e| vec![crate::scene::jsonloc::serde_error(path, &e)])?;
     let base = path.parent().unwrap_or(Path::new("."));
     let lines = std::cell::OnceCell::new();
     let at = |field: String| {

@@ -405,20 +405,31 @@ impl MaterialDb {
         self.materials.is_empty()
     }
 
-    /// Names close to `name` (case-insensitive substring either way), for
-    /// "did you mean" hints.
+    /// Names close to `name`, for "did you mean" hints: sharing a word
+    /// (split at `_`, space, `-`) or containing one another, case-insensitive,
+    /// best first, at most five.
     pub fn similar_names(&self, name: &str) -> Vec<&str> {
+        let words = |s: &str| -> Vec<String> {
+            s.to_lowercase()
+                .split(['_', ' ', '-'])
+                .filter(|w| !w.is_empty())
+                .map(str::to_string)
+                .collect()
+        };
         let l = name.to_lowercase();
-        let mut v: Vec<&str> = self
+        let mine = words(name);
+        let mut v: Vec<(usize, &str)> = self
             .materials
             .iter()
-            .map(|m| m.name.as_str())
-            .filter(|n| {
-                let nl = n.to_lowercase();
-                nl.contains(&l) || l.contains(&nl)
+            .map(|m| {
+                let nl = m.name.to_lowercase();
+                let shared = words(&m.name).iter().filter(|w| mine.contains(w)).count();
+                let sub = usize::from(nl.contains(&l) || l.contains(&nl));
+                (2 * shared + sub, m.name.as_str())
             })
+            .filter(|(s, _)| *s > 0)
             .collect();
-        v.truncate(5);
-        v
+        v.sort_by_key(|x| std::cmp::Reverse(x.0));
+        v.into_iter().take(5).map(|(_, n)| n).collect()
     }
 }

@@ -9,6 +9,20 @@
 //! to report.
 
 use std::collections::HashMap;
+use std::path::Path;
+
+use crate::error::{Error, Location};
+
+/// A `serde_json` error as an irsig error naming the file, line and column.
+pub fn serde_error(path: &Path, e: &serde_json::Error) -> Error {
+    let msg = e.to_string();
+    let suffix = format!(" at line {} column {}", e.line(), e.column());
+    let msg = msg.strip_suffix(&suffix).unwrap_or(&msg);
+    Error::parse(
+        Location::file(path).at_line(e.line()),
+        format!("column {}: {msg}", e.column()),
+    )
+}
 
 /// Path → 1-based line of every member and element in a JSON text.
 ///

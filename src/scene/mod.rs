@@ -1,7 +1,1056 @@
 //! Scene description: the JSON scene file, objects → parts → facets, built-in
-//! primitives and the procedural generators.
+//! primitives and the bundled town's generator.
+//!
+//! [`Scene::load`] reads a scene file ([`file`] documents the format), its
+//! material databases and geometry, and gives:
+//! - [`Scene::geometry`]: the [`SceneGeometry`] the tracer sees (each
+//!   object's mesh stored once, placed by its instances);
+//! - per facet (global facet numbering, see [`crate::geometry`]) its
+//!   [`Part`]: [`Scene::facet_part`], or [`Scene::facet_parts`] for all at
+//!   once; a part names its object, its material (index into
+//!   [`Scene::materials`]) and per-part overrides, and
+//!   [`Scene::part_material`] applies them;
+//! - the site, image time, weather reference, and the `sensors`,
+//!   `atmosphere` and `render` sections as JSON for later stages.
+//!
+//! [`Scene::check`] collects *every* problem (each naming the file and the
+//! JSON path and line) rather than stopping at the first.
 
+pub mod file;
 pub mod jsonloc;
 pub mod obj;
+pub mod primitives;
+pub mod town;
 
+use std::cell::OnceCell;
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use chrono::{DateTime, FixedOffset};
+use glam::{Affine3A, Quat, Vec3};
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::error::{Error, Location, Result};
+use crate::geometry::{Instance, SceneGeometry, TriangleMesh};
+use crate::material::{Material, MaterialDb};
+use crate::sun::Site;
+
+pub use file::SceneFile;
 pub use obj::{ObjGroup, load_obj};
+use primitives::GroupedMesh;
+
+/// A part: the faces of one object that share a material and overrides.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Part {
+    /// Face group name.
+    pub name: String,
+    /// Index into [`Scene::objects`].
+    pub object: usize,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Thickness override, m.
+    pub thickness_m: Option<f64>,
+    /// Self-generated power override, W/m².
+    pub self_power_w_m2: Option<f64>,
+    /// Exposed-area override.
+    pub exposed_area: Option<f64>,
+    /// Fixed temperature, K (bypasses the thermal model).
+    pub fixed_temperature_k: Option<f64>,
+    /// Default sky-view shape factor, 0..=1.
+    pub shape_factor: Option<f64>,
+}
+
+/// An object of the scene: one mesh, placed by a range of instances.
+#[derive(Debug, Clone, Serialize)]
+pub struct SceneObject {
+    /// Name.
+    pub name: String,
+    /// Index into `geometry.meshes`.
+    pub mesh: usize,
+    /// Its instances: indices into `geometry.instances`.
+    pub instances: Range<usize>,
+}
+
+/// The weather history a scene refers to (read by `irsig::weather`).
+#[derive(Debug, Clone, Serialize)]
+pub struct WeatherRef {
+    /// The file, resolved against the scene file's folder.
+    pub path: PathBuf,
+    /// Format name, when given.
+    pub format: Option<String>,
+    /// Reader options, passed through.
+    pub options: Option<serde_json::Map<String, Value>>,
+}
+
+/// A loaded scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Free text.
+    pub description: Option<String>,
+    /// Site position.
+    pub site: Site,
+    /// Local time offset from UTC, hours.
+    pub utc_offset_hours: f64,
+    /// Image time.
+    pub time: DateTime<FixedOffset>,
+    /// Weather history reference.
+    pub weather: Option<WeatherRef>,
+    /// All materials of the scene's databases.
+    pub materials: MaterialDb,
+    /// Objects, in file order.
+    pub objects: Vec<SceneObject>,
+    /// Parts of all objects.
+    pub parts: Vec<Part>,
+    /// Meshes (one per object) and instances.
+    pub geometry: SceneGeometry,
+    /// Per mesh, per triangle: index into [`Scene::parts`].
+    pub mesh_parts: Vec<Vec<u32>>,
+    /// Per instance: index into [`Scene::objects`].
+    pub instance_object: Vec<usize>,
+    /// `geometry.facet_offsets()`, cached.
+    pub facet_offsets: Vec<usize>,
+    /// The `sensors` section, as written.
+    pub sensors: Vec<Value>,
+    /// The `atmosphere` section, as written.
+    pub atmosphere: Option<Value>,
+    /// The `render` section, as written.
+    pub render: Option<Value>,
+}
+
+/// What `irsig scene check` prints.
+#[derive(Debug, Clone, Serialize)]
+pub struct SceneSummary {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Site latitude, longitude (deg), altitude (m).
+    pub site: [f64; 3],
+    /// Image time, RFC 3339.
+    pub time: String,
+    /// Weather file, if any.
+    pub weather: Option<PathBuf>,
+    /// Number of objects.
+    pub objects: usize,
+    /// Number of instances.
+    pub instances: usize,
+    /// Number of parts.
+    pub parts: usize,
+    /// Triangles stored (each mesh once).
+    pub triangles_stored: usize,
+    /// Triangles placed (facets: over all instances).
+    pub triangles_placed: usize,
+    /// Materials in the databases.
+    pub materials_available: usize,
+    /// Materials used, with their facet counts, in database order.
+    pub materials_used: Vec<(String, usize)>,
+    /// World bounding box min, m.
+    pub bounds_min: [f32; 3],
+    /// World bounding box max, m.
+    pub bounds_max: [f32; 3],
+    /// Number of sensors.
+    pub sensors: usize,
+    /// Per object: name, instances, triangles per instance.
+    pub object_list: Vec<(String, usize, usize)>,
+}
+
+impl Scene {
+    /// Load a scene file; the error lists every problem found.
+    pub fn load(path: &Path) -> Result<Scene> {
+        Self::check(path).map_err(|errs| {
+            if errs.len() == 1 {
+                errs.into_iter().next().expect("one")
+            } else {
+                let n = errs.len();
+                let list: Vec<String> = errs.iter().map(|e| format!("  {e}")).collect();
+                Error::Other(format!("{n} problems in the scene:\n{}", list.join("\n")))
+            }
+        })
+    }
+
+    /// Load a scene file, collecting every problem found.
+    pub fn check(path: &Path) -> std::result::Result<Scene, Vec<Error>> {
+        Loader::new(path)?.load()
+    }
+
+    /// Index into [`Scene::parts`] of primitive `prim` of instance `instance`.
+    pub fn part_index(&self, instance: usize, prim: usize) -> usize {
+        self.mesh_parts[self.geometry.instances[instance].mesh][prim] as usize
+    }
+
+    /// The part of global facet `facet`.
+    pub fn facet_part(&self, facet: usize) -> &Part {
+        let inst = self.facet_offsets.partition_point(|&o| o <= facet) - 1;
+        &self.parts[self.part_index(inst, facet - self.facet_offsets[inst])]
+    }
+
+    /// Part index of every facet, in global facet order.
+    pub fn facet_parts(&self) -> Vec<u32> {
+        let mut v = Vec::with_capacity(self.geometry.facet_count());
+        for inst in &self.geometry.instances {
+            v.extend_from_slice(&self.mesh_parts[inst.mesh]);
+        }
+        v
+    }
+
+    /// The material of part `part` with the part's overrides applied
+    /// (thickness, self power, exposed area).
+    pub fn part_material(&self, part: usize) -> Material {
+        let p = &self.parts[part];
+        let mut m = self.materials.materials()[p.material].clone();
+        if let Some(t) = p.thickness_m {
+            m.thickness_m = t;
+        }
+        if let Some(q) = p.self_power_w_m2 {
+            m.self_power_w_m2 = q;
+        }
+        if let Some(e) = p.exposed_area {
+            m.exposed_area = e;
+        }
+        m
+    }
+
+    /// Summary for `irsig scene check`.
+    pub fn summary(&self) -> SceneSummary {
+        let mut used = vec![0usize; self.materials.len()];
+        for inst in &self.geometry.instances {
+            for &p in &self.mesh_parts[inst.mesh] {
+                used[self.parts[p as usize].material] += 1;
+            }
+        }
+        let (lo, hi) = self.geometry.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+        SceneSummary {
+            path: self.path.clone(),
+            site: [
+                self.site.latitude_deg,
+                self.site.longitude_deg,
+                self.site.altitude_m,
+            ],
+            time: self.time.to_rfc3339(),
+            weather: self.weather.as_ref().map(|w| w.path.clone()),
+            objects: self.objects.len(),
+            instances: self.geometry.instances.len(),
+            parts: self.parts.len(),
+            triangles_stored: self.geometry.stored_triangle_count(),
+            triangles_placed: self.geometry.facet_count(),
+            materials_available: self.materials.len(),
+            materials_used: used
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| **n > 0)
+                .map(|(i, n)| (self.materials.materials()[i].name.clone(), *n))
+                .collect(),
+            bounds_min: lo.to_array(),
+            bounds_max: hi.to_array(),
+            sensors: self.sensors.len(),
+            object_list: self
+                .objects
+                .iter()
+                .map(|o| {
+                    (
+                        o.name.clone(),
+                        o.instances.len(),
+                        self.geometry.meshes[o.mesh].triangle_count(),
+                    )
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The JSON Schema of the scene file format, pretty-printed.
+pub fn schema_json() -> String {
+    let s = schemars::schema_for!(SceneFile);
+    serde_json::to_string_pretty(&s).expect("schema serialises") + "\n"
+}
+
+/// Object → parent transform: scale, then rotate x, y, z, then translate.
+pub fn transform_affine(t: &file::TransformSpec) -> Affine3A {
+    let s = match &t.scale {
+        None => Vec3::ONE,
+        Some(file::Scale::Uniform(s)) => Vec3::splat(*s as f32),
+        Some(file::Scale::PerAxis(v)) => Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32),
+    };
+    let r = t.rotate_deg.unwrap_or([0.0; 3]);
+    let q = Quat::from_rotation_z(r[2].to_radians() as f32)
+        * Quat::from_rotation_y(r[1].to_radians() as f32)
+        * Quat::from_rotation_x(r[0].to_radians() as f32);
+    let tr = t.translate.unwrap_or([0.0; 3]);
+    Affine3A::from_scale_rotation_translation(
+        s,
+        q,
+        Vec3::new(tr[0] as f32, tr[1] as f32, tr[2] as f32),
+    )
+}
+
+struct Loader {
+    path: PathBuf,
+    base: PathBuf,
+    text: String,
+    lines: OnceCell<jsonloc::JsonLines>,
+    errors: Vec<Error>,
+}
+
+impl Loader {
+    fn new(path: &Path) -> std::result::Result<Self, Vec<Error>> {
+        let text = std::fs::read_to_string(path).map_err(|e| vec![Error::io(path, e)])?;
+        Ok(Loader {
+            path: path.to_path_buf(),
+            base: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+            text,
+            lines: OnceCell::new(),
+            errors: Vec::new(),
+        })
+    }
+
+    fn loc(&self, field: &str) -> Location {
+        let l = self
+            .lines
+            .get_or_init(|| jsonloc::JsonLines::new(&self.text));
+        let mut loc = Location::file(&self.path);
+        if let Some(n) = l.line(field) {
+            loc = loc.at_line(n);
+        }
+        loc.with_field(field)
+    }
+
+    fn err(&mut self, field: &str, msg: impl Into<String>) {
+        let e = Error::parse(self.loc(field), msg);
+        self.errors.push(e);
+    }
+
+    fn resolve(&self, p: &str) -> PathBuf {
+        let p = Path::new(p);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.base.join(p)
+        }
+    }
+
+    fn load(mut self) -> std::result::Result<Scene, Vec<Error>> {
+        let f: SceneFile = serde_json::from_str(&self.text)
+            .map_err(|e| vec![jsonloc::serde_error(&self.path, &e)])?;
+        // Site and time.
+        let s = &f.site;
+        if !(-90.0..=90.0).contains(&s.latitude_deg) {
+            self.err(
+                "site.latitude_deg",
+                format!("{}°: expected −90..=90 (north positive)", s.latitude_deg),
+            );
+        }
+        if !(-180.0..=180.0).contains(&s.longitude_deg) {
+            self.err(
+                "site.longitude_deg",
+                format!("{}°: expected −180..=180 (east positive)", s.longitude_deg),
+            );
+        }
+        if !(s.altitude_m.is_finite() && (-500.0..=9000.0).contains(&s.altitude_m)) {
+            self.err(
+                "site.altitude_m",
+                format!("{} m: expected −500..=9000", s.altitude_m),
+            );
+        }
+        if !(-12.0..=14.0).contains(&s.utc_offset_hours) {
+            self.err(
+                "site.utc_offset_hours",
+                format!("{} h: expected −12..=14", s.utc_offset_hours),
+            );
+        }
+        let site = Site {
+            latitude_deg: s.latitude_deg,
+            longitude_deg: s.longitude_deg,
+            altitude_m: s.altitude_m,
+        };
+        let time = match DateTime::parse_from_rfc3339(&f.time) {
+            Ok(t) => Some(t),
+            Err(e) => {
+                self.err(
+                    "time",
+                    format!(
+                        "`{}`: {e}; expected RFC 3339 with offset, e.g. 2025-06-21T14:00:00-04:00",
+                        f.time
+                    ),
+                );
+                None
+            }
+        };
+        // Weather.
+        let weather = f.weather.as_ref().map(|w| {
+            let p = self.resolve(&w.file);
+            if !p.is_file() {
+                self.err(
+                    "weather.file",
+                    format!("weather file {} not found", p.display()),
+                );
+            }
+            WeatherRef {
+                path: p,
+                format: w.format.clone(),
+                options: w.options.clone(),
+            }
+        });
+        // Materials.
+        let mut materials = MaterialDb::new();
+        if f.materials.is_empty() {
+            self.err("materials", "no material database given");
+        }
+        for (i, m) in f.materials.iter().enumerate() {
+            let p = self.resolve(m);
+            if !p.is_file() {
+                self.err(
+                    &format!("materials[{i}]"),
+                    format!("material database {} not found", p.display()),
+                );
+                continue;
+            }
+            let db = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mat")) {
+                crate::material::dirsig::load_mat(&p).map_err(|e| vec![e])
+            } else {
+                crate::material::db::load_json_all(&p)
+            };
+            match db {
+                Ok(db) => {
+                    if let Err(e) = materials.merge(db) {
+                        self.errors.push(e);
+                    }
+                }
+                Err(es) => self.errors.extend(es),
+            }
+        }
+        // Objects.
+        let mut geometry = SceneGeometry::default();
+        let mut objects = Vec::new();
+        let mut parts: Vec<Part> = Vec::new();
+        let mut mesh_parts = Vec::new();
+        let mut instance_object = Vec::new();
+        let mut names: HashMap<String, usize> = HashMap::new();
+        for (k, o) in f.objects.iter().enumerate() {
+            let at = format!("objects[{k}]");
+            if let Some(prev) = names.insert(o.name.clone(), k) {
+                self.err(
+                    &format!("{at}.name"),
+                    format!("object name `{}` already used by objects[{prev}]", o.name),
+                );
+            }
+            let Some(gm) = self.object_mesh(o, &at) else {
+                continue;
+            };
+            let Some(group_part) =
+                self.object_parts(o, &at, &gm, &materials, objects.len(), &mut parts)
+            else {
+                continue;
+            };
+            let obj_t = o
+                .transform
+                .as_ref()
+                .map(transform_affine)
+                .unwrap_or(Affine3A::IDENTITY);
+            let inst_specs: Vec<(String, Affine3A)> = match &o.instances {
+                None => vec![(format!("{at}.transform"), obj_t)],
+                Some(v) => v
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| (format!("{at}.instances[{i}]"), transform_affine(t) * obj_t))
+                    .collect(),
+            };
+            if inst_specs.is_empty() {
+                self.err(
+                    &format!("{at}.instances"),
+                    "empty instance list: the object would not appear",
+                );
+                continue;
+            }
+            let mesh_index = geometry.meshes.len();
+            let first = geometry.instances.len();
+            for (field, a) in inst_specs {
+                let det = a.matrix3.determinant();
+                if !(det.is_finite() && det > 0.0) {
+                    self.err(
+                        &field,
+                        format!(
+                            "transform has determinant {det}: expected > 0 (no zero or mirroring scale on placements)"
+                        ),
+                    );
+                    continue;
+                }
+                geometry.instances.push(Instance {
+                    mesh: mesh_index,
+                    world_from_object: a,
+                });
+                instance_object.push(objects.len());
+            }
+            mesh_parts.push(
+                gm.group_of
+                    .iter()
+                    .map(|g| group_part[*g as usize])
+                    .collect(),
+            );
+            geometry.meshes.push(TriangleMesh {
+                name: o.name.clone(),
+                positions: gm.positions,
+                indices: gm.indices,
+            });
+            objects.push(SceneObject {
+                name: o.name.clone(),
+                mesh: mesh_index,
+                instances: first..geometry.instances.len(),
+            });
+        }
+        if f.objects.is_empty() {
+            self.err("objects", "the scene has no objects");
+        }
+        for (i, s) in f.sensors.iter().enumerate() {
+            if !s.get("type").is_some_and(Value::is_string) {
+                self.err(
+                    &format!("sensors[{i}]"),
+                    "a sensor needs a `type` string (`frame` or `line_scanner`)",
+                );
+            }
+        }
+        if !self.errors.is_empty() {
+            return Err(self.errors);
+        }
+        let facet_offsets = geometry.facet_offsets();
+        Ok(Scene {
+            path: self.path,
+            description: f.description,
+            site,
+            utc_offset_hours: f.site.utc_offset_hours,
+            time: time.expect("no errors"),
+            weather,
+            materials,
+            objects,
+            parts,
+            geometry,
+            mesh_parts,
+            instance_object,
+            facet_offsets,
+            sensors: f.sensors.into_iter().map(Value::Object).collect(),
+            atmosphere: f.atmosphere.map(Value::Object),
+            render: f.render.map(Value::Object),
+        })
+    }
+
+    /// The merged, grouped mesh of an object's shapes (object space).
+    fn object_mesh(&mut self, o: &file::ObjectSpec, at: &str) -> Option<GroupedMesh> {
+        let mut out = GroupedMesh::default();
+        let mut ok = true;
+        if o.shapes.is_empty() {
+            self.err(
+                &format!("{at}.shapes"),
+                format!("object `{}` has no shapes", o.name),
+            );
+            return None;
+        }
+        for (j, s) in o.shapes.iter().enumerate() {
+            let sat = format!("{at}.shapes[{j}]");
+            match self.shape_mesh(s, &sat) {
+                Some(mut m) => {
+                    if let Some(p) = &s.part {
+                        m.groups = vec![p.clone()];
+                        m.group_of.iter_mut().for_each(|g| *g = 0);
+                    }
+                    if let Some(t) = &s.transform {
+                        let a = transform_affine(t);
+                        let det = a.matrix3.determinant();
+                        if !(det.is_finite() && det != 0.0) {
+                            self.err(
+                                &format!("{sat}.transform"),
+                                "transform is singular (zero scale?)",
+                            );
+                            ok = false;
+                            continue;
+                        }
+                        for p in &mut m.positions {
+                            *p = a.transform_point3(*p);
+                        }
+                        if det < 0.0 {
+                            // Mirrored: keep faces counter-clockwise from the front.
+                            for t in &mut m.indices {
+                                t.swap(1, 2);
+                            }
+                        }
+                    }
+                    out.append(&m);
+                }
+                None => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    fn shape_mesh(&mut self, s: &file::ShapeSpec, at: &str) -> Option<GroupedMesh> {
+        let kinds = [
+            ("obj", s.obj.is_some()),
+            ("box", s.box_.is_some()),
+            ("plane", s.plane.is_some()),
+            ("heightmap", s.heightmap.is_some()),
+            ("cylinder", s.cylinder.is_some()),
+            ("cone", s.cone.is_some()),
+            ("sphere", s.sphere.is_some()),
+            ("gable_roof", s.gable_roof.is_some()),
+        ];
+        let given: Vec<&str> = kinds.iter().filter(|k| k.1).map(|k| k.0).collect();
+        if given.len() != 1 {
+            self.err(
+                at,
+                format!(
+                    "a shape needs exactly one of obj, box, plane, heightmap, cylinder, cone, sphere, gable_roof; found {}",
+                    if given.is_empty() { "none".to_string() } else { given.join(", ") }
+                ),
+            );
+            return None;
+        }
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let bad = |this: &mut Self, field: &str, msg: String| {
+            this.err(&format!("{at}.{field}"), msg);
+            None::<GroupedMesh>
+        };
+        let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
+        if let Some(p) = &s.obj {
+            let path = self.resolve(p);
+            return match load_obj(&path) {
+                Ok(groups) => {
+                    let mut m = GroupedMesh::default();
+                    for g in groups {
+                        let name = g.material_name.clone().unwrap_or(g.name.clone());
+                        let gi = m.group(&name);
+                        let base = m.positions.len() as u32;
+                        m.positions.extend(g.mesh.positions);
+                        for t in g.mesh.indices {
+                            m.indices.push(t.map(|i| i + base));
+                            m.group_of.push(gi);
+                        }
+                    }
+                    Some(m)
+                }
+                Err(e) => bad(self, "obj", format!("cannot load OBJ: {e}")),
+            };
+        }
+        if let Some(b) = &s.box_ {
+            if !b.size.iter().all(|v| pos(*v)) {
+                return bad(
+                    self,
+                    "box.size",
+                    format!("{:?}: expected three sizes > 0 m", b.size),
+                );
+            }
+            if b.max_edge_m.is_some_and(|e| !pos(e)) {
+                return bad(self, "box.max_edge_m", "expected > 0 m".into());
+            }
+            let sz = Vec3::new(b.size[0] as f32, b.size[1] as f32, b.size[2] as f32);
+            return Some(primitives::box_mesh(sz, b.max_edge_m, b.bottom));
+        }
+        if let Some(p) = &s.plane {
+            if !p.size.iter().all(|v| pos(*v)) {
+                return bad(
+                    self,
+                    "plane.size",
+                    format!("{:?}: expected two sizes > 0 m", p.size),
+                );
+            }
+            if p.max_edge_m.is_some_and(|e| !pos(e)) {
+                return bad(self, "plane.max_edge_m", "expected > 0 m".into());
+            }
+            return Some(primitives::plane_mesh(
+                [p.size[0] as f32, p.size[1] as f32],
+                p.max_edge_m,
+            ));
+        }
+        if let Some(c) = &s.cylinder {
+            if !pos(c.radius) || !pos(c.height) {
+                return bad(self, "cylinder", "radius and height must be > 0 m".into());
+            }
+            return Some(primitives::cylinder_mesh(
+                c.radius as f32,
+                c.height as f32,
+                segs(c.segments, 16),
+                c.caps,
+            ));
+        }
+        if let Some(c) = &s.cone {
+            if !pos(c.radius) || !pos(c.height) {
+                return bad(self, "cone", "radius and height must be > 0 m".into());
+            }
+            return Some(primitives::cone_mesh(
+                c.radius as f32,
+                c.height as f32,
+                segs(c.segments, 16),
+                c.cap,
+            ));
+        }
+        if let Some(c) = &s.sphere {
+            if !pos(c.radius) {
+                return bad(self, "sphere.radius", "expected > 0 m".into());
+            }
+            return Some(primitives::sphere_mesh(
+                c.radius as f32,
+                segs(c.segments, 16),
+                segs(c.rings, 8),
+            ));
+        }
+        if let Some(g) = &s.gable_roof {
+            if !(pos(g.width)
+                && pos(g.depth)
+                && pos(g.height)
+                && g.overhang.is_finite()
+                && g.overhang >= 0.0)
+            {
+                return bad(
+                    self,
+                    "gable_roof",
+                    "width, depth, height must be > 0 m and overhang ≥ 0".into(),
+                );
+            }
+            return Some(primitives::gable_roof_mesh(
+                g.width as f32,
+                g.depth as f32,
+                g.height as f32,
+                g.overhang as f32,
+            ));
+        }
+        let h = s.heightmap.as_ref().expect("one kind given");
+        self.heightmap(h, &format!("{at}.heightmap"))
+    }
+
+    fn heightmap(&mut self, h: &file::HeightmapSpec, at: &str) -> Option<GroupedMesh> {
+        let [nx, ny] = h.cells;
+        if !(h.size.iter().all(|v| v.is_finite() && *v > 0.0)) {
+            self.err(&format!("{at}.size"), "expected two sizes > 0 m");
+            return None;
+        }
+        if nx == 0 || ny == 0 || nx * ny > 4_000_000 {
+            self.err(
+                &format!("{at}.cells"),
+                "expected 1..=4,000,000 cells in total, ≥ 1 each way",
+            );
+            return None;
+        }
+        let sources = [
+            h.heights.is_some(),
+            h.heights_csv.is_some(),
+            h.function.is_some(),
+        ];
+        if sources.iter().filter(|x| **x).count() > 1 {
+            self.err(at, "give at most one of heights, heights_csv, function");
+            return None;
+        }
+        let (sx, sy) = (h.size[0], h.size[1]);
+        let (dx, dy) = (sx / nx as f64, sy / ny as f64);
+        // Vertex heights, row-major from the south (j = 0) edge.
+        let mut z = vec![0.0f64; (nx + 1) * (ny + 1)];
+        let rows: Option<(Vec<Vec<f64>>, String)> = if let Some(r) = &h.heights {
+            Some((r.clone(), format!("{at}.heights")))
+        } else if let Some(f) = &h.heights_csv {
+            let p = self.resolve(f);
+            match read_grid_csv(&p) {
+                Ok(r) => Some((r, format!("{at}.heights_csv"))),
+                Err(e) => {
+                    self.err(&format!("{at}.heights_csv"), e.to_string());
+                    return None;
+                }
+            }
+        } else {
+            None
+        };
+        if let Some((r, field)) = rows {
+            if r.len() != ny + 1 || r.iter().any(|row| row.len() != nx + 1) {
+                self.err(
+                    &field,
+                    format!(
+                        "expected {} rows of {} heights (cells + 1 each way), found {} rows",
+                        ny + 1,
+                        nx + 1,
+                        r.len()
+                    ),
+                );
+                return None;
+            }
+            if r.iter().flatten().any(|v| !v.is_finite()) {
+                self.err(&field, "heights must be finite numbers");
+                return None;
+            }
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    z[j * (nx + 1) + i] = r[ny - j][i];
+                }
+            }
+        } else if let Some(f) = &h.function {
+            for w in &f.waves {
+                if !(w.wavelength_m.is_finite() && w.wavelength_m > 0.0) {
+                    self.err(&format!("{at}.function.waves"), "wavelength_m must be > 0");
+                    return None;
+                }
+            }
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    let x = -sx / 2.0 + i as f64 * dx;
+                    let y = -sy / 2.0 + j as f64 * dy;
+                    z[j * (nx + 1) + i] = height_function(f, x, y);
+                }
+            }
+        }
+        // Classes.
+        let mut class_of: Vec<String> = vec!["surface".to_string(); nx * ny];
+        if let Some(c) = &h.classes {
+            let field = format!("{at}.classes.rows");
+            if c.rows.len() != ny {
+                self.err(
+                    &field,
+                    format!("expected {ny} rows (cells[1]), found {}", c.rows.len()),
+                );
+                return None;
+            }
+            for (r, row) in c.rows.iter().enumerate() {
+                let chars: Vec<char> = row.chars().collect();
+                if chars.len() != nx {
+                    self.err(
+                        &format!("{field}[{r}]"),
+                        format!("expected {nx} characters (cells[0]), found {}", chars.len()),
+                    );
+                    return None;
+                }
+                let j = ny - 1 - r;
+                for (i, ch) in chars.iter().enumerate() {
+                    match c.legend.get(&ch.to_string()) {
+                        Some(g) => class_of[j * nx + i] = g.clone(),
+                        None => {
+                            self.err(
+                                &format!("{field}[{r}]"),
+                                format!(
+                                    "character `{ch}` at column {} is not in the legend",
+                                    i + 1
+                                ),
+                            );
+                            return None;
+                        }
+                    }
+                }
+            }
+        }
+        Some(primitives::heightmap_mesh(
+            [sx as f32, sy as f32],
+            nx,
+            ny,
+            |i, j| z[j * (nx + 1) + i] as f32,
+            |i, j| class_of[j * nx + i].clone(),
+        ))
+    }
+
+    /// Map each face group of `gm` to a part (created here); `None` after
+    /// recording errors.
+    fn object_parts(
+        &mut self,
+        o: &file::ObjectSpec,
+        at: &str,
+        gm: &GroupedMesh,
+        db: &MaterialDb,
+        object: usize,
+        parts: &mut Vec<Part>,
+    ) -> Option<Vec<u32>> {
+        let mut ok = true;
+        let mut spec_used = vec![false; o.parts.len()];
+        let mut map = Vec::with_capacity(gm.groups.len());
+        let material_index = |this: &mut Self, name: &str, field: &str| -> Option<usize> {
+            match db.index_of(name) {
+                Some(i) => Some(i),
+                None => {
+                    if !db.is_empty() {
+                        let near = db.similar_names(name);
+                        let hint = if near.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" (similar: {})", near.join(", "))
+                        };
+                        this.err(field, format!("unknown material `{name}`{hint}"));
+                    }
+                    None
+                }
+            }
+        };
+        for g in &gm.groups {
+            let spec = o.parts.iter().position(|p| &p.name == g);
+            let part = if let Some(si) = spec {
+                spec_used[si] = true;
+                let p = &o.parts[si];
+                let f = format!("{at}.parts[{si}]");
+                let m = material_index(self, &p.material, &format!("{f}.material"));
+                let mut good = m.is_some();
+                let check = |this: &mut Self,
+                             v: Option<f64>,
+                             name: &str,
+                             ok: &dyn Fn(f64) -> bool,
+                             want: &str| {
+                    if let Some(v) = v {
+                        if !ok(v) {
+                            this.err(&format!("{f}.{name}"), format!("{v}: expected {want}"));
+                            return false;
+                        }
+                    }
+                    true
+                };
+                good &= check(
+                    self,
+                    p.thickness_m,
+                    "thickness_m",
+                    &|v| v.is_finite() && v > 0.0,
+                    "> 0 m",
+                );
+                good &= check(
+                    self,
+                    p.self_power_w_m2,
+                    "self_power_w_m2",
+                    &|v| v.is_finite(),
+                    "a finite W/m²",
+                );
+                good &= check(
+                    self,
+                    p.exposed_area,
+                    "exposed_area",
+                    &|v| (-1.0..=1.0).contains(&v),
+                    "−1..=1",
+                );
+                good &= check(
+                    self,
+                    p.fixed_temperature_k,
+                    "fixed_temperature_k",
+                    &|v| v > 0.0 && v < 5000.0,
+                    "0 < T < 5000 K",
+                );
+                good &= check(
+                    self,
+                    p.shape_factor,
+                    "shape_factor",
+                    &|v| (0.0..=1.0).contains(&v),
+                    "0..=1",
+                );
+                good.then(|| Part {
+                    name: g.clone(),
+                    object,
+                    material: m.expect("checked"),
+                    thickness_m: p.thickness_m,
+                    self_power_w_m2: p.self_power_w_m2,
+                    exposed_area: p.exposed_area,
+                    fixed_temperature_k: p.fixed_temperature_k,
+                    shape_factor: p.shape_factor,
+                })
+            } else {
+                let (name, field) = match &o.material {
+                    Some(m) => (m.clone(), format!("{at}.material")),
+                    None => (g.clone(), format!("{at}.shapes")),
+                };
+                match db.index_of(&name) {
+                    Some(m) => Some(Part {
+                        name: g.clone(),
+                        object,
+                        material: m,
+                        thickness_m: None,
+                        self_power_w_m2: None,
+                        exposed_area: None,
+                        fixed_temperature_k: None,
+                        shape_factor: None,
+                    }),
+                    None => {
+                        if o.material.is_some() {
+                            material_index(self, &name, &field);
+                        } else if !db.is_empty() {
+                            self.err(
+                                &field,
+                                format!(
+                                    "object `{}`: face group `{g}` has no part, the object no `material`, and no material is named `{g}`",
+                                    o.name
+                                ),
+                            );
+                        }
+                        None
+                    }
+                }
+            };
+            match part {
+                Some(p) => {
+                    map.push(parts.len() as u32);
+                    parts.push(p);
+                }
+                None => ok = false,
+            }
+        }
+        for (si, used) in spec_used.iter().enumerate() {
+            if !used {
+                let groups = gm.groups.join(", ");
+                self.err(
+                    &format!("{at}.parts[{si}].name"),
+                    format!(
+                        "part `{}` matches no face group of object `{}` (groups: {groups})",
+                        o.parts[si].name, o.name
+                    ),
+                );
+                ok = false;
+            }
+        }
+        ok.then_some(map)
+    }
+}
+
+/// Evaluate a terrain height function at (x, y), m.
+pub fn height_function(f: &file::HeightFunction, x: f64, y: f64) -> f64 {
+    let mut z = f.base_m;
+    if let Some([a, b]) = f.slope {
+        z += a * x + b * y;
+    }
+    for w in &f.waves {
+        let d = w.direction_deg.to_radians();
+        z += w.amplitude_m
+            * (std::f64::consts::TAU * (x * d.cos() + y * d.sin()) / w.wavelength_m + w.phase_rad)
+                .sin();
+    }
+    for b in &f.bowls {
+        let r2 =
+            ((x - b.center[0]).powi(2) + (y - b.center[1]).powi(2)) / (b.radius_m * b.radius_m);
+        if r2 < 1.0 {
+            z -= b.depth_m * (1.0 - r2).powi(2);
+        }
+    }
+    for fl in &f.flats {
+        // Distance outside the rectangle (0 inside).
+        let ox = (fl.min[0] - x).max(x - fl.max[0]).max(0.0);
+        let oy = (fl.min[1] - y).max(y - fl.max[1]).max(0.0);
+        let d = ox.hypot(oy);
+        let w = if d <= 0.0 {
+            1.0
+        } else if fl.blend_m > 0.0 && d < fl.blend_m {
+            let t = d / fl.blend_m;
+            1.0 - t * t * (3.0 - 2.0 * t)
+        } else {
+            0.0
+        };
+        z = w * fl.height_m + (1.0 - w) * z;
+    }
+    z
+}
+
+/// Read a CSV grid of numbers (comma or whitespace separated, `#` comments).
+fn read_grid_csv(path: &Path) -> Result<Vec<Vec<f64>>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut rows = Vec::new();
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let row: std::result::Result<Vec<f64>, _> = line
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .map(str::parse::<f64>)
+            .collect();
+        rows.push(row.map_err(|_| {
+            Error::parse(
+                Location::file(path).at_line(n + 1),
+                "expected numbers separated by commas",
+            )
+        })?);
+    }
+    Ok(rows)
+}
