@@ -502,3 +502,46 @@ fn cli_scene_check() {
         "{err}"
     );
 }
+
+#[test]
+fn scene_weather_is_loaded_and_must_cover_the_image_time() {
+    let d = tempfile::tempdir().unwrap();
+    let town_weather = repo_path("scenes/town/weather.csv");
+    if !town_weather.exists() {
+        eprintln!("notice: scenes/town/weather.csv absent; skipping");
+        return;
+    }
+    let p = small_scene(d.path(), SMALL);
+    std::fs::copy(&town_weather, p.parent().unwrap().join("w.csv")).unwrap();
+    let with = SMALL.replace(
+        "\"materials\": [",
+        "\"weather\": {\"file\": \"w.csv\"},\n  \"materials\": [",
+    );
+    let p = small_scene(d.path(), &with);
+    let s = Scene::load(&p).unwrap();
+    let w = s.weather.as_ref().unwrap();
+    assert!(w.history.start() <= s.time && s.time <= w.history.end());
+    assert!(w.history.records().len() > 2);
+
+    let late = with.replace("2025-06-21T14:00:00-04:00", "2025-07-01T14:00:00-04:00");
+    let p = small_scene(d.path(), &late);
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("line 4: field `weather.file`") && e.contains("not the image time"),
+        "{e}"
+    );
+
+    // A DIRSIG .wth carries no date: the scene gives its start.
+    let Some(dir) = crate::util::shared_data("dirsig") else {
+        return;
+    };
+    std::fs::copy(dir.join("saw.wth"), p.parent().unwrap().join("saw.wth")).unwrap();
+    let wth = SMALL.replace(
+        "\"materials\": [",
+        "\"weather\": {\"file\": \"saw.wth\", \"start\": \"2025-06-20T00:00:00-04:00\"},\n  \"materials\": [",
+    );
+    let p = small_scene(d.path(), &wth);
+    let s = Scene::load(&p).unwrap();
+    let h = &s.weather.as_ref().unwrap().history;
+    assert_eq!(h.end() - h.start(), chrono::TimeDelta::hours(48));
+}

@@ -91,8 +91,8 @@ fn check(file: &Path, json: bool) -> anyhow::Result<()> {
         "site       {:.4}°, {:.4}°, {:.0} m; time {}",
         s.site[0], s.site[1], s.site[2], s.time
     )?;
-    if let Some(w) = &s.weather {
-        writeln!(out, "weather    {}", w.display())?;
+    if let (Some(w), Some((n, a, b))) = (&s.weather, &s.weather_records) {
+        writeln!(out, "weather    {}: {n} records, {a} .. {b}", w.display())?;
     }
     writeln!(
         out,

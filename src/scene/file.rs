@@ -94,15 +94,15 @@ pub struct SiteSpec {
 #[serde(deny_unknown_fields)]
 pub struct WeatherSpec {
     /// The file (irsig CSV/JSON, EPW, TMY3, DIRSIG `.wth`), relative to the
-    /// scene file.
+    /// scene file; the format is recognised from its extension and content.
     pub file: String,
-    /// Format name when the extension is ambiguous (`csv`, `json`, `epw`,
-    /// `tmy3`, `wth`).
+    /// Local date and time of the first row of a DIRSIG `.wth` file (which
+    /// carries no date), RFC 3339.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub format: Option<String>,
-    /// Reader options (e.g. the start date of a `.wth`), passed through.
+    pub start: Option<String>,
+    /// Replace the year of every row of an EPW/TMY3 typical-year file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub options: Option<Map<String, Value>>,
+    pub year: Option<i32>,
 }
 
 /// An affine transform: scale, then rotate (x, y, z), then translate.

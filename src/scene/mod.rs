@@ -36,6 +36,7 @@ use crate::error::{Error, Location, Result};
 use crate::geometry::{Instance, SceneGeometry, TriangleMesh};
 use crate::material::{Material, MaterialDb};
 use crate::sun::Site;
+use crate::weather::{LoadOptions, WeatherHistory};
 
 pub use file::SceneFile;
 pub use obj::{ObjGroup, load_obj};
@@ -73,15 +74,13 @@ pub struct SceneObject {
     pub instances: Range<usize>,
 }
 
-/// The weather history a scene refers to (read by `irsig::weather`).
-#[derive(Debug, Clone, Serialize)]
+/// The weather history of a scene, loaded with `irsig::weather`.
+#[derive(Debug, Clone)]
 pub struct WeatherRef {
     /// The file, resolved against the scene file's folder.
     pub path: PathBuf,
-    /// Format name, when given.
-    pub format: Option<String>,
-    /// Reader options, passed through.
-    pub options: Option<serde_json::Map<String, Value>>,
+    /// The history (covers the image time).
+    pub history: WeatherHistory,
 }
 
 /// A loaded scene.
@@ -132,6 +131,8 @@ pub struct SceneSummary {
     pub time: String,
     /// Weather file, if any.
     pub weather: Option<PathBuf>,
+    /// Weather records and the first and last record times (RFC 3339).
+    pub weather_records: Option<(usize, String, String)>,
     /// Number of objects.
     pub objects: usize,
     /// Number of instances.
@@ -230,6 +231,13 @@ impl Scene {
             ],
             time: self.time.to_rfc3339(),
             weather: self.weather.as_ref().map(|w| w.path.clone()),
+            weather_records: self.weather.as_ref().map(|w| {
+                (
+                    w.history.records().len(),
+                    w.history.start().to_rfc3339(),
+                    w.history.end().to_rfc3339(),
+                )
+            }),
             objects: self.objects.len(),
             instances: self.geometry.instances.len(),
             parts: self.parts.len(),
@@ -378,20 +386,55 @@ impl Loader {
             }
         };
         // Weather.
-        let weather = f.weather.as_ref().map(|w| {
+        let mut weather = None;
+        if let Some(w) = &f.weather {
             let p = self.resolve(&w.file);
+            let mut opts = LoadOptions::default().with_site(site);
+            if let Some(y) = w.year {
+                opts = opts.with_year(y);
+            }
+            let mut ok = true;
+            if let Some(st) = &w.start {
+                match DateTime::parse_from_rfc3339(st) {
+                    Ok(t) => opts = opts.with_start(t),
+                    Err(e) => {
+                        self.err("weather.start", format!("`{st}`: {e}; expected RFC 3339"));
+                        ok = false;
+                    }
+                }
+            }
+            let site_ok = (-90.0..=90.0).contains(&site.latitude_deg)
+                && (-180.0..=180.0).contains(&site.longitude_deg);
             if !p.is_file() {
                 self.err(
                     "weather.file",
                     format!("weather file {} not found", p.display()),
                 );
+            } else if ok && site_ok {
+                match crate::weather::load_with(&p, &opts) {
+                    Ok(h) => {
+                        if let Some(t) = time {
+                            if t < h.start() || t > h.end() {
+                                self.err(
+                                    "weather.file",
+                                    format!(
+                                        "the weather history covers {} .. {}, not the image time {}",
+                                        h.start().to_rfc3339(),
+                                        h.end().to_rfc3339(),
+                                        t.to_rfc3339()
+                                    ),
+                                );
+                            }
+                        }
+                        weather = Some(WeatherRef {
+                            path: p,
+                            history: h,
+                        });
+                    }
+                    Err(e) => self.err("weather.file", format!("cannot read the weather: {e}")),
+                }
             }
-            WeatherRef {
-                path: p,
-                format: w.format.clone(),
-                options: w.options.clone(),
-            }
-        });
+        }
         // Materials.
         let mut materials = MaterialDb::new();
         if f.materials.is_empty() {
