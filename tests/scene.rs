@@ -433,6 +433,12 @@ fn town_loads_with_expected_content() {
     assert_eq!(types, vec!["frame", "line_scanner"]);
     assert_eq!(s.sensors[0]["width"], 640);
     assert_eq!(s.sensors[1]["altitude_m"], 600.0);
+    // The sensor stage accepts both as written.
+    for (i, v) in s.sensors.iter().enumerate() {
+        let cfg: irsig::sensor::SensorConfig = serde_json::from_value(v.clone()).unwrap();
+        let loc = irsig::Location::file(&p).with_field(format!("sensors[{i}]"));
+        irsig::sensor::Sensor::from_config(&cfg, &loc).unwrap();
+    }
 }
 
 #[test]
