@@ -11,10 +11,14 @@
 //!
 //! Residuals are always `synthetic − truth`.
 
+pub mod calibrate;
 pub mod compare;
 pub mod csv;
+pub mod diurnal;
 pub mod image;
+pub mod params;
 pub mod plot;
+pub mod sensitivity;
 pub mod stats;
 
 use std::io::Write;

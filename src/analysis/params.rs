@@ -1,0 +1,597 @@
+//! Input parameters of sensitivity studies and calibrations (the PARAMS
+//! JSON file), and how each one perturbs a weather history or a material.
+//!
+//! ```json
+//! { "params": [
+//!   { "kind": "weather", "property": "air_temperature_offset_k",
+//!     "low": -2, "high": 2, "uncertainty": 0.5 },
+//!   { "kind": "material", "material": "asphalt", "property": "solar_absorptivity",
+//!     "low": 0.85, "high": 0.95, "uncertainty": 0.02 }
+//! ] }
+//! ```
+//!
+//! A bare top-level array is accepted too. Per entry: `kind` (`weather` or
+//! `material`), `property`, `material` (material entries only), `low` and
+//! `high` (the plausible bounds), optional `name` (default
+//! `weather.<property>` / `<material>.<property>`), optional `nominal`
+//! (default: 0 for offsets, 1 for scales, the material's own value for
+//! material properties) and optional `uncertainty` (one standard
+//! uncertainty, in the parameter's unit; default the standard deviation of
+//! a uniform distribution over the bounds, `(high − low)/√12`).
+//!
+//! Weather properties (applied to every record of the history):
+//! `air_temperature_offset_k` (K added to the air temperature; the dew
+//! point is kept, capped at the air temperature, and the relative humidity
+//! recomputed), `wind_speed_scale`, `wind_speed_offset_m_s` (result clamped
+//! at 0), `relative_humidity_offset` (fraction added, result clamped to
+//! 0.01–1, dew point recomputed), `insolation_scale` (multiplies direct,
+//! diffuse and global solar irradiance), `sky_longwave_offset_w_m2` (W/m²
+//! added to the downwelling longwave, clamped at 0), `cloud_cover_offset`
+//! (fraction added to total and opaque sky cover, clamped to 0–1; it acts
+//! only where the thermal model derives sky longwave from cloud cover).
+//!
+//! Material properties (absolute values, SI): `conductivity` (W/(m·K)),
+//! `specific_heat` (J/(kg·K)), `density` (kg/m³), `thickness` (m),
+//! `solar_absorptivity`, `thermal_emissivity` (a spectral emissivity curve
+//! is scaled by the same ratio, capped at 1), `exposed_area`.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::material::Material;
+use crate::weather::WeatherRecord;
+use crate::{Error, Location, Result};
+
+/// A weather property a parameter perturbs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WeatherProperty {
+    /// K added to the air temperature.
+    AirTemperatureOffsetK,
+    /// Factor on the wind speed.
+    WindSpeedScale,
+    /// m/s added to the wind speed.
+    WindSpeedOffsetMS,
+    /// Fraction added to the relative humidity.
+    RelativeHumidityOffset,
+    /// Factor on all solar irradiances.
+    InsolationScale,
+    /// W/m² added to the sky longwave irradiance.
+    SkyLongwaveOffsetWM2,
+    /// Fraction added to total and opaque sky cover.
+    CloudCoverOffset,
+}
+
+const WEATHER_PROPERTIES: [(&str, WeatherProperty); 7] = [
+    (
+        "air_temperature_offset_k",
+        WeatherProperty::AirTemperatureOffsetK,
+    ),
+    ("wind_speed_scale", WeatherProperty::WindSpeedScale),
+    ("wind_speed_offset_m_s", WeatherProperty::WindSpeedOffsetMS),
+    (
+        "relative_humidity_offset",
+        WeatherProperty::RelativeHumidityOffset,
+    ),
+    ("insolation_scale", WeatherProperty::InsolationScale),
+    (
+        "sky_longwave_offset_w_m2",
+        WeatherProperty::SkyLongwaveOffsetWM2,
+    ),
+    ("cloud_cover_offset", WeatherProperty::CloudCoverOffset),
+];
+
+impl WeatherProperty {
+    /// The property's name in PARAMS files.
+    pub fn name(&self) -> &'static str {
+        WEATHER_PROPERTIES
+            .iter()
+            .find(|(_, p)| p == self)
+            .map(|(n, _)| *n)
+            .unwrap_or("?")
+    }
+    /// The value that leaves the weather unchanged.
+    pub fn identity(&self) -> f64 {
+        match self {
+            WeatherProperty::WindSpeedScale | WeatherProperty::InsolationScale => 1.0,
+            _ => 0.0,
+        }
+    }
+    /// The values this property may take.
+    fn domain(&self) -> (f64, f64) {
+        match self {
+            WeatherProperty::WindSpeedScale | WeatherProperty::InsolationScale => (0.0, 10.0),
+            WeatherProperty::RelativeHumidityOffset | WeatherProperty::CloudCoverOffset => {
+                (-1.0, 1.0)
+            }
+            _ => (f64::NEG_INFINITY, f64::INFINITY),
+        }
+    }
+}
+
+/// A material property a parameter sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MaterialProperty {
+    /// Thermal conductivity, W/(m·K).
+    Conductivity,
+    /// Specific heat, J/(kg·K).
+    SpecificHeat,
+    /// Density, kg/m³.
+    Density,
+    /// Slab thickness, m.
+    Thickness,
+    /// Solar absorptivity, 0–1.
+    SolarAbsorptivity,
+    /// Broadband thermal emissivity, 0–1.
+    ThermalEmissivity,
+    /// Exposed area (material module semantics).
+    ExposedArea,
+}
+
+const MATERIAL_PROPERTIES: [(&str, MaterialProperty); 7] = [
+    ("conductivity", MaterialProperty::Conductivity),
+    ("specific_heat", MaterialProperty::SpecificHeat),
+    ("density", MaterialProperty::Density),
+    ("thickness", MaterialProperty::Thickness),
+    ("solar_absorptivity", MaterialProperty::SolarAbsorptivity),
+    ("thermal_emissivity", MaterialProperty::ThermalEmissivity),
+    ("exposed_area", MaterialProperty::ExposedArea),
+];
+
+impl MaterialProperty {
+    /// The property's name in PARAMS files.
+    pub fn name(&self) -> &'static str {
+        MATERIAL_PROPERTIES
+            .iter()
+            .find(|(_, p)| p == self)
+            .map(|(n, _)| *n)
+            .unwrap_or("?")
+    }
+    /// The property's value in `m`.
+    pub fn get(&self, m: &Material) -> f64 {
+        match self {
+            MaterialProperty::Conductivity => m.conductivity_w_m_k,
+            MaterialProperty::SpecificHeat => m.specific_heat_j_kg_k,
+            MaterialProperty::Density => m.density_kg_m3,
+            MaterialProperty::Thickness => m.thickness_m,
+            MaterialProperty::SolarAbsorptivity => m.solar_absorptivity,
+            MaterialProperty::ThermalEmissivity => m.thermal_emissivity,
+            MaterialProperty::ExposedArea => m.exposed_area,
+        }
+    }
+    /// Set the property in `m` to `v` (emissivity also scales a spectral
+    /// curve by the same ratio, capped at 1).
+    pub fn set(&self, m: &mut Material, v: f64) {
+        match self {
+            MaterialProperty::Conductivity => m.conductivity_w_m_k = v,
+            MaterialProperty::SpecificHeat => m.specific_heat_j_kg_k = v,
+            MaterialProperty::Density => m.density_kg_m3 = v,
+            MaterialProperty::Thickness => m.thickness_m = v,
+            MaterialProperty::SolarAbsorptivity => m.solar_absorptivity = v,
+            MaterialProperty::ThermalEmissivity => {
+                let old = m.thermal_emissivity;
+                if let Some(c) = &mut m.emissivity_curve {
+                    if old > 0.0 {
+                        let r = v / old;
+                        for row in &mut c.emissivity {
+                            for e in row {
+                                *e = (*e * r).min(1.0);
+                            }
+                        }
+                    }
+                }
+                m.thermal_emissivity = v;
+            }
+            MaterialProperty::ExposedArea => m.exposed_area = v,
+        }
+    }
+    /// The values this property may take.
+    fn domain(&self) -> (f64, f64, bool) {
+        // (min, max, min exclusive)
+        match self {
+            MaterialProperty::SolarAbsorptivity => (0.0, 1.0, false),
+            MaterialProperty::ThermalEmissivity => (0.0, 1.0, true),
+            MaterialProperty::ExposedArea => (0.0, f64::INFINITY, false),
+            _ => (0.0, f64::INFINITY, true),
+        }
+    }
+}
+
+/// What a parameter perturbs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// The weather history.
+    Weather(WeatherProperty),
+    /// A property of the named material.
+    Material {
+        /// Material name.
+        material: String,
+        /// Property.
+        property: MaterialProperty,
+    },
+}
+
+/// One uncertain input with its plausible range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    /// Display name.
+    pub name: String,
+    /// What it perturbs.
+    pub target: Target,
+    /// Nominal (best-estimate) value.
+    pub nominal: f64,
+    /// Lower plausible bound.
+    pub low: f64,
+    /// Upper plausible bound.
+    pub high: f64,
+    /// One standard uncertainty, parameter unit.
+    pub uncertainty: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawParam {
+    name: Option<String>,
+    kind: String,
+    property: String,
+    material: Option<String>,
+    nominal: Option<f64>,
+    low: f64,
+    high: f64,
+    uncertainty: Option<f64>,
+}
+
+/// The parameters of a study, in file order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ParamSet {
+    /// The parameters.
+    pub params: Vec<Parameter>,
+}
+
+fn json_error(path: &Path, e: &serde_json::Error) -> Error {
+    Error::parse(
+        Location::file(path).at_line(e.line()),
+        format!(
+            "{e} (expected a PARAMS file: {{\"params\": [{{\"kind\": \"weather\"|\"material\", \"property\": …, \"low\": …, \"high\": …}}]}})"
+        ),
+    )
+}
+
+impl ParamSet {
+    /// Read a PARAMS JSON file. Material nominals left out are taken from
+    /// `materials` (by name); every referenced material must be there.
+    pub fn load(path: impl AsRef<Path>, materials: &[Material]) -> Result<ParamSet> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::parse(&text, path, materials)
+    }
+
+    /// Parse PARAMS JSON text (`path` names it in errors).
+    pub fn parse(text: &str, path: &Path, materials: &[Material]) -> Result<ParamSet> {
+        // Syntax errors carry serde_json's line; entry errors their JSON path.
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| json_error(path, &e))?;
+        let list = match value {
+            serde_json::Value::Array(a) => a,
+            serde_json::Value::Object(mut o) => match o.remove("params") {
+                Some(serde_json::Value::Array(a)) if o.is_empty() => a,
+                _ => {
+                    return Err(Error::parse(
+                        Location::file(path),
+                        "expected {\"params\": [...]} (and no other key) or a bare array of parameters",
+                    ));
+                }
+            },
+            _ => {
+                return Err(Error::parse(
+                    Location::file(path),
+                    "expected {\"params\": [...]} or a bare array of parameters",
+                ));
+            }
+        };
+        let raw = list
+            .into_iter()
+            .enumerate()
+            .map(|(i, v)| {
+                serde_json::from_value::<RawParam>(v).map_err(|e| {
+                    Error::parse(
+                        Location::file(path).with_field(format!("params[{i}]")),
+                        format!("{e}; expected kind, property, [material], low, high, [nominal], [uncertainty], [name]"),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        if raw.is_empty() {
+            return Err(Error::parse(
+                Location::file(path).with_field("params"),
+                "no parameters listed",
+            ));
+        }
+        let mut params: Vec<Parameter> = Vec::with_capacity(raw.len());
+        for (i, r) in raw.into_iter().enumerate() {
+            let at = |f: &str| Location::file(path).with_field(format!("params[{i}].{f}"));
+            let (target, default_nominal, (dmin, dmax, excl)) = match r.kind.as_str() {
+                "weather" => {
+                    if r.material.is_some() {
+                        return Err(Error::parse(
+                            at("material"),
+                            "a weather parameter takes no `material`",
+                        ));
+                    }
+                    let p = WEATHER_PROPERTIES
+                        .iter()
+                        .find(|(n, _)| *n == r.property)
+                        .map(|(_, p)| *p)
+                        .ok_or_else(|| {
+                            Error::parse(
+                                at("property"),
+                                format!(
+                                    "unknown weather property `{}`; expected one of {}",
+                                    r.property,
+                                    WEATHER_PROPERTIES.map(|(n, _)| n).join(", ")
+                                ),
+                            )
+                        })?;
+                    let (a, b) = p.domain();
+                    (Target::Weather(p), p.identity(), (a, b, false))
+                }
+                "material" => {
+                    let mname = r.material.clone().ok_or_else(|| {
+                        Error::parse(
+                            at("material"),
+                            "a material parameter needs `material` (its name)",
+                        )
+                    })?;
+                    let p = MATERIAL_PROPERTIES
+                        .iter()
+                        .find(|(n, _)| *n == r.property)
+                        .map(|(_, p)| *p)
+                        .ok_or_else(|| {
+                            Error::parse(
+                                at("property"),
+                                format!(
+                                    "unknown material property `{}`; expected one of {}",
+                                    r.property,
+                                    MATERIAL_PROPERTIES.map(|(n, _)| n).join(", ")
+                                ),
+                            )
+                        })?;
+                    let m = materials.iter().find(|m| m.name == mname).ok_or_else(|| {
+                        Error::parse(
+                            at("material"),
+                            format!(
+                                "no material `{mname}` in the scene; known: {}",
+                                materials
+                                    .iter()
+                                    .map(|m| m.name.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ),
+                        )
+                    })?;
+                    (
+                        Target::Material {
+                            material: mname,
+                            property: p,
+                        },
+                        p.get(m),
+                        p.domain(),
+                    )
+                }
+                other => {
+                    return Err(Error::parse(
+                        at("kind"),
+                        format!("unknown kind `{other}`; expected `weather` or `material`"),
+                    ));
+                }
+            };
+            let name = r.name.clone().unwrap_or_else(|| match &target {
+                Target::Weather(p) => format!("weather.{}", p.name()),
+                Target::Material { material, property } => {
+                    format!("{material}.{}", property.name())
+                }
+            });
+            if params.iter().any(|q| q.name == name) {
+                return Err(Error::parse(
+                    at("name"),
+                    format!("duplicate parameter name `{name}`"),
+                ));
+            }
+            if params.iter().any(|q| q.target == target) {
+                return Err(Error::parse(
+                    at("property"),
+                    format!("`{name}` perturbs the same input as an earlier parameter"),
+                ));
+            }
+            if !(r.low.is_finite() && r.high.is_finite() && r.low < r.high) {
+                return Err(Error::parse(
+                    at("low"),
+                    format!(
+                        "expected finite bounds with low < high, got [{}, {}]",
+                        r.low, r.high
+                    ),
+                ));
+            }
+            let below = if excl { r.low <= dmin } else { r.low < dmin };
+            if below || r.high > dmax {
+                return Err(Error::parse(
+                    at("low"),
+                    format!(
+                        "bounds [{}, {}] leave the property's domain ({}{dmin}, {dmax}]",
+                        r.low,
+                        r.high,
+                        if excl { "(" } else { "[" }
+                    ),
+                ));
+            }
+            let nominal = r.nominal.unwrap_or(default_nominal);
+            if !(nominal >= r.low && nominal <= r.high) {
+                return Err(Error::parse(
+                    at("nominal"),
+                    format!(
+                        "nominal {nominal}{} lies outside [{}, {}]",
+                        if r.nominal.is_none() {
+                            " (the current value)"
+                        } else {
+                            ""
+                        },
+                        r.low,
+                        r.high
+                    ),
+                ));
+            }
+            let uncertainty = r.uncertainty.unwrap_or((r.high - r.low) / 12f64.sqrt());
+            if !(uncertainty.is_finite() && uncertainty >= 0.0) {
+                return Err(Error::parse(
+                    at("uncertainty"),
+                    format!("expected a non-negative standard uncertainty, got {uncertainty}"),
+                ));
+            }
+            params.push(Parameter {
+                name,
+                target,
+                nominal,
+                low: r.low,
+                high: r.high,
+                uncertainty,
+            });
+        }
+        Ok(ParamSet { params })
+    }
+
+    /// The nominal values, in order.
+    pub fn nominal(&self) -> Vec<f64> {
+        self.params.iter().map(|p| p.nominal).collect()
+    }
+
+    /// The material names the parameters touch (each once, in order).
+    pub fn materials(&self) -> Vec<&str> {
+        let mut out: Vec<&str> = Vec::new();
+        for p in &self.params {
+            if let Target::Material { material, .. } = &p.target {
+                if !out.contains(&material.as_str()) {
+                    out.push(material);
+                }
+            }
+        }
+        out
+    }
+
+    /// Whether any parameter perturbs the weather.
+    pub fn has_weather(&self) -> bool {
+        self.params
+            .iter()
+            .any(|p| matches!(p.target, Target::Weather(_)))
+    }
+
+    fn check_len(&self, values: &[f64]) -> Result<()> {
+        if values.len() != self.params.len() {
+            return Err(Error::invalid(
+                "parameter values",
+                format!(
+                    "{} values for {} parameters",
+                    values.len(),
+                    self.params.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A copy of `weather` with the weather parameters set to `values`
+    /// (one value per parameter, in order; material entries are ignored).
+    pub fn apply_weather(
+        &self,
+        values: &[f64],
+        weather: &[WeatherRecord],
+    ) -> Result<Vec<WeatherRecord>> {
+        self.check_len(values)?;
+        let mut w = weather.to_vec();
+        for (p, &v) in self.params.iter().zip(values) {
+            if let Target::Weather(wp) = p.target {
+                for r in &mut w {
+                    apply_weather_property(wp, v, r);
+                }
+            }
+        }
+        Ok(w)
+    }
+
+    /// A copy of `materials` with the material parameters set to `values`
+    /// (weather entries are ignored).
+    pub fn apply_materials(&self, values: &[f64], materials: &[Material]) -> Result<Vec<Material>> {
+        self.check_len(values)?;
+        let mut out = materials.to_vec();
+        for (p, &v) in self.params.iter().zip(values) {
+            if let Target::Material { material, property } = &p.target {
+                let m = out
+                    .iter_mut()
+                    .find(|m| &m.name == material)
+                    .ok_or_else(|| {
+                        Error::invalid(&p.name, format!("no material `{material}` to apply it to"))
+                    })?;
+                property.set(m, v);
+            }
+        }
+        Ok(out)
+    }
+
+    /// `material` with this set's parameters for it set to `values`.
+    pub fn apply_material(&self, values: &[f64], material: &Material) -> Result<Material> {
+        self.check_len(values)?;
+        let mut m = material.clone();
+        for (p, &v) in self.params.iter().zip(values) {
+            if let Target::Material { material, property } = &p.target {
+                if *material == m.name {
+                    property.set(&mut m, v);
+                }
+            }
+        }
+        Ok(m)
+    }
+}
+
+/// Saturation vapour pressure over water, Pa, at `t_k` (Magnus form,
+/// Alduchov & Eskridge 1996, J. Appl. Meteor. 35, 601–609, eq. 21:
+/// 610.94·exp(17.625·t/(t + 243.04)), t in °C; within 0.4 % for −40…50 °C).
+pub fn saturation_vapour_pressure_pa(t_k: f64) -> f64 {
+    let t = t_k - 273.15;
+    610.94 * (17.625 * t / (t + 243.04)).exp()
+}
+
+/// Dew point, K, for air at `t_k` with relative humidity `rh` (0–1):
+/// the inverse of [`saturation_vapour_pressure_pa`].
+pub fn dew_point_k(t_k: f64, rh: f64) -> f64 {
+    let g = (rh.max(1e-6) * saturation_vapour_pressure_pa(t_k) / 610.94).ln();
+    243.04 * g / (17.625 - g) + 273.15
+}
+
+fn apply_weather_property(p: WeatherProperty, v: f64, r: &mut WeatherRecord) {
+    match p {
+        WeatherProperty::AirTemperatureOffsetK => {
+            r.air_temperature_k += v;
+            r.dew_point_k = r.dew_point_k.min(r.air_temperature_k);
+            r.relative_humidity = (saturation_vapour_pressure_pa(r.dew_point_k)
+                / saturation_vapour_pressure_pa(r.air_temperature_k))
+            .clamp(0.0, 1.0);
+        }
+        WeatherProperty::WindSpeedScale => r.wind_speed_m_s *= v,
+        WeatherProperty::WindSpeedOffsetMS => r.wind_speed_m_s = (r.wind_speed_m_s + v).max(0.0),
+        WeatherProperty::RelativeHumidityOffset => {
+            r.relative_humidity = (r.relative_humidity + v).clamp(0.01, 1.0);
+            r.dew_point_k = dew_point_k(r.air_temperature_k, r.relative_humidity);
+        }
+        WeatherProperty::InsolationScale => {
+            r.direct_normal_w_m2 *= v;
+            r.diffuse_horizontal_w_m2 *= v;
+            r.global_horizontal_w_m2 *= v;
+        }
+        WeatherProperty::SkyLongwaveOffsetWM2 => {
+            r.sky_longwave_w_m2 = (r.sky_longwave_w_m2 + v).max(0.0)
+        }
+        WeatherProperty::CloudCoverOffset => {
+            r.total_sky_cover = (r.total_sky_cover + v).clamp(0.0, 1.0);
+            r.opaque_sky_cover = (r.opaque_sky_cover + v).clamp(0.0, 1.0);
+        }
+    }
+}
