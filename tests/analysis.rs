@@ -341,3 +341,347 @@ fn cli_compare_images_json_and_histogram_plot() {
     assert!(!ok);
     assert!(err.contains("pts.csv:line 3"), "{err}");
 }
+
+#[test]
+fn exr_synthetic_with_material_layer_compares_per_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let synth = stack(
+        4,
+        1,
+        &[
+            ("apparent_temperature", vec![300.0, 302.0, 310.0, 312.0]),
+            ("material_id", vec![1.0, 1.0, 2.0, 2.0]),
+        ],
+    );
+    let sp = dir.path().join("s.exr");
+    irsig::output::write_exr(&sp, &synth).unwrap();
+    let tp = dir.path().join("t.tif");
+    write_tiff_f32(&tp, 4, 1, &[301.0, 303.0, 309.0, 311.0]);
+    let s = image::read_image(&sp).unwrap();
+    let t = image::read_image(&tp).unwrap();
+    let c = compare::compare_images(&s, &t, &CompareOptions::default()).unwrap();
+    assert_close!(c.overall.bias, 0.0, 1e-6);
+    assert_close!(c.overall.rmse, 1.0, 1e-6);
+    let b: Vec<f64> = c.per_material.iter().map(|m| m.agreement.bias).collect();
+    assert_eq!(b, vec![-1.0, 1.0]);
+}
+
+// ---- sensitivity engines on analytic models ---------------------------
+
+use irsig::analysis::calibrate::{self, CalibrationOptions};
+use irsig::analysis::diurnal;
+use irsig::analysis::params::ParamSet;
+use irsig::analysis::sensitivity::{self, Factor, MorrisOptions};
+
+fn factor(name: &str, nominal: f64, low: f64, high: f64, u: f64) -> Factor {
+    Factor {
+        name: name.into(),
+        nominal,
+        low,
+        high,
+        uncertainty: u,
+    }
+}
+
+/// y0 = 3·a + 0.5·b² (+ 0·c), y1 = a·b.
+fn analytic(x: &[f64]) -> irsig::Result<Vec<f64>> {
+    Ok(vec![3.0 * x[0] + 0.5 * x[1] * x[1], x[0] * x[1]])
+}
+
+fn analytic_factors() -> Vec<Factor> {
+    vec![
+        factor("a", 1.0, 0.0, 2.0, 0.1),
+        factor("b", 2.0, 0.0, 4.0, 0.2),
+        factor("unused", 0.0, -1.0, 1.0, 0.5),
+    ]
+}
+
+#[test]
+fn oat_exact_on_analytic_model_and_unused_parameter_has_no_effect() {
+    let f = analytic_factors();
+    let out = vec!["y0".to_string(), "y1".to_string()];
+    let oat = sensitivity::one_at_a_time(&f, &out, &analytic).unwrap();
+    assert_eq!(oat.evaluations, 7);
+    assert_eq!(oat.nominal_outputs, vec![5.0, 2.0]);
+    let e = &oat.effects[0];
+    assert_eq!((e[0].at_low, e[0].at_high, e[0].per_unit), (-3.0, 3.0, 3.0));
+    // b: 0.5·(0−4) = −2, 0.5·(16−4) = 6, secant (8 − 0)/4 = 2.
+    assert_eq!((e[1].at_low, e[1].at_high, e[1].per_unit), (-2.0, 6.0, 2.0));
+    assert_eq!((e[2].at_low, e[2].at_high, e[2].per_unit), (0.0, 0.0, 0.0));
+    assert_eq!(oat.ranking(0), vec![1, 0, 2]);
+    // Error budget: linear propagation u·|∂y/∂x|, root-sum-square:
+    // y0: 0.1·3 = 0.3, 0.2·2 = 0.4 → 0.5.
+    let s: Vec<Vec<f64>> = oat
+        .effects
+        .iter()
+        .map(|o| o.iter().map(|e| e.per_unit).collect())
+        .collect();
+    let b = sensitivity::error_budget(&f, &out, &s);
+    assert_close!(b[0].combined, 0.5, 1e-12);
+    assert_eq!(b[0].lines[0].name, "b");
+    assert_close!(b[0].lines[0].variance_fraction, 0.64, 1e-12);
+    assert_eq!(b[0].lines[2].contribution, 0.0);
+}
+
+#[test]
+fn morris_statistics_on_analytic_model() {
+    let f = analytic_factors();
+    let out = vec!["y0".to_string(), "y1".to_string()];
+    let opts = MorrisOptions {
+        trajectories: 30,
+        levels: 4,
+        seed: 7,
+    };
+    let m = sensitivity::morris(&f, &out, &analytic, opts).unwrap();
+    assert_eq!(m.evaluations, 30 * 4);
+    assert_close!(m.delta, 2.0 / 3.0, 1e-15);
+    // Linear in a: every elementary effect is 3 × range 2 = 6, σ = 0.
+    let a = &m.effects[0][0];
+    assert_close!(a.mu, 6.0, 1e-12);
+    assert_close!(a.mu_star, 6.0, 1e-12);
+    assert_close!(a.sigma, 0.0, 1e-12);
+    assert_close!(a.mu_star_per_unit, 3.0, 1e-12);
+    // Quadratic in b: with b = 4u, EE = 8(u₁ + u₂) ∈ {16/3, 32/3}: mean
+    // between them, σ > 0 (non-linearity shows).
+    let b = &m.effects[0][1];
+    assert!(
+        b.mu_star > 16.0 / 3.0 - 1e-9 && b.mu_star < 32.0 / 3.0 + 1e-9,
+        "{b:?}"
+    );
+    assert!(b.sigma > 1.0, "{b:?}");
+    // The unused parameter: exactly zero.
+    let c = &m.effects[0][2];
+    assert_eq!((c.mu, c.mu_star, c.sigma), (0.0, 0.0, 0.0));
+    // Interaction term y1 = a·b: both effects vary (σ > 0), same seed → same result.
+    assert!(m.effects[1][0].sigma > 0.0 && m.effects[1][1].sigma > 0.0);
+    let again = sensitivity::morris(&f, &out, &analytic, opts).unwrap();
+    assert_eq!(again.effects[1][1], m.effects[1][1]);
+    assert_eq!(m.ranking(0)[2], 2);
+    assert!(sensitivity::morris(&f, &out, &analytic, MorrisOptions { levels: 3, ..opts }).is_err());
+}
+
+#[test]
+fn finite_difference_jacobian_matches_derivatives() {
+    let f = analytic_factors();
+    let j = sensitivity::finite_difference_jacobian(&f, &[1.0, 2.0, 0.0], 1e-4, &analytic).unwrap();
+    assert_close!(j[0][0], 3.0, 1e-9);
+    assert_close!(j[0][1], 2.0, 1e-9);
+    assert_close!(j[1][0], 2.0, 1e-9);
+    assert_close!(j[1][1], 1.0, 1e-9);
+    assert_eq!(j[0][2], 0.0);
+    // At a bound: one-sided, still right for a linear term.
+    let j = sensitivity::finite_difference_jacobian(&f, &[2.0, 0.0, 1.0], 1e-4, &analytic).unwrap();
+    assert_close!(j[0][0], 3.0, 1e-9);
+}
+
+/// Standard normal deviates (Box–Muller) from a seeded generator.
+fn normals(seed: u64, n: usize) -> Vec<f64> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let u1: f64 = rng.random_range(f64::EPSILON..1.0);
+            let u2: f64 = rng.random();
+            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+        })
+        .collect()
+}
+
+/// A diurnal surface-temperature curve T(h) = mean + amp·sin(2π(h − lag)/24).
+fn diurnal_curve(x: &[f64], hours: &[f64]) -> Vec<f64> {
+    hours
+        .iter()
+        .map(|h| x[0] + x[1] * (2.0 * std::f64::consts::PI * (h - x[2]) / 24.0).sin())
+        .collect()
+}
+
+#[test]
+fn calibration_recovers_known_parameters_within_intervals() {
+    let hours: Vec<f64> = (0..48).map(|i| i as f64 * 0.5).collect();
+    let true_x = [296.0, 12.0, 8.5];
+    let f = vec![
+        factor("mean_k", 290.0, 280.0, 320.0, 1.0),
+        factor("amplitude_k", 5.0, 0.0, 25.0, 1.0),
+        factor("lag_h", 6.0, 3.0, 12.0, 1.0),
+    ];
+    let sigma = 0.4;
+    let mut covered = [0usize; 3];
+    let runs = 30;
+    for seed in 0..runs {
+        let noise = normals(seed, hours.len());
+        let truth: Vec<f64> = diurnal_curve(&true_x, &hours)
+            .iter()
+            .zip(&noise)
+            .map(|(t, e)| t + sigma * e)
+            .collect();
+        let model = |x: &[f64]| Ok(diurnal_curve(x, &hours));
+        let c = calibrate::calibrate(&f, &truth, &model, CalibrationOptions::default()).unwrap();
+        assert_eq!((c.n_obs, c.dof), (48, 45));
+        assert!(c.fitted.rmse < c.initial.rmse);
+        // The residual RMSE approaches the noise level (within sampling spread).
+        assert!((c.fitted.rmse - sigma).abs() < 0.15, "{}", c.fitted.rmse);
+        for (i, p) in c.params.iter().enumerate() {
+            assert!(p.std_error.is_finite() && p.std_error > 0.0);
+            if p.ci_low <= true_x[i] && true_x[i] <= p.ci_high {
+                covered[i] += 1;
+            }
+        }
+        if seed == 0 {
+            // Linearised standard errors for a sinusoid fit (n samples over
+            // whole periods): se(mean) = σ/√n, se(amp) = σ·√(2/n).
+            assert_close!(
+                c.params[0].std_error,
+                c.fitted.residual_std * (48.0f64).sqrt().recip(),
+                0.01
+            );
+            assert_close!(
+                c.params[1].std_error,
+                c.fitted.residual_std * (2.0f64 / 48.0).sqrt(),
+                0.01
+            );
+            assert!(c.fitted.spearman > 0.99);
+        }
+    }
+    // 95 % intervals: expect ~28.5 of 30 covering; allow sampling spread.
+    for (i, n) in covered.iter().enumerate() {
+        assert!(*n >= 25, "parameter {i} covered in only {n}/{runs} runs");
+    }
+}
+
+#[test]
+fn calibration_flags_unidentifiable_parameter() {
+    let hours: Vec<f64> = (0..24).map(|i| i as f64).collect();
+    let truth = diurnal_curve(&[300.0, 10.0, 9.0], &hours);
+    let f = vec![
+        factor("mean_k", 295.0, 280.0, 320.0, 1.0),
+        factor("unused", 0.5, 0.0, 1.0, 0.1),
+    ];
+    let model = |x: &[f64]| Ok(diurnal_curve(&[x[0], 10.0, 9.0], &hours));
+    let c = calibrate::calibrate(&f, &truth, &model, CalibrationOptions::default()).unwrap();
+    assert_close!(c.params[0].fitted, 300.0, 1e-4);
+    assert!(c.params[1].std_error.is_infinite());
+    let e =
+        calibrate::calibrate(&f, &truth[..2], &model, CalibrationOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("2 truth values"), "{e}");
+}
+
+#[test]
+fn diurnal_contrast_maximum_and_crossovers() {
+    use chrono::{DateTime, Duration};
+    let t0 = DateTime::parse_from_rfc3339("2024-06-21T00:00:00-04:00").unwrap();
+    let times: Vec<_> = (0..=96).map(|i| t0 + Duration::minutes(15 * i)).collect();
+    let h: Vec<f64> = (0..=96).map(|i| i as f64 * 0.25).collect();
+    // target − background = −5 + 10 sin(2π(h − 9)/24): zero at 11:00 and
+    // 19:00, largest |contrast| 15 at 03:00.
+    let target = diurnal_curve(&[295.0, 10.0, 9.0], &h);
+    let background = vec![300.0; h.len()];
+    let s = diurnal::contrast_series("temperature", "K", &times, &target, &background).unwrap();
+    assert_eq!(s.crossovers.len(), 2);
+    for (c, want) in s.crossovers.iter().zip([11, 19]) {
+        let err = (*c - (t0 + Duration::hours(want))).num_seconds().abs();
+        assert!(err < 60, "crossover {c} vs {want}:00 ({err} s)");
+    }
+    assert_eq!(s.time_of_max, t0 + Duration::hours(3));
+    assert_close!(s.max_contrast_signed, -15.0, 1e-9);
+}
+
+fn test_material(name: &str) -> irsig::material::Material {
+    let db = irsig::material::MaterialDb::load(&crate::util::repo_path("scenes/materials.json"))
+        .unwrap();
+    let mut m = db.materials()[0].clone();
+    m.name = name.into();
+    m
+}
+
+#[test]
+fn params_file_parses_applies_and_reports_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("params.json");
+    let asphalt = test_material("asphalt");
+    let mats = vec![asphalt.clone()];
+    std::fs::write(
+        &p,
+        r#"{"params": [
+          {"kind": "weather", "property": "air_temperature_offset_k", "low": -2, "high": 2, "uncertainty": 0.5},
+          {"kind": "weather", "property": "relative_humidity_offset", "low": -0.2, "high": 0.2},
+          {"kind": "material", "material": "asphalt", "property": "thermal_emissivity", "low": 0.85, "high": 0.98}
+        ]}"#,
+    )
+    .unwrap();
+    let ps = ParamSet::load(&p, &mats).unwrap();
+    assert_eq!(ps.params[0].name, "weather.air_temperature_offset_k");
+    assert_eq!(ps.params[2].name, "asphalt.thermal_emissivity");
+    assert_eq!(ps.nominal(), vec![0.0, 0.0, asphalt.thermal_emissivity]);
+    assert_close!(ps.params[1].uncertainty, 0.4 / 12f64.sqrt(), 1e-15);
+    let m = ps.apply_materials(&[0.0, 0.0, 0.9], &mats).unwrap();
+    assert_eq!(m[0].thermal_emissivity, 0.9);
+    // Air temperature +2 K at fixed dew point: humidity falls by the ratio
+    // of saturation vapour pressures (≈ 6.2 % per K near 20 °C).
+    let rec = irsig::weather::WeatherRecord {
+        time: chrono::DateTime::parse_from_rfc3339("2024-06-21T12:00:00-04:00").unwrap(),
+        air_temperature_k: 293.15,
+        dew_point_k: 283.15,
+        relative_humidity: 0.526,
+        pressure_pa: 101325.0,
+        wind_speed_m_s: 2.0,
+        wind_direction_deg: 180.0,
+        direct_normal_w_m2: 800.0,
+        diffuse_horizontal_w_m2: 100.0,
+        global_horizontal_w_m2: 700.0,
+        sky_longwave_w_m2: 330.0,
+        total_sky_cover: 0.2,
+        opaque_sky_cover: 0.1,
+    };
+    let w = ps.apply_weather(&[2.0, 0.0, 0.9], &[rec]).unwrap();
+    assert_eq!(w[0].air_temperature_k, 295.15);
+    assert_eq!(w[0].dew_point_k, 283.15);
+    let es = irsig::analysis::params::saturation_vapour_pressure_pa;
+    assert_close!(
+        w[0].relative_humidity,
+        0.526 * es(293.15) / es(295.15),
+        1e-12
+    );
+    assert!(w[0].relative_humidity < 0.526 * 0.9);
+    // Zero offsets leave the record exactly as it was.
+    assert_eq!(ps.apply_weather(&[0.0, 0.0, 0.9], &[rec]).unwrap()[0], rec);
+    // Magnus at 20 °C vs 2338.8 Pa (Hyland–Wexler / WMO tables), within
+    // the form's stated 0.4 %.
+    assert_close!(es(293.15), 2338.8, 0.004 * 2338.8);
+    let w = ps.apply_weather(&[0.0, 0.2, 0.9], &[rec]).unwrap();
+    assert_close!(w[0].relative_humidity, 0.726, 1e-12);
+    let dp = irsig::analysis::params::dew_point_k;
+    assert_close!(
+        w[0].dew_point_k - 283.15,
+        dp(293.15, 0.726) - dp(293.15, 0.526),
+        1e-12
+    );
+    assert_close!(es(dp(293.15, 0.726)) / es(293.15), 0.726, 1e-12);
+    // Errors name the file and the field.
+    for (text, want) in [
+        (
+            r#"[{"kind":"weather","property":"wind","low":0,"high":1}]"#,
+            "params[0].property",
+        ),
+        (
+            r#"[{"kind":"material","material":"brick","property":"density","low":1,"high":2}]"#,
+            "params[0].material",
+        ),
+        (
+            r#"[{"kind":"material","material":"asphalt","property":"solar_absorptivity","low":0.5,"high":1.2}]"#,
+            "params[0].low",
+        ),
+        (
+            r#"[{"kind":"material","material":"asphalt","property":"density","low":1,"high":2}]"#,
+            "params[0].nominal",
+        ),
+        (
+            r#"[{"kind":"weather","property":"insolation_scale","low":0.5,"high":1.5,"colour":1}]"#,
+            "params[0]",
+        ),
+        ("[\n{\"kind\": }", "line 2"),
+    ] {
+        std::fs::write(&p, text).unwrap();
+        let e = ParamSet::load(&p, &mats).unwrap_err().to_string();
+        assert!(e.contains("params.json") && e.contains(want), "{text}: {e}");
+    }
+}

@@ -179,8 +179,9 @@ fn invert(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
             if r != c {
                 let f = m[r][c];
                 if f != 0.0 {
-                    for k in 0..2 * n {
-                        m[r][k] -= f * m[c][k];
+                    let pivot = m[c].clone();
+                    for (v, pv) in m[r].iter_mut().zip(&pivot) {
+                        *v -= f * pv;
                     }
                 }
             }

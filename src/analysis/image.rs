@@ -63,9 +63,7 @@ impl ImageFormat {
         match ext.as_str() {
             "png" => Some(ImageFormat::Png),
             "tif" | "tiff" => Some(ImageFormat::Tiff),
-            "exr" | "hdr" | "img" | "envi" | "dat" | "bsq" | "bil" | "bip" => {
-                Some(ImageFormat::Stack)
-            }
+            "exr" | "hdr" | "img" => Some(ImageFormat::Stack),
             _ => None,
         }
     }
@@ -87,11 +85,7 @@ pub fn read_image(path: impl AsRef<Path>) -> Result<ImageStack> {
 }
 
 fn read_stack(path: &Path) -> Result<ImageStack> {
-    // TEMPORARY until `crate::output::read_image` (EXR/ENVI) lands on main.
-    Err(Error::parse(
-        Location::file(path),
-        "EXR/ENVI reading is not in this build yet; convert to TIFF/PNG",
-    ))
+    crate::output::read_image(path)
 }
 
 fn single(width: usize, height: usize, data: Vec<f32>) -> ImageStack {

@@ -21,34 +21,13 @@ pub mod plot;
 pub mod sensitivity;
 pub mod stats;
 
-use std::io::Write;
 use std::path::Path;
 
-use crate::{Error, Result};
+use crate::Result;
 
-/// Write `bytes` to `path` atomically: a temporary file in the same
-/// directory, flushed and synced, then renamed over `path`.
+/// Write `bytes` to `path` atomically (see [`crate::output::write_atomic`]).
 pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| {
-            Error::invalid("output path", format!("`{}` names no file", path.display()))
-        })?
-        .to_string_lossy();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(Error::io(path, e));
-    }
-    Ok(())
+    crate::output::write_atomic(path, |w| {
+        w.write_all(bytes).map_err(|e| crate::Error::io(path, e))
+    })
 }

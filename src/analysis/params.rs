@@ -22,7 +22,8 @@
 //! Weather properties (applied to every record of the history):
 //! `air_temperature_offset_k` (K added to the air temperature; the dew
 //! point is kept, capped at the air temperature, and the relative humidity
-//! recomputed), `wind_speed_scale`, `wind_speed_offset_m_s` (result clamped
+//! scaled to keep the vapour pressure; saturation caps it at 1),
+//! `wind_speed_scale`, `wind_speed_offset_m_s` (result clamped
 //! at 0), `relative_humidity_offset` (fraction added, result clamped to
 //! 0.01–1, dew point recomputed), `insolation_scale` (multiplies direct,
 //! diffuse and global solar irradiance), `sky_longwave_offset_w_m2` (W/m²
@@ -191,7 +192,7 @@ impl MaterialProperty {
         match self {
             MaterialProperty::SolarAbsorptivity => (0.0, 1.0, false),
             MaterialProperty::ThermalEmissivity => (0.0, 1.0, true),
-            MaterialProperty::ExposedArea => (0.0, f64::INFINITY, false),
+            MaterialProperty::ExposedArea => (-1.0, 1.0, false),
             _ => (0.0, f64::INFINITY, true),
         }
     }
@@ -569,17 +570,30 @@ pub fn dew_point_k(t_k: f64, rh: f64) -> f64 {
 fn apply_weather_property(p: WeatherProperty, v: f64, r: &mut WeatherRecord) {
     match p {
         WeatherProperty::AirTemperatureOffsetK => {
+            // Same vapour pressure (dew point) in warmer/cooler air: the
+            // relative humidity scales by e_s(T_old)/e_s(T_new); an offset
+            // of 0 leaves the record unchanged.
+            let t_old = r.air_temperature_k;
             r.air_temperature_k += v;
-            r.dew_point_k = r.dew_point_k.min(r.air_temperature_k);
-            r.relative_humidity = (saturation_vapour_pressure_pa(r.dew_point_k)
-                / saturation_vapour_pressure_pa(r.air_temperature_k))
-            .clamp(0.0, 1.0);
+            let rh = r.relative_humidity * saturation_vapour_pressure_pa(t_old)
+                / saturation_vapour_pressure_pa(r.air_temperature_k);
+            if rh > 1.0 {
+                r.relative_humidity = 1.0;
+                r.dew_point_k = r.air_temperature_k;
+            } else {
+                r.relative_humidity = rh;
+            }
         }
         WeatherProperty::WindSpeedScale => r.wind_speed_m_s *= v,
         WeatherProperty::WindSpeedOffsetMS => r.wind_speed_m_s = (r.wind_speed_m_s + v).max(0.0),
         WeatherProperty::RelativeHumidityOffset => {
-            r.relative_humidity = (r.relative_humidity + v).clamp(0.01, 1.0);
-            r.dew_point_k = dew_point_k(r.air_temperature_k, r.relative_humidity);
+            // Dew point moved by the Magnus change, so that a record whose
+            // fields disagree slightly is left exactly as it is at v = 0.
+            let old = r.relative_humidity;
+            r.relative_humidity = (old + v).clamp(0.01, 1.0);
+            r.dew_point_k += dew_point_k(r.air_temperature_k, r.relative_humidity)
+                - dew_point_k(r.air_temperature_k, old.max(0.01));
+            r.dew_point_k = r.dew_point_k.min(r.air_temperature_k);
         }
         WeatherProperty::InsolationScale => {
             r.direct_normal_w_m2 *= v;

@@ -53,7 +53,6 @@ pub fn render_png(
     {
         let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
         root.fill(&WHITE)
-            .and_then(|_| Ok(()))
             .map_err(|e| Error::Other(format!("plot {}: {e}", path.display())))?;
         draw(&root).map_err(|e| Error::Other(format!("plot {}: {e}", path.display())))?;
         root.present()
