@@ -211,6 +211,7 @@ fn solve_energy_budget_closes() {
     for back in [
         BackBoundary::Insulated,
         BackBoundary::BOTH_FACES,
+        BackBoundary::Exposed { fraction: 0.5 },
         BackBoundary::BUILDING,
         BackBoundary::GROUND,
     ] {
@@ -469,6 +470,41 @@ fn panel_and_wall_differ_much_less_under_overcast() {
 
 fn range(t: &[f64]) -> f64 {
     t.iter().cloned().fold(f64::MIN, f64::max) - t.iter().cloned().fold(f64::MAX, f64::min)
+}
+
+/// Self-convergence: on two synthetic clear days, the default options agree
+/// with the `accurate` preset (24 cells, 120-s steps, up to 6 spin-up days)
+/// to 0.15 K on the second day, and the `fast` preset to 1 K, for a thin
+/// panel, a building wall and a ground column.
+#[test]
+fn presets_converge_to_accurate_solution() {
+    let (forcing, cos) = synthetic_days(true);
+    let sun = vec![1.0f32; cos.len()];
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let (panel, wall) = panel_and_wall();
+    let ground = SlabProperties {
+        conductivity_w_m_k: K_CONCRETE,
+        density_kg_m3: 2300.0,
+        specific_heat_j_kg_k: 880.0,
+        back: BackBoundary::GROUND,
+        ..wall
+    };
+    for props in [panel, wall, ground] {
+        let exact = thermal::solve(&props, &forcing, &inputs, &SolveOptions::accurate()).unwrap();
+        for (opts, tol) in [(SolveOptions::default(), 0.15), (SolveOptions::fast(), 1.0)] {
+            let sol = thermal::solve(&props, &forcing, &inputs, &opts).unwrap();
+            let err = sol.surface_temperature_k[96..]
+                .iter()
+                .zip(&exact.surface_temperature_k[96..])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                err < tol,
+                "{:?}: {err} K from accurate (tolerance {tol} K)",
+                props.back
+            );
+        }
+    }
 }
 
 /// Degenerate grids (one to three cells) take the same code paths' edge
