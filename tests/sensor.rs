@@ -751,18 +751,31 @@ fn effects_chain_from_config_is_deterministic() {
            "mtf": {"aperture_diameter_m": 0.05, "fill_factor": 1.0},
            "nedt_k": 0.05, "bits": 14, "gain": 500, "offset": 100, "seed": 7"#,
     );
-    let m = s.effects.mtf.unwrap();
+    let m = s.effects.mtf.unwrap().at(10.0);
     // Cutoff D/λ · (pixel angle): λ = 10 µm (band centre), pixel angle =
     // 1/focal_px.
     let c = camera(&s);
     let expect = 0.05 / 10e-6 / c.focal_px;
     assert!((m.optics_cutoff_cycles_per_px.unwrap() - expect).abs() < 1e-12);
+    let bands = s
+        .resolve_bands(
+            std::path::Path::new("."),
+            0.05,
+            &Location::file("scene.json").with_field("sensors[0]"),
+        )
+        .unwrap();
+    assert!((effects::band_centre_um(&bands[0]) - 10.0).abs() < 1e-9);
+    // σ_L = NEdT·dL/dT, the analytic derivative against a central difference.
+    let sigma = s.effects.noise_sigma(&bands[0]);
+    let numeric =
+        effects::radiance_sigma_from_nedt(0.05, 300.0, |t| bands[0].blackbody_radiance(t));
+    assert!((sigma / numeric - 1.0).abs() < 1e-6, "{sigma} {numeric}");
     let (w, h, n) = (64, 48, 2);
     let over: Vec<f32> = (0..w * n * h * n)
         .map(|i| 8.0 + (i % 13) as f32 * 0.01)
         .collect();
-    let a = s.effects.apply(&over, w, h, n, 0, 0.01).unwrap();
-    let b = s.effects.apply(&over, w, h, n, 0, 0.01).unwrap();
+    let a = s.effects.apply(&over, w, h, n, 0, &bands[0]).unwrap();
+    let b = s.effects.apply(&over, w, h, n, 0, &bands[0]).unwrap();
     assert_eq!(a, b);
     let counts = a.counts.unwrap();
     assert!(
@@ -772,4 +785,57 @@ fn effects_chain_from_config_is_deterministic() {
     );
     let mean: f64 = counts.iter().map(|&v| v as f64).sum::<f64>() / counts.len() as f64;
     assert!((mean - (500.0 * 8.06 + 100.0)).abs() < 2.0, "{mean}");
+}
+
+#[test]
+fn band_responses_resolve_from_ranges_and_csv_files() {
+    let dir = tempfile::tempdir().unwrap();
+    // A symmetric triangular response: centre 10 µm.
+    std::fs::write(
+        dir.path().join("tri.csv"),
+        "wavelength_um,response\n9.0,0\n10.0,1\n11.0,0\n",
+    )
+    .unwrap();
+    let cfg: SensorConfig = serde_json::from_str(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30,
+            "position": [0,0,1], "look_at": [0,1,1],
+            "bands": [{"name": "tri", "response": "tri.csv"},
+                      {"name": "mw", "response": [3.0, 5.0]}]}"#,
+    )
+    .unwrap();
+    let loc = Location::file("scene.json").with_field("sensors[2]");
+    let s = Sensor::from_config(&cfg, &loc).unwrap();
+    let bands = s.resolve_bands(dir.path(), 0.01, &loc).unwrap();
+    assert!((effects::band_centre_um(&bands[0]) - 10.0).abs() < 1e-9);
+    assert!((bands[0].equivalent_width_um() - 1.0).abs() < 1e-9);
+    assert!((effects::band_centre_um(&bands[1]) - 4.0).abs() < 1e-9);
+    // A missing file is an error naming it.
+    let e = s
+        .resolve_bands(&dir.path().join("nowhere"), 0.01, &loc)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("tri.csv"), "{e}");
+}
+
+#[test]
+fn image_set_writes_exr_envi_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = sample_stack(12, 7);
+    let paths =
+        output::write_image_set(dir.path(), "cam", &s, &[("band0_radiance", 10.0)], "irsig")
+            .unwrap();
+    assert_eq!(
+        listing(dir.path()),
+        vec!["cam.exr", "cam.hdr", "cam.img", "cam.png"]
+    );
+    assert_bit_identical(&s, &read_exr(&paths.exr).unwrap());
+    let e = read_envi(&paths.envi.unwrap().1).unwrap();
+    assert_eq!(e.stack.layers.len(), 1);
+    assert_eq!(e.stack.layers[0], s.layers[0]);
+    assert_eq!(e.wavelengths, Some(vec![10.0]));
+    assert!(paths.png.is_some());
+    // A missing spectral layer fails before anything is written.
+    let d2 = tempfile::tempdir().unwrap();
+    assert!(output::write_image_set(d2.path(), "x", &s, &[("nope", 4.0)], "").is_err());
+    assert!(listing(d2.path()).is_empty());
 }

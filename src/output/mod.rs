@@ -16,7 +16,7 @@ mod envi;
 mod exr_io;
 mod quicklook;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 pub use atomic::{AtomicFile, WriteSeek, write_atomic};
 pub use envi::{EnviImage, envi_paths, read_envi, write_envi};
@@ -159,6 +159,62 @@ impl ImageStack {
     pub fn stats(&self) -> Vec<LayerStats> {
         self.layers.iter().map(Layer::stats).collect()
     }
+}
+
+/// The files of one rendered image set (see [`write_image_set`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageSetPaths {
+    /// `NAME.exr`: every layer.
+    pub exr: PathBuf,
+    /// `NAME.img` and `NAME.hdr`: the spectral layers, if any were named.
+    pub envi: Option<(PathBuf, PathBuf)>,
+    /// `NAME.png`: quick-look of `apparent_temperature`, if that layer exists.
+    pub png: Option<PathBuf>,
+}
+
+/// Write the standard image set of a render into `dir`: `NAME.exr` (all
+/// layers), `NAME.img` + `NAME.hdr` (the layers named in `spectral`, in that
+/// order, each with its band-centre wavelength in µm) and `NAME.png` (the
+/// quick-look of the `apparent_temperature` layer). Each file is written
+/// atomically; the image is validated before any file is written.
+pub fn write_image_set(
+    dir: impl AsRef<Path>,
+    name: &str,
+    stack: &ImageStack,
+    spectral: &[(&str, f64)],
+    description: &str,
+) -> Result<ImageSetPaths> {
+    let dir = dir.as_ref();
+    stack.validate()?;
+    let mut envi_stack = ImageStack::new(stack.width, stack.height);
+    for (layer, _) in spectral {
+        let l = stack.layer(layer).ok_or_else(|| {
+            Error::invalid(
+                "spectral layers",
+                format!("no layer `{layer}` in the image to write to ENVI"),
+            )
+        })?;
+        envi_stack.push(l.name.clone(), l.data.clone())?;
+    }
+    let exr = dir.join(format!("{name}.exr"));
+    write_exr(&exr, stack)?;
+    let envi = if spectral.is_empty() {
+        None
+    } else {
+        let w: Vec<f64> = spectral.iter().map(|(_, w)| *w).collect();
+        let base = dir.join(name);
+        write_envi(&base, &envi_stack, Some(&w), description)?;
+        Some(envi_paths(&base))
+    };
+    let png = match stack.layer("apparent_temperature") {
+        Some(t) => {
+            let p = dir.join(format!("{name}.png"));
+            write_quicklook_png(&p, stack.width, stack.height, &t.data, None)?;
+            Some(p)
+        }
+        None => None,
+    };
+    Ok(ImageSetPaths { exr, envi, png })
 }
 
 /// Read an image file into an [`ImageStack`], choosing the format by the

@@ -22,7 +22,8 @@ use rayon::prelude::*;
 use rustfft::{FftPlanner, num_complex::Complex};
 use serde::Deserialize;
 
-use super::{BandConfig, MtfConfig};
+use super::MtfConfig;
+use crate::radiometry::Band;
 use crate::{Error, Result};
 
 /// Point-spread function used to reduce oversampled sub-pixels.
@@ -305,13 +306,51 @@ pub fn quantise(data: &[f32], bits: u32, gain: f64, offset: f64) -> Vec<f32> {
         .collect()
 }
 
+/// A sensor's MTF settings; the optics cutoff depends on the band's
+/// wavelength, so the [`Mtf`] itself is made per band by [`MtfModel::at`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MtfModel {
+    /// Entrance-pupil diameter, m (`None`: no optics MTF).
+    pub aperture_diameter_m: Option<f64>,
+    /// Fixed wavelength for the optics MTF, µm (`None`: each band's centre).
+    pub wavelength_um: Option<f64>,
+    /// Detector fill factor (`None`: no detector MTF).
+    pub fill_factor: Option<f64>,
+    /// Angle one pixel subtends (pitch/f, or a scanner's sample step), rad.
+    pub pixel_angle_rad: f64,
+}
+
+impl MtfModel {
+    /// The MTF for a band centred at `band_centre_um`: diffraction cutoff
+    /// `ν_c = D/λ` cycles/rad, i.e. `D·(pixel angle)/λ` cycles/pixel.
+    pub fn at(&self, band_centre_um: f64) -> Mtf {
+        let lambda_m = self.wavelength_um.unwrap_or(band_centre_um) * 1e-6;
+        Mtf {
+            optics_cutoff_cycles_per_px: self
+                .aperture_diameter_m
+                .map(|d| d / lambda_m * self.pixel_angle_rad),
+            fill_factor: self.fill_factor,
+        }
+    }
+}
+
+/// Response-weighted centre wavelength of a band, `∫R λ dλ / ∫R dλ`, µm.
+pub fn band_centre_um(band: &Band) -> f64 {
+    band.wavelengths_um()
+        .iter()
+        .zip(band.weights_um())
+        .map(|(l, w)| l * w)
+        .sum::<f64>()
+        / band.equivalent_width_um()
+}
+
 /// A sensor's effects chain (see the module doc).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Effects {
     /// Oversampling reduction PSF.
     pub psf: Psf,
     /// Optics/detector MTF, if any.
-    pub mtf: Option<Mtf>,
+    pub mtf: Option<MtfModel>,
     /// NEdT, K, if noise is on.
     pub nedt_k: Option<f64>,
     /// Scene temperature at which the NEdT holds, K.
@@ -353,7 +392,6 @@ impl Effects {
     /// Build from scene-file values; `pixel_angle_rad` is the angle one
     /// pixel subtends (pitch/f, or a scanner's sample step).
     pub(crate) fn from_parts(
-        bands: &[BandConfig],
         psf: Psf,
         mtf: Option<&MtfConfig>,
         pixel_angle_rad: f64,
@@ -377,27 +415,19 @@ impl Effects {
         let mtf = match mtf {
             None => None,
             Some(m) => {
-                let optics = match m.aperture_diameter_m {
-                    None => None,
-                    Some(d) => {
-                        let lambda_um = m
-                            .wavelength_um
-                            .or_else(|| bands.first().and_then(BandConfig::range_centre_um))
-                            .ok_or_else(|| {
-                                Error::invalid(
-                                    "mtf.wavelength_um",
-                                    "missing: expected a wavelength (µm) for the optics MTF",
-                                )
-                            })?;
-                        if !(d > 0.0 && lambda_um > 0.0) {
+                for (name, v) in [
+                    ("mtf.aperture_diameter_m", m.aperture_diameter_m),
+                    ("mtf.wavelength_um", m.wavelength_um),
+                ] {
+                    if let Some(v) = v {
+                        if !(v.is_finite() && v > 0.0) {
                             return Err(Error::invalid(
-                                "mtf.aperture_diameter_m",
-                                format!("D = {d} m, λ = {lambda_um} µm: expected positive values"),
+                                name,
+                                format!("{v}: expected a positive value"),
                             ));
                         }
-                        Some(d / (lambda_um * 1e-6) * pixel_angle_rad)
                     }
-                };
+                }
                 if let Some(ff) = m.fill_factor {
                     if !(ff > 0.0 && ff <= 1.0) {
                         return Err(Error::invalid(
@@ -406,9 +436,11 @@ impl Effects {
                         ));
                     }
                 }
-                Some(Mtf {
-                    optics_cutoff_cycles_per_px: optics,
+                Some(MtfModel {
+                    aperture_diameter_m: m.aperture_diameter_m,
+                    wavelength_um: m.wavelength_um,
                     fill_factor: m.fill_factor,
+                    pixel_angle_rad,
                 })
             }
         };
@@ -419,6 +451,12 @@ impl Effects {
                     format!("{n}: expected NEdT ≥ 0 K"),
                 ));
             }
+        }
+        if !(nedt_reference_k.is_finite() && nedt_reference_k > 0.0) {
+            return Err(Error::invalid(
+                "nedt_reference_k",
+                format!("{nedt_reference_k}: expected a positive temperature in K"),
+            ));
         }
         if let Some(b) = bits {
             if !(1..=24).contains(&b) {
@@ -446,26 +484,64 @@ impl Effects {
         })
     }
 
-    /// Run the chain on one band's oversampled radiance image
-    /// (`(width·n) × (height·n)`). `noise_sigma` is the radiance noise σ
-    /// (from [`radiance_sigma_from_nedt`] with the band's radiance
-    /// function; ignored when `nedt_k` is `None`); `band` selects the noise
-    /// stream.
+    /// Radiance noise σ of `band` (W·m⁻²·sr⁻¹): `NEdT · dL/dT` at the
+    /// reference temperature, with the band's analytic Planck derivative;
+    /// 0 without an NEdT.
+    pub fn noise_sigma(&self, band: &Band) -> f64 {
+        self.nedt_k.map_or(0.0, |n| {
+            n * band.blackbody_radiance_derivative(self.nedt_reference_k)
+        })
+    }
+
+    /// Run the chain on band number `band_index` (its noise stream) of
+    /// spectral band `band`, given its oversampled radiance image
+    /// (`(width·n) × (height·n)`, W·m⁻²·sr⁻¹).
     pub fn apply(
         &self,
         oversampled: &[f32],
         width: usize,
         height: usize,
         n: usize,
-        band: usize,
+        band_index: usize,
+        band: &Band,
+    ) -> Result<BandImage> {
+        let mtf = self.mtf.map(|m| m.at(band_centre_um(band)));
+        self.apply_with(
+            oversampled,
+            width,
+            height,
+            n,
+            band_index,
+            mtf.as_ref(),
+            self.noise_sigma(band),
+        )
+    }
+
+    /// [`Effects::apply`] with the band's MTF and noise σ given directly.
+    #[allow(clippy::too_many_arguments)]
+    pub fn apply_with(
+        &self,
+        oversampled: &[f32],
+        width: usize,
+        height: usize,
+        n: usize,
+        band_index: usize,
+        mtf: Option<&Mtf>,
         noise_sigma: f64,
     ) -> Result<BandImage> {
         let mut radiance = reduce_oversampled(oversampled, width, height, n, self.psf)?;
-        if let Some(m) = &self.mtf {
+        if let Some(m) = mtf {
             apply_mtf(&mut radiance, width, height, m)?;
         }
         if self.nedt_k.is_some() {
-            add_noise(&mut radiance, width, 0, noise_sigma, self.seed, band as u64);
+            add_noise(
+                &mut radiance,
+                width,
+                0,
+                noise_sigma,
+                self.seed,
+                band_index as u64,
+            );
         }
         let counts = self
             .bits

@@ -21,15 +21,16 @@ pub mod camera;
 pub mod effects;
 pub mod scanner;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
 use serde::Deserialize;
 
 pub use camera::FrameCamera;
-pub use effects::{Effects, Mtf, Psf};
+pub use effects::{BandImage, Effects, Mtf, MtfModel, Psf};
 pub use scanner::{LineScanner, LineScannerParams};
 
+use crate::radiometry::{Band, read_response_csv};
 use crate::trace::Ray;
 use crate::{Error, Location, Result};
 
@@ -56,6 +57,20 @@ pub enum ResponseSpec {
 }
 
 impl BandConfig {
+    /// Resolve the response into a radiometry [`Band`] sampled every
+    /// ≤ `step_um`: a rectangular band, or the CSV file (relative paths are
+    /// taken from `base_dir`, the scene file's folder) read by
+    /// [`crate::radiometry::read_response_csv`].
+    pub fn resolve(&self, base_dir: &Path, step_um: f64) -> Result<Band> {
+        match &self.response {
+            ResponseSpec::Range([lo, hi]) => Band::flat(*lo, *hi, step_um),
+            ResponseSpec::File(f) => {
+                let resp = read_response_csv(base_dir.join(f))?;
+                Band::from_response(&resp, step_um)
+            }
+        }
+    }
+
     /// The band centre for a rectangular band, µm (`None` for a file, whose
     /// centre the radiometry module computes).
     pub fn range_centre_um(&self) -> Option<f64> {
@@ -323,7 +338,6 @@ impl Sensor {
                     FrameCamera::new(c.width, c.height, focal_px, axes, position, c.oversample)
                         .map_err(|e| at("width", e))?;
                 let effects = Effects::from_parts(
-                    &c.bands,
                     c.psf,
                     c.mtf.as_ref(),
                     c.pixel_pitch_m
@@ -339,7 +353,13 @@ impl Sensor {
                         c.seed,
                     ),
                 )
-                .map_err(|e| at("mtf", e))?;
+                .map_err(|e| {
+                    let field = match &e {
+                        Error::Invalid { field, .. } => field.clone(),
+                        _ => "mtf".into(),
+                    };
+                    at(&field, e)
+                })?;
                 check_bands(&c.bands).map_err(|e| at("bands", e))?;
                 Ok(Sensor {
                     name: c.name.clone(),
@@ -376,7 +396,6 @@ impl Sensor {
                     at(&field, e)
                 })?;
                 let effects = Effects::from_parts(
-                    &c.bands,
                     c.psf,
                     c.mtf.as_ref(),
                     geometry.sample_step_rad(),
@@ -389,7 +408,13 @@ impl Sensor {
                         c.seed,
                     ),
                 )
-                .map_err(|e| at("mtf", e))?;
+                .map_err(|e| {
+                    let field = match &e {
+                        Error::Invalid { field, .. } => field.clone(),
+                        _ => "mtf".into(),
+                    };
+                    at(&field, e)
+                })?;
                 check_bands(&c.bands).map_err(|e| at("bands", e))?;
                 Ok(Sensor {
                     name: c.name.clone(),
@@ -399,6 +424,34 @@ impl Sensor {
                 })
             }
         }
+    }
+
+    /// Resolve every band's response (see [`BandConfig::resolve`]); errors
+    /// name the band (`<location>.bands[i].response`).
+    pub fn resolve_bands(
+        &self,
+        base_dir: &Path,
+        step_um: f64,
+        location: &Location,
+    ) -> Result<Vec<Band>> {
+        self.bands
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                b.resolve(base_dir, step_um).map_err(|e| match e {
+                    Error::Invalid { message, .. } => {
+                        let base = location.field.clone().unwrap_or_else(|| "sensor".into());
+                        Error::parse(
+                            location
+                                .clone()
+                                .with_field(format!("{base}.bands[{i}].response")),
+                            message,
+                        )
+                    }
+                    other => other,
+                })
+            })
+            .collect()
     }
 
     /// Image width: columns / samples per line.
