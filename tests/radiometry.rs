@@ -330,6 +330,20 @@ mod emissivity {
     }
 
     #[test]
+    fn dirsig_ems_evaluates() {
+        // gray.ems (DIRSIG, one curve at 0.9, no angular split): ε = 0.9 at
+        // normal view, the Fresnel fall-off toward grazing.
+        let Some(dir) = crate::util::shared_data("dirsig") else {
+            return;
+        };
+        let c = irsig::material::dirsig::read_ems(&dir.join("gray.ems")).unwrap();
+        let e = Emissivity::from_curve(&c).unwrap();
+        assert!((e.eval(10.0, 0.0) - 0.9).abs() < 1e-12);
+        assert!((e.eval(10.0, 75.0) - fresnel_emissivity(0.9, 75.0)).abs() < 1e-12);
+        assert!(e.eval(10.0, 75.0) < 0.85);
+    }
+
+    #[test]
     fn angular_curve_interpolates_in_wavelength_and_angle() {
         let curve = EmissivityCurve {
             wavelengths_um: vec![8.0, 12.0],
