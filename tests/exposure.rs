@@ -625,3 +625,31 @@ fn sun_directions_follow_the_ephemeris() {
     // Night: below the horizon.
     assert!(d[4].z < 0.0 && d[92].z < 0.0);
 }
+
+#[test]
+fn sky_sampling_parses_from_text() {
+    assert_eq!(
+        "dirsig".parse::<SkySampling>().unwrap(),
+        SkySampling::DIRSIG
+    );
+    assert_eq!(
+        "grid:5x10".parse::<SkySampling>().unwrap(),
+        SkySampling::Grid {
+            zenith_step_deg: 5.0,
+            azimuth_step_deg: 10.0
+        }
+    );
+    assert_eq!(
+        "stratified:256".parse::<SkySampling>().unwrap(),
+        SkySampling::Stratified { samples: 256 }
+    );
+    assert_eq!(
+        SkySampling::Stratified { samples: 250 }.rays_per_face(),
+        256
+    );
+    assert_eq!(SkySampling::DIRSIG.rays_per_face(), 72);
+    for bad in ["", "grid:0x30", "stratified:0", "stratified:x", "hemi"] {
+        let e = bad.parse::<SkySampling>().unwrap_err().to_string();
+        assert!(e.contains("expected `dirsig`"), "{bad}: {e}");
+    }
+}

@@ -57,6 +57,44 @@ impl SkySampling {
     }
 }
 
+impl std::str::FromStr for SkySampling {
+    type Err = crate::Error;
+    /// `dirsig` (or `grid`): DIRSIG's 15°×30° grid; `grid:DZxDA` (degrees,
+    /// e.g. `grid:5x10`); `stratified:N` (N rays per face).
+    fn from_str(s: &str) -> crate::Result<Self> {
+        let bad = || {
+            crate::Error::invalid(
+                "sky sampling",
+                format!("`{s}`: expected `dirsig`, `grid:DZxDA` (degrees) or `stratified:N`"),
+            )
+        };
+        match s.split_once(':') {
+            None if s == "dirsig" || s == "grid" => Ok(SkySampling::DIRSIG),
+            Some(("grid", g)) => {
+                let (z, a) = g.split_once('x').ok_or_else(bad)?;
+                let (z, a): (f32, f32) =
+                    (z.parse().map_err(|_| bad())?, a.parse().map_err(|_| bad())?);
+                if !(z.is_finite()
+                    && (0.5..=90.0).contains(&z)
+                    && a.is_finite()
+                    && (0.5..=360.0).contains(&a))
+                {
+                    return Err(bad());
+                }
+                Ok(SkySampling::Grid {
+                    zenith_step_deg: z,
+                    azimuth_step_deg: a,
+                })
+            }
+            Some(("stratified", n)) => match n.parse::<u32>() {
+                Ok(samples @ 1..=1_048_576) => Ok(SkySampling::Stratified { samples }),
+                _ => Err(bad()),
+            },
+            _ => Err(bad()),
+        }
+    }
+}
+
 impl Default for SkySampling {
     fn default() -> Self {
         SkySampling::DIRSIG
