@@ -6,7 +6,8 @@ use glam::Vec3;
 use irsig::exposure::sampling::{dirsig_grid, triangle_strata};
 use irsig::exposure::{ExposureParams, SkySampling, compute_exposure};
 use irsig::geometry::{SceneGeometry, TriangleMesh};
-use irsig::trace::{Coherence, Hit, Ray, Tracer};
+use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer};
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// Brute-force reference tracer: every ray against every triangle
 /// (Möller & Trumbore 1997), both faces.
@@ -74,6 +75,108 @@ impl Tracer for Brute {
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             *o = self.tris.iter().any(|(t, _, _)| Self::hit(r, t).is_some());
         }
+    }
+}
+
+/// Every query answered by Embree (packets), cross-checked ray by ray
+/// against obvhs and the brute-force tracer: hit or miss, and the distance.
+/// A disagreement counts only when the ray does not pass within 1e-4 (in
+/// barycentrics) of a triangle edge, where backends legitimately differ
+/// (e.g. a ray through the end edge of a wall). On drop (unless the test
+/// already failed) it asserts that there were none.
+struct Checked {
+    backends: Vec<Box<dyn Tracer>>,
+    brute: Brute,
+    rays: AtomicU64,
+    mismatches: AtomicU64,
+}
+
+impl Checked {
+    fn new(g: &SceneGeometry) -> Self {
+        Checked {
+            backends: vec![
+                trace::build(g, Backend::Embree).unwrap(),
+                trace::build(g, Backend::Obvhs).unwrap(),
+                Box::new(Brute::new(g)),
+            ],
+            brute: Brute::new(g),
+            rays: AtomicU64::new(0),
+            mismatches: AtomicU64::new(0),
+        }
+    }
+    /// Whether `r` passes within 1e-4 (barycentric) of an edge of a
+    /// triangle it crosses.
+    fn grazes_an_edge(&self, r: &Ray) -> bool {
+        let wide = 1e-4;
+        self.brute.tris.iter().any(|(t, _, _)| {
+            // Möller–Trumbore with a widened acceptance band.
+            let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+            let p = r.dir.cross(e2);
+            let det = e1.dot(p);
+            if det.abs() < 1e-12 {
+                return false;
+            }
+            let s = r.origin - t[0];
+            let u = s.dot(p) / det;
+            let v = r.dir.dot(s.cross(e1)) / det;
+            let d = e2.dot(s.cross(e1)) / det;
+            let w = 1.0 - u - v;
+            d > 0.0 && u > -wide && v > -wide && w > -wide && u.min(v).min(w) < wide
+        })
+    }
+    fn count(&self, rays: &[Ray], bad: impl Iterator<Item = usize>) {
+        let real = bad.filter(|&i| !self.grazes_an_edge(&rays[i])).count();
+        self.mismatches.fetch_add(real as u64, Relaxed);
+    }
+}
+
+impl Drop for Checked {
+    fn drop(&mut self) {
+        let (r, m) = (self.rays.load(Relaxed), self.mismatches.load(Relaxed));
+        if !std::thread::panicking() {
+            assert_eq!(m, 0, "backends disagree on {m} of {r} rays away from edges");
+        }
+    }
+}
+
+impl Tracer for Checked {
+    fn name(&self) -> &str {
+        "checked"
+    }
+    fn intersect(&self, rays: &[Ray], c: Coherence, out: &mut [Option<Hit>]) {
+        self.backends[0].intersect(rays, c, out);
+        let mut other = vec![None; rays.len()];
+        for b in &self.backends[1..] {
+            b.intersect(rays, c, &mut other);
+            let bad = out
+                .iter()
+                .zip(&other)
+                .enumerate()
+                .filter_map(|(i, (a, b))| {
+                    let differ = match (a, b) {
+                        (None, None) => false,
+                        (Some(a), Some(b)) => (a.t - b.t).abs() > 1e-4 * a.t.max(1.0),
+                        _ => true,
+                    };
+                    differ.then_some(i)
+                });
+            self.count(rays, bad);
+        }
+        self.rays.fetch_add(rays.len() as u64, Relaxed);
+    }
+    fn occluded(&self, rays: &[Ray], c: Coherence, out: &mut [bool]) {
+        self.backends[0].occluded(rays, c, out);
+        let mut other = vec![false; rays.len()];
+        for b in &self.backends[1..] {
+            b.occluded(rays, c, &mut other);
+            let bad = out
+                .iter()
+                .zip(&other)
+                .enumerate()
+                .filter_map(|(i, (a, b))| (a != b).then_some(i));
+            self.count(rays, bad);
+        }
+        self.rays.fetch_add(rays.len() as u64, Relaxed);
     }
 }
 
@@ -163,7 +266,7 @@ fn tilted_plane_shape_factor() {
         let ev = Vec3::new(0.0, 2.0 * b.cos(), -2.0 * b.sin());
         let ids = quad(&mut m, Vec3::new(-1.0, -1.0, 1.0), eu, ev, 2, 2);
         let geo = SceneGeometry::single(m);
-        let brute = Brute::new(&geo);
+        let brute = Checked::new(&geo);
         let exact = (1.0 + b.cos() as f64) / 2.0;
         let exp = compute_exposure(&brute, &geo, &[], &[], &stratified(1024)).unwrap();
         let f = area_mean(&exp, ids.clone(), &exp.sky.shape_factor);
@@ -269,7 +372,7 @@ fn urban_canyon_shape_factors_match_masson() {
         assert!((r - road_ref).abs() < 1e-6 && (wl - wall_ref).abs() < 1e-6);
         let w = 10.0f32;
         let (geo, road, wall) = canyon(hw as f32 * w, w);
-        let brute = Brute::new(&geo);
+        let brute = Checked::new(&geo);
         let exp = compute_exposure(&brute, &geo, &[], &[], &stratified(4096)).unwrap();
         let fr = area_mean(&exp, road.clone(), &exp.sky.shape_factor);
         let fw = area_mean(&exp, wall.clone(), &exp.sky.shape_factor);
@@ -372,7 +475,7 @@ fn sun(elev_deg: f32, az_deg: f32) -> Vec3 {
 #[test]
 fn solar_history_of_ground_shaded_by_a_wall() {
     let (geo, _, ground, wall) = wall_on_ground(false);
-    let brute = Brute::new(&geo);
+    let brute = Checked::new(&geo);
     // Steps: night; sun due north at 45° (the wall, 2 m, shades y ∈ [−2, 0]
     // to the south); due south at 45° (shades y ∈ [0, 2], and lights the
     // south-facing wall); due east at 30° (the wall is edge-on: no shadow,
@@ -423,7 +526,7 @@ fn solar_history_of_ground_shaded_by_a_wall() {
 #[test]
 fn partial_shadow_matches_the_sunlit_area() {
     let (geo, _, ground, _) = wall_on_ground(false);
-    let brute = Brute::new(&geo);
+    let brute = Checked::new(&geo);
     // Sun south at atan(2/1.5): the 2 m wall shades y ∈ [0, 1.5]; the strip
     // y ∈ [1, 2] is half in shadow.
     let elev = (2.0f32 / 1.5).atan().to_degrees();
@@ -441,7 +544,7 @@ fn partial_shadow_matches_the_sunlit_area() {
 #[test]
 fn double_sided_facets_take_sun_and_sky_on_both_faces() {
     let (geo, ds, _, wall) = wall_on_ground(true);
-    let brute = Brute::new(&geo);
+    let brute = Checked::new(&geo);
     let steps = [sun(45.0, 0.0), sun(45.0, 180.0)];
     let exp = compute_exposure(&brute, &geo, &ds, &steps, &stratified(1024)).unwrap();
     let c45 = 45f32.to_radians().cos();
@@ -469,7 +572,7 @@ fn double_sided_facets_take_sun_and_sky_on_both_faces() {
 #[test]
 fn results_do_not_depend_on_threads_or_batches() {
     let (geo, _, _) = canyon(10.0, 10.0);
-    let brute = Brute::new(&geo);
+    let brute = Checked::new(&geo);
     let steps = [sun(30.0, 135.0), sun(60.0, 200.0)];
     let run = |threads: usize, batch: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -502,7 +605,7 @@ fn stratified_error_estimate_tracks_the_actual_error() {
     quad(&mut m, Vec3::ZERO, eu, ev, 20, 10);
     let geo = SceneGeometry::single(m);
     let exact = (1.0 + b.cos()) / 2.0;
-    let exp = compute_exposure(&Brute::new(&geo), &geo, &[], &[], &stratified(64)).unwrap();
+    let exp = compute_exposure(&Checked::new(&geo), &geo, &[], &[], &stratified(64)).unwrap();
     let n = geo.facet_count() as f32;
     let rms_err = (exp
         .sky
@@ -524,7 +627,7 @@ fn stratified_error_estimate_tracks_the_actual_error() {
 #[test]
 fn bad_inputs_are_reported() {
     let (geo, _, _, _) = wall_on_ground(false);
-    let brute = Brute::new(&geo);
+    let brute = Checked::new(&geo);
     let e =
         compute_exposure(&brute, &geo, &[true; 3], &[], &ExposureParams::default()).unwrap_err();
     assert!(
@@ -652,4 +755,400 @@ fn sky_sampling_parses_from_text() {
         let e = bad.parse::<SkySampling>().unwrap_err().to_string();
         assert!(e.contains("expected `dirsig`"), "{bad}: {e}");
     }
+}
+// ---- Scene-wide thermal solve ----
+
+use irsig::exposure::{Dedup, FacetThermal, ThermalParams, solve_facet_temperatures};
+use irsig::thermal::{BackBoundary, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties};
+
+/// A clear day, 15-min records over 24 h: air 288 ± 6 K peaking at 15:00,
+/// sun rising due east at 06:00 and culminating at 60° due south; with
+/// `constant_air` the air stays at 288 K.
+fn clear_day(constant_air: bool) -> (Forcing, Vec<Vec3>) {
+    let times: Vec<f64> = (0..=96).map(|i| i as f64 * 900.0).collect();
+    let mut f = Forcing::constant(&times, 288.0, 2.0, 0.0, 0.0, 0.0);
+    let mut dirs = Vec::new();
+    for (i, &t) in times.iter().enumerate() {
+        let hour = t / 3600.0;
+        let s = (std::f64::consts::PI * (hour - 6.0) / 12.0).sin();
+        let air = if constant_air {
+            288.0
+        } else {
+            288.0 + 6.0 * (std::f64::consts::PI * (hour - 9.0) / 12.0).sin()
+        };
+        f.air_temperature_k[i] = air;
+        f.direct_normal_w_m2[i] = if s > 0.0 { 850.0 * s.powf(0.3) } else { 0.0 };
+        f.diffuse_horizontal_w_m2[i] = 100.0 * s.max(0.0);
+        f.sky_longwave_w_m2[i] = 0.75 * STEFAN_BOLTZMANN_W_M2_K4 * air.powi(4);
+        let elev = if s > 0.0 { 60.0 * s as f32 } else { -10.0 };
+        let az = 90.0 + 180.0 * ((hour as f32 - 6.0) / 12.0).clamp(0.0, 1.0);
+        dirs.push(sun(elev, az));
+    }
+    (f, dirs)
+}
+
+fn asphalt() -> SlabProperties {
+    SlabProperties {
+        conductivity_w_m_k: 0.75,
+        density_kg_m3: 2100.0,
+        specific_heat_j_kg_k: 920.0,
+        thickness_m: 0.1,
+        solar_absorptivity: 0.9,
+        thermal_emissivity: 0.95,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::GROUND,
+    }
+}
+
+fn brick() -> SlabProperties {
+    SlabProperties {
+        conductivity_w_m_k: 0.7,
+        density_kg_m3: 1900.0,
+        specific_heat_j_kg_k: 840.0,
+        thickness_m: 0.2,
+        solar_absorptivity: 0.65,
+        thermal_emissivity: 0.9,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::BUILDING,
+    }
+}
+
+/// Ground (asphalt) and wall (brick), everything solved.
+fn solved_kinds(n: usize, wall: &std::ops::Range<usize>) -> Vec<FacetThermal> {
+    (0..n)
+        .map(|f| FacetThermal::Solve(wall.contains(&f) as u32))
+        .collect()
+}
+
+#[test]
+fn dedup_matches_the_per_facet_solve() {
+    let (geo, _, ground, wall) = wall_on_ground(false);
+    let (forcing, dirs) = clear_day(false);
+    let exp = compute_exposure(&Checked::new(&geo), &geo, &[], &dirs, &stratified(256)).unwrap();
+    let kinds = solved_kinds(geo.facet_count(), &wall);
+    let props = [asphalt(), brick()];
+    let images = [56, 96]; // 14:00 and midnight
+    let with = solve_facet_temperatures(
+        &exp,
+        &kinds,
+        &props,
+        &forcing,
+        &images,
+        &ThermalParams::default(),
+    )
+    .unwrap();
+    let without = ThermalParams {
+        dedup: None,
+        ..Default::default()
+    };
+    let without =
+        solve_facet_temperatures(&exp, &kinds, &props, &forcing, &images, &without).unwrap();
+    let (a, b) = (&with.passes[1], &without.passes[1]);
+    eprintln!(
+        "classes: {} with dedup, {} without; pass 2 changed T by ≤ {:.3} K",
+        a.classes,
+        b.classes,
+        a.max_change_from_previous_pass_k.unwrap()
+    );
+    assert_eq!(b.classes, geo.facet_count());
+    for (x, y) in with
+        .surface_temperature_k
+        .iter()
+        .zip(&without.surface_temperature_k)
+    {
+        for f in 0..geo.facet_count() {
+            assert!((x[f] - y[f]).abs() < 0.1, "facet {f}: {} vs {}", x[f], y[f]);
+        }
+    }
+    // At 14:00 the always-lit ground south of the wall is much hotter than
+    // the ground in its shadow north of it.
+    let t14 = &with.surface_temperature_k[0];
+    let sunny = ground.start; // y ∈ [−4, −3]: always lit
+    let shaded = ground.start + 9; // y ∈ [0, 1] north of the wall: shaded all day
+    assert!(
+        t14[sunny] > t14[shaded] + 5.0,
+        "{} vs {}",
+        t14[sunny],
+        t14[shaded]
+    );
+}
+
+/// In an open field most facets see the same sun and sky: with DIRSIG's
+/// grid (the same 72 directions for every facet) they share one solve.
+#[test]
+fn dedup_merges_facets_with_the_same_inputs() {
+    let mut m = TriangleMesh::default();
+    let ground = quad(
+        &mut m,
+        Vec3::new(-20.0, -20.0, 0.0),
+        Vec3::X * 40.0,
+        Vec3::Y * 40.0,
+        10,
+        10,
+    );
+    let wall = quad(
+        &mut m,
+        Vec3::new(-1.0, 0.0, 0.0),
+        Vec3::X * 2.0,
+        Vec3::Z * 1.0,
+        1,
+        1,
+    );
+    let geo = SceneGeometry::single(m);
+    let (forcing, dirs) = clear_day(false);
+    let exp = compute_exposure(
+        &Checked::new(&geo),
+        &geo,
+        &[],
+        &dirs,
+        &ExposureParams::default(),
+    )
+    .unwrap();
+    let kinds = solved_kinds(geo.facet_count(), &wall);
+    let props = [asphalt(), brick()];
+    let r = solve_facet_temperatures(
+        &exp,
+        &kinds,
+        &props,
+        &forcing,
+        &[56],
+        &ThermalParams::default(),
+    )
+    .unwrap();
+    let open = ground
+        .clone()
+        .filter(|&f| exp.sky.shape_factor[f] == 1.0)
+        .count();
+    eprintln!(
+        "{} facets, {open} see only sky; classes: pass 1 {}, pass 2 {}",
+        geo.facet_count(),
+        r.passes[0].classes,
+        r.passes[1].classes
+    );
+    assert!(open > 150);
+    assert!(
+        r.passes[0].classes < geo.facet_count() / 4,
+        "{:?}",
+        r.passes[0]
+    );
+    // Pass 2: facets that see (almost) only sky keep their pass-1 result.
+    assert!(r.passes[1].reused_facets >= open, "{:?}", r.passes[1]);
+    let all = ThermalParams {
+        dedup: None,
+        ..Default::default()
+    };
+    let s = solve_facet_temperatures(&exp, &kinds, &props, &forcing, &[56], &all).unwrap();
+    for f in 0..geo.facet_count() {
+        let (a, b) = (r.surface_temperature_k[0][f], s.surface_temperature_k[0][f]);
+        assert!((a - b).abs() < 0.1, "facet {f}: {a} vs {b}");
+    }
+}
+
+#[test]
+fn fixed_facets_bypass_the_solver_and_warm_their_neighbours() {
+    let (geo, _, ground, wall) = wall_on_ground(false);
+    let (forcing, dirs) = clear_day(false);
+    let exp = compute_exposure(&Checked::new(&geo), &geo, &[], &dirs, &stratified(256)).unwrap();
+    let mut kinds = solved_kinds(geo.facet_count(), &wall);
+    for f in wall.clone() {
+        kinds[f] = FacetThermal::Fixed(330.0);
+    }
+    let props = [asphalt(), brick()];
+    let one = ThermalParams {
+        passes: 1,
+        ..Default::default()
+    };
+    let p1 = solve_facet_temperatures(&exp, &kinds, &props, &forcing, &[96], &one).unwrap();
+    let p2 = solve_facet_temperatures(
+        &exp,
+        &kinds,
+        &props,
+        &forcing,
+        &[96],
+        &ThermalParams::default(),
+    )
+    .unwrap();
+    let (t1, t2) = (&p1.surface_temperature_k[0], &p2.surface_temperature_k[0]);
+    for f in wall {
+        assert_eq!((t1[f], t2[f]), (330.0, 330.0));
+    }
+    // Ground south of the wall: y ∈ [−1, 0] next to it, y ∈ [−4, −3] far.
+    let (near, far) = (ground.start + 6, ground.start);
+    let (dn, df) = (t2[near] - t1[near], t2[far] - t1[far]);
+    eprintln!("a 330 K wall warms the ground next to it by {dn:.3} K, 3 m away by {df:.3} K");
+    assert!(dn > 0.3 && df > 0.0 && dn > 3.0 * df, "{dn} {df}");
+}
+
+/// Neighbours at exactly the air temperature make pass 2 reproduce pass 1:
+/// the background's radiative mean is then the air temperature.
+#[test]
+fn neighbours_at_air_temperature_leave_the_second_pass_unchanged() {
+    let (geo, _, _, wall) = wall_on_ground(false);
+    let (forcing, dirs) = clear_day(true);
+    let exp = compute_exposure(&Checked::new(&geo), &geo, &[], &dirs, &stratified(64)).unwrap();
+    let mut kinds = solved_kinds(geo.facet_count(), &wall);
+    for f in wall {
+        kinds[f] = FacetThermal::Fixed(288.0);
+    }
+    let r = solve_facet_temperatures(
+        &exp,
+        &kinds,
+        &[asphalt(), brick()],
+        &forcing,
+        &[40, 96],
+        &ThermalParams::default(),
+    )
+    .unwrap();
+    let change = r.passes[1].max_change_from_previous_pass_k.unwrap();
+    assert!(change < 0.01, "{change} K");
+}
+
+#[test]
+fn scene_solve_rejects_mismatched_inputs() {
+    let (geo, _, _, wall) = wall_on_ground(false);
+    let (forcing, dirs) = clear_day(true);
+    let exp =
+        compute_exposure(&Checked::new(&geo), &geo, &[], &dirs[..10], &stratified(16)).unwrap();
+    let kinds = solved_kinds(geo.facet_count(), &wall);
+    let e = solve_facet_temperatures(
+        &exp,
+        &kinds,
+        &[asphalt(), brick()],
+        &forcing,
+        &[0],
+        &ThermalParams::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("97 records"), "{e}");
+    let exp = compute_exposure(&Checked::new(&geo), &geo, &[], &dirs, &stratified(16)).unwrap();
+    let e = solve_facet_temperatures(
+        &exp,
+        &kinds,
+        &[asphalt()],
+        &forcing,
+        &[0],
+        &ThermalParams::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("property set 1"), "{e}");
+    let e = solve_facet_temperatures(
+        &exp,
+        &kinds[1..],
+        &[asphalt(), brick()],
+        &forcing,
+        &[0],
+        &ThermalParams::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("one per facet"), "{e}");
+    let _ = Dedup::default();
+}
+
+/// The whole pipeline on the town's synthetic weather (Rochester NY, June):
+/// a wall running east–west casts its noon shadow on the ground north of it.
+#[test]
+fn scene_pipeline_on_the_town_weather() {
+    use chrono::{DateTime, TimeDelta};
+    use irsig::exposure::{FacetThermalSetup, SceneThermalParams, solve_scene_temperatures};
+    let (weather, _) = irsig::weather::synth::town_history().unwrap();
+    let site = *weather.site().expect("the town history has a site");
+    let (geo, _, ground, wall) = wall_on_ground(false);
+    let setup = FacetThermalSetup {
+        kinds: solved_kinds(geo.facet_count(), &wall),
+        props: vec![asphalt(), brick()],
+        double_sided: Vec::new(),
+    };
+    let noon = DateTime::parse_from_rfc3339("2025-06-21T13:00:00-04:00").unwrap();
+    let night = DateTime::parse_from_rfc3339("2025-06-21T23:00:00-04:00").unwrap();
+    let images = [noon, night];
+    let params = SceneThermalParams::default();
+    let r = solve_scene_temperatures(
+        &Checked::new(&geo),
+        &geo,
+        &setup,
+        &weather,
+        &site,
+        &images,
+        &params,
+    )
+    .unwrap();
+    // 24 h before noon at 15 min, to 23:00: 96 + 40 steps, + the end.
+    assert_eq!(r.times.len(), 96 + 40 + 1);
+    assert_eq!(r.times[0], noon - TimeDelta::hours(24));
+    assert_eq!(r.times[r.temperatures.image_records[0]], noon);
+    assert_eq!(r.times[r.temperatures.image_records[1]], night);
+    // Solar noon ≈ 13:10 EDT, elevation ≈ 70°: the 2 m wall shades ≈ 0.7 m
+    // north of it; the strip y ∈ [1, 2] is lit, y ∈ [−4, 0] (south) too.
+    let sun = r.sun_fraction(0);
+    let strip = |k: usize| ground.start + 2 * k;
+    assert_eq!(sun[strip(0)], 1.0);
+    assert_eq!(sun[strip(5)], 1.0);
+    assert!(sun[strip(4)] < 0.6, "strip y ∈ [0,1]: {}", sun[strip(4)]);
+    assert!(r.sun_fraction(1).iter().all(|&s| s == 0.0), "night");
+    let air_noon = weather.at(noon).unwrap().air_temperature_k as f32;
+    let t = r.surface_temperature_k(0);
+    assert!(
+        t[strip(0)] > air_noon + 10.0,
+        "sunlit asphalt {} vs air {air_noon}",
+        t[strip(0)]
+    );
+    assert!(t[strip(0)] > t[strip(4)] + 3.0);
+    eprintln!(
+        "{} facets: rays {:?}, thermal {:?}, {:.0} facets/s",
+        geo.facet_count(),
+        r.timings.rays,
+        r.timings.thermal,
+        r.facets_per_second()
+    );
+    // A window the weather does not cover is an error naming the span.
+    let early = DateTime::parse_from_rfc3339("2025-06-19T12:00:00-04:00").unwrap();
+    let e = solve_scene_temperatures(
+        &Checked::new(&geo),
+        &geo,
+        &setup,
+        &weather,
+        &site,
+        &[early],
+        &params,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("weather history covers"), "{e}");
+}
+
+/// Embree and obvhs give the same shape factors and sun fractions on a
+/// procedural town (terrain + buildings, instanced), facet by facet, up to
+/// rays that graze an edge.
+#[test]
+fn backends_agree_on_a_procedural_town() {
+    use irsig::geometry::procedural::{TerrainParams, generate};
+    let mut p = TerrainParams::with_triangles(4000, 3);
+    p.size_m = 200.0;
+    let geo = generate(&p);
+    let steps = [sun(20.0, 100.0), sun(55.0, 180.0), sun(35.0, 250.0)];
+    let params = ExposureParams::default();
+    let run = |b: Backend| {
+        let t = trace::build(&geo, b).unwrap();
+        compute_exposure(&*t, &geo, &[], &steps, &params).unwrap()
+    };
+    let (e, o) = (run(Backend::Embree), run(Backend::Obvhs));
+    let n = geo.facet_count();
+    let same_f = (0..n)
+        .filter(|&f| e.sky.shape_factor[f] == o.sky.shape_factor[f])
+        .count();
+    let same_s = (0..e.solar.sun_fraction.len())
+        .filter(|&i| e.solar.sun_fraction[i] == o.solar.sun_fraction[i])
+        .count();
+    let worst = (0..n)
+        .map(|f| (e.sky.shape_factor[f] - o.sky.shape_factor[f]).abs())
+        .fold(0.0f32, f32::max);
+    eprintln!(
+        "{n} facets: F identical on {same_f}, sun fraction on {same_s} of {} facet-steps; worst |ΔF| {worst}",
+        e.solar.sun_fraction.len()
+    );
+    assert!(same_f as f64 >= 0.995 * n as f64);
+    assert!(same_s as f64 >= 0.995 * e.solar.sun_fraction.len() as f64);
+    assert!(worst <= 0.05, "{worst}");
+    // Some facets are shaded and some see buildings: the scene exercises both.
+    assert!(e.solar.sun_fraction.iter().any(|&s| s > 0.0 && s < 1.0));
+    assert!((0..n).any(|f| !e.sky.background(f).is_empty()));
 }

@@ -16,6 +16,13 @@
 //! - [`history_times`] / [`sun_directions`]: the record times of the
 //!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min) and the
 //!   sun's direction at each, computed once for the scene (NREL SPA).
+//! - [`solve_facet_temperatures`]: the scene-wide thermal solve — every
+//!   facet through [`crate::thermal::solve`], deduplicated, two passes (the
+//!   second with the neighbours' temperatures as background), fixed
+//!   facets bypassing it ([`FacetThermal`]).
+//! - [`solve_scene_temperatures`]: all of the above for a render — history
+//!   window, sun, rays, thermal → [`SceneThermal`] (temperatures, shape
+//!   factors and sun fractions at the image times, timings).
 //!
 //! Rays go through any [`Tracer`] (Embree or obvhs) in batches of
 //! [`ExposureParams::batch_facets`] facets, batches in parallel (rayon).
@@ -35,9 +42,11 @@
 
 mod facets;
 mod history;
+mod pipeline;
 pub mod sampling;
 mod sky;
 mod solar;
+mod solve;
 
 use std::time::{Duration, Instant};
 
@@ -45,8 +54,15 @@ use glam::Vec3;
 
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_times, sun_directions};
+pub use pipeline::{
+    FacetThermalSetup, SceneThermal, SceneThermalParams, SceneThermalTimings,
+    solve_scene_temperatures,
+};
 pub use sky::{BackgroundEntry, SkySampling, SkyView, sky_view};
 pub use solar::{SolarHistory, solar_history};
+pub use solve::{
+    Dedup, FacetThermal, PassStats, SceneTemperatures, ThermalParams, solve_facet_temperatures,
+};
 
 use crate::geometry::SceneGeometry;
 use crate::trace::Tracer;

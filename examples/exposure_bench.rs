@@ -1,0 +1,132 @@
+//! Throughput of the per-facet pipeline (solar history + sky view rays, then
+//! the two-pass thermal solve) on a procedural town: terrain of asphalt-like
+//! ground with brick box buildings, the town's synthetic June weather
+//! (Rochester NY), image at 14:00 local time after a 24 h history.
+//!
+//! Run: `cargo run --release --example exposure_bench -- [TRIANGLES] [BACKEND] [SKY]`
+//! (defaults 300000, embree, grid; SKY = grid | N for N stratified rays).
+
+use std::time::Instant;
+
+use chrono::DateTime;
+use irsig::exposure::{
+    FacetThermal, FacetThermalSetup, SceneThermalParams, SkySampling, solve_scene_temperatures,
+};
+use irsig::geometry::procedural::{TerrainParams, generate};
+use irsig::thermal::{BackBoundary, SlabProperties};
+use irsig::trace::{self, Backend};
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let triangles: usize = args.first().map_or(Ok(300_000), |s| s.parse())?;
+    let backend: Backend = args.get(1).map_or(Ok(Backend::Embree), |s| s.parse())?;
+    let sky = match args.get(2).map(String::as_str) {
+        None | Some("grid") => SkySampling::DIRSIG,
+        Some(n) => SkySampling::Stratified {
+            samples: n.parse()?,
+        },
+    };
+    rayon::ThreadPoolBuilder::new()
+        .start_handler(|_| trace::init_worker_thread())
+        .build_global()?;
+
+    let t0 = Instant::now();
+    let geo = generate(&TerrainParams::with_triangles(triangles, 7));
+    let tracer = trace::build(&geo, backend)?;
+    let build = t0.elapsed();
+    let (weather, _) = irsig::weather::synth::town_history()?;
+    let site = *weather.site().expect("town weather has a site");
+
+    let ground = SlabProperties {
+        conductivity_w_m_k: 0.75,
+        density_kg_m3: 2100.0,
+        specific_heat_j_kg_k: 920.0,
+        thickness_m: 0.1,
+        solar_absorptivity: 0.9,
+        thermal_emissivity: 0.95,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::GROUND,
+    };
+    let brick = SlabProperties {
+        conductivity_w_m_k: 0.7,
+        density_kg_m3: 1900.0,
+        specific_heat_j_kg_k: 840.0,
+        thickness_m: 0.2,
+        solar_absorptivity: 0.65,
+        thermal_emissivity: 0.9,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::BUILDING,
+    };
+    let offsets = geo.facet_offsets();
+    let kinds: Vec<FacetThermal> = (0..geo.facet_count())
+        .map(|f| FacetThermal::Solve((f >= offsets[1]) as u32))
+        .collect();
+    let setup = FacetThermalSetup {
+        kinds,
+        props: vec![ground, brick],
+        double_sided: Vec::new(),
+    };
+    let image = DateTime::parse_from_rfc3339("2025-06-21T14:00:00-04:00")?;
+    let params = SceneThermalParams {
+        exposure: irsig::exposure::ExposureParams {
+            sky,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let r = solve_scene_temperatures(&*tracer, &geo, &setup, &weather, &site, &[image], &params)?;
+
+    let n = geo.facet_count();
+    let s = &r.exposure.stats;
+    let tm = &r.timings;
+    println!(
+        "scene: {n} facets ({} buildings), {} records; backend {}, sky {:?}, {} threads",
+        offsets.len() - 2,
+        r.times.len(),
+        tracer.name(),
+        params.exposure.sky,
+        rayon::current_num_threads()
+    );
+    println!("build (geometry + BVH): {:.2} s", build.as_secs_f64());
+    println!(
+        "rays: {:.2} s — solar {:.1} M rays in {:.2} s ({:.2} Mrays/s), sky {:.1} M rays in {:.2} s ({:.2} Mrays/s)",
+        tm.rays.as_secs_f64(),
+        s.solar_rays as f64 * 1e-6,
+        s.solar.as_secs_f64(),
+        s.solar_rays as f64 * 1e-6 / s.solar.as_secs_f64(),
+        s.sky_rays as f64 * 1e-6,
+        s.sky.as_secs_f64(),
+        s.sky_rays as f64 * 1e-6 / s.sky.as_secs_f64(),
+    );
+    for (i, p) in r.temperatures.passes.iter().enumerate() {
+        println!(
+            "thermal pass {}: {} facets in {} classes, setup {:.2} s, solve {:.2} s; spin-up change ≤ {:.3} K{}",
+            i + 1,
+            p.solved_facets,
+            p.classes,
+            p.setup.as_secs_f64(),
+            p.solve.as_secs_f64(),
+            p.max_spinup_change_k,
+            p.max_change_from_previous_pass_k
+                .map_or(String::new(), |c| format!(
+                    ", ≤ {c:.2} K from the previous pass"
+                ))
+        );
+    }
+    println!(
+        "total {:.2} s (setup {:.2}, rays {:.2}, thermal {:.2}): {:.0} facets/s",
+        tm.total().as_secs_f64(),
+        tm.setup.as_secs_f64(),
+        tm.rays.as_secs_f64(),
+        tm.thermal.as_secs_f64(),
+        r.facets_per_second()
+    );
+    let t = r.surface_temperature_k(0);
+    let (lo, hi) = t
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    println!("surface temperatures at 14:00: {lo:.1} – {hi:.1} K");
+    Ok(())
+}

@@ -1,0 +1,158 @@
+//! The whole per-facet pipeline for a render: history window → sun
+//! directions → rays ([`compute_exposure`]) → thermal passes
+//! ([`solve_facet_temperatures`]) → temperatures at the image times.
+
+use std::time::{Duration, Instant};
+
+use chrono::{DateTime, FixedOffset, TimeDelta};
+
+use super::{
+    Exposure, ExposureParams, FacetThermal, HistoryWindow, SceneTemperatures, ThermalParams,
+    compute_exposure, history_times, solve_facet_temperatures, sun_directions,
+};
+use crate::Result;
+use crate::geometry::SceneGeometry;
+use crate::sun::Site;
+use crate::thermal::{Forcing, SlabProperties};
+use crate::trace::Tracer;
+use crate::weather::WeatherHistory;
+
+/// How each facet's temperature is obtained: the thermal side of a scene.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FacetThermalSetup {
+    /// Per facet (global facet order): solved with a property set, or fixed.
+    pub kinds: Vec<FacetThermal>,
+    /// The property sets [`FacetThermal::Solve`] indexes.
+    pub props: Vec<SlabProperties>,
+    /// Per facet: both faces are front faces (thin objects); may be empty.
+    pub double_sided: Vec<bool>,
+}
+
+/// Parameters of [`solve_scene_temperatures`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SceneThermalParams {
+    /// The history window.
+    pub window: HistoryWindow,
+    /// Ray tracing of the per-facet inputs.
+    pub exposure: ExposureParams,
+    /// The thermal passes.
+    pub thermal: ThermalParams,
+}
+
+/// Timings of [`solve_scene_temperatures`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SceneThermalTimings {
+    /// History grid, weather interpolation and sun positions.
+    pub setup: Duration,
+    /// Ray tracing (solar history and sky view).
+    pub rays: Duration,
+    /// Thermal passes.
+    pub thermal: Duration,
+}
+
+impl SceneThermalTimings {
+    /// Total.
+    pub fn total(&self) -> Duration {
+        self.setup + self.rays + self.thermal
+    }
+}
+
+/// Temperatures and ray-traced inputs of every facet of a scene.
+#[derive(Debug, Clone)]
+pub struct SceneThermal {
+    /// Record times of the history.
+    pub times: Vec<DateTime<FixedOffset>>,
+    /// The image times, as given.
+    pub image_times: Vec<DateTime<FixedOffset>>,
+    /// Solar history, shape factors and background per facet.
+    pub exposure: Exposure,
+    /// Surface temperatures at the image times, with per-pass statistics.
+    pub temperatures: SceneTemperatures,
+    /// Where the time went.
+    pub timings: SceneThermalTimings,
+}
+
+impl SceneThermal {
+    /// Surface temperature of every facet at image time `image`, K.
+    pub fn surface_temperature_k(&self, image: usize) -> &[f32] {
+        &self.temperatures.surface_temperature_k[image]
+    }
+    /// Shape factor (sky view factor, front face) of every facet.
+    pub fn shape_factor(&self) -> &[f32] {
+        &self.exposure.sky.shape_factor
+    }
+    /// Sunlit fraction of every facet at image time `image`.
+    pub fn sun_fraction(&self, image: usize) -> Vec<f32> {
+        let r = self.temperatures.image_records[image];
+        let s = &self.exposure.solar;
+        (0..s.facet_count()).map(|f| s.sun_fraction(f)[r]).collect()
+    }
+    /// Facets per second through the whole pipeline (rays + thermal).
+    pub fn facets_per_second(&self) -> f64 {
+        self.exposure.facets.len() as f64 / self.timings.total().as_secs_f64().max(1e-9)
+    }
+}
+
+/// Every facet's surface temperature at `image_times`: builds the history
+/// window, traces the sun at every record and the sky of every facet, and
+/// runs the thermal passes. This is what a render calls.
+///
+/// # Errors
+/// Bad window, weather not covering it, bad site, mismatched setup lengths,
+/// and the thermal solver's errors (naming the facet).
+pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
+    tracer: &T,
+    geometry: &SceneGeometry,
+    setup: &FacetThermalSetup,
+    weather: &WeatherHistory,
+    site: &Site,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+) -> Result<SceneThermal> {
+    let t0 = Instant::now();
+    let times = history_times(weather, image_times, &params.window)?;
+    let records = times
+        .iter()
+        .map(|&t| weather.at(t))
+        .collect::<Result<Vec<_>>>()?;
+    let forcing = Forcing::from_records(&records)?;
+    let dirs = sun_directions(site, &times)?;
+    let image_records: Vec<usize> = image_times
+        .iter()
+        .map(|t| {
+            times
+                .iter()
+                .position(|x| (*x - *t).abs() < TimeDelta::seconds(1))
+                .expect("image times are on the grid")
+        })
+        .collect();
+    let t1 = Instant::now();
+    let exposure = compute_exposure(
+        tracer,
+        geometry,
+        &setup.double_sided,
+        &dirs,
+        &params.exposure,
+    )?;
+    let t2 = Instant::now();
+    let temperatures = solve_facet_temperatures(
+        &exposure,
+        &setup.kinds,
+        &setup.props,
+        &forcing,
+        &image_records,
+        &params.thermal,
+    )?;
+    let t3 = Instant::now();
+    Ok(SceneThermal {
+        times,
+        image_times: image_times.to_vec(),
+        exposure,
+        temperatures,
+        timings: SceneThermalTimings {
+            setup: t1 - t0,
+            rays: t2 - t1,
+            thermal: t3 - t2,
+        },
+    })
+}
