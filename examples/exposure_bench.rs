@@ -1,72 +1,36 @@
 //! Throughput of the per-facet pipeline (solar history + sky view rays, then
-//! the two-pass thermal solve) on a procedural town: terrain of asphalt-like
-//! ground with brick box buildings, the town's synthetic June weather
-//! (Rochester NY), image at 14:00 local time after a 24 h history.
+//! the two-pass thermal solve), on a scene file (its parts, weather, site and
+//! image time) or on a procedural town: terrain of asphalt-like ground with
+//! brick box buildings, the town's synthetic June weather (Rochester NY),
+//! image at 14:00 local time; 24 h history either way.
 //!
-//! Run: `cargo run --release --example exposure_bench -- [TRIANGLES] [BACKEND] [SKY]`
-//! (defaults 300000, embree, grid; SKY = grid | N for N stratified rays).
+//! Run: `cargo run --release --example exposure_bench -- [SCENE.json | TRIANGLES] [BACKEND] [SKY]`
+//! (defaults scenes/town/scene.json, embree, dirsig; SKY = dirsig |
+//! grid:DZxDA | stratified:N).
 
+use std::path::Path;
 use std::time::Instant;
 
 use chrono::DateTime;
 use irsig::exposure::{
-    FacetThermal, FacetThermalSetup, SceneThermalParams, SkySampling, solve_scene_temperatures,
+    FacetThermal, FacetThermalSetup, SceneThermalParams, SkySampling, solve_scene,
+    solve_scene_temperatures,
 };
 use irsig::geometry::procedural::{TerrainParams, generate};
+use irsig::scene::Scene;
 use irsig::thermal::{BackBoundary, SlabProperties};
 use irsig::trace::{self, Backend};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let triangles: usize = args.first().map_or(Ok(300_000), |s| s.parse())?;
+    let what = args
+        .first()
+        .map_or("scenes/town/scene.json", String::as_str);
     let backend: Backend = args.get(1).map_or(Ok(Backend::Embree), |s| s.parse())?;
-    let sky = match args.get(2).map(String::as_str) {
-        None | Some("grid") => SkySampling::DIRSIG,
-        Some(n) => SkySampling::Stratified {
-            samples: n.parse()?,
-        },
-    };
+    let sky: SkySampling = args.get(2).map_or(Ok(SkySampling::DIRSIG), |s| s.parse())?;
     rayon::ThreadPoolBuilder::new()
         .start_handler(|_| trace::init_worker_thread())
         .build_global()?;
-
-    let t0 = Instant::now();
-    let geo = generate(&TerrainParams::with_triangles(triangles, 7));
-    let tracer = trace::build(&geo, backend)?;
-    let build = t0.elapsed();
-    let (weather, _) = irsig::weather::synth::town_history()?;
-    let site = *weather.site().expect("town weather has a site");
-
-    let ground = SlabProperties {
-        conductivity_w_m_k: 0.75,
-        density_kg_m3: 2100.0,
-        specific_heat_j_kg_k: 920.0,
-        thickness_m: 0.1,
-        solar_absorptivity: 0.9,
-        thermal_emissivity: 0.95,
-        self_power_w_m2: 0.0,
-        back: BackBoundary::GROUND,
-    };
-    let brick = SlabProperties {
-        conductivity_w_m_k: 0.7,
-        density_kg_m3: 1900.0,
-        specific_heat_j_kg_k: 840.0,
-        thickness_m: 0.2,
-        solar_absorptivity: 0.65,
-        thermal_emissivity: 0.9,
-        self_power_w_m2: 0.0,
-        back: BackBoundary::BUILDING,
-    };
-    let offsets = geo.facet_offsets();
-    let kinds: Vec<FacetThermal> = (0..geo.facet_count())
-        .map(|f| FacetThermal::Solve((f >= offsets[1]) as u32))
-        .collect();
-    let setup = FacetThermalSetup {
-        kinds,
-        props: vec![ground, brick],
-        double_sided: Vec::new(),
-    };
-    let image = DateTime::parse_from_rfc3339("2025-06-21T14:00:00-04:00")?;
     let params = SceneThermalParams {
         exposure: irsig::exposure::ExposureParams {
             sky,
@@ -74,16 +38,64 @@ fn main() -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    let r = solve_scene_temperatures(&*tracer, &geo, &setup, &weather, &site, &[image], &params)?;
+
+    let t0 = Instant::now();
+    let (geo, r, tracer_name, build) = if what.ends_with(".json") {
+        let scene = Scene::load(Path::new(what))?;
+        let load = t0.elapsed();
+        let t1 = Instant::now();
+        let tracer = trace::build(&scene.geometry, backend)?;
+        let build = t1.elapsed();
+        println!("scene {what} loaded in {:.2} s", load.as_secs_f64());
+        let r = solve_scene(&*tracer, &scene, &[], &params)?;
+        (scene.geometry, r, tracer.name().to_string(), build)
+    } else {
+        let geo = generate(&TerrainParams::with_triangles(what.parse()?, 7));
+        let tracer = trace::build(&geo, backend)?;
+        let build = t0.elapsed();
+        let (weather, _) = irsig::weather::synth::town_history()?;
+        let site = *weather.site().expect("town weather has a site");
+        let ground = SlabProperties {
+            conductivity_w_m_k: 0.75,
+            density_kg_m3: 2100.0,
+            specific_heat_j_kg_k: 920.0,
+            thickness_m: 0.1,
+            solar_absorptivity: 0.9,
+            thermal_emissivity: 0.95,
+            self_power_w_m2: 0.0,
+            back: BackBoundary::GROUND,
+        };
+        let brick = SlabProperties {
+            conductivity_w_m_k: 0.7,
+            density_kg_m3: 1900.0,
+            specific_heat_j_kg_k: 840.0,
+            thickness_m: 0.2,
+            solar_absorptivity: 0.65,
+            thermal_emissivity: 0.9,
+            self_power_w_m2: 0.0,
+            back: BackBoundary::BUILDING,
+        };
+        let offsets = geo.facet_offsets();
+        let setup = FacetThermalSetup {
+            kinds: (0..geo.facet_count())
+                .map(|f| FacetThermal::Solve((f >= offsets[1]) as u32))
+                .collect(),
+            props: vec![ground, brick],
+            ..Default::default()
+        };
+        let image = DateTime::parse_from_rfc3339("2025-06-21T14:00:00-04:00")?;
+        let r =
+            solve_scene_temperatures(&*tracer, &geo, &setup, &weather, &site, &[image], &params)?;
+        (geo, r, tracer.name().to_string(), build)
+    };
 
     let n = geo.facet_count();
     let s = &r.exposure.stats;
     let tm = &r.timings;
     println!(
-        "scene: {n} facets ({} buildings), {} records; backend {}, sky {:?}, {} threads",
-        offsets.len() - 2,
+        "{n} facets ({} instances), {} records; backend {tracer_name}, sky {:?}, {} threads",
+        geo.instances.len(),
         r.times.len(),
-        tracer.name(),
         params.exposure.sky,
         rayon::current_num_threads()
     );
@@ -127,6 +139,9 @@ fn main() -> anyhow::Result<()> {
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
         });
-    println!("surface temperatures at 14:00: {lo:.1} – {hi:.1} K");
+    println!(
+        "surface temperatures at {}: {lo:.1} – {hi:.1} K",
+        r.image_times[0].to_rfc3339()
+    );
     Ok(())
 }

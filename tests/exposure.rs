@@ -1056,7 +1056,7 @@ fn scene_pipeline_on_the_town_weather() {
     let setup = FacetThermalSetup {
         kinds: solved_kinds(geo.facet_count(), &wall),
         props: vec![asphalt(), brick()],
-        double_sided: Vec::new(),
+        ..Default::default()
     };
     let noon = DateTime::parse_from_rfc3339("2025-06-21T13:00:00-04:00").unwrap();
     let night = DateTime::parse_from_rfc3339("2025-06-21T23:00:00-04:00").unwrap();
@@ -1151,4 +1151,91 @@ fn backends_agree_on_a_procedural_town() {
     // Some facets are shaded and some see buildings: the scene exercises both.
     assert!(e.solar.sun_fraction.iter().any(|&s| s > 0.0 && s < 1.0));
     assert!((0..n).any(|f| !e.sky.background(f).is_empty()));
+}
+
+/// A small scene file end to end: parts become property sets, fixed
+/// temperatures bypass the solver, a part's shape factor overrides the
+/// traced one, and the scene's weather, site and image time drive it.
+#[test]
+fn solve_scene_from_a_scene_file() {
+    use irsig::exposure::{SceneThermalParams, solve_scene};
+    use irsig::scene::Scene;
+    let d = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        crate::util::repo_path("scenes/materials.json"),
+        d.path().join("materials.json"),
+    )
+    .unwrap();
+    std::fs::copy(
+        crate::util::repo_path("scenes/town/weather.csv"),
+        d.path().join("weather.csv"),
+    )
+    .unwrap();
+    let text = |weather: &str| {
+        format!(
+            r#"{{
+  "site": {{"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4}},
+  "time": "2025-06-21T14:00:00-04:00",
+  {weather}
+  "materials": ["materials.json"],
+  "objects": [
+    {{"name": "ground",
+     "shapes": [{{"heightmap": {{"size": [40, 40], "cells": [4, 4],
+                  "heights": [[0,0,0,0,0],[0,0,0,0,0],[0,0,0,0,0],[0,0,0,0,0],[0,0,0,0,0]],
+                  "classes": {{"legend": {{"a": "asphalt", "g": "lawn"}}, "rows": ["aagg", "aagg", "aagg", "aagg"]}}}}}}],
+     "parts": [{{"name": "lawn", "material": "grass", "shape_factor": 0.9}}]}},
+    {{"name": "shed",
+     "shapes": [{{"box": {{"size": [4, 4, 3], "bottom": false}}}}],
+     "material": "brick",
+     "parts": [{{"name": "top", "material": "painted_steel", "fixed_temperature_k": 330}}]}}
+  ]
+}}"#
+        )
+    };
+    let path = d.path().join("scene.json");
+    std::fs::write(&path, text(r#""weather": {"file": "weather.csv"},"#)).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    let tracer = trace::build(&scene.geometry, Backend::Embree).unwrap();
+    let r = solve_scene(&*tracer, &scene, &[], &SceneThermalParams::default()).unwrap();
+    assert_eq!(r.image_times, vec![scene.time]);
+    let t = r.surface_temperature_k(0);
+    let air = scene
+        .weather
+        .as_ref()
+        .unwrap()
+        .history
+        .at(scene.time)
+        .unwrap()
+        .air_temperature_k as f32;
+    let sun = r.sun_fraction(0);
+    let mut seen = [0; 3];
+    for f in 0..scene.geometry.facet_count() {
+        let part = scene.facet_part(f);
+        if part.name == "top" {
+            assert_eq!(t[f], 330.0);
+            seen[0] += 1;
+        } else if part.name == "lawn" {
+            assert_eq!(r.shape_factor()[f], 0.9);
+            seen[1] += 1;
+        }
+        let mat = &scene.materials.materials()[part.material].name;
+        // Sunlit asphalt at 14:00 in June is far above the air temperature.
+        if mat == "asphalt" && sun[f] == 1.0 {
+            assert!(t[f] > air + 10.0, "asphalt {} vs air {air}", t[f]);
+            seen[2] += 1;
+        }
+        assert!(
+            t[f] > air - 15.0 && t[f] < air + 45.0,
+            "facet {f} ({mat}): {}",
+            t[f]
+        );
+    }
+    assert!(seen.iter().all(|&n| n > 0), "{seen:?}");
+    // Without weather, the error names the scene file and the field.
+    std::fs::write(&path, text("")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    let e = solve_scene(&*tracer, &scene, &[], &SceneThermalParams::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("scene.json") && e.contains("weather"), "{e}");
 }

@@ -10,12 +10,13 @@ use super::{
     Exposure, ExposureParams, FacetThermal, HistoryWindow, SceneTemperatures, ThermalParams,
     compute_exposure, history_times, solve_facet_temperatures, sun_directions,
 };
-use crate::Result;
 use crate::geometry::SceneGeometry;
+use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::{Forcing, SlabProperties};
 use crate::trace::Tracer;
 use crate::weather::WeatherHistory;
+use crate::{Error, Location, Result};
 
 /// How each facet's temperature is obtained: the thermal side of a scene.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -26,6 +27,60 @@ pub struct FacetThermalSetup {
     pub props: Vec<SlabProperties>,
     /// Per facet: both faces are front faces (thin objects); may be empty.
     pub double_sided: Vec<bool>,
+    /// Per facet: a shape factor that replaces the traced one in the
+    /// thermal solve (a part's `shape_factor` override); may be empty.
+    pub shape_factor_override: Vec<Option<f32>>,
+}
+
+impl FacetThermalSetup {
+    /// The thermal side of a loaded scene: per part, its material with the
+    /// part's overrides ([`Scene::part_material`]) as slab properties, or
+    /// its fixed temperature; double-sided from the material; the part's
+    /// shape-factor override.
+    ///
+    /// # Errors
+    /// A material outside the slab model's domain, naming the scene file,
+    /// the object and the part.
+    pub fn from_scene(scene: &Scene) -> Result<Self> {
+        let mut props = Vec::new();
+        let mut part_kind = Vec::with_capacity(scene.parts.len());
+        let mut part_ds = Vec::with_capacity(scene.parts.len());
+        for (i, p) in scene.parts.iter().enumerate() {
+            let m = scene.part_material(i);
+            part_ds.push(m.double_sided);
+            part_kind.push(match p.fixed_temperature_k {
+                Some(t) => FacetThermal::Fixed(t as f32),
+                None => {
+                    let sp = SlabProperties::from_material(&m).map_err(|e| {
+                        Error::parse(
+                            Location::file(&scene.path).with_field(format!(
+                                "object `{}`, part `{}`",
+                                scene.objects[p.object].name, p.name
+                            )),
+                            e.to_string(),
+                        )
+                    })?;
+                    props.push(sp);
+                    FacetThermal::Solve(props.len() as u32 - 1)
+                }
+            });
+        }
+        let parts = scene.facet_parts();
+        let any_override = scene.parts.iter().any(|p| p.shape_factor.is_some());
+        Ok(FacetThermalSetup {
+            kinds: parts.iter().map(|&p| part_kind[p as usize]).collect(),
+            props,
+            double_sided: parts.iter().map(|&p| part_ds[p as usize]).collect(),
+            shape_factor_override: if any_override {
+                parts
+                    .iter()
+                    .map(|&p| scene.parts[p as usize].shape_factor.map(|f| f as f32))
+                    .collect()
+            } else {
+                Vec::new()
+            },
+        })
+    }
 }
 
 /// Parameters of [`solve_scene_temperatures`].
@@ -127,13 +182,30 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
         })
         .collect();
     let t1 = Instant::now();
-    let exposure = compute_exposure(
+    let mut exposure = compute_exposure(
         tracer,
         geometry,
         &setup.double_sided,
         &dirs,
         &params.exposure,
     )?;
+    if !setup.shape_factor_override.is_empty() {
+        if setup.shape_factor_override.len() != exposure.facets.len() {
+            return Err(Error::invalid(
+                "shape_factor_override",
+                format!(
+                    "expected one entry per facet ({}) or none, got {}",
+                    exposure.facets.len(),
+                    setup.shape_factor_override.len()
+                ),
+            ));
+        }
+        for (f, o) in setup.shape_factor_override.iter().enumerate() {
+            if let Some(v) = *o {
+                exposure.sky.shape_factor[f] = v;
+            }
+        }
+    }
     let t2 = Instant::now();
     let temperatures = solve_facet_temperatures(
         &exposure,
@@ -155,4 +227,39 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
             thermal: t3 - t2,
         },
     })
+}
+
+/// [`solve_scene_temperatures`] for a loaded scene at its image time: the
+/// scene's geometry, parts, weather and site.
+///
+/// # Errors
+/// A scene without a weather history (naming the scene file), and as
+/// [`solve_scene_temperatures`].
+pub fn solve_scene<T: Tracer + ?Sized>(
+    tracer: &T,
+    scene: &Scene,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+) -> Result<SceneThermal> {
+    let weather = scene.weather.as_ref().ok_or_else(|| {
+        Error::parse(
+            Location::file(&scene.path).with_field("weather"),
+            "the thermal model needs a weather history; add `\"weather\": \"FILE\"`",
+        )
+    })?;
+    let setup = FacetThermalSetup::from_scene(scene)?;
+    let times: Vec<DateTime<FixedOffset>> = if image_times.is_empty() {
+        vec![scene.time]
+    } else {
+        image_times.to_vec()
+    };
+    solve_scene_temperatures(
+        tracer,
+        &scene.geometry,
+        &setup,
+        &weather.history,
+        &scene.site,
+        &times,
+        params,
+    )
 }
