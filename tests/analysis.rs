@@ -685,3 +685,171 @@ fn params_file_parses_applies_and_reports_errors() {
         assert!(e.contains("params.json") && e.contains(want), "{text}: {e}");
     }
 }
+
+// ---- one-facet studies ---------------------------------------------------
+
+use irsig::analysis::facet::{self, FacetSpec, OneFacet};
+use irsig::analysis::study::MaterialStudy;
+
+/// Asphalt and concrete on a horizontal facet under the town's weather
+/// (19–20 June 2025, Rochester NY) up to 20 June 14:00, default solver.
+fn town_study(params: &str) -> MaterialStudy {
+    let h = irsig::weather::load(&crate::util::repo_path("scenes/town/weather.csv")).unwrap();
+    let until = chrono::DateTime::parse_from_rfc3339("2025-06-20T14:00:00-04:00").unwrap();
+    let records = facet::records_until(&h, until).unwrap();
+    let site = *h.site().unwrap();
+    let opts = irsig::thermal::SolveOptions::default();
+    let f = OneFacet::new(
+        records,
+        &site,
+        &FacetSpec::default(),
+        opts,
+        facet::lwir_band().unwrap(),
+    )
+    .unwrap();
+    let db = irsig::material::MaterialDb::load(&crate::util::repo_path("scenes/materials.json"))
+        .unwrap();
+    let materials = vec![
+        db.get("asphalt").unwrap().clone(),
+        db.get("concrete").unwrap().clone(),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("params.json");
+    std::fs::write(&p, params).unwrap();
+    let params = ParamSet::load(&p, &materials).unwrap();
+    let time_index = f.index_at(until).unwrap();
+    MaterialStudy {
+        facet: f,
+        materials,
+        params,
+        time_index,
+    }
+}
+
+const FACET_PARAMS: &str = r#"[
+  {"kind": "weather", "property": "insolation_scale", "low": 0.8, "high": 1.2, "uncertainty": 0.05},
+  {"kind": "weather", "property": "air_temperature_offset_k", "low": -2, "high": 2, "uncertainty": 0.5},
+  {"kind": "material", "material": "asphalt", "property": "conductivity", "low": 0.5, "high": 1.0},
+  {"kind": "material", "material": "concrete", "property": "solar_absorptivity", "low": 0.5, "high": 0.8}
+]"#;
+
+#[test]
+fn one_facet_oat_and_morris_rank_like_finite_differences() {
+    let study = town_study(FACET_PARAMS);
+    let f = study.params.factors();
+    let out = study.output_names();
+    assert_eq!(out[0], "asphalt.surface_temperature_k");
+    let model = |x: &[f64]| study.evaluate(x);
+    let oat = sensitivity::one_at_a_time(&f, &out, &model).unwrap();
+    let m = sensitivity::morris(
+        &f,
+        &out,
+        &model,
+        MorrisOptions {
+            trajectories: 8,
+            levels: 4,
+            seed: 3,
+        },
+    )
+    .unwrap();
+    let jac =
+        sensitivity::finite_difference_jacobian(&f, &study.params.nominal(), 1e-3, &model).unwrap();
+    // Asphalt surface temperature (output 0): rank by |∂T/∂x|·(high − low).
+    let scaled: Vec<f64> = f
+        .iter()
+        .zip(&jac[0])
+        .map(|(f, d)| (d * (f.high - f.low)).abs())
+        .collect();
+    let mut fd_rank: Vec<usize> = (0..f.len()).collect();
+    fd_rank.sort_by(|&a, &b| scaled[b].total_cmp(&scaled[a]));
+    assert_eq!(
+        oat.ranking(0),
+        fd_rank,
+        "OAT {:?} vs FD {scaled:?}",
+        oat.effects[0]
+    );
+    assert_eq!(
+        m.ranking(0),
+        fd_rank,
+        "Morris {:?} vs FD {scaled:?}",
+        m.effects[0]
+    );
+    // Physics signs: more sun and warmer air warm the asphalt at 14:00.
+    assert!(jac[0][0] > 0.0 && jac[0][1] > 0.0);
+    // The concrete parameter does not enter the asphalt outputs: exactly zero.
+    for o in [0, 1] {
+        assert_eq!(oat.effects[o][3].swing(), 0.0);
+        assert_eq!((m.effects[o][3].mu_star, m.effects[o][3].sigma), (0.0, 0.0));
+        assert_eq!(jac[o][3], 0.0);
+    }
+    // …and asphalt's conductivity none on concrete (outputs 2, 3).
+    assert_eq!(oat.effects[2][2].swing(), 0.0);
+    assert!(oat.effects[2][3].swing() > 0.1);
+    // A +1 K air offset raises the surface by less than 1 K (the surface
+    // also exchanges with sun, sky and ground), but by a good part of it.
+    assert!(
+        oat.effects[0][1].per_unit > 0.3 && oat.effects[0][1].per_unit < 1.0,
+        "{:?}",
+        oat.effects[0][1]
+    );
+}
+
+#[test]
+fn one_facet_calibration_recovers_known_material_within_intervals() {
+    let params = r#"[
+      {"kind": "material", "material": "asphalt", "property": "solar_absorptivity", "low": 0.7, "high": 0.98},
+      {"kind": "material", "material": "asphalt", "property": "conductivity", "low": 0.4, "high": 2.0}
+    ]"#;
+    let study = town_study(params);
+    let true_x = [0.82, 1.3];
+    // Truth: irsig's own series with the known values, hourly, plus seeded noise.
+    let every = 4; // 15-min records → hourly
+    let clean = study.temperature_series(&true_x, 0).unwrap();
+    let idx: Vec<usize> = (0..clean.len()).step_by(every).collect();
+    let mut covered = [0usize; 2];
+    let seeds = 8;
+    for seed in 0..seeds {
+        let noise = normals(100 + seed, idx.len());
+        let truth: Vec<f64> = idx
+            .iter()
+            .zip(&noise)
+            .map(|(&i, e)| clean[i] + 0.3 * e)
+            .collect();
+        let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
+            let t = study.temperature_series(x, 0)?;
+            Ok(idx.iter().map(|&i| t[i]).collect())
+        };
+        let c = calibrate::calibrate(
+            &study.params.factors(),
+            &truth,
+            &model,
+            CalibrationOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            c.initial.rmse > 1.0,
+            "nominal asphalt should misfit: {}",
+            c.initial.rmse
+        );
+        assert!((c.fitted.rmse - 0.3).abs() < 0.1, "{}", c.fitted.rmse);
+        for (k, (p, t)) in c.params.iter().zip(true_x).enumerate() {
+            eprintln!(
+                "seed {seed}: {} = {:.4} ± {:.4} (true {t})",
+                p.name, p.fitted, p.std_error
+            );
+            assert!((p.fitted - t).abs() < 4.0 * p.std_error, "{p:?} vs {t}");
+            assert!(
+                p.ci_high - p.ci_low < 0.2 * (p.bounds[1] - p.bounds[0]),
+                "{p:?}"
+            );
+            if p.ci_low <= t && t <= p.ci_high {
+                covered[k] += 1;
+            }
+        }
+    }
+    // 95 % intervals over 8 noise draws: at least 6 should cover (P ≈ 0.99).
+    assert!(
+        covered.iter().all(|&n| n >= 6),
+        "covered {covered:?} of {seeds}"
+    );
+}

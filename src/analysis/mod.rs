@@ -15,11 +15,13 @@ pub mod calibrate;
 pub mod compare;
 pub mod csv;
 pub mod diurnal;
+pub mod facet;
 pub mod image;
 pub mod params;
 pub mod plot;
 pub mod sensitivity;
 pub mod stats;
+pub mod study;
 
 use std::path::Path;
 

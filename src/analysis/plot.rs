@@ -144,8 +144,15 @@ pub struct TornadoBar {
     pub at_high: f64,
 }
 
-/// A tornado plot: horizontal bars, largest swing at the top.
-pub fn tornado(path: &Path, title: &str, x_label: &str, bars: &[TornadoBar]) -> Result<()> {
+/// A tornado plot: horizontal bars, largest swing at the top; `legend`
+/// names the two bar colours (e.g. `["low bound", "high bound"]`).
+pub fn tornado(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    legend: [&str; 2],
+    bars: &[TornadoBar],
+) -> Result<()> {
     let mut bars: Vec<TornadoBar> = bars.to_vec();
     bars.sort_by(|a, b| {
         let sa = (a.at_high - a.at_low).abs();
@@ -204,14 +211,14 @@ pub fn tornado(path: &Path, title: &str, x_label: &str, bars: &[TornadoBar]) -> 
                 [(0.0, 0.0), (0.0, 0.0)],
                 PALETTE[0].filled(),
             )))?
-            .label("low bound")
+            .label(legend[0])
             .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], PALETTE[0].filled()));
         chart
             .draw_series(std::iter::once(Rectangle::new(
                 [(0.0, 0.0), (0.0, 0.0)],
                 PALETTE[1].filled(),
             )))?
-            .label("high bound")
+            .label(legend[1])
             .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], PALETTE[1].filled()));
         chart
             .configure_series_labels()

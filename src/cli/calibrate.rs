@@ -1,10 +1,213 @@
-//! `irsig calibrate` (being written).
+//! `irsig calibrate`: fit input parameters within their bounds to truth
+//! temperatures (bounded Nelder–Mead), with confidence intervals.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+
+use irsig::analysis::calibrate::{self, Calibration, CalibrationOptions};
+use irsig::analysis::csv;
+use irsig::analysis::facet;
+
+use super::sensitivity::{FacetArgs, ThermalArgs, build_study};
 
 /// Arguments of `irsig calibrate`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(after_long_help = "\
+Scene form: POINTS.csv holds `x,y,value,material` (value = surface temperature
+in K at the image time); each point is predicted by the one-facet model of its
+material. One-facet form (--thermal): SERIES.csv holds
+`time,surface_temperature_k` for one facet (as `irsig thermal`); the fitted
+material is written with -o as a material JSON file that
+`irsig thermal --material FITTED.json` reads.
+
+Example:
+  irsig calibrate --thermal --material asphalt --weather w.csv --truth series.csv \\
+      --params params.json -o fitted.json")]
+pub struct Args {
+    /// Scene file (omit with --thermal).
+    pub scene: Option<PathBuf>,
+    /// Truth: POINTS.csv (scene) or SERIES.csv (--thermal).
+    #[arg(long, value_name = "CSV")]
+    pub truth: PathBuf,
+    /// Parameters to fit, with bounds (JSON).
+    #[arg(long, value_name = "PARAMS.json")]
+    pub params: PathBuf,
+    /// Image time (scene form; default the scene's).
+    #[arg(long, value_name = "RFC3339")]
+    pub time: Option<String>,
+    #[command(flatten)]
+    pub one: ThermalArgs,
+    #[command(flatten)]
+    pub facet: FacetArgs,
+    /// Confidence level of the intervals.
+    #[arg(long, default_value_t = 0.95)]
+    pub confidence: f64,
+    /// Write the fitted material (one-facet form) as material JSON.
+    #[arg(short = 'o', long, value_name = "FITTED.json")]
+    pub output: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Run `irsig calibrate`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`irsig calibrate` is not available in this build yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let opts = CalibrationOptions {
+        confidence: args.confidence,
+        ..CalibrationOptions::default()
+    };
+    let (result, fitted_material) =
+        if args.one.thermal {
+            anyhow::ensure!(
+                args.scene.is_none(),
+                "give either SCENE.json or --thermal, not both"
+            );
+            let series = csv::read_temperature_series(&args.truth)?;
+            let last = series.last().map(|s| s.0).context("empty series")?;
+            let last_s = last.to_rfc3339();
+            let study = build_study(None, &args.one, &args.facet, Some(&last_s), &args.params)?;
+            let times: Vec<f64> = study
+                .facet
+                .records
+                .iter()
+                .map(|r| (r.time - study.facet.records[0].time).num_milliseconds() as f64 * 1e-3)
+                .collect();
+            let at: Vec<f64> = series
+                .iter()
+                .map(|(t, _)| (*t - study.facet.records[0].time).num_milliseconds() as f64 * 1e-3)
+                .collect();
+            if let Some((k, (t, _))) = series.iter().enumerate().find(|(k, _)| at[*k] < 0.0) {
+                anyhow::bail!(
+                    "{}: line {}: {t} is before the first weather record",
+                    args.truth.display(),
+                    k + 2
+                );
+            }
+            let truth: Vec<f64> = series.iter().map(|s| s.1).collect();
+            let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
+                let ts = study.temperature_series(x, 0)?;
+                Ok(at.iter().map(|&t| interpolate(&times, &ts, t)).collect())
+            };
+            let c = calibrate::calibrate(&study.params.factors(), &truth, &model, opts)?;
+            let x: Vec<f64> = c.params.iter().map(|p| p.fitted).collect();
+            let m = study.params.apply_material(&x, &study.materials[0])?;
+            (c, Some(m))
+        } else {
+            let scene = args
+                .scene
+                .as_ref()
+                .context("give a SCENE.json, or --thermal …")?;
+            let pts = csv::read_truth_points(&args.truth)?;
+            let study = build_study(
+                Some(scene),
+                &args.one,
+                &args.facet,
+                args.time.as_deref(),
+                &args.params,
+            )?;
+            let mut which = Vec::with_capacity(pts.len());
+            let mut truth = Vec::with_capacity(pts.len());
+            for p in &pts {
+                let name = p.material.as_deref().with_context(|| {
+                    format!(
+                        "{}: line {}: a `material` is needed to predict this point",
+                        args.truth.display(),
+                        p.line
+                    )
+                })?;
+                let k = study
+                    .materials
+                    .iter()
+                    .position(|m| m.name == name)
+                    .with_context(|| {
+                        format!(
+                            "{}: line {}: material `{name}` is not used in the scene",
+                            args.truth.display(),
+                            p.line
+                        )
+                    })?;
+                which.push(k);
+                truth.push(p.value.with_context(|| {
+                    format!("{}: line {}: no value", args.truth.display(), p.line)
+                })?);
+            }
+            let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
+                let y = study.evaluate(x)?;
+                Ok(which.iter().map(|&k| y[2 * k]).collect())
+            };
+            (
+                calibrate::calibrate(&study.params.factors(), &truth, &model, opts)?,
+                None,
+            )
+        };
+    if let (Some(out), Some(m)) = (&args.output, &fitted_material) {
+        facet::write_material_json(
+            out,
+            m,
+            &format!(
+                "{} fitted by irsig calibrate to {} (RMSE {:.3} K)",
+                m.name,
+                args.truth.display(),
+                result.fitted.rmse
+            ),
+        )?;
+    } else if args.output.is_some() {
+        anyhow::bail!("-o writes the fitted material of the one-facet form (--thermal)");
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&result)?);
+    } else {
+        print_result(&result);
+    }
+    Ok(())
+}
+
+/// Linear interpolation of `(xs, ys)` at `x` (clamped at the ends).
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let i = xs.partition_point(|&v| v <= x);
+    if i == 0 {
+        return ys[0];
+    }
+    if i >= xs.len() {
+        return ys[xs.len() - 1];
+    }
+    let f = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
+    ys[i - 1] + f * (ys[i] - ys[i - 1])
+}
+
+fn print_result(c: &Calibration) {
+    println!(
+        "fit to {} values ({} degrees of freedom), {} model evaluations",
+        c.n_obs, c.dof, c.evaluations
+    );
+    println!(
+        "RMSE {:.4} → {:.4}   bias {:+.4} → {:+.4}   Spearman {:.4} → {:.4}",
+        c.initial.rmse,
+        c.fitted.rmse,
+        c.initial.bias,
+        c.fitted.bias,
+        c.initial.spearman,
+        c.fitted.spearman
+    );
+    println!(
+        "{:<40} {:>12} {:>12} {:>12}  {:.0}% interval",
+        "parameter",
+        "initial",
+        "fitted",
+        "std error",
+        c.confidence * 100.0
+    );
+    for p in &c.params {
+        println!(
+            "{:<40} {:>12.5} {:>12.5} {:>12.5}  [{:.5}, {:.5}]{}",
+            p.name,
+            p.initial,
+            p.fitted,
+            p.std_error,
+            p.ci_low,
+            p.ci_high,
+            if p.at_bound { "  (at a bound)" } else { "" }
+        );
+    }
 }

@@ -1,10 +1,437 @@
-//! `irsig sensitivity` (being written).
+//! `irsig sensitivity`: which inputs the temperatures and radiances are
+//! most sensitive to, by one-at-a-time bounds or Morris screening, with an
+//! estimated-error budget; on the one-facet thermal path per material.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use chrono::{DateTime, FixedOffset};
+use serde::Serialize;
+
+use irsig::analysis::facet::{self, FacetSpec, OneFacet};
+use irsig::analysis::params::ParamSet;
+use irsig::analysis::plot::{self, TornadoBar};
+use irsig::analysis::sensitivity::{self, ErrorBudget, Morris, MorrisOptions, Oat};
+use irsig::analysis::study::MaterialStudy;
+use irsig::material::Material;
+use irsig::scene::Scene;
+use irsig::sun::Site;
+use irsig::thermal::SolveOptions;
+use irsig::weather::{self, LoadOptions};
+
+/// The one-facet description shared by `sensitivity`, `calibrate` and
+/// `diurnal` (as in `irsig thermal`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct FacetArgs {
+    /// Facet tilt from horizontal, degrees (0 = facing up).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    pub tilt: f64,
+    /// Direction the facet faces, degrees clockwise from north.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 180.0,
+        allow_negative_numbers = true
+    )]
+    pub azimuth: f64,
+    /// Sky shape factor (default (1 + cos tilt)/2).
+    #[arg(long, value_name = "F")]
+    pub shape_factor: Option<f64>,
+    /// Accurate thermal solver preset (default: the default preset).
+    #[arg(long)]
+    pub accurate: bool,
+}
+
+impl FacetArgs {
+    pub(crate) fn spec(&self) -> FacetSpec {
+        FacetSpec {
+            tilt_deg: self.tilt,
+            azimuth_deg: self.azimuth,
+            shape_factor: self.shape_factor,
+        }
+    }
+    pub(crate) fn options(&self) -> SolveOptions {
+        if self.accurate {
+            SolveOptions::accurate()
+        } else {
+            SolveOptions::default()
+        }
+    }
+}
+
+/// One-facet mode inputs (`--thermal`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ThermalArgs {
+    /// One-facet mode: a material under a weather file, no scene.
+    #[arg(long)]
+    pub thermal: bool,
+    /// Material: a name in --materials, a material file, or FILE#NAME.
+    #[arg(long, value_name = "NAME|FILE", requires = "thermal")]
+    pub material: Option<String>,
+    /// Material database for --material NAME.
+    #[arg(long, value_name = "FILE", default_value = "scenes/materials.json")]
+    pub materials: PathBuf,
+    /// Weather file (irsig CSV/JSON, EPW, TMY3, DIRSIG .wth).
+    #[arg(long, value_name = "FILE", requires = "thermal")]
+    pub weather: Option<PathBuf>,
+    /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
+    #[arg(long, value_name = "RFC3339")]
+    pub start: Option<String>,
+    /// Site LAT,LON,ALT (default: the weather file's).
+    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
+    pub site: Option<String>,
+}
+
+pub(crate) fn parse_time(flag: &str, s: &str) -> anyhow::Result<DateTime<FixedOffset>> {
+    DateTime::parse_from_rfc3339(s).with_context(|| {
+        format!(
+            "{flag}: `{s}` is not an RFC 3339 time with offset (e.g. 2024-06-21T14:00:00-04:00)"
+        )
+    })
+}
+
+pub(crate) fn parse_site(s: &str) -> anyhow::Result<Site> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--site: `{s}`: expected LAT,LON[,ALT] numbers"))?;
+    anyhow::ensure!(
+        v.len() == 2 || v.len() == 3,
+        "--site: `{s}`: expected LAT,LON[,ALT]"
+    );
+    Ok(Site::new(v[0], v[1], v.get(2).copied().unwrap_or(0.0))?)
+}
+
+/// Materials, weather records up to `until`, and site: from a scene or
+/// from --thermal inputs.
+pub(crate) struct Setup {
+    pub materials: Vec<Material>,
+    pub facet: OneFacet,
+    pub time: DateTime<FixedOffset>,
+}
+
+pub(crate) fn setup_thermal(
+    t: &ThermalArgs,
+    f: &FacetArgs,
+    until: DateTime<FixedOffset>,
+) -> anyhow::Result<Setup> {
+    let spec = t
+        .material
+        .as_deref()
+        .context("--thermal needs --material NAME|FILE")?;
+    let wpath = t
+        .weather
+        .as_ref()
+        .context("--thermal needs --weather FILE")?;
+    let material = facet::find_material(spec, &t.materials)?;
+    let site = t.site.as_deref().map(parse_site).transpose()?;
+    let mut opts = LoadOptions::default();
+    if let Some(s) = site {
+        opts = opts.with_site(s);
+    }
+    if let Some(s) = &t.start {
+        opts = opts.with_start(parse_time("--start", s)?);
+    }
+    let history = weather::load_with(wpath, &opts)?;
+    let site = site.or(history.site().copied()).with_context(|| {
+        format!(
+            "{}: the weather file names no site; give --site LAT,LON,ALT",
+            wpath.display()
+        )
+    })?;
+    let records =
+        facet::records_until(&history, until).with_context(|| format!("{}", wpath.display()))?;
+    let facet = OneFacet::new(records, &site, &f.spec(), f.options(), facet::lwir_band()?)?;
+    Ok(Setup {
+        materials: vec![material],
+        facet,
+        time: until,
+    })
+}
+
+/// The materials a scene uses (with part overrides of each material's most
+/// common part), its weather up to `until` (default the image time).
+pub(crate) fn setup_scene(
+    scene: &Scene,
+    f: &FacetArgs,
+    until: Option<DateTime<FixedOffset>>,
+) -> anyhow::Result<Setup> {
+    let until = until.unwrap_or(scene.time);
+    let wref = scene
+        .weather
+        .as_ref()
+        .with_context(|| format!("{}: the scene has no weather history", scene.path.display()))?;
+    let records = facet::records_until(&wref.history, until)?;
+    let facet = OneFacet::new(
+        records,
+        &scene.site,
+        &f.spec(),
+        f.options(),
+        facet::lwir_band()?,
+    )?;
+    // Count facets per part, then keep each material's most common part.
+    let mut count = vec![0usize; scene.parts.len()];
+    for inst in &scene.geometry.instances {
+        for &p in &scene.mesh_parts[inst.mesh] {
+            count[p as usize] += 1;
+        }
+    }
+    let mut best: Vec<Option<usize>> = vec![None; scene.materials.len()];
+    for (p, part) in scene.parts.iter().enumerate() {
+        if count[p] == 0 || part.fixed_temperature_k.is_some() {
+            continue;
+        }
+        let b = &mut best[part.material];
+        if b.is_none_or(|q| count[q] < count[p]) {
+            *b = Some(p);
+        }
+    }
+    let materials: Vec<Material> = best
+        .iter()
+        .flatten()
+        .map(|&p| scene.part_material(p))
+        .collect();
+    anyhow::ensure!(
+        !materials.is_empty(),
+        "{}: no facet uses the thermal model",
+        scene.path.display()
+    );
+    Ok(Setup {
+        materials,
+        facet,
+        time: until,
+    })
+}
 
 /// Arguments of `irsig sensitivity`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(after_long_help = "\
+Per material (one free-standing facet per material, geometry held fixed), the
+change of the surface temperature (K) and of the surface-leaving 8-14 um band
+radiance (W/m2/sr) at the image time, for each parameter of PARAMS.json, ranked.
+
+  oat     each parameter at its low and high bound, the others nominal
+  morris  Morris elementary effects: mu* (mean |effect|), mu, sigma, per full range
+
+The error budget multiplies each parameter's standard uncertainty by the
+output's sensitivity and combines them root-sum-square.
+
+Examples:
+  irsig sensitivity scenes/town/scene.json --params params.json --plot tornado.png
+  irsig sensitivity --thermal --material asphalt --weather w.csv --time 2024-06-21T14:00:00-04:00 \\
+      --params params.json --method morris --json")]
+pub struct Args {
+    /// Scene file (omit with --thermal).
+    pub scene: Option<PathBuf>,
+    /// Parameters with bounds (JSON; see the analysis docs).
+    #[arg(long, value_name = "PARAMS.json")]
+    pub params: PathBuf,
+    /// Method.
+    #[arg(long, value_enum, default_value = "oat")]
+    pub method: Method,
+    /// Morris trajectories.
+    #[arg(long, default_value_t = 20, value_name = "R")]
+    pub trajectories: usize,
+    /// Morris grid levels (even).
+    #[arg(long, default_value_t = 4, value_name = "P")]
+    pub levels: usize,
+    /// Morris random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Image time (default: the scene's; required with --thermal).
+    #[arg(long, value_name = "RFC3339")]
+    pub time: Option<String>,
+    #[command(flatten)]
+    pub one: ThermalArgs,
+    #[command(flatten)]
+    pub facet: FacetArgs,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a tornado plot (surface temperatures).
+    #[arg(long, value_name = "OUT.png")]
+    pub plot: Option<PathBuf>,
+}
+
+/// Sensitivity method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// One at a time (low/high bounds).
+    Oat,
+    /// Morris elementary effects.
+    Morris,
+}
+
+#[derive(Serialize)]
+struct Report {
+    method: &'static str,
+    time: String,
+    outputs: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    oat: Option<Oat>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    morris: Option<Morris>,
+    error_budget: Vec<ErrorBudget>,
+}
+
+pub(crate) fn build_study(
+    scene: Option<&PathBuf>,
+    one: &ThermalArgs,
+    facet_args: &FacetArgs,
+    time: Option<&str>,
+    params: &std::path::Path,
+) -> anyhow::Result<MaterialStudy> {
+    let time = time.map(|t| parse_time("--time", t)).transpose()?;
+    let setup = match (scene, one.thermal) {
+        (Some(_), true) => anyhow::bail!("give either SCENE.json or --thermal, not both"),
+        (None, false) => {
+            anyhow::bail!("give a SCENE.json, or --thermal --material … --weather … --time …")
+        }
+        (None, true) => setup_thermal(one, facet_args, time.context("--thermal needs --time")?)?,
+        (Some(p), false) => {
+            let scene = Scene::load(p)?;
+            setup_scene(&scene, facet_args, time)?
+        }
+    };
+    let params = ParamSet::load(params, &setup.materials)?;
+    let time_index = setup.facet.index_at(setup.time)?;
+    Ok(MaterialStudy {
+        facet: setup.facet,
+        materials: setup.materials,
+        params,
+        time_index,
+    })
+}
 
 /// Run `irsig sensitivity`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`irsig sensitivity` is not available in this build yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let study = build_study(
+        args.scene.as_ref(),
+        &args.one,
+        &args.facet,
+        args.time.as_deref(),
+        &args.params,
+    )?;
+    let factors = study.params.factors();
+    let outputs = study.output_names();
+    let model = |x: &[f64]| study.evaluate(x);
+    let time = study.facet.records[study.time_index].time.to_rfc3339();
+    let mut report = Report {
+        method: match args.method {
+            Method::Oat => "oat",
+            Method::Morris => "morris",
+        },
+        time,
+        outputs: outputs.clone(),
+        oat: None,
+        morris: None,
+        error_budget: Vec::new(),
+    };
+    let mut bars = Vec::new();
+    match args.method {
+        Method::Oat => {
+            let oat = sensitivity::one_at_a_time(&factors, &outputs, &model)?;
+            let s: Vec<Vec<f64>> = oat
+                .effects
+                .iter()
+                .map(|o| o.iter().map(|e| e.per_unit).collect())
+                .collect();
+            report.error_budget = sensitivity::error_budget(&factors, &outputs, &s);
+            for (o, name) in outputs
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| n.ends_with("temperature_k"))
+            {
+                let mat = name.trim_end_matches(".surface_temperature_k");
+                for (i, e) in oat.effects[o].iter().enumerate() {
+                    if e.swing() > 0.0 {
+                        bars.push(TornadoBar {
+                            name: format!("{mat}: {}", factors[i].name),
+                            at_low: e.at_low,
+                            at_high: e.at_high,
+                        });
+                    }
+                }
+            }
+            report.oat = Some(oat);
+        }
+        Method::Morris => {
+            let opts = MorrisOptions {
+                trajectories: args.trajectories,
+                levels: args.levels,
+                seed: args.seed,
+            };
+            let m = sensitivity::morris(&factors, &outputs, &model, opts)?;
+            let s: Vec<Vec<f64>> = m
+                .effects
+                .iter()
+                .map(|o| o.iter().map(|e| e.mu_star_per_unit).collect())
+                .collect();
+            report.error_budget = sensitivity::error_budget(&factors, &outputs, &s);
+            for (o, name) in outputs
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| n.ends_with("temperature_k"))
+            {
+                let mat = name.trim_end_matches(".surface_temperature_k");
+                for (i, e) in m.effects[o].iter().enumerate() {
+                    if e.mu_star > 0.0 {
+                        bars.push(TornadoBar {
+                            name: format!("{mat}: {}", factors[i].name),
+                            at_low: e.mu,
+                            at_high: e.mu_star,
+                        });
+                    }
+                }
+            }
+            report.morris = Some(m);
+        }
+    }
+    if let Some(p) = &args.plot {
+        let (title, legend) = match args.method {
+            Method::Oat => (
+                "Surface temperature change at the parameter bounds",
+                ["low bound", "high bound"],
+            ),
+            Method::Morris => (
+                "Morris elementary effects per full range",
+                ["mu (signed mean)", "mu* (mean |effect|)"],
+            ),
+        };
+        plot::tornado(p, title, "ΔT (K)", legend, &bars)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!("sensitivity ({}) at {}", report.method, report.time);
+    for (o, name) in outputs.iter().enumerate() {
+        println!("{name}:");
+        if let Some(oat) = &report.oat {
+            println!("  nominal {:.4}", oat.nominal_outputs[o]);
+            for i in oat.ranking(o) {
+                let e = &oat.effects[o][i];
+                println!(
+                    "  {:<40} low {:+10.4}  high {:+10.4}  per unit {:+.4e}",
+                    factors[i].name, e.at_low, e.at_high, e.per_unit
+                );
+            }
+        }
+        if let Some(m) = &report.morris {
+            for i in m.ranking(o) {
+                let e = &m.effects[o][i];
+                println!(
+                    "  {:<40} mu* {:10.4}  mu {:+10.4}  sigma {:10.4}",
+                    factors[i].name, e.mu_star, e.mu, e.sigma
+                );
+            }
+        }
+        let b = &report.error_budget[o];
+        println!(
+            "  estimated error (RSS of uncertainty × sensitivity): {:.4}",
+            b.combined
+        );
+    }
+    Ok(())
 }

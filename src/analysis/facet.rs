@@ -1,0 +1,260 @@
+//! The one-facet thermal path used by sensitivity, calibration and diurnal
+//! studies: a free-standing facet (tilt, azimuth, sky shape factor, the sun
+//! unshadowed) solved with [`crate::thermal::solve`], as `irsig thermal`
+//! does. The facet geometry — sunlit fraction and solar incidence per
+//! record — is computed once and held fixed while materials and weather
+//! are perturbed.
+//!
+//! Surface-leaving band radiance (no atmospheric path, a sensor at the
+//! surface), per wavelength of the band grid:
+//! `L = ε B(T_s) + (1 − ε) [F B(T_sky) + (1 − F) B(T_air)]`, with
+//! `T_sky = (E_sky/σ)^{1/4}` the effective sky temperature of the record's
+//! downwelling longwave irradiance (an isotropic-sky approximation), `F`
+//! the sky shape factor and `ε` the material's spectral emissivity at
+//! normal view (Schott 2007, *Remote Sensing*, eq. 4.61 without path
+//! terms). The apparent temperature is the band brightness temperature of L.
+
+use std::path::Path;
+
+use chrono::{DateTime, FixedOffset};
+
+use crate::material::{Material, MaterialDb};
+use crate::radiometry::band::Band;
+use crate::sun::{self, Site};
+use crate::thermal::{
+    self, FacetInputs, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties, SolveOptions,
+};
+use crate::weather::{WeatherHistory, WeatherRecord};
+use crate::{Error, Result};
+
+/// Orientation and sky view of a free-standing facet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FacetSpec {
+    /// Tilt from horizontal, degrees (0 = facing up).
+    pub tilt_deg: f64,
+    /// Direction faced, degrees clockwise from north (180 = south).
+    pub azimuth_deg: f64,
+    /// Sky shape factor; `None` = `(1 + cos tilt)/2` (an unobstructed plane).
+    pub shape_factor: Option<f64>,
+}
+
+impl Default for FacetSpec {
+    fn default() -> Self {
+        FacetSpec {
+            tilt_deg: 0.0,
+            azimuth_deg: 180.0,
+            shape_factor: None,
+        }
+    }
+}
+
+/// The default study band: 8–14 µm, flat response.
+pub fn lwir_band() -> Result<Band> {
+    Band::flat(8.0, 14.0, 0.05)
+}
+
+/// A facet with its fixed geometry over a weather history.
+#[derive(Debug, Clone)]
+pub struct OneFacet {
+    /// The nominal weather records (the solve runs over all of them).
+    pub records: Vec<WeatherRecord>,
+    sun_fraction: Vec<f32>,
+    cos_incidence: Vec<f32>,
+    /// Sky shape factor used.
+    pub shape_factor: f64,
+    /// Thermal solver options (spin-up always runs its full cycle count and
+    /// Newton is tightened to 1e-7 K, so outputs are smooth in parameters).
+    pub options: SolveOptions,
+    /// Band of the radiance outputs.
+    pub band: Band,
+}
+
+/// The records of `history` up to `until`, ending with the weather
+/// interpolated at `until` when it falls between records.
+pub fn records_until(
+    history: &WeatherHistory,
+    until: DateTime<FixedOffset>,
+) -> Result<Vec<WeatherRecord>> {
+    let mut out: Vec<WeatherRecord> = history
+        .records()
+        .iter()
+        .take_while(|r| r.time <= until)
+        .copied()
+        .collect();
+    if out.last().is_none_or(|r| r.time < until) {
+        out.push(history.at(until)?);
+    }
+    Ok(out)
+}
+
+impl OneFacet {
+    /// Geometry of `facet` at `site` for every record.
+    pub fn new(
+        records: Vec<WeatherRecord>,
+        site: &Site,
+        facet: &FacetSpec,
+        options: SolveOptions,
+        band: Band,
+    ) -> Result<Self> {
+        if !(facet.tilt_deg.is_finite() && (0.0..=180.0).contains(&facet.tilt_deg)) {
+            return Err(Error::invalid(
+                "--tilt",
+                format!("{} is not a tilt in 0..=180 degrees", facet.tilt_deg),
+            ));
+        }
+        if !facet.azimuth_deg.is_finite() {
+            return Err(Error::invalid(
+                "--azimuth",
+                "not a finite direction in degrees",
+            ));
+        }
+        let tilt = facet.tilt_deg.to_radians();
+        let shape_factor = facet.shape_factor.unwrap_or((1.0 + tilt.cos()) / 2.0);
+        if !(0.0..=1.0).contains(&shape_factor) {
+            return Err(Error::invalid(
+                "--shape-factor",
+                format!("{shape_factor} is not a fraction in 0..=1"),
+            ));
+        }
+        if records.is_empty() {
+            return Err(Error::invalid("weather", "no weather records"));
+        }
+        let az = facet.azimuth_deg.to_radians();
+        let normal = glam::DVec3::new(tilt.sin() * az.sin(), tilt.sin() * az.cos(), tilt.cos());
+        let mut sun_fraction = Vec::with_capacity(records.len());
+        let mut cos_incidence = Vec::with_capacity(records.len());
+        for r in &records {
+            let p = sun::position_standard(site, r.time)?;
+            let cos = normal.dot(p.direction_enu()).clamp(-1.0, 1.0);
+            sun_fraction.push(if p.is_up() && cos > 0.0 { 1.0f32 } else { 0.0 });
+            cos_incidence.push(cos as f32);
+        }
+        // Studies difference outputs across parameter values, so the outputs
+        // must be smooth in them: a spin-up that stops on a tolerance (a
+        // whole day more or less) or a loose Newton tolerance would add
+        // steps and noise. Fixed cycle count, tight Newton.
+        let mut options = options;
+        options.spinup.tolerance_k = 0.0;
+        options.newton_tolerance_k = options.newton_tolerance_k.min(1e-7);
+        Ok(OneFacet {
+            records,
+            sun_fraction,
+            cos_incidence,
+            shape_factor,
+            options,
+            band,
+        })
+    }
+
+    /// Index of the record at `time` (the last record at or before it).
+    pub fn index_at(&self, time: DateTime<FixedOffset>) -> Result<usize> {
+        let n = self.records.iter().take_while(|r| r.time <= time).count();
+        if n == 0 {
+            return Err(Error::invalid(
+                "time",
+                format!("{time} is before the first weather record"),
+            ));
+        }
+        Ok(n - 1)
+    }
+
+    /// Surface temperature (K) at every record for `material` under
+    /// `weather` (same record times as [`OneFacet::records`]).
+    pub fn surface_temperatures(
+        &self,
+        material: &Material,
+        weather: &[WeatherRecord],
+    ) -> Result<Vec<f64>> {
+        if weather.len() != self.records.len() {
+            return Err(Error::invalid(
+                "weather",
+                "the perturbed history must keep the record times",
+            ));
+        }
+        let props = SlabProperties::from_material(material)?;
+        let forcing = Forcing::from_records(weather)?;
+        let inputs = FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor);
+        Ok(thermal::solve(&props, &forcing, &inputs, &self.options)?.surface_temperature_k)
+    }
+
+    /// Surface-leaving band radiance (W·m⁻²·sr⁻¹) of `material` at surface
+    /// temperature `t_k` under weather record `w` (see the module docs).
+    pub fn band_radiance(&self, material: &Material, w: &WeatherRecord, t_k: f64) -> f64 {
+        let t_sky = (w.sky_longwave_w_m2.max(0.0) / STEFAN_BOLTZMANN_W_M2_K4).powf(0.25);
+        let f = self.shape_factor;
+        let planck = self.band.planck();
+        self.band
+            .wavelengths_um()
+            .iter()
+            .zip(self.band.weights_um())
+            .map(|(&l, wgt)| {
+                let e = material.emissivity_at(l, 0.0).clamp(0.0, 1.0);
+                let down = f * planck.radiance(l, t_sky)
+                    + (1.0 - f) * planck.radiance(l, w.air_temperature_k);
+                wgt * (e * planck.radiance(l, t_k) + (1.0 - e) * down)
+            })
+            .sum()
+    }
+
+    /// Band brightness temperature (K) of a band radiance.
+    pub fn apparent_temperature(&self, radiance_w_m2_sr: f64) -> Result<f64> {
+        self.band.brightness_temperature(radiance_w_m2_sr)
+    }
+}
+
+/// A material by name in the database `db`, or from a material file
+/// (`FILE` holding one material, or `FILE#NAME`) — as `irsig thermal
+/// --material` takes it.
+pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
+    let (file, name) = match spec.split_once('#') {
+        Some((f, n)) => (std::path::PathBuf::from(f), Some(n)),
+        None if Path::new(spec).is_file() => (std::path::PathBuf::from(spec), None),
+        None => (db.to_path_buf(), Some(spec)),
+    };
+    let mdb = MaterialDb::load(&file)?;
+    match name {
+        Some(n) => mdb.get(n).cloned().ok_or_else(|| {
+            Error::invalid(
+                "--material",
+                format!(
+                    "{}: no material named `{n}`; it has: {}",
+                    file.display(),
+                    mdb.materials()
+                        .iter()
+                        .map(|m| m.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        }),
+        None => match mdb.materials() {
+            [m] => Ok(m.clone()),
+            ms => Err(Error::invalid(
+                "--material",
+                format!(
+                    "{} holds {} materials; choose one with FILE#NAME",
+                    file.display(),
+                    ms.len()
+                ),
+            )),
+        },
+    }
+}
+
+/// Write `material` as an irsig material JSON file (`{"materials": [...]}`)
+/// that `irsig thermal --material FILE` reads back; atomically.
+pub fn write_material_json(path: &Path, material: &Material, description: &str) -> Result<()> {
+    let mut entry = serde_json::to_value(material).map_err(|e| Error::Other(e.to_string()))?;
+    if let Some(o) = entry.as_object_mut() {
+        if o.get("emissivity_curve").is_some_and(|v| v.is_null()) {
+            o.remove("emissivity_curve");
+        }
+        o.insert(
+            "description".into(),
+            serde_json::Value::String(description.into()),
+        );
+    }
+    let doc = serde_json::json!({ "materials": [entry] });
+    let text = serde_json::to_string_pretty(&doc).map_err(|e| Error::Other(e.to_string()))? + "\n";
+    super::write_file_atomic(path, text.as_bytes())
+}
