@@ -1,0 +1,389 @@
+//! Rendering a sensor's image: rows of primary rays → hits → radiance →
+//! PSF reduction ([`render_rows`], giving a [`RowBand`]), then the
+//! image-wide sensor effects and the output layers ([`finish`]).
+//!
+//! A [`RowBand`] holds, for a range of image rows, each band's radiance after
+//! the oversampling reduction but *before* MTF, noise and quantisation, and
+//! the truth layers. Row bands are what tiles store: the MTF acts on the
+//! whole image, so it is applied once the bands are assembled. Every value
+//! of a row band depends only on the rows it covers (and, for a Gaussian
+//! PSF, the halo rows traced with it), never on the thread count or on how
+//! the image is split, so tiles merge bit for bit into the single render.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use super::shade::Shader;
+use crate::output::ImageStack;
+use crate::radiometry::Band;
+use crate::sensor::{Psf, Sensor, effects};
+use crate::trace::{Coherence, Hit, Ray};
+use crate::{Error, Result};
+
+/// Names of the truth layers, in output order.
+pub const TRUTH_LAYERS: [&str; 6] = [
+    "surface_temperature",
+    "material_id",
+    "object_id",
+    "shape_factor",
+    "sun_fraction",
+    "depth",
+];
+
+/// Values written to the truth layers of pixels whose centre ray leaves the
+/// scene (sky or ground beyond), in [`TRUTH_LAYERS`] order:
+/// temperature 0 K, material and object id −1, shape factor 0, sun
+/// fraction 0, depth 0 m. (No NaN or infinity appears in any layer.)
+pub const MISS_TRUTH: [f32; 6] = [0.0, -1.0, -1.0, 0.0, 0.0, 0.0];
+
+/// Rows of an image before the image-wide sensor effects.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowBand {
+    /// Image width, pixels.
+    pub width: usize,
+    /// Full image height, pixels.
+    pub height: usize,
+    /// The rows held.
+    pub rows: Range<usize>,
+    /// Per band: radiance after the PSF reduction, W·m⁻²·sr⁻¹,
+    /// `rows.len() × width`.
+    pub radiance: Vec<Vec<f32>>,
+    /// Truth layers ([`TRUTH_LAYERS`] order) of each pixel's centre ray.
+    pub truth: Vec<Vec<f32>>,
+}
+
+impl RowBand {
+    /// An empty band of rows, to be filled.
+    pub fn empty(width: usize, height: usize, rows: Range<usize>, bands: usize) -> Self {
+        let n = rows.len() * width;
+        RowBand {
+            width,
+            height,
+            rows,
+            radiance: vec![vec![0.0; n]; bands],
+            truth: vec![vec![0.0; n]; TRUTH_LAYERS.len()],
+        }
+    }
+
+    /// Copy `other`'s rows into this band (which must cover them).
+    pub fn paste(&mut self, other: &RowBand) -> Result<()> {
+        if other.width != self.width
+            || other.radiance.len() != self.radiance.len()
+            || other.rows.start < self.rows.start
+            || other.rows.end > self.rows.end
+        {
+            return Err(Error::invalid(
+                "row band",
+                format!(
+                    "rows {:?} of width {} with {} bands do not fit rows {:?} of width {} with {} bands",
+                    other.rows,
+                    other.width,
+                    other.radiance.len(),
+                    self.rows,
+                    self.width,
+                    self.radiance.len()
+                ),
+            ));
+        }
+        let at = (other.rows.start - self.rows.start) * self.width;
+        let n = other.rows.len() * self.width;
+        for (d, s) in self
+            .radiance
+            .iter_mut()
+            .chain(self.truth.iter_mut())
+            .zip(other.radiance.iter().chain(&other.truth))
+        {
+            d[at..at + n].copy_from_slice(&s[..n]);
+        }
+        Ok(())
+    }
+}
+
+/// Time spent in each stage, summed over threads.
+#[derive(Debug, Default)]
+pub struct StageTimes {
+    ray_generation: AtomicU64,
+    primary_trace: AtomicU64,
+    shading: AtomicU64,
+    psf: AtomicU64,
+    /// Primary rays traced.
+    pub primary_rays: AtomicU64,
+}
+
+impl StageTimes {
+    fn add(counter: &AtomicU64, d: Duration) {
+        counter.fetch_add(d.as_nanos() as u64, Ordering::Relaxed);
+    }
+    /// Primary-ray generation, thread-seconds.
+    pub fn ray_generation(&self) -> Duration {
+        Duration::from_nanos(self.ray_generation.load(Ordering::Relaxed))
+    }
+    /// Tracing primary rays (packets), thread-seconds.
+    pub fn primary_trace(&self) -> Duration {
+        Duration::from_nanos(self.primary_trace.load(Ordering::Relaxed))
+    }
+    /// Radiometry including secondary rays and band integration,
+    /// thread-seconds.
+    pub fn shading(&self) -> Duration {
+        Duration::from_nanos(self.shading.load(Ordering::Relaxed))
+    }
+    /// PSF reduction, wall-clock.
+    pub fn psf(&self) -> Duration {
+        Duration::from_nanos(self.psf.load(Ordering::Relaxed))
+    }
+}
+
+/// One traced row: per band the oversampled band radiances, and the truth
+/// values of the row's pixels.
+struct RowOut {
+    radiance: Vec<Vec<f32>>,
+    truth: Vec<[f32; 6]>,
+}
+
+fn trace_row(shader: &Shader, sensor: &Sensor, row: usize, times: &StageTimes) -> RowOut {
+    let t0 = Instant::now();
+    let mut rays: Vec<Ray> = Vec::with_capacity(sensor.rays_per_row());
+    sensor.rays_for_row(row, &mut rays);
+    let t1 = Instant::now();
+    let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
+    shader
+        .tracer()
+        .intersect(&rays, Coherence::Coherent, &mut hits);
+    let t2 = Instant::now();
+    let nl = shader.spectrum_len();
+    let mut spectra = vec![0.0f64; rays.len() * nl];
+    shader.shade(&rays, &hits, 0, &mut spectra);
+    let radiance: Vec<Vec<f32>> = (0..shader.band_count())
+        .map(|b| {
+            spectra
+                .chunks_exact(nl)
+                .map(|s| shader.band_radiance(b, s) as f32)
+                .collect()
+        })
+        .collect();
+    // Truth of each pixel's centre sub-ray (sub-row and sub-column ⌊N/2⌋).
+    let n = sensor.oversample();
+    let ws = sensor.width() * n;
+    let s = &shader.conditions().surface;
+    let optics = shader.optics();
+    let truth = (0..sensor.width())
+        .map(|col| {
+            let k = (n / 2) * ws + col * n + n / 2;
+            match &hits[k] {
+                None => MISS_TRUTH,
+                Some(h) => {
+                    let f = shader.facet_of(h);
+                    let m = &optics.materials[optics.facet_material[f] as usize];
+                    let depth = h.t * rays[k].dir.length();
+                    [
+                        s.temperature_k[f],
+                        m.id as f32,
+                        optics.facet_object[f] as f32,
+                        s.shape_factor[f],
+                        s.sun_fraction[f],
+                        if depth.is_finite() { depth } else { 0.0 },
+                    ]
+                }
+            }
+        })
+        .collect();
+    let t3 = Instant::now();
+    StageTimes::add(&times.ray_generation, t1 - t0);
+    StageTimes::add(&times.primary_trace, t2 - t1);
+    StageTimes::add(&times.shading, t3 - t2);
+    times
+        .primary_rays
+        .fetch_add(rays.len() as u64, Ordering::Relaxed);
+    RowOut { radiance, truth }
+}
+
+/// Render image rows `rows` of `sensor`: trace and shade the primary rays of
+/// those rows (plus the PSF's halo rows), band-integrate, and reduce the
+/// oversampled radiance with the PSF. `progress` is called with the number
+/// of rows finished (from worker threads).
+pub fn render_rows(
+    shader: &Shader,
+    sensor: &Sensor,
+    rows: Range<usize>,
+    times: &StageTimes,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RowBand> {
+    let (w, h, n) = (sensor.width(), sensor.height(), sensor.oversample());
+    if rows.start >= rows.end || rows.end > h {
+        return Err(Error::invalid(
+            "rows",
+            format!("{rows:?}: expected a non-empty range within 0..{h}"),
+        ));
+    }
+    if shader.band_count() != sensor.bands.len() {
+        return Err(Error::invalid(
+            "bands",
+            format!(
+                "{} bands shaded for a sensor with {}",
+                shader.band_count(),
+                sensor.bands.len()
+            ),
+        ));
+    }
+    let psf = sensor.effects.psf;
+    let halo = psf.halo_px();
+    let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
+    let outs: Vec<RowOut> = traced
+        .clone()
+        .into_par_iter()
+        .map(|r| {
+            let o = trace_row(shader, sensor, r, times);
+            progress(1);
+            o
+        })
+        .collect();
+    let t0 = Instant::now();
+    let mut band = RowBand::empty(w, h, rows.clone(), shader.band_count());
+    let ws = w * n;
+    for b in 0..shader.band_count() {
+        let reduced = match psf {
+            // Box weights do not depend on the position in the image:
+            // reduce the traced rows alone.
+            Psf::Box => {
+                let mut over = Vec::with_capacity(traced.len() * n * ws);
+                for o in &outs {
+                    over.extend_from_slice(&o.radiance[b]);
+                }
+                effects::reduce_oversampled(&over, w, traced.len(), n, psf)?
+            }
+            // Other PSFs: place the traced rows in a full-height image so
+            // every weight is computed exactly as in a full render.
+            _ => {
+                let mut over = vec![0.0f32; h * n * ws];
+                for (o, r) in outs.iter().zip(traced.clone()) {
+                    over[r * n * ws..(r + 1) * n * ws].copy_from_slice(&o.radiance[b]);
+                }
+                let full = effects::reduce_oversampled(&over, w, h, n, psf)?;
+                full[traced.start * w..traced.end * w].to_vec()
+            }
+        };
+        let skip = (rows.start - traced.start) * w;
+        band.radiance[b].copy_from_slice(&reduced[skip..skip + rows.len() * w]);
+    }
+    for (i, o) in outs[rows.start - traced.start..][..rows.len()]
+        .iter()
+        .enumerate()
+    {
+        for (col, t) in o.truth.iter().enumerate() {
+            for (l, v) in t.iter().enumerate() {
+                band.truth[l][i * w + col] = *v;
+            }
+        }
+    }
+    StageTimes::add(&times.psf, t0.elapsed());
+    Ok(band)
+}
+
+/// A finished image: the layers and the ENVI wavelengths of its band
+/// radiance layers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finished {
+    /// All layers: per band `NAME_radiance` (and `NAME_counts` when
+    /// quantised), `apparent_temperature` (band 0) and
+    /// `NAME_apparent_temperature` (other bands), then the truth layers.
+    pub stack: ImageStack,
+    /// The band radiance layers alone (for ENVI).
+    pub radiance: ImageStack,
+    /// Response-weighted centre wavelength of each band, µm.
+    pub wavelengths_um: Vec<f64>,
+}
+
+/// Response-weighted mean wavelength of a band, µm.
+pub fn band_centre_um(band: &Band) -> f64 {
+    let w = band.weights_um();
+    let s: f64 = w.iter().sum();
+    w.iter()
+        .zip(band.wavelengths_um())
+        .map(|(a, l)| a * l)
+        .sum::<f64>()
+        / s
+}
+
+/// Brightness temperature of band radiance `l`, K; 0 for a non-positive or
+/// non-finite radiance (documented sentinel; no NaN in outputs).
+pub fn apparent_temperature(band: &Band, l: f32) -> f32 {
+    if !(l.is_finite() && l > 0.0) {
+        return 0.0;
+    }
+    band.brightness_temperature(l as f64)
+        .map(|t| t as f32)
+        .unwrap_or(0.0)
+}
+
+/// Apply the image-wide sensor effects to a complete [`RowBand`] (MTF, then
+/// NEdT noise with `seed`, then quantisation) and build the output layers.
+pub fn finish(
+    full: &RowBand,
+    sensor: &Sensor,
+    bands: &[Band],
+    seed: u64,
+) -> Result<Finished> {
+    let (w, h) = (full.width, full.height);
+    if full.rows != (0..h) || bands.len() != full.radiance.len() {
+        return Err(Error::invalid(
+            "image",
+            format!(
+                "rows {:?} of {h} with {} bands: expected all rows and {} bands",
+                full.rows,
+                full.radiance.len(),
+                bands.len()
+            ),
+        ));
+    }
+    let fx = &sensor.effects;
+    let mut stack = ImageStack::new(w, h);
+    let mut radiance_stack = ImageStack::new(w, h);
+    let mut temps = Vec::new();
+    for (b, (band, cfg)) in bands.iter().zip(&sensor.bands).enumerate() {
+        let mut l = full.radiance[b].clone();
+        if let Some(m) = &fx.mtf {
+            effects::apply_mtf(&mut l, w, h, m)?;
+        }
+        if let Some(nedt) = fx.nedt_k {
+            let sigma = effects::radiance_sigma_from_nedt(nedt, fx.nedt_reference_k, |t| {
+                band.blackbody_radiance(t)
+            });
+            effects::add_noise(&mut l, w, 0, sigma, seed, b as u64);
+        }
+        let t: Vec<f32> = l.par_iter().map(|&v| apparent_temperature(band, v)).collect();
+        let counts = fx.bits.map(|bits| effects::quantise(&l, bits, fx.gain, fx.offset));
+        radiance_stack.push(format!("{}_radiance", cfg.name), l.clone())?;
+        stack.push(format!("{}_radiance", cfg.name), l)?;
+        if let Some(c) = counts {
+            stack.push(format!("{}_counts", cfg.name), c)?;
+        }
+        temps.push((cfg.name.clone(), t));
+    }
+    for (b, (name, t)) in temps.into_iter().enumerate() {
+        let layer = if b == 0 {
+            "apparent_temperature".to_string()
+        } else {
+            format!("{name}_apparent_temperature")
+        };
+        stack.push(layer, t)?;
+    }
+    for (name, v) in TRUTH_LAYERS.iter().zip(&full.truth) {
+        stack.push(*name, v.clone())?;
+    }
+    for l in &stack.layers {
+        if let Some(v) = l.data.iter().find(|v| !v.is_finite()) {
+            return Err(Error::Other(format!(
+                "layer `{}` of sensor `{}` has a non-finite value ({v}): refusing to write it",
+                l.name, sensor.name
+            )));
+        }
+    }
+    Ok(Finished {
+        stack,
+        radiance: radiance_stack,
+        wavelengths_um: bands.iter().map(band_centre_um).collect(),
+    })
+}

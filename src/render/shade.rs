@@ -1,0 +1,556 @@
+//! Per-hit radiance: the "big equation" on each band's spectral grid, with
+//! secondary rays for specular reflection and transmission.
+//!
+//! For a hit on a facet at temperature `T`, seen at view zenith `θ` from the
+//! normal facing the ray, with spectral emissivity `ε(λ, θ)`, grey
+//! transmissivity `t` and specular fraction `s` (Kirchhoff: reflectance
+//! `r = 1 − ε − t`, diffuse `r_d = (1 − s)·r`, specular `r_s = s·r`), the
+//! radiance leaving toward the sensor is (Schott, *Remote Sensing: The Image
+//! Chain Approach*, 2nd ed., eq. 4.59, as DIRSIG evaluates it):
+//!
+//! ```text
+//! L(λ) = ε·B(λ, T)                                 self-emission
+//!      + r_d·E_s(λ)·cos σ·f_sun / π                direct sun (diffuse part)
+//!      + r_d·[F·L_sky(λ) + (1 − F)·B(λ, T_bg)]     sky and background
+//!      + r_s·L_spec(λ)                             radiance along the mirror ray
+//!      + t·L_behind(λ)                             radiance along the continuing ray
+//! ```
+//!
+//! `F` is the facet's sky shape factor, `f_sun` its sunlit fraction,
+//! `cos σ` the cosine of the solar incidence, `T_bg` the radiative mean
+//! temperature of what it sees below the sky. `L_spec` and `L_behind` are
+//! traced (the same equation at the next hit) while the bounce budget lasts;
+//! past it, both take the diffuse environment `F·L_sky + (1 − F)·B(T_bg)`.
+//! The solar glint (a delta in the mirror direction) is left out.
+//!
+//! Rays that leave the scene see the sky radiance when they point above the
+//! horizon (`dir.z ≥ 0`) and the ground beyond the scene (a blackbody at
+//! [`Conditions::ground_temperature_k`]) when they point below it.
+//!
+//! Units: wavelength µm, spectral radiance W·m⁻²·sr⁻¹·µm⁻¹, spectral
+//! irradiance W·m⁻²·µm⁻¹, band radiance ∫ R L dλ in W·m⁻²·sr⁻¹.
+//!
+//! Speed: Planck's function is tabulated per band on a temperature grid of
+//! [`PLANCK_TABLE_STEP_K`] covering the scene's temperatures and
+//! interpolated linearly (relative error ≤ 2·10⁻⁶, i.e. < 10⁻⁴ K in
+//! brightness temperature, at 3–14 µm; temperatures off the table are
+//! evaluated exactly), and emissivity per material on a 1° angle grid.
+
+use glam::Vec3;
+
+use crate::geometry::SceneGeometry;
+use crate::material::Material;
+use crate::radiometry::{Band, Planck};
+use crate::trace::{Coherence, Hit, Ray, Tracer};
+
+/// Temperature step of the tabulated Planck function, K.
+pub const PLANCK_TABLE_STEP_K: f64 = 0.05;
+/// Most nodes of the Planck table (beyond: exact evaluation).
+const PLANCK_TABLE_MAX_NODES: usize = 16384;
+/// Angle rows of the emissivity tables (0°, 1°, …, 90°).
+const ANGLE_ROWS: usize = 91;
+
+/// Sky radiance model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sky {
+    /// An isotropic grey sky: a blackbody at this temperature, K.
+    Blackbody {
+        /// Effective sky temperature, K.
+        temperature_k: f64,
+    },
+}
+
+/// The sun as the renderer sees it at the image time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SunInput {
+    /// Unit east-north-up vector toward the sun.
+    pub direction: Vec3,
+    /// Direct normal irradiance at the surface, W/m² (broadband; distributed
+    /// over wavelength as a 5772 K blackbody, see [`solar_spectrum`]).
+    pub direct_normal_w_m2: f64,
+}
+
+/// Per-facet thermal state at the image time (global facet order).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SurfaceState {
+    /// Surface temperature, K.
+    pub temperature_k: Vec<f32>,
+    /// Sky shape factor F, 0–1.
+    pub shape_factor: Vec<f32>,
+    /// Sunlit fraction, 0–1.
+    pub sun_fraction: Vec<f32>,
+    /// Cosine of the solar incidence on the front face (0 when the sun is
+    /// behind the face or below the horizon).
+    pub cos_sun: Vec<f32>,
+    /// Radiative mean temperature of the background (non-sky) seen, K.
+    pub background_k: Vec<f32>,
+}
+
+impl SurfaceState {
+    /// Every facet at `temperature_k`, seeing only sky (F = 1), in shade.
+    pub fn uniform(facets: usize, temperature_k: f32) -> Self {
+        SurfaceState {
+            temperature_k: vec![temperature_k; facets],
+            shape_factor: vec![1.0; facets],
+            sun_fraction: vec![0.0; facets],
+            cos_sun: vec![0.0; facets],
+            background_k: vec![temperature_k; facets],
+        }
+    }
+
+    /// Number of facets.
+    pub fn len(&self) -> usize {
+        self.temperature_k.len()
+    }
+
+    /// Whether there are no facets.
+    pub fn is_empty(&self) -> bool {
+        self.temperature_k.is_empty()
+    }
+
+    /// Check the lengths agree and the values are finite and in range.
+    pub fn validate(&self, facets: usize) -> crate::Result<()> {
+        let lens = [
+            ("temperature_k", self.temperature_k.len()),
+            ("shape_factor", self.shape_factor.len()),
+            ("sun_fraction", self.sun_fraction.len()),
+            ("cos_sun", self.cos_sun.len()),
+            ("background_k", self.background_k.len()),
+        ];
+        for (name, n) in lens {
+            if n != facets {
+                return Err(crate::Error::invalid(
+                    format!("surface state `{name}`"),
+                    format!("{n} values: expected one per facet ({facets})"),
+                ));
+            }
+        }
+        if let Some((i, t)) = self
+            .temperature_k
+            .iter()
+            .chain(&self.background_k)
+            .enumerate()
+            .find(|(_, t)| !(t.is_finite() && **t > 0.0))
+        {
+            return Err(crate::Error::invalid(
+                "surface temperature",
+                format!("value {i} is {t} K: expected a finite positive temperature"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Everything about the image time the shading needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Conditions {
+    /// Per-facet thermal state.
+    pub surface: SurfaceState,
+    /// Sky radiance.
+    pub sky: Sky,
+    /// The sun, `None` at night.
+    pub sun: Option<SunInput>,
+    /// Temperature of the ground beyond the scene (rays leaving the scene
+    /// downward), K; a blackbody.
+    pub ground_temperature_k: f64,
+}
+
+/// What the renderer knows about each facet of the scene.
+#[derive(Debug, Clone)]
+pub struct SceneOptics {
+    /// Materials; facets index into this.
+    pub materials: Vec<Material>,
+    /// Per facet: index into `materials`.
+    pub facet_material: Vec<u32>,
+    /// Per facet: object id (written to the `object_id` layer).
+    pub facet_object: Vec<u32>,
+}
+
+/// Shading options.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadeOptions {
+    /// Most secondary bounces (specular reflection / transmission) per
+    /// primary ray.
+    pub max_bounces: u32,
+    /// Secondary-ray origin offset along the normal, m.
+    pub offset_m: f32,
+}
+
+/// Solar spectral irradiance on a surface normal to the sun, W·m⁻²·µm⁻¹:
+/// the broadband direct normal irradiance `dni_w_m2` distributed as a
+/// 5772 K blackbody (IAU 2015 nominal effective temperature),
+/// `E(λ) = DNI · π B(λ, 5772 K) / (σ · 5772⁴)`.
+pub fn solar_spectrum(planck: &Planck, wavelengths_um: &[f64], dni_w_m2: f64) -> Vec<f64> {
+    const SUN_K: f64 = 5772.0;
+    let sigma = crate::radiometry::Constants::CODATA_2018.stefan_boltzmann_w_m2_k4();
+    let scale = dni_w_m2.max(0.0) * std::f64::consts::PI / (sigma * SUN_K.powi(4));
+    wavelengths_um
+        .iter()
+        .map(|&l| scale * planck.radiance(l, SUN_K))
+        .collect()
+}
+
+/// One band's precomputed tables.
+#[derive(Debug, Clone)]
+struct BandTables {
+    band: Band,
+    /// Offset of this band's wavelengths in the concatenated spectrum.
+    start: usize,
+    /// Sky spectral radiance.
+    sky: Vec<f64>,
+    /// Ground-beyond-the-scene spectral radiance.
+    ground: Vec<f64>,
+    /// Solar spectral irradiance at the surface, normal to the sun.
+    sun: Vec<f64>,
+    /// Per material: `ANGLE_ROWS × n` emissivities.
+    eps: Vec<Vec<f64>>,
+}
+
+/// Planck's function on a temperature grid, all bands' wavelengths
+/// concatenated.
+#[derive(Debug, Clone)]
+struct PlanckTable {
+    t0: f64,
+    nodes: usize,
+    /// `nodes × total` values.
+    values: Vec<f64>,
+}
+
+/// The radiance of rays: per ray, the spectral radiance on every band's
+/// grid, bands concatenated.
+pub struct Shader<'a> {
+    tracer: &'a dyn Tracer,
+    geometry: &'a SceneGeometry,
+    offsets: Vec<usize>,
+    optics: &'a SceneOptics,
+    conditions: &'a Conditions,
+    options: ShadeOptions,
+    bands: Vec<BandTables>,
+    total: usize,
+    wavelengths: Vec<f64>,
+    planck: Planck,
+    table: PlanckTable,
+}
+
+impl std::fmt::Debug for Shader<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Shader")
+            .field("tracer", &self.tracer.name())
+            .field("bands", &self.bands.len())
+            .field("spectrum_len", &self.total)
+            .finish()
+    }
+}
+
+impl<'a> Shader<'a> {
+    /// Precompute the tables for `bands` under `conditions`.
+    pub fn new(
+        tracer: &'a dyn Tracer,
+        geometry: &'a SceneGeometry,
+        optics: &'a SceneOptics,
+        conditions: &'a Conditions,
+        bands: &[Band],
+        options: ShadeOptions,
+    ) -> crate::Result<Self> {
+        let facets = geometry.facet_count();
+        conditions.surface.validate(facets)?;
+        if optics.facet_material.len() != facets || optics.facet_object.len() != facets {
+            return Err(crate::Error::invalid(
+                "scene optics",
+                format!(
+                    "{} materials / {} objects per facet: expected {facets}",
+                    optics.facet_material.len(),
+                    optics.facet_object.len()
+                ),
+            ));
+        }
+        if let Some(m) = optics
+            .facet_material
+            .iter()
+            .find(|&&m| m as usize >= optics.materials.len())
+        {
+            return Err(crate::Error::invalid(
+                "scene optics",
+                format!(
+                    "material index {m}: expected < {}",
+                    optics.materials.len()
+                ),
+            ));
+        }
+        let planck = bands.first().map(|b| *b.planck()).unwrap_or_default();
+        let Sky::Blackbody { temperature_k: t_sky } = conditions.sky;
+        let mut tables = Vec::new();
+        let mut wavelengths = Vec::new();
+        for band in bands {
+            let wl = band.wavelengths_um();
+            let sky = wl.iter().map(|&l| planck.radiance(l, t_sky)).collect();
+            let ground = wl
+                .iter()
+                .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
+                .collect();
+            let sun = match conditions.sun {
+                Some(s) if s.direction.z > 0.0 => {
+                    solar_spectrum(&planck, wl, s.direct_normal_w_m2)
+                }
+                _ => vec![0.0; wl.len()],
+            };
+            let eps = optics
+                .materials
+                .iter()
+                .map(|m| {
+                    let mut rows = Vec::with_capacity(ANGLE_ROWS * wl.len());
+                    for a in 0..ANGLE_ROWS {
+                        rows.extend(wl.iter().map(|&l| m.emissivity_at(l, a as f64)));
+                    }
+                    rows
+                })
+                .collect();
+            tables.push(BandTables {
+                band: band.clone(),
+                start: wavelengths.len(),
+                sky,
+                ground,
+                sun,
+                eps,
+            });
+            wavelengths.extend_from_slice(wl);
+        }
+        let total = wavelengths.len();
+        // Planck table over the scene's temperature range.
+        let s = &conditions.surface;
+        let (lo, hi) = s
+            .temperature_k
+            .iter()
+            .chain(&s.background_k)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t as f64), hi.max(t as f64))
+            });
+        let table = if lo.is_finite() && total > 0 {
+            let t0 = (lo / PLANCK_TABLE_STEP_K).floor() * PLANCK_TABLE_STEP_K;
+            let nodes = (((hi - t0) / PLANCK_TABLE_STEP_K).ceil() as usize + 2)
+                .min(PLANCK_TABLE_MAX_NODES);
+            let mut values = Vec::with_capacity(nodes * total);
+            for k in 0..nodes {
+                let t = t0 + k as f64 * PLANCK_TABLE_STEP_K;
+                values.extend(wavelengths.iter().map(|&l| planck.radiance(l, t)));
+            }
+            PlanckTable { t0, nodes, values }
+        } else {
+            PlanckTable {
+                t0: 0.0,
+                nodes: 0,
+                values: Vec::new(),
+            }
+        };
+        Ok(Shader {
+            tracer,
+            geometry,
+            offsets: geometry.facet_offsets(),
+            optics,
+            conditions,
+            options,
+            bands: tables,
+            total,
+            wavelengths,
+            planck,
+            table,
+        })
+    }
+
+    /// Number of spectral values per ray (all bands).
+    pub fn spectrum_len(&self) -> usize {
+        self.total
+    }
+
+    /// Number of bands.
+    pub fn band_count(&self) -> usize {
+        self.bands.len()
+    }
+
+    /// The band `b`.
+    pub fn band(&self, b: usize) -> &Band {
+        &self.bands[b].band
+    }
+
+    /// Band radiance ∫ R L dλ (W·m⁻²·sr⁻¹) of band `b` from a concatenated
+    /// spectrum.
+    pub fn band_radiance(&self, b: usize, spectrum: &[f64]) -> f64 {
+        let t = &self.bands[b];
+        t.band
+            .integrate(&spectrum[t.start..t.start + t.band.len()])
+    }
+
+    /// Global facet index of a hit.
+    pub fn facet_of(&self, hit: &Hit) -> usize {
+        SceneGeometry::facet_id(&self.offsets, hit.instance, hit.prim)
+    }
+
+    /// The tracer.
+    pub fn tracer(&self) -> &'a dyn Tracer {
+        self.tracer
+    }
+
+    /// The scene optics.
+    pub fn optics(&self) -> &SceneOptics {
+        self.optics
+    }
+
+    /// The conditions.
+    pub fn conditions(&self) -> &Conditions {
+        self.conditions
+    }
+
+    /// B(λ, T) for all wavelengths into `out`: tabulated, or exact off the
+    /// table.
+    fn planck_into(&self, t: f64, out: &mut [f64]) {
+        let tab = &self.table;
+        let x = (t - tab.t0) / PLANCK_TABLE_STEP_K;
+        if tab.nodes >= 2 && x >= 0.0 && x < (tab.nodes - 1) as f64 {
+            let k = x as usize;
+            let f = x - k as f64;
+            let a = &tab.values[k * self.total..(k + 1) * self.total];
+            let b = &tab.values[(k + 1) * self.total..(k + 2) * self.total];
+            for ((o, &va), &vb) in out.iter_mut().zip(a).zip(b) {
+                *o = va + f * (vb - va);
+            }
+        } else {
+            for (o, &l) in out.iter_mut().zip(&self.wavelengths) {
+                *o = self.planck.radiance(l, t);
+            }
+        }
+    }
+
+    /// Spectral radiance arriving along each ray (misses see the sky or the
+    /// ground beyond), written to `out` (`rays.len() × spectrum_len()`).
+    /// `depth` is the number of bounces already taken.
+    pub fn shade(&self, rays: &[Ray], hits: &[Option<Hit>], depth: u32, out: &mut [f64]) {
+        let n = self.total;
+        debug_assert_eq!(out.len(), rays.len() * n);
+        // Secondary rays: (parent, is_transmission).
+        let mut sec_rays = Vec::new();
+        let mut sec_parent = Vec::new();
+        if depth < self.options.max_bounces {
+            for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+                let Some(h) = hit else { continue };
+                let m = &self.optics.materials
+                    [self.optics.facet_material[self.facet_of(h)] as usize];
+                if m.specular_fraction <= 0.0 && m.transmissivity <= 0.0 {
+                    continue;
+                }
+                let (p, nrm, d) = self.hit_frame(ray, h);
+                if m.specular_fraction > 0.0 {
+                    let r = d - 2.0 * d.dot(nrm) * nrm;
+                    sec_rays.push(Ray::new(p + nrm * self.options.offset_m, r));
+                    sec_parent.push((i, false));
+                }
+                if m.transmissivity > 0.0 {
+                    sec_rays.push(Ray::new(p - nrm * self.options.offset_m, d));
+                    sec_parent.push((i, true));
+                }
+            }
+        }
+        let mut sec_spec = Vec::new();
+        if !sec_rays.is_empty() {
+            let mut sec_hits = vec![None; sec_rays.len()];
+            self.tracer
+                .intersect(&sec_rays, Coherence::Incoherent, &mut sec_hits);
+            sec_spec = vec![0.0; sec_rays.len() * n];
+            self.shade(&sec_rays, &sec_hits, depth + 1, &mut sec_spec);
+        }
+        // Index of each ray's reflected / transmitted spectrum.
+        let mut refl = vec![usize::MAX; rays.len()];
+        let mut trans = vec![usize::MAX; rays.len()];
+        for (k, &(i, is_t)) in sec_parent.iter().enumerate() {
+            if is_t {
+                trans[i] = k;
+            } else {
+                refl[i] = k;
+            }
+        }
+        let mut b_t = vec![0.0; n];
+        let mut b_bg = vec![0.0; n];
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let o = &mut out[i * n..(i + 1) * n];
+            let Some(h) = hit else {
+                self.miss_into(ray.dir, o);
+                continue;
+            };
+            let spec_in = (refl[i] != usize::MAX).then(|| &sec_spec[refl[i] * n..(refl[i] + 1) * n]);
+            let behind = (trans[i] != usize::MAX).then(|| &sec_spec[trans[i] * n..(trans[i] + 1) * n]);
+            self.leaving_into(ray, h, spec_in, behind, &mut b_t, &mut b_bg, o);
+        }
+    }
+
+    /// Spectral radiance of a ray leaving the scene.
+    pub fn miss_into(&self, dir: Vec3, out: &mut [f64]) {
+        for t in &self.bands {
+            let src = if dir.z >= 0.0 { &t.sky } else { &t.ground };
+            out[t.start..t.start + src.len()].copy_from_slice(src);
+        }
+    }
+
+    /// Hit point, normal facing the ray's origin, and unit ray direction.
+    fn hit_frame(&self, ray: &Ray, h: &Hit) -> (Vec3, Vec3, Vec3) {
+        let d = ray.dir.normalize_or_zero();
+        let p = ray.origin + ray.dir * h.t;
+        let mut nrm = h.ng.normalize_or(Vec3::Z);
+        if nrm.dot(d) > 0.0 {
+            nrm = -nrm;
+        }
+        (p, nrm, d)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn leaving_into(
+        &self,
+        ray: &Ray,
+        h: &Hit,
+        spec_in: Option<&[f64]>,
+        behind: Option<&[f64]>,
+        b_t: &mut [f64],
+        b_bg: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let f = self.facet_of(h);
+        let s = &self.conditions.surface;
+        let mi = self.optics.facet_material[f] as usize;
+        let m = &self.optics.materials[mi];
+        let (_, nrm, d) = self.hit_frame(ray, h);
+        let cos_view = (-d.dot(nrm)).clamp(0.0, 1.0) as f64;
+        let theta = cos_view.acos().to_degrees();
+        let a0 = (theta.floor() as usize).min(ANGLE_ROWS - 2);
+        let ta = theta - a0 as f64;
+        self.planck_into(s.temperature_k[f] as f64, b_t);
+        self.planck_into(s.background_k[f] as f64, b_bg);
+        let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+        // The sun only lights the face it falls on: for a single-sided facet
+        // seen from behind, cos σ of the front face does not apply.
+        let front = h.ng.dot(d) < 0.0;
+        let sun_w = if front || m.double_sided {
+            (s.cos_sun[f] as f64).max(0.0) * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
+                / std::f64::consts::PI
+        } else {
+            0.0
+        };
+        let spec_frac = m.specular_fraction.clamp(0.0, 1.0);
+        let tr = m.transmissivity.clamp(0.0, 1.0);
+        for t in &self.bands {
+            let nl = t.band.len();
+            let e = &t.eps[mi];
+            let e0 = &e[a0 * nl..(a0 + 1) * nl];
+            let e1 = &e[(a0 + 1) * nl..(a0 + 2) * nl];
+            for j in 0..nl {
+                let k = t.start + j;
+                let eps = e0[j] + ta * (e1[j] - e0[j]);
+                let r = (1.0 - eps - tr).max(0.0);
+                let rd = (1.0 - spec_frac) * r;
+                let rs = spec_frac * r;
+                let env = big_f * t.sky[j] + (1.0 - big_f) * b_bg[k];
+                let sun = t.sun[j] * sun_w;
+                let spec = spec_in.map_or(env, |v| v[k]);
+                let beh = behind.map_or(env, |v| v[k]);
+                out[k] = eps * b_t[k] + rd * (sun + env) + rs * spec + tr * beh;
+            }
+        }
+    }
+}

@@ -1,0 +1,332 @@
+//! Tiles: a render split into `N` bands of image rows (`--tile K/N`), each
+//! written to a partial file and assembled by `irsig merge`.
+//!
+//! A tile file `NAME.tileK-of-N.exr` is an OpenEXR image of the tile's rows
+//! holding, per band, the radiance after the PSF reduction but before the
+//! image-wide effects (`NAME_radiance`), and the truth layers; its part
+//! attribute `irsigTile` is a JSON [`TileInfo`]: which image it belongs to
+//! (scene hash, sensor, time), the full size and its row range. Merging
+//! checks every tile of `1..=N` is present exactly once and that they agree,
+//! pastes the rows and runs the image-wide effects once
+//! ([`super::image::finish`]), so the result is bit-identical to a render in
+//! one piece. Tiles are written atomically: a tile file that exists is
+//! complete, and a rerun skips it ([`tile_is_complete`]).
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::traits::*;
+use exr::prelude::{self as x};
+use serde::{Deserialize, Serialize};
+
+use super::image::{RowBand, TRUTH_LAYERS};
+use crate::output::write_atomic;
+use crate::{Error, Location, Result};
+
+/// Name of the EXR attribute holding the [`TileInfo`] JSON.
+pub const TILE_ATTRIBUTE: &str = "irsigTile";
+
+/// Which tile of which image a tile file holds.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TileInfo {
+    /// Format version (1).
+    pub version: u32,
+    /// Hash of everything the image depends on (scene, weather, materials,
+    /// sensor, time, seed, options), hex.
+    pub scene_hash: String,
+    /// The scene file, as given on the command line (absolute).
+    pub scene: PathBuf,
+    /// Sensor name.
+    pub sensor: String,
+    /// Output file stem (sensor name, plus the time for a series).
+    pub stem: String,
+    /// Image time, RFC 3339.
+    pub time: String,
+    /// Tile index `K` (1-based).
+    pub tile: usize,
+    /// Tile count `N`.
+    pub tiles: usize,
+    /// Full image width, pixels.
+    pub width: usize,
+    /// Full image height, pixels.
+    pub height: usize,
+    /// First row held.
+    pub row_start: usize,
+    /// One past the last row held.
+    pub row_end: usize,
+    /// Band names, in order.
+    pub bands: Vec<String>,
+    /// Noise seed used by the finishing step.
+    pub seed: u64,
+    /// Tracing backend.
+    pub backend: String,
+}
+
+/// Rows `[start, end)` of tile `k` (1-based) of `n` for an image of
+/// `height` rows: as equal as possible, the first `height mod n` tiles one
+/// row longer.
+pub fn tile_rows(k: usize, n: usize, height: usize) -> std::ops::Range<usize> {
+    let base = height / n;
+    let extra = height % n;
+    let start = (k - 1) * base + (k - 1).min(extra);
+    let len = base + usize::from(k - 1 < extra);
+    start..start + len
+}
+
+/// Parse `K/N` (1 ≤ K ≤ N).
+pub fn parse_tile(s: &str) -> Result<(usize, usize)> {
+    let bad = || {
+        Error::invalid(
+            "--tile",
+            format!("`{s}`: expected K/N with 1 ≤ K ≤ N, e.g. 3/8"),
+        )
+    };
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let k: usize = k.trim().parse().map_err(|_| bad())?;
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if k == 0 || n == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// The tile file of `stem` in `dir`: `dir/STEM.tileK-of-N.exr`.
+pub fn tile_path(dir: &Path, stem: &str, k: usize, n: usize) -> PathBuf {
+    dir.join(format!("{stem}.tile{k}-of-{n}.exr"))
+}
+
+/// JSON with every non-ASCII character escaped (EXR text is Latin-1).
+fn ascii_json<T: Serialize>(v: &T) -> Result<String> {
+    let s = serde_json::to_string(v).map_err(|e| Error::Other(format!("tile metadata: {e}")))?;
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c.is_ascii() {
+            out.push(c);
+        } else {
+            let mut buf = [0u16; 2];
+            for u in c.encode_utf16(&mut buf) {
+                out.push_str(&format!("\\u{u:04x}"));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Write a tile file atomically.
+pub fn write_tile(path: &Path, info: &TileInfo, band: &RowBand) -> Result<()> {
+    if band.rows != (info.row_start..info.row_end) || band.radiance.len() != info.bands.len() {
+        return Err(Error::invalid(
+            "tile",
+            format!(
+                "rows {:?} with {} bands do not match the tile metadata",
+                band.rows,
+                band.radiance.len()
+            ),
+        ));
+    }
+    let names: Vec<String> = info
+        .bands
+        .iter()
+        .map(|b| format!("{b}_radiance"))
+        .chain(TRUTH_LAYERS.iter().map(|s| s.to_string()))
+        .collect();
+    let data: Vec<&Vec<f32>> = band.radiance.iter().chain(&band.truth).collect();
+    let channels: x::SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = names
+        .iter()
+        .zip(&data)
+        .map(|(n, d)| x::AnyChannel::new(n.as_str(), x::FlatSamples::F32((*d).clone())))
+        .collect();
+    let mut attributes = x::LayerAttributes::named("irsig-tile");
+    attributes.other.insert(
+        x::Text::from(TILE_ATTRIBUTE),
+        x::AttributeValue::Text(x::Text::from(ascii_json(info)?.as_str())),
+    );
+    let layer = x::Layer::new(
+        (band.width, band.rows.len()),
+        attributes,
+        x::Encoding::SMALL_LOSSLESS,
+        x::AnyChannels::sort(channels),
+    );
+    let image = x::Image::from_layer(layer);
+    write_atomic(path, |w| {
+        image
+            .write()
+            .non_parallel()
+            .to_buffered(w)
+            .map_err(|e| Error::Other(format!("{}: writing tile: {e}", path.display())))
+    })
+}
+
+/// Read a tile file: its metadata and rows.
+pub fn read_tile(path: &Path) -> Result<(TileInfo, RowBand)> {
+    let bad = |m: String| Error::parse(Location::file(path), m);
+    if !path.exists() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        ));
+    }
+    let image = x::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_file(path)
+        .map_err(|e| bad(format!("not a readable OpenEXR tile: {e}")))?;
+    let layer = image.layer_data;
+    let info: TileInfo = match layer.attributes.other.get(&x::Text::from(TILE_ATTRIBUTE)) {
+        Some(x::AttributeValue::Text(t)) => serde_json::from_str(&t.to_string())
+            .map_err(|e| bad(format!("attribute `{TILE_ATTRIBUTE}`: {e}")))?,
+        _ => {
+            return Err(bad(format!(
+                "no `{TILE_ATTRIBUTE}` attribute: expected a tile written by `irsig render --tile K/N`"
+            )));
+        }
+    };
+    let (w, h) = (layer.size.width(), layer.size.height());
+    if w != info.width
+        || info.row_end < info.row_start
+        || h != info.row_end - info.row_start
+        || info.row_end > info.height
+        || info.tile == 0
+        || info.tile > info.tiles
+    {
+        return Err(bad(format!(
+            "size {w}×{h} does not match its metadata (width {}, rows {}..{} of {}, tile {}/{})",
+            info.width, info.row_start, info.row_end, info.height, info.tile, info.tiles
+        )));
+    }
+    let get = |name: &str| -> Result<Vec<f32>> {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .ok_or_else(|| bad(format!("missing layer `{name}`")))?;
+        match &c.sample_data {
+            x::FlatSamples::F32(v) => Ok(v.clone()),
+            _ => Err(bad(format!("layer `{name}`: expected 32-bit float samples"))),
+        }
+    };
+    let radiance = info
+        .bands
+        .iter()
+        .map(|b| get(&format!("{b}_radiance")))
+        .collect::<Result<Vec<_>>>()?;
+    let truth = TRUTH_LAYERS
+        .iter()
+        .map(|n| get(n))
+        .collect::<Result<Vec<_>>>()?;
+    let band = RowBand {
+        width: w,
+        height: info.height,
+        rows: info.row_start..info.row_end,
+        radiance,
+        truth,
+    };
+    Ok((info, band))
+}
+
+/// Whether `path` holds a complete tile matching `expected` (same image and
+/// rows). Files are written atomically, so a readable one is complete.
+pub fn tile_is_complete(path: &Path, expected: &TileInfo) -> bool {
+    match read_tile(path) {
+        Ok((info, _)) => &info == expected,
+        Err(_) => false,
+    }
+}
+
+/// Assemble tiles into the full image, checking they all belong to one
+/// image (same hash, sensor, time, size, band names, tile count) and that
+/// tiles `1..=N` are each present exactly once.
+pub fn assemble(parts: &[(PathBuf, TileInfo, RowBand)]) -> Result<(TileInfo, RowBand)> {
+    let Some((p0, first, _)) = parts.first() else {
+        return Err(Error::invalid("merge", "no tile files given"));
+    };
+    let n = first.tiles;
+    let mut seen: Vec<Option<&Path>> = vec![None; n];
+    for (p, info, _) in parts {
+        let same = info.scene_hash == first.scene_hash
+            && info.sensor == first.sensor
+            && info.stem == first.stem
+            && info.time == first.time
+            && info.width == first.width
+            && info.height == first.height
+            && info.bands == first.bands
+            && info.tiles == first.tiles
+            && info.seed == first.seed;
+        if !same {
+            return Err(Error::parse(
+                Location::file(p),
+                format!(
+                    "tile {}/{} of `{}` (scene hash {}, {}×{}) does not belong to the same image as {} (`{}`, scene hash {}, {}×{}, {} tiles)",
+                    info.tile,
+                    info.tiles,
+                    info.stem,
+                    info.scene_hash,
+                    info.width,
+                    info.height,
+                    p0.display(),
+                    first.stem,
+                    first.scene_hash,
+                    first.width,
+                    first.height,
+                    first.tiles
+                ),
+            ));
+        }
+        if info.row_start..info.row_end != tile_rows(info.tile, n, info.height) {
+            return Err(Error::parse(
+                Location::file(p),
+                format!(
+                    "tile {}/{} holds rows {}..{}: expected {:?}",
+                    info.tile,
+                    n,
+                    info.row_start,
+                    info.row_end,
+                    tile_rows(info.tile, n, info.height)
+                ),
+            ));
+        }
+        if let Some(other) = seen[info.tile - 1] {
+            return Err(Error::parse(
+                Location::file(p),
+                format!(
+                    "tile {}/{} given twice (also {})",
+                    info.tile,
+                    n,
+                    other.display()
+                ),
+            ));
+        }
+        seen[info.tile - 1] = Some(p);
+    }
+    let missing: Vec<String> = seen
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_none())
+        .map(|(k, _)| format!("{}/{n}", k + 1))
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::invalid(
+            "merge",
+            format!(
+                "`{}`: missing tile(s) {}: expected all {n} tiles (`{}.tileK-of-{n}.exr`)",
+                first.stem,
+                missing.join(", "),
+                first.stem
+            ),
+        ));
+    }
+    let mut full = RowBand::empty(first.width, first.height, 0..first.height, first.bands.len());
+    for (_, _, band) in parts {
+        full.paste(band)?;
+    }
+    let mut info = first.clone();
+    info.tile = 1;
+    info.tiles = 1;
+    info.row_start = 0;
+    info.row_end = first.height;
+    Ok((info, full))
+}
