@@ -1,1 +1,176 @@
-//! The render pipeline: scene → exposure/thermal → primary rays → radiometry → sensor → outputs (being written).
+//! The render pipeline: scene → exposure and thermal state → primary rays →
+//! radiance → sensor effects → image files.
+//!
+//! # How the parts fit
+//! - [`shade`]: [`Shader`] evaluates the radiance of rays on each band's
+//!   spectral grid — the "big equation" at every hit, with secondary rays
+//!   for specular reflection and transmission — from the facets' thermal
+//!   state ([`Conditions`], [`SurfaceState`]) and optics ([`SceneOptics`]).
+//! - [`image`]: [`render_rows`] traces a sensor's primary rays row by row in
+//!   packets ([`crate::trace::Coherence::Coherent`]), band-integrates and
+//!   reduces the oversampling with the PSF into a [`RowBand`];
+//!   [`finish`] applies the image-wide effects (MTF, NEdT noise,
+//!   quantisation), computes apparent temperatures and builds the layers.
+//! - [`tile`]: a render split into row bands (`--tile K/N`), partial files
+//!   and their assembly (`irsig merge`).
+//! - [`session`]: the whole chain for a loaded scene file — the tracer built
+//!   once, exposure and thermal state per image time, each sensor rendered
+//!   and written ([`write_outputs`]: `NAME.exr`, `NAME.img`/`NAME.hdr`,
+//!   `NAME.png`, all atomic).
+//!
+//! Results do not depend on the number of threads or on the tiling: rays
+//! are traced in fixed rows, every value depends only on its own rays, and
+//! noise streams are keyed by (seed, band, row).
+
+pub mod image;
+// pub mod session; (waits for the scene module)
+pub mod shade;
+pub mod tile;
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
+pub use shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
+
+use crate::output::{write_envi, write_exr, write_quicklook_png};
+use crate::radiometry::{Band, read_response_csv};
+use crate::sensor::{ResponseSpec, Sensor};
+use crate::{Error, Location, Result};
+
+fn default_max_bounces() -> u32 {
+    2
+}
+fn default_spectral_step_um() -> f64 {
+    0.1
+}
+fn default_facet_samples() -> u32 {
+    1
+}
+
+/// The `render` section of a scene file (all fields optional).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderConfig {
+    /// Most secondary bounces (specular reflection, transmission) per
+    /// primary ray (default 2).
+    #[serde(default = "default_max_bounces")]
+    pub max_bounces: u32,
+    /// Spectral step of the band grids the radiance is evaluated on, µm
+    /// (default 0.1: trapezoid error < 10⁻⁴ of the band radiance at 3–14 µm).
+    #[serde(default = "default_spectral_step_um")]
+    pub spectral_step_um: f64,
+    /// Effective sky temperature, K (default: from the weather's downwelling
+    /// longwave, `(E_sky/σ)^¼`).
+    pub sky_temperature_k: Option<f64>,
+    /// Sample points per facet edge for the solar and sky rays (default 1).
+    #[serde(default = "default_facet_samples")]
+    pub facet_samples: u32,
+}
+
+impl Default for RenderConfig {
+    fn default() -> Self {
+        RenderConfig {
+            max_bounces: default_max_bounces(),
+            spectral_step_um: default_spectral_step_um(),
+            sky_temperature_k: None,
+            facet_samples: default_facet_samples(),
+        }
+    }
+}
+
+impl RenderConfig {
+    /// Parse the scene file's `render` section (`None`: defaults), naming
+    /// `location` in errors.
+    pub fn from_json(value: Option<&serde_json::Value>, location: &Location) -> Result<Self> {
+        let Some(v) = value else {
+            return Ok(RenderConfig::default());
+        };
+        let c: RenderConfig = serde_json::from_value(v.clone()).map_err(|e| {
+            Error::parse(
+                location.clone().with_field("render"),
+                format!("{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples"),
+            )
+        })?;
+        let bad = |field: &str, msg: String| {
+            Error::parse(location.clone().with_field(format!("render.{field}")), msg)
+        };
+        if c.max_bounces > 8 {
+            return Err(bad(
+                "max_bounces",
+                format!("{}: expected 0 to 8", c.max_bounces),
+            ));
+        }
+        if !(c.spectral_step_um.is_finite()
+            && c.spectral_step_um > 0.0
+            && c.spectral_step_um <= 1.0)
+        {
+            return Err(bad(
+                "spectral_step_um",
+                format!("{}: expected a step in (0, 1] µm", c.spectral_step_um),
+            ));
+        }
+        if let Some(t) = c.sky_temperature_k {
+            if !(t.is_finite() && t > 0.0 && t < 400.0) {
+                return Err(bad(
+                    "sky_temperature_k",
+                    format!("{t}: expected a temperature in (0, 400) K"),
+                ));
+            }
+        }
+        if !(1..=16).contains(&c.facet_samples) {
+            return Err(bad(
+                "facet_samples",
+                format!("{}: expected 1 to 16", c.facet_samples),
+            ));
+        }
+        Ok(c)
+    }
+}
+
+/// The spectral bands of `sensor` on grids of at most `step_um`; response
+/// files are resolved against `base_dir` (the scene file's folder).
+pub fn sensor_bands(sensor: &Sensor, base_dir: &Path, step_um: f64) -> Result<Vec<Band>> {
+    sensor
+        .bands
+        .iter()
+        .map(|b| match &b.response {
+            ResponseSpec::Range([lo, hi]) => Band::flat(*lo, *hi, step_um),
+            ResponseSpec::File(p) => {
+                let path = if p.is_absolute() {
+                    p.clone()
+                } else {
+                    base_dir.join(p)
+                };
+                let resp = read_response_csv(&path)?;
+                Band::from_response(&resp, step_um)
+            }
+        })
+        .collect()
+}
+
+/// The output files of image `stem` in `dir`.
+pub fn output_paths(dir: &Path, stem: &str) -> [PathBuf; 4] {
+    [
+        dir.join(format!("{stem}.exr")),
+        dir.join(format!("{stem}.img")),
+        dir.join(format!("{stem}.hdr")),
+        dir.join(format!("{stem}.png")),
+    ]
+}
+
+/// Write a finished image into `dir`: `STEM.exr` (all layers), `STEM.img` +
+/// `STEM.hdr` (ENVI, band radiances with centre wavelengths) and `STEM.png`
+/// (quick-look of the apparent temperature), each atomically.
+pub fn write_outputs(dir: &Path, stem: &str, f: &Finished, description: &str) -> Result<()> {
+    let [exr, img, _, png] = output_paths(dir, stem);
+    write_exr(&exr, &f.stack)?;
+    write_envi(&img, &f.radiance, Some(&f.wavelengths_um), description)?;
+    let t = f
+        .stack
+        .layer("apparent_temperature")
+        .ok_or_else(|| Error::Other("no apparent_temperature layer".into()))?;
+    write_quicklook_png(&png, f.stack.width, f.stack.height, &t.data, None)?;
+    Ok(())
+}

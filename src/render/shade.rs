@@ -220,7 +220,6 @@ struct PlanckTable {
 /// grid, bands concatenated.
 pub struct Shader<'a> {
     tracer: &'a dyn Tracer,
-    geometry: &'a SceneGeometry,
     offsets: Vec<usize>,
     optics: &'a SceneOptics,
     conditions: &'a Conditions,
@@ -344,7 +343,6 @@ impl<'a> Shader<'a> {
         };
         Ok(Shader {
             tracer,
-            geometry,
             offsets: geometry.facet_offsets(),
             optics,
             conditions,

@@ -276,7 +276,7 @@ pub fn assemble(parts: &[(PathBuf, TileInfo, RowBand)]) -> Result<(TileInfo, Row
                 ),
             ));
         }
-        if info.row_start..info.row_end != tile_rows(info.tile, n, info.height) {
+        if (info.row_start..info.row_end) != tile_rows(info.tile, n, info.height) {
             return Err(Error::parse(
                 Location::file(p),
                 format!(
