@@ -4,6 +4,9 @@
 
 use glam::Vec3;
 use irsig::Location;
+use irsig::atmosphere::Atmosphere;
+use irsig::radiometry::Emissivity;
+use irsig::sensor::Geometry;
 use irsig::geometry::{Instance, SceneGeometry, TriangleMesh};
 use irsig::material::Material;
 use irsig::radiometry::Band;
@@ -149,6 +152,7 @@ fn blackbody_plane_reads_its_temperature_in_every_pixel() {
         },
         sun: None,
         ground_temperature_k: 280.0,
+        atmosphere: Atmosphere::None,
     };
     let s = sensor(nadir_camera(32, 24, 40.0, 2));
     let (_, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
@@ -189,19 +193,24 @@ fn grey_plane_matches_the_hand_computed_big_equation() {
             direct_normal_w_m2: dni,
         }),
         ground_temperature_k: 280.0,
+        atmosphere: Atmosphere::None,
     };
     let s = sensor(nadir_camera(8, 8, 10.0, 1));
     let (bands, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
+    let eps_of = Emissivity::from_material(&optics.materials[0]).unwrap();
     for (band, name) in bands.iter().zip(["LWIR", "MWIR"]) {
         // Hand computation with band integrals of blackbodies:
         // L = ε B(T) + (1−ε)[E_s cos σ f/π + F L_sky + (1−F) B(T_bg)], the
-        // sun a 5772 K blackbody scaled to the DNI.
+        // sun a 5772 K blackbody scaled to the DNI, ε = ε(θ) of the pixel's
+        // view zenith (grey, Fresnel fall-off).
         let b = |t: f64| band.blackbody_radiance(t);
         let sigma = 5.670374419e-8;
         let e_sun = dni * std::f64::consts::PI * b(5772.0) / (sigma * 5772f64.powi(4));
-        let expected = 0.5 * b(310.0)
-            + 0.5 * (e_sun * 0.7 * 0.8 / std::f64::consts::PI + 0.6 * b(t_sky) + 0.4 * b(290.0));
-        for &l in layer(&f, &format!("{name}_radiance")) {
+        for (i, &l) in layer(&f, &format!("{name}_radiance")).iter().enumerate() {
+            let eps = eps_of.eval(10.0, view_zenith_deg(&s, i % 8, i / 8));
+            let expected = eps * b(310.0)
+                + (1.0 - eps)
+                    * (e_sun * 0.7 * 0.8 / std::f64::consts::PI + 0.6 * b(t_sky) + 0.4 * b(290.0));
             let rel = (l as f64 - expected).abs() / expected;
             assert!(rel < 2e-5, "{name}: {l} vs {expected} (rel {rel:e})");
         }
@@ -209,6 +218,16 @@ fn grey_plane_matches_the_hand_computed_big_equation() {
     // The sun matters in the MWIR band, so the check above covers its term.
     let mwir = &bands[1];
     assert!(mwir.blackbody_radiance(5772.0) * 800.0 / (5.67e-8 * 5772f64.powi(4)) > 0.01 * mwir.blackbody_radiance(310.0));
+}
+
+/// View zenith (degrees) at a horizontal surface of the centre ray of
+/// pixel `(col, row)` of a frame camera.
+fn view_zenith_deg(s: &Sensor, col: usize, row: usize) -> f64 {
+    let Geometry::Frame(c) = &s.geometry else {
+        panic!("frame camera expected")
+    };
+    let d = c.direction(col as f64 + 0.5, row as f64 + 0.5).normalize();
+    (-d.z).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
 /// A specular plate (z = 0) in front of a vertical wall at y = 60 facing
@@ -240,6 +259,7 @@ fn plate_and_wall(wall_k: f32) -> (SceneGeometry, SceneOptics, Conditions) {
         },
         sun: None,
         ground_temperature_k: 280.0,
+        atmosphere: Atmosphere::None,
     };
     (geom, optics, cond)
 }
@@ -258,15 +278,20 @@ fn specular_plate_shows_the_hot_block_scaled_by_one_minus_epsilon() {
     let b = |t: f64| bands[0].blackbody_radiance(t);
     let ids = layer(&hot, "material_id");
     assert!(ids.iter().all(|&m| m == 1.0), "every centre ray hits the plate");
-    for (&lh, &lc) in layer(&hot, "LWIR_radiance")
+    let eps_of = Emissivity::from_material(&hot_o.materials[0]).unwrap();
+    let eps = |i: usize| eps_of.eval(10.0, view_zenith_deg(&s, i % 16, i / 16));
+    for (i, (&lh, &lc)) in layer(&hot, "LWIR_radiance")
         .iter()
         .zip(layer(&cold, "LWIR_radiance"))
+        .enumerate()
     {
-        // L = ε B(T_plate) + (1 − ε) B(T_wall), mirror reflection only.
-        let expected = 0.2 * b(300.0) + 0.8 * b(400.0);
-        assert!(((lh as f64 - expected) / expected).abs() < 2e-5, "{lh} vs {expected}");
+        // L = ε B(T_plate) + (1 − ε) B(T_wall), mirror reflection only,
+        // ε = ε(θ) ≈ ε(45°) of the plate.
+        let e = eps(i);
+        let expected = e * b(300.0) + (1.0 - e) * b(400.0);
+        assert!(((lh as f64 - expected) / expected).abs() < 1e-4, "{lh} vs {expected}");
         let diff = (lh - lc) as f64;
-        let expected_diff = 0.8 * (b(400.0) - b(250.0));
+        let expected_diff = (1.0 - e) * (b(400.0) - b(250.0));
         assert!(((diff - expected_diff) / expected_diff).abs() < 1e-4);
     }
     // With no bounces the plate reflects the diffuse environment instead.
@@ -284,9 +309,10 @@ fn specular_plate_shows_the_hot_block_scaled_by_one_minus_epsilon() {
     )
     .unwrap();
     let rows = render_rows(&shader, &s, 0..16, &StageTimes::default(), &|_| {}).unwrap();
-    let expected = 0.2 * b(300.0) + 0.8 * b(240.0); // F = 1: all sky
-    for &l in &rows.radiance[0] {
-        assert!(((l as f64 - expected) / expected).abs() < 2e-5);
+    for (i, &l) in rows.radiance[0].iter().enumerate() {
+        let e = eps(i);
+        let expected = e * b(300.0) + (1.0 - e) * b(240.0); // F = 1: all sky
+        assert!(((l as f64 - expected) / expected).abs() < 1e-4);
     }
 }
 
@@ -317,6 +343,7 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
         },
         sun: None,
         ground_temperature_k: 280.0,
+        atmosphere: Atmosphere::None,
     };
     let s = sensor(json!({"type": "line_scanner", "name": "scan", "ifov_rad": 0.003,
         "scan_angle_deg": 40.0, "samples_per_line": 160, "lines": 140,
@@ -371,6 +398,7 @@ fn busy_scene() -> (SceneGeometry, SceneOptics, Conditions, Sensor) {
             direct_normal_w_m2: 700.0,
         }),
         ground_temperature_k: 285.0,
+        atmosphere: Atmosphere::None,
     };
     let s = sensor(json!({"type": "frame", "name": "busy", "width": 48, "height": 37,
            "fov_deg": 50.0, "position": [10.0, -90.0, 60.0], "look_at": [0.0, 0.0, 0.0],
@@ -432,6 +460,7 @@ fn tiles_merge_bit_for_bit_into_the_single_render() {
         let info = TileInfo {
             version: 1,
             scene_hash: "abc".into(),
+            scene_file_hash: "0123".into(),
             scene: "scene.json".into(),
             sensor: s.name.clone(),
             stem: s.name.clone(),

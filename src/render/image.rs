@@ -155,7 +155,7 @@ fn trace_row(shader: &Shader, sensor: &Sensor, row: usize, times: &StageTimes) -
     let t2 = Instant::now();
     let nl = shader.spectrum_len();
     let mut spectra = vec![0.0f64; rays.len() * nl];
-    shader.shade(&rays, &hits, 0, &mut spectra);
+    shader.shade_primary(&rays, &hits, &mut spectra);
     let radiance: Vec<Vec<f32>> = (0..shader.band_count())
         .map(|b| {
             spectra

@@ -23,6 +23,7 @@
 //! noise streams are keyed by (seed, band, row).
 
 pub mod image;
+pub mod path;
 // pub mod session; (waits for the scene module)
 pub mod shade;
 pub mod tile;

@@ -38,9 +38,11 @@
 
 use glam::Vec3;
 
+use super::path::PathTables;
+use crate::atmosphere::{Atmosphere, SkyConditions};
 use crate::geometry::SceneGeometry;
 use crate::material::Material;
-use crate::radiometry::{Band, Planck};
+use crate::radiometry::{Band, Emissivity, Planck};
 use crate::trace::{Coherence, Hit, Ray, Tracer};
 
 /// Temperature step of the tabulated Planck function, K.
@@ -53,11 +55,14 @@ const ANGLE_ROWS: usize = 91;
 /// Sky radiance model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Sky {
-    /// An isotropic grey sky: a blackbody at this temperature, K.
+    /// An isotropic sky: a blackbody at this temperature, K.
     Blackbody {
         /// Effective sky temperature, K.
         temperature_k: f64,
     },
+    /// The atmosphere's sky radiance ([`Atmosphere::sky_radiance`]) for
+    /// these surface conditions.
+    Atmosphere(SkyConditions),
 }
 
 /// The sun as the renderer sees it at the image time.
@@ -153,6 +158,9 @@ pub struct Conditions {
     /// Temperature of the ground beyond the scene (rays leaving the scene
     /// downward), K; a blackbody.
     pub ground_temperature_k: f64,
+    /// The atmosphere: sky radiance for [`Sky::Atmosphere`]; the sensor
+    /// path is applied through [`Shader::with_path`].
+    pub atmosphere: Atmosphere,
 }
 
 /// What the renderer knows about each facet of the scene.
@@ -229,6 +237,7 @@ pub struct Shader<'a> {
     wavelengths: Vec<f64>,
     planck: Planck,
     table: PlanckTable,
+    path: Option<PathTables>,
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -277,12 +286,21 @@ impl<'a> Shader<'a> {
             ));
         }
         let planck = bands.first().map(|b| *b.planck()).unwrap_or_default();
-        let Sky::Blackbody { temperature_k: t_sky } = conditions.sky;
+        let emissivities = optics
+            .materials
+            .iter()
+            .map(Emissivity::from_material)
+            .collect::<crate::Result<Vec<_>>>()?;
         let mut tables = Vec::new();
         let mut wavelengths = Vec::new();
         for band in bands {
             let wl = band.wavelengths_um();
-            let sky = wl.iter().map(|&l| planck.radiance(l, t_sky)).collect();
+            let sky = match &conditions.sky {
+                Sky::Blackbody { temperature_k } => {
+                    wl.iter().map(|&l| planck.radiance(l, *temperature_k)).collect()
+                }
+                Sky::Atmosphere(c) => conditions.atmosphere.sky_radiance(c, band.grid())?,
+            };
             let ground = wl
                 .iter()
                 .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
@@ -293,13 +311,12 @@ impl<'a> Shader<'a> {
                 }
                 _ => vec![0.0; wl.len()],
             };
-            let eps = optics
-                .materials
+            let eps = emissivities
                 .iter()
-                .map(|m| {
+                .map(|e| {
                     let mut rows = Vec::with_capacity(ANGLE_ROWS * wl.len());
                     for a in 0..ANGLE_ROWS {
-                        rows.extend(wl.iter().map(|&l| m.emissivity_at(l, a as f64)));
+                        rows.extend(wl.iter().map(|&l| e.eval(l, a as f64)));
                     }
                     rows
                 })
@@ -352,7 +369,32 @@ impl<'a> Shader<'a> {
             wavelengths,
             planck,
             table,
+            path: None,
         })
+    }
+
+    /// The same shader applying the sensor path's τ₂ and L_u to primary
+    /// hits ([`Shader::shade_primary`]); `None`: no atmosphere.
+    pub fn with_path(mut self, path: Option<PathTables>) -> Self {
+        self.path = path;
+        self
+    }
+
+    /// [`Shader::shade`] for primary rays (unit directions, from the
+    /// sensor): the radiance at the sensor, `L·τ₂ + L_u` over the slant
+    /// range of each hit.
+    pub fn shade_primary(&self, rays: &[Ray], hits: &[Option<Hit>], out: &mut [f64]) {
+        self.shade(rays, hits, 0, out);
+        let Some(p) = &self.path else { return };
+        let n = self.total;
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let Some(h) = hit else { continue };
+            let range = (h.t * ray.dir.length()) as f64;
+            for (b, t) in self.bands.iter().enumerate() {
+                let s = &mut out[i * n + t.start..i * n + t.start + t.band.len()];
+                p.apply(b, range, s);
+            }
+        }
     }
 
     /// Number of spectral values per ray (all bands).

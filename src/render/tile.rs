@@ -33,6 +33,9 @@ pub struct TileInfo {
     /// Hash of everything the image depends on (scene, weather, materials,
     /// sensor, time, seed, options), hex.
     pub scene_hash: String,
+    /// Hash of the scene file alone (checked by `irsig merge`, which reads
+    /// the sensor settings from it), hex.
+    pub scene_file_hash: String,
     /// The scene file, as given on the command line (absolute).
     pub scene: PathBuf,
     /// Sensor name.

@@ -1,0 +1,731 @@
+//! The whole chain for a scene file: what `irsig render` runs.
+//!
+//! [`Session::open`] loads the scene (geometry, materials, weather), types
+//! its `sensors`, `atmosphere` and `render` sections, and builds the tracer
+//! once. [`Session::thermal`] computes every facet's thermal state at the
+//! image times in one go (one spin-up for the whole series).
+//! [`Session::render_image`] renders one sensor at one time — whole, or one
+//! tile of row bands — and [`Session::run`] loops over times and sensors,
+//! writing the files.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use chrono::{DateTime, FixedOffset, TimeDelta};
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
+use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
+use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
+use super::path::PathTables;
+use super::{RenderConfig, sensor_bands, write_outputs};
+use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
+use crate::radiometry::Band;
+use crate::scene::Scene;
+use crate::sensor::{Sensor, SensorConfig};
+use crate::trace::{self, Backend, Tracer};
+use crate::weather::{self, LoadOptions, WeatherHistory, WeatherRecord};
+use crate::{Error, Location, Result};
+
+/// The scene file's `atmosphere` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum AtmosphereConfig {
+    /// No atmosphere between scene and sensor; a grey sky at the air
+    /// temperature with the weather's downwelling longwave (the default).
+    None,
+    /// The built-in layered model driven by the weather at the image time.
+    Builtin {
+        /// CO₂ volume mixing ratio, ppmv (default 420).
+        co2_ppmv: Option<f64>,
+        /// Water-vapour scale height, m (default 2000).
+        water_scale_height_m: Option<f64>,
+    },
+    /// A table of MODTRAN tape7 runs, listed in an index JSON file (relative
+    /// to the scene file).
+    Tape7 {
+        /// The index file.
+        index: PathBuf,
+    },
+}
+
+/// Options of a render run (the command line).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOptions {
+    /// Tracing backend.
+    pub backend: Backend,
+    /// Image times; empty: the scene's time.
+    pub times: Vec<DateTime<FixedOffset>>,
+    /// Render only tile `K` of `N` (1-based) into a partial file.
+    pub tile: Option<(usize, usize)>,
+    /// Noise seed overriding the sensors' own.
+    pub seed: Option<u64>,
+    /// Show a progress bar (stderr).
+    pub progress: bool,
+    /// Only these sensors (by name); empty: all.
+    pub sensors: Vec<String>,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            backend: Backend::Embree,
+            times: Vec::new(),
+            tile: None,
+            seed: None,
+            progress: false,
+            sensors: Vec::new(),
+        }
+    }
+}
+
+/// Where the time of a run went (wall clock; the per-stage split of the
+/// row loop is summed over threads and scaled to its wall time).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Timings {
+    /// Loading the scene, materials and weather.
+    pub load: Duration,
+    /// Building the BVH.
+    pub bvh_build: Duration,
+    /// Per-facet rays and thermal solve.
+    pub thermal: Duration,
+    /// Primary-ray generation.
+    pub ray_generation: Duration,
+    /// Primary-ray tracing (packets).
+    pub primary_trace: Duration,
+    /// Radiometry: the big equation, secondary rays, band integration.
+    pub radiometry: Duration,
+    /// Sensor: PSF reduction, MTF, noise, quantisation, apparent temperature.
+    pub sensor: Duration,
+    /// Writing files.
+    pub output: Duration,
+    /// Primary rays traced.
+    pub primary_rays: u64,
+}
+
+impl Timings {
+    /// Total.
+    pub fn total(&self) -> Duration {
+        self.load
+            + self.bvh_build
+            + self.thermal
+            + self.ray_generation
+            + self.primary_trace
+            + self.radiometry
+            + self.sensor
+            + self.output
+    }
+}
+
+/// A scene ready to render.
+pub struct Session {
+    /// The loaded scene.
+    pub scene: Scene,
+    /// The `render` section.
+    pub config: RenderConfig,
+    /// The sensors, in scene order.
+    pub sensors: Vec<Sensor>,
+    /// Each sensor's bands on the render's spectral grids.
+    pub bands: Vec<Vec<Band>>,
+    /// The weather history.
+    pub weather: WeatherHistory,
+    /// The tracer.
+    pub tracer: Box<dyn Tracer>,
+    /// Backend used.
+    pub backend: Backend,
+    /// Per-facet optics.
+    pub optics: SceneOptics,
+    atmosphere: AtmosphereConfig,
+    hash: u64,
+    file_hash: u64,
+    /// Timings so far.
+    pub timings: Timings,
+}
+
+impl std::fmt::Debug for Session {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session")
+            .field("scene", &self.scene.path)
+            .field("sensors", &self.sensors.len())
+            .field("backend", &self.backend)
+            .finish()
+    }
+}
+
+/// FNV-1a, 64 bit: a stable hash of the inputs, for tile consistency.
+#[derive(Debug, Clone, Copy)]
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Feed bytes.
+    pub fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    /// The hash.
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// The per-facet thermal state at each image time.
+#[derive(Debug, Clone)]
+pub struct ThermalStates {
+    /// The image times.
+    pub times: Vec<DateTime<FixedOffset>>,
+    /// Per time: the conditions the shading needs.
+    pub conditions: Vec<Conditions>,
+    /// Per time: the weather record.
+    pub records: Vec<WeatherRecord>,
+}
+
+fn parse_at<T: for<'de> Deserialize<'de>>(
+    v: &serde_json::Value,
+    loc: &Location,
+    expected: &str,
+) -> Result<T> {
+    serde_json::from_value(v.clone())
+        .map_err(|e| Error::parse(loc.clone(), format!("{e}: expected {expected}")))
+}
+
+impl Session {
+    /// Load `scene_path` and build the tracer with `backend`.
+    pub fn open(scene_path: &Path, backend: Backend) -> Result<Session> {
+        let t0 = Instant::now();
+        let scene = Scene::load(scene_path)?;
+        let file = Location::file(scene_path);
+        let config = RenderConfig::from_json(scene.render.as_ref(), &file)?;
+        let atmosphere = match &scene.atmosphere {
+            None => AtmosphereConfig::None,
+            Some(v) => parse_at(
+                v,
+                &file.clone().with_field("atmosphere"),
+                "{\"model\": \"none\"}, {\"model\": \"builtin\"} or {\"model\": \"tape7\", \"index\": FILE}",
+            )?,
+        };
+        let base = scene_path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let mut sensors = Vec::new();
+        let mut bands = Vec::new();
+        for (i, v) in scene.sensors.iter().enumerate() {
+            let loc = file.clone().with_field(format!("sensors[{i}]"));
+            let c: SensorConfig = parse_at(
+                v,
+                &loc,
+                "a sensor with \"type\": \"frame\" or \"line_scanner\"",
+            )?;
+            let s = Sensor::from_config(&c, &loc)?;
+            if sensors.iter().any(|o: &Sensor| o.name == s.name) {
+                return Err(Error::parse(
+                    loc.with_field(format!("sensors[{i}].name")),
+                    format!("`{}` is used twice: expected unique sensor names", s.name),
+                ));
+            }
+            bands.push(sensor_bands(&s, &base, config.spectral_step_um)?);
+            sensors.push(s);
+        }
+        if sensors.is_empty() {
+            return Err(Error::parse(
+                file.clone().with_field("sensors"),
+                "no sensors: expected at least one frame camera or line scanner",
+            ));
+        }
+        let weather_ref = scene.weather.as_ref().ok_or_else(|| {
+            Error::parse(
+                file.clone().with_field("weather"),
+                "missing: a render needs a weather history (`\"weather\": {\"file\": …}`)",
+            )
+        })?;
+        let weather = weather::load_with(
+            &weather_ref.path,
+            &LoadOptions::default().with_site(scene.site),
+        )?;
+        // Optics: one material per part (overrides applied).
+        let parts = scene.facet_parts();
+        let materials = (0..scene.parts.len())
+            .map(|p| scene.part_material(p))
+            .collect();
+        let facet_object = parts
+            .iter()
+            .map(|&p| scene.parts[p as usize].object as u32)
+            .collect();
+        let optics = SceneOptics {
+            materials,
+            facet_material: parts,
+            facet_object,
+        };
+        // Hash of everything the images depend on.
+        let mut h = Fnv::default();
+        let text = std::fs::read(scene_path).map_err(|e| Error::io(scene_path, e))?;
+        h.write(&text);
+        let mut fh = Fnv::default();
+        fh.write(&text);
+        h.write(&std::fs::read(&weather_ref.path).map_err(|e| Error::io(&weather_ref.path, e))?);
+        h.write(format!("{:?}", optics.materials).as_bytes());
+        h.write(format!("{:?}", scene.geometry.bounds()).as_bytes());
+        h.write(&scene.geometry.facet_count().to_le_bytes());
+        h.write(env!("CARGO_PKG_VERSION").as_bytes());
+        let load = t0.elapsed();
+        let t1 = Instant::now();
+        let tracer = trace::build(&scene.geometry, backend)?;
+        let bvh_build = t1.elapsed();
+        Ok(Session {
+            scene,
+            config,
+            sensors,
+            bands,
+            weather,
+            tracer,
+            backend,
+            optics,
+            atmosphere,
+            hash: h.finish(),
+            file_hash: fh.finish(),
+            timings: Timings {
+                load,
+                bvh_build,
+                ..Timings::default()
+            },
+        })
+    }
+
+    /// The atmosphere at one image time.
+    fn atmosphere_at(&self, record: &WeatherRecord) -> Result<Atmosphere> {
+        Ok(match &self.atmosphere {
+            AtmosphereConfig::None => Atmosphere::None,
+            AtmosphereConfig::Builtin {
+                co2_ppmv,
+                water_scale_height_m,
+            } => {
+                let mut p = crate::atmosphere::BuiltinParams::default();
+                if let Some(c) = co2_ppmv {
+                    p.co2_ppmv = *c;
+                }
+                if let Some(w) = water_scale_height_m {
+                    p.water_scale_height_m = *w;
+                }
+                Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+                    SurfaceMet::from_weather(record, self.scene.site.altitude_m),
+                    p,
+                )?)
+            }
+            AtmosphereConfig::Tape7 { index } => {
+                let base = self.scene.path.parent().unwrap_or(Path::new("."));
+                Atmosphere::Tape7Lut(Tape7Lut::read_index(base.join(index))?)
+            }
+        })
+    }
+
+    /// The thermal state of every facet at each of `times` (one exposure
+    /// computation and one thermal spin-up for the whole series).
+    pub fn thermal(&mut self, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
+        let t0 = Instant::now();
+        let states = standin_thermal(self, times)?;
+        self.timings.thermal += t0.elapsed();
+        Ok(states)
+    }
+
+    /// Output file stem of `sensor` at time `time` (`series`: more than one
+    /// time in the run).
+    pub fn stem(sensor: &Sensor, time: &DateTime<FixedOffset>, series: bool) -> String {
+        if series {
+            format!("{}_{}", sensor.name, time.format("%Y%m%dT%H%M%S"))
+        } else {
+            sensor.name.clone()
+        }
+    }
+
+    /// Tile metadata of `sensor` (index) at `time`.
+    fn tile_info(
+        &self,
+        s: usize,
+        stem: &str,
+        time: &DateTime<FixedOffset>,
+        (k, n): (usize, usize),
+        seed: u64,
+    ) -> TileInfo {
+        let sensor = &self.sensors[s];
+        let rows = tile_rows(k, n, sensor.height());
+        let mut h = Fnv(self.hash);
+        h.write(sensor.name.as_bytes());
+        h.write(time.to_rfc3339().as_bytes());
+        h.write(&seed.to_le_bytes());
+        h.write(self.backend.as_str().as_bytes());
+        TileInfo {
+            version: 1,
+            scene_hash: format!("{:016x}", h.finish()),
+            scene_file_hash: format!("{:016x}", self.file_hash),
+            scene: std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone()),
+            sensor: sensor.name.clone(),
+            stem: stem.to_string(),
+            time: time.to_rfc3339(),
+            tile: k,
+            tiles: n,
+            width: sensor.width(),
+            height: sensor.height(),
+            row_start: rows.start,
+            row_end: rows.end,
+            bands: sensor.bands.iter().map(|b| b.name.clone()).collect(),
+            seed,
+            backend: self.backend.as_str().to_string(),
+        }
+    }
+
+    /// Render rows `rows` of sensor `s` under `cond`.
+    pub fn render_rows(
+        &mut self,
+        s: usize,
+        cond: &Conditions,
+        rows: std::ops::Range<usize>,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<RowBand> {
+        let sensor = &self.sensors[s];
+        let bands = &self.bands[s];
+        let size = self
+            .scene
+            .geometry
+            .bounds()
+            .map(|(lo, hi)| (hi - lo).length())
+            .unwrap_or(1.0);
+        let opts = ShadeOptions {
+            max_bounces: self.config.max_bounces,
+            offset_m: (1e-5 * size).max(1e-4),
+        };
+        let paths = PathTables::new(&cond.atmosphere, sensor, bands, self.scene.site.altitude_m, size as f64)?;
+        let shader = Shader::new(
+            self.tracer.as_ref(),
+            &self.scene.geometry,
+            &self.optics,
+            cond,
+            bands,
+            opts,
+        )?
+        .with_path(paths);
+        let times = StageTimes::default();
+        let t0 = Instant::now();
+        let band = render_rows(&shader, sensor, rows, &times, progress)?;
+        let wall = t0.elapsed();
+        // Split the loop's wall time by the threads' shares.
+        let parts = [
+            times.ray_generation(),
+            times.primary_trace(),
+            times.shading(),
+        ];
+        let sum: f64 = parts.iter().map(|d| d.as_secs_f64()).sum::<f64>().max(1e-12);
+        let loop_wall = wall.saturating_sub(times.psf()).as_secs_f64();
+        let share = |d: Duration| Duration::from_secs_f64(loop_wall * d.as_secs_f64() / sum);
+        self.timings.ray_generation += share(parts[0]);
+        self.timings.primary_trace += share(parts[1]);
+        self.timings.radiometry += share(parts[2]);
+        self.timings.sensor += times.psf();
+        self.timings.primary_rays += times
+            .primary_rays
+            .load(std::sync::atomic::Ordering::Relaxed);
+        Ok(band)
+    }
+
+    /// Apply the image-wide effects to a full row band of sensor `s`.
+    pub fn finish(&mut self, s: usize, band: &RowBand, seed: u64) -> Result<Finished> {
+        let t0 = Instant::now();
+        let f = finish(band, &self.sensors[s], &self.bands[s], seed)?;
+        self.timings.sensor += t0.elapsed();
+        Ok(f)
+    }
+
+    /// Render every (selected) sensor at every time into `out_dir`: whole
+    /// images (`STEM.exr`, `.img`/`.hdr`, `.png`), or with `options.tile`
+    /// one tile file each (skipped when already complete). Returns the
+    /// stems written or skipped.
+    pub fn run(&mut self, out_dir: &Path, options: &RunOptions) -> Result<Vec<String>> {
+        std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+        for name in &options.sensors {
+            if !self.sensors.iter().any(|s| &s.name == name) {
+                return Err(Error::invalid(
+                    "--sensor",
+                    format!(
+                        "`{name}`: no such sensor (the scene has {})",
+                        self.sensors
+                            .iter()
+                            .map(|s| s.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        }
+        let times = if options.times.is_empty() {
+            vec![self.scene.time]
+        } else {
+            options.times.clone()
+        };
+        let series = times.len() > 1;
+        let chosen: Vec<usize> = (0..self.sensors.len())
+            .filter(|&i| options.sensors.is_empty() || options.sensors.contains(&self.sensors[i].name))
+            .collect();
+        // Which images still need work (tiles already complete are skipped).
+        let mut jobs = Vec::new();
+        let mut done = Vec::new();
+        for (ti, time) in times.iter().enumerate() {
+            for &s in &chosen {
+                let sensor = &self.sensors[s];
+                let stem = Self::stem(sensor, time, series);
+                let seed = options.seed.unwrap_or(sensor.effects.seed);
+                if let Some(tile) = options.tile {
+                    let info = self.tile_info(s, &stem, time, tile, seed);
+                    let path = tile_path(out_dir, &stem, tile.0, tile.1);
+                    if tile_is_complete(&path, &info) {
+                        done.push(stem);
+                        continue;
+                    }
+                }
+                jobs.push((ti, s, stem, seed));
+            }
+        }
+        if jobs.is_empty() {
+            return Ok(done);
+        }
+        let states = self.thermal(&times)?;
+        let total_rows: u64 = jobs
+            .iter()
+            .map(|(_, s, _, _)| match options.tile {
+                Some((k, n)) => tile_rows(k, n, self.sensors[*s].height()).len() as u64,
+                None => self.sensors[*s].height() as u64,
+            })
+            .sum();
+        let bar = progress_bar(total_rows, options.progress);
+        for (ti, s, stem, seed) in jobs {
+            let time = times[ti];
+            bar.set_message(stem.clone());
+            let height = self.sensors[s].height();
+            let rows = match options.tile {
+                Some((k, n)) => tile_rows(k, n, height),
+                None => 0..height,
+            };
+            let cond = &states.conditions[ti];
+            let band = self.render_rows(s, cond, rows, &|n| bar.inc(n))?;
+            match options.tile {
+                Some(tile) => {
+                    let info = self.tile_info(s, &stem, &time, tile, seed);
+                    let t0 = Instant::now();
+                    write_tile(&tile_path(out_dir, &stem, tile.0, tile.1), &info, &band)?;
+                    self.timings.output += t0.elapsed();
+                }
+                None => {
+                    let f = self.finish(s, &band, seed)?;
+                    let t0 = Instant::now();
+                    let desc = format!(
+                        "irsig render of {} ({}), sensor {} at {}",
+                        self.scene.path.display(),
+                        self.backend,
+                        self.sensors[s].name,
+                        time.to_rfc3339()
+                    );
+                    write_outputs(out_dir, &stem, &f, &desc)?;
+                    self.timings.output += t0.elapsed();
+                }
+            }
+            done.push(stem);
+        }
+        bar.finish_and_clear();
+        Ok(done)
+    }
+}
+
+fn progress_bar(total: u64, show: bool) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !show || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {msg:20} [{bar:40}] {pos}/{len} rows ({eta})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar
+}
+
+/// Parse `--times`: a comma-separated list of RFC 3339 times, or
+/// `START/END/STEP` with STEP like `30s`, `15min`, `1h`.
+pub fn parse_times(s: &str) -> Result<Vec<DateTime<FixedOffset>>> {
+    let time = |t: &str| {
+        DateTime::parse_from_rfc3339(t.trim()).map_err(|e| {
+            Error::invalid(
+                "--times",
+                format!("`{t}`: {e}: expected an RFC 3339 time like 2025-06-21T14:00:00-04:00"),
+            )
+        })
+    };
+    let parts: Vec<&str> = s.split('/').collect();
+    match parts.as_slice() {
+        [start, end, step] => {
+            let (a, b) = (time(start)?, time(end)?);
+            let step = parse_duration(step)?;
+            if b < a {
+                return Err(Error::invalid(
+                    "--times",
+                    format!("`{s}`: the end is before the start"),
+                ));
+            }
+            let mut out = Vec::new();
+            let mut t = a;
+            while t <= b {
+                out.push(t);
+                if out.len() > 10_000 {
+                    return Err(Error::invalid(
+                        "--times",
+                        format!("`{s}`: more than 10000 times"),
+                    ));
+                }
+                t += step;
+            }
+            Ok(out)
+        }
+        [_] => s.split(',').map(time).collect(),
+        _ => Err(Error::invalid(
+            "--times",
+            format!("`{s}`: expected T1,T2,… or START/END/STEP"),
+        )),
+    }
+}
+
+fn parse_duration(s: &str) -> Result<TimeDelta> {
+    let bad = || {
+        Error::invalid(
+            "--times",
+            format!("step `{s}`: expected a positive duration like 30s, 15min or 1h"),
+        )
+    };
+    let s = s.trim();
+    let split = s.find(|c: char| !(c.is_ascii_digit() || c == '.')).ok_or_else(bad)?;
+    let (num, unit) = s.split_at(split);
+    let v: f64 = num.parse().map_err(|_| bad())?;
+    let secs = match unit {
+        "s" => v,
+        "m" | "min" => v * 60.0,
+        "h" => v * 3600.0,
+        _ => return Err(bad()),
+    };
+    if !(secs.is_finite() && secs >= 1.0) {
+        return Err(bad());
+    }
+    Ok(TimeDelta::milliseconds((secs * 1000.0).round() as i64))
+}
+
+/// STAND-IN for the scene-wide thermal solve (src/exposure, being landed):
+/// ray-traced sun fraction, incidence and shape factor at each image time,
+/// and a quasi-steady surface energy balance per facet (no heat storage):
+/// `α(E_b f cos σ + E_d F) + ε(F E_sky + (1−F) σ T_air⁴) + h (T_air − T) + q
+///  = ε σ T⁴`, `h` from McAdams. Fixed-temperature parts keep their value.
+fn standin_thermal(session: &Session, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
+    use crate::exposure::{ExposureParams, compute_exposure};
+    let scene = &session.scene;
+    let sigma = crate::radiometry::Constants::CODATA_2018.stefan_boltzmann_w_m2_k4();
+    let mut sun_dirs = Vec::new();
+    let mut records = Vec::new();
+    for t in times {
+        let rec = session.weather.at(*t)?;
+        let sp = session.weather.sun_position(*t)?;
+        let d = sp.direction_enu().as_vec3().normalize();
+        sun_dirs.push(if d.is_finite() { d } else { Vec3::NEG_Z });
+        records.push(rec);
+    }
+    let params = ExposureParams {
+        samples_per_edge: session.config.facet_samples,
+        ..ExposureParams::default()
+    };
+    let double: Vec<bool> = session
+        .optics
+        .facet_material
+        .iter()
+        .map(|&m| session.optics.materials[m as usize].double_sided)
+        .collect();
+    let exposure = compute_exposure(
+        session.tracer.as_ref(),
+        &scene.geometry,
+        &double,
+        &sun_dirs,
+        &params,
+    )?;
+    let parts = &scene.parts;
+    let n = scene.geometry.facet_count();
+    let mut conditions = Vec::new();
+    for (ti, rec) in records.iter().enumerate() {
+        let t_air = rec.air_temperature_k;
+        let h = crate::thermal::mcadams_h_w_m2_k(rec.wind_speed_m_s);
+        let mut surface = SurfaceState::uniform(n, t_air as f32);
+        for f in 0..n {
+            let p = &parts[session.optics.facet_material[f] as usize];
+            let m = &session.optics.materials[session.optics.facet_material[f] as usize];
+            let big_f = p
+                .shape_factor
+                .map(|v| v as f32)
+                .unwrap_or(exposure.sky.shape_factor[f]);
+            let sun_f = exposure.solar.sun_fraction(f)[ti];
+            let cos = exposure.solar.cos_incidence(f)[ti].max(0.0);
+            surface.shape_factor[f] = big_f;
+            surface.sun_fraction[f] = sun_f;
+            surface.cos_sun[f] = cos;
+            let t = match p.fixed_temperature_k {
+                Some(t) => t,
+                None => {
+                    let (eps, alpha) = (m.thermal_emissivity, m.solar_absorptivity);
+                    let fb = big_f as f64;
+                    let gain = alpha
+                        * (rec.direct_normal_w_m2 * (sun_f * cos) as f64
+                            + rec.diffuse_horizontal_w_m2 * fb)
+                        + eps * (fb * rec.sky_longwave_w_m2 + (1.0 - fb) * sigma * t_air.powi(4))
+                        + h * t_air
+                        + m.self_power_w_m2;
+                    // Newton on g(T) = eps σ T⁴ + h T − gain.
+                    let mut t = t_air;
+                    for _ in 0..30 {
+                        let g = eps * sigma * t.powi(4) + h * t - gain;
+                        let dg = 4.0 * eps * sigma * t.powi(3) + h;
+                        t -= g / dg;
+                    }
+                    t
+                }
+            };
+            surface.temperature_k[f] = t as f32;
+        }
+        let temps = surface.temperature_k.clone();
+        for f in 0..n {
+            surface.background_k[f] =
+                exposure.sky.background_temperature(f, &temps, t_air as f32);
+        }
+        let sun = (sun_dirs[ti].z > 0.0).then_some(SunInput {
+            direction: sun_dirs[ti],
+            direct_normal_w_m2: rec.direct_normal_w_m2,
+        });
+        let sky = match session.config.sky_temperature_k {
+            Some(t) => Sky::Blackbody { temperature_k: t },
+            None => Sky::Atmosphere(crate::atmosphere::SkyConditions {
+                air_temperature_k: t_air,
+                sky_longwave_w_m2: rec.sky_longwave_w_m2,
+            }),
+        };
+        conditions.push(Conditions {
+            surface,
+            sky,
+            sun,
+            ground_temperature_k: t_air,
+            atmosphere: session.atmosphere_at(rec)?,
+        });
+    }
+    Ok(ThermalStates {
+        times: times.to_vec(),
+        conditions,
+        records,
+    })
+}
