@@ -1,10 +1,94 @@
-//! `irsig render` (being written).
+//! `irsig render SCENE.json -o DIR`: the whole imaging chain to image files.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use irsig::render::session::{RunOptions, Session, parse_times};
+use irsig::render::tile::parse_tile;
+use irsig::trace::Backend;
 
 /// Arguments of `irsig render`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scene file (JSON).
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+    /// Output folder (created if needed): per sensor `NAME.exr`, `NAME.img` +
+    /// `NAME.hdr` (ENVI) and `NAME.png`, or `NAME.tileK-of-N.exr` with --tile.
+    #[arg(short, long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Ray-tracing backend: embree, embree-single or obvhs.
+    #[arg(long, default_value = "embree", value_name = "NAME")]
+    pub backend: Backend,
+    /// Image times: a comma-separated list of RFC 3339 times, or
+    /// START/END/STEP (STEP like 30s, 15min, 1h). Default: the scene's time.
+    /// With several times, files are named `NAME_YYYYMMDDTHHMMSS.*`.
+    #[arg(long, value_name = "LIST|START/END/STEP")]
+    pub times: Option<String>,
+    /// Render only the K-th of N bands of rows into `NAME.tileK-of-N.exr`
+    /// (skipped if that tile is already complete); assemble with `irsig merge`.
+    #[arg(long, value_name = "K/N")]
+    pub tile: Option<String>,
+    /// Noise seed (overrides the sensors' `seed`).
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+    /// Render only this sensor (repeatable). Default: all.
+    #[arg(long = "sensor", value_name = "NAME")]
+    pub sensors: Vec<String>,
+    /// No progress bar and no summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
 
 /// Run `irsig render`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`irsig render` is not available in this build yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let times = match &args.times {
+        Some(t) => parse_times(t)?,
+        None => Vec::new(),
+    };
+    let tile = args.tile.as_deref().map(parse_tile).transpose()?;
+    let mut session = Session::open(&args.scene, args.backend)
+        .with_context(|| format!("loading {}", args.scene.display()))?;
+    let options = RunOptions {
+        backend: args.backend,
+        times,
+        tile,
+        seed: args.seed,
+        progress: !args.quiet,
+        sensors: args.sensors.clone(),
+    };
+    let stems = session
+        .run(&args.out, &options)
+        .with_context(|| format!("rendering {}", args.scene.display()))?;
+    if !args.quiet {
+        let t = &session.timings;
+        for s in &stems {
+            match tile {
+                Some((k, n)) => eprintln!(
+                    "wrote {}",
+                    args.out.join(format!("{s}.tile{k}-of-{n}.exr")).display()
+                ),
+                None => eprintln!(
+                    "wrote {}",
+                    args.out.join(format!("{s}.{{exr,img,hdr,png}}")).display()
+                ),
+            }
+        }
+        eprintln!(
+            "{} facets, {} primary rays; time {:.2} s: load {:.2}, BVH {:.2}, rays+thermal {:.2}, \
+             ray generation {:.2}, primary trace {:.2}, radiometry {:.2}, sensor {:.2}, output {:.2}",
+            session.scene.geometry.facet_count(),
+            t.primary_rays,
+            t.total().as_secs_f64(),
+            t.load.as_secs_f64(),
+            t.bvh_build.as_secs_f64(),
+            t.thermal.as_secs_f64(),
+            t.ray_generation.as_secs_f64(),
+            t.primary_trace.as_secs_f64(),
+            t.radiometry.as_secs_f64(),
+            t.sensor.as_secs_f64(),
+            t.output.as_secs_f64(),
+        );
+    }
+    Ok(())
 }

@@ -151,6 +151,34 @@ pub fn sensor_bands(sensor: &Sensor, base_dir: &Path, step_um: f64) -> Result<Ve
         .collect()
 }
 
+/// FNV-1a, 64 bit: a stable hash of the inputs, for tile consistency.
+#[derive(Debug, Clone, Copy)]
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Feed bytes.
+    pub fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    /// The hash.
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+    /// Continue from a previous [`Fnv::finish`].
+    pub fn with_state(state: u64) -> Self {
+        Fnv(state)
+    }
+}
+
 /// The output files of image `stem` in `dir`.
 pub fn output_paths(dir: &Path, stem: &str) -> [PathBuf; 4] {
     [

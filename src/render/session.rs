@@ -19,7 +19,7 @@ use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::path::PathTables;
-use super::{RenderConfig, sensor_bands, write_outputs};
+use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
 use crate::radiometry::Band;
 use crate::scene::Scene;
@@ -150,30 +150,6 @@ impl std::fmt::Debug for Session {
             .field("sensors", &self.sensors.len())
             .field("backend", &self.backend)
             .finish()
-    }
-}
-
-/// FNV-1a, 64 bit: a stable hash of the inputs, for tile consistency.
-#[derive(Debug, Clone, Copy)]
-pub struct Fnv(u64);
-
-impl Default for Fnv {
-    fn default() -> Self {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv {
-    /// Feed bytes.
-    pub fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    /// The hash.
-    pub fn finish(&self) -> u64 {
-        self.0
     }
 }
 
@@ -354,7 +330,7 @@ impl Session {
     ) -> TileInfo {
         let sensor = &self.sensors[s];
         let rows = tile_rows(k, n, sensor.height());
-        let mut h = Fnv(self.hash);
+        let mut h = Fnv::with_state(self.hash);
         h.write(sensor.name.as_bytes());
         h.write(time.to_rfc3339().as_bytes());
         h.write(&seed.to_le_bytes());

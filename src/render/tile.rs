@@ -333,3 +333,105 @@ pub fn assemble(parts: &[(PathBuf, TileInfo, RowBand)]) -> Result<(TileInfo, Row
     info.row_end = first.height;
     Ok((info, full))
 }
+
+/// The sensor `name` of the scene file `scene` and its bands, read from the
+/// file's JSON alone (no geometry), for finishing merged tiles. Errors when
+/// the file's hash is not `expected_file_hash` (the scene changed since the
+/// tiles were rendered).
+pub fn sensor_from_scene_file(
+    scene: &Path,
+    name: &str,
+    expected_file_hash: &str,
+) -> Result<(crate::sensor::Sensor, Vec<crate::radiometry::Band>)> {
+    let bytes = std::fs::read(scene).map_err(|e| Error::io(scene, e))?;
+    let mut h = super::Fnv::default();
+    h.write(&bytes);
+    let got = format!("{:016x}", h.finish());
+    if got != expected_file_hash {
+        return Err(Error::parse(
+            Location::file(scene),
+            format!(
+                "the scene file changed since the tiles were rendered (hash {got}, tiles say {expected_file_hash}): re-render the tiles"
+            ),
+        ));
+    }
+    let file = Location::file(scene);
+    let v: serde_json::Value = serde_json::from_slice(&bytes)
+        .map_err(|e| Error::parse(file.clone().at_line(e.line()), format!("{e}")))?;
+    let config = super::RenderConfig::from_json(v.get("render"), &file)?;
+    let sensors = v
+        .get("sensors")
+        .and_then(|s| s.as_array())
+        .ok_or_else(|| Error::parse(file.clone().with_field("sensors"), "missing: expected an array"))?;
+    for (i, s) in sensors.iter().enumerate() {
+        if s.get("name").and_then(|n| n.as_str()) != Some(name) {
+            continue;
+        }
+        let loc = file.clone().with_field(format!("sensors[{i}]"));
+        let c: crate::sensor::SensorConfig = serde_json::from_value(s.clone())
+            .map_err(|e| Error::parse(loc.clone(), e.to_string()))?;
+        let sensor = crate::sensor::Sensor::from_config(&c, &loc)?;
+        let base = scene.parent().unwrap_or(Path::new("."));
+        let bands = super::sensor_bands(&sensor, base, config.spectral_step_um)?;
+        return Ok((sensor, bands));
+    }
+    Err(Error::parse(
+        file.with_field("sensors"),
+        format!("no sensor named `{name}`"),
+    ))
+}
+
+/// Merge tile files into finished images in `out_dir`: tiles are grouped by
+/// image (file stem), each group checked and assembled ([`assemble`]),
+/// finished with the sensor's effects read from the scene file, and written
+/// ([`super::write_outputs`]). Returns the stems written.
+pub fn merge_tiles(parts: &[PathBuf], out_dir: &Path) -> Result<Vec<String>> {
+    let mut groups: std::collections::BTreeMap<String, Vec<(PathBuf, TileInfo, RowBand)>> =
+        Default::default();
+    for p in parts {
+        let (info, band) = read_tile(p)?;
+        groups
+            .entry(info.stem.clone())
+            .or_default()
+            .push((p.clone(), info, band));
+    }
+    if groups.is_empty() {
+        return Err(Error::invalid("merge", "no tile files given"));
+    }
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let mut done = Vec::new();
+    for (stem, group) in groups {
+        let (info, full) = assemble(&group)?;
+        let (sensor, bands) =
+            sensor_from_scene_file(&info.scene, &info.sensor, &info.scene_file_hash)?;
+        if sensor.width() != info.width || sensor.height() != info.height {
+            return Err(Error::parse(
+                Location::file(&info.scene),
+                format!(
+                    "sensor `{}` is {}×{} but its tiles are {}×{}",
+                    info.sensor,
+                    sensor.width(),
+                    sensor.height(),
+                    info.width,
+                    info.height
+                ),
+            ));
+        }
+        let finished = super::finish(&full, &sensor, &bands, info.seed)?;
+        let desc = format!(
+            "irsig merge of {} tiles of {} ({}), sensor {} at {}",
+            info_tiles(&group),
+            info.scene.display(),
+            info.backend,
+            info.sensor,
+            info.time
+        );
+        super::write_outputs(out_dir, &stem, &finished, &desc)?;
+        done.push(stem);
+    }
+    Ok(done)
+}
+
+fn info_tiles(group: &[(PathBuf, TileInfo, RowBand)]) -> usize {
+    group.first().map_or(0, |g| g.1.tiles)
+}
