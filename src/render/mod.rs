@@ -24,7 +24,7 @@
 
 pub mod image;
 pub mod path;
-// pub mod session; (waits for the scene module)
+pub mod session;
 pub mod shade;
 pub mod tile;
 

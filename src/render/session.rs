@@ -25,7 +25,7 @@ use crate::radiometry::Band;
 use crate::scene::Scene;
 use crate::sensor::{Sensor, SensorConfig};
 use crate::trace::{self, Backend, Tracer};
-use crate::weather::{self, LoadOptions, WeatherHistory, WeatherRecord};
+use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
 
 /// The scene file's `atmosphere` section.
@@ -220,10 +220,7 @@ impl Session {
                 "missing: a render needs a weather history (`\"weather\": {\"file\": …}`)",
             )
         })?;
-        let weather = weather::load_with(
-            &weather_ref.path,
-            &LoadOptions::default().with_site(scene.site),
-        )?;
+        let weather = weather_ref.history.clone();
         // Optics: one material per part (overrides applied).
         let parts = scene.facet_parts();
         let materials = (0..scene.parts.len())
