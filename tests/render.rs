@@ -5,17 +5,17 @@
 use glam::Vec3;
 use irsig::Location;
 use irsig::atmosphere::Atmosphere;
-use irsig::radiometry::Emissivity;
-use irsig::sensor::Geometry;
 use irsig::geometry::{Instance, SceneGeometry, TriangleMesh};
 use irsig::material::Material;
 use irsig::radiometry::Band;
+use irsig::radiometry::Emissivity;
 use irsig::render::image::{StageTimes, finish, render_rows};
 use irsig::render::tile::{TileInfo, assemble, read_tile, tile_rows, write_tile};
 use irsig::render::{
     Conditions, Finished, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState,
     sensor_bands,
 };
+use irsig::sensor::Geometry;
 use irsig::sensor::{Sensor, SensorConfig};
 use irsig::trace::{self, Backend};
 use serde_json::json;
@@ -130,7 +130,10 @@ fn render(
 }
 
 fn layer<'a>(f: &'a Finished, name: &str) -> &'a [f32] {
-    &f.stack.layer(name).unwrap_or_else(|| panic!("layer {name}")).data
+    &f.stack
+        .layer(name)
+        .unwrap_or_else(|| panic!("layer {name}"))
+        .data
 }
 
 fn nadir_camera(width: usize, height: usize, fov: f64, n: usize) -> serde_json::Value {
@@ -168,7 +171,10 @@ fn blackbody_plane_reads_its_temperature_in_every_pixel() {
     let d = layer(&f, "depth");
     let centre = d[12 * 32 + 16];
     assert!((centre - 100.0).abs() < 0.5, "centre depth {centre}");
-    assert!(d.iter().all(|&v| (99.99..=100.0 / (20f32.to_radians().cos() * 0.9)).contains(&v)));
+    assert!(
+        d.iter()
+            .all(|&v| (99.99..=100.0 / (20f32.to_radians().cos() * 0.9)).contains(&v))
+    );
 }
 
 #[test]
@@ -217,7 +223,10 @@ fn grey_plane_matches_the_hand_computed_big_equation() {
     }
     // The sun matters in the MWIR band, so the check above covers its term.
     let mwir = &bands[1];
-    assert!(mwir.blackbody_radiance(5772.0) * 800.0 / (5.67e-8 * 5772f64.powi(4)) > 0.01 * mwir.blackbody_radiance(310.0));
+    assert!(
+        mwir.blackbody_radiance(5772.0) * 800.0 / (5.67e-8 * 5772f64.powi(4))
+            > 0.01 * mwir.blackbody_radiance(310.0)
+    );
 }
 
 /// View zenith (degrees) at a horizontal surface of the centre ray of
@@ -277,7 +286,10 @@ fn specular_plate_shows_the_hot_block_scaled_by_one_minus_epsilon() {
     let (bands, cold) = render(&cold_g, &cold_o, &cold_c, &s, Backend::Embree);
     let b = |t: f64| bands[0].blackbody_radiance(t);
     let ids = layer(&hot, "material_id");
-    assert!(ids.iter().all(|&m| m == 1.0), "every centre ray hits the plate");
+    assert!(
+        ids.iter().all(|&m| m == 1.0),
+        "every centre ray hits the plate"
+    );
     let eps_of = Emissivity::from_material(&hot_o.materials[0]).unwrap();
     let eps = |i: usize| eps_of.eval(10.0, view_zenith_deg(&s, i % 16, i / 16));
     for (i, (&lh, &lc)) in layer(&hot, "LWIR_radiance")
@@ -289,7 +301,10 @@ fn specular_plate_shows_the_hot_block_scaled_by_one_minus_epsilon() {
         // ε = ε(θ) ≈ ε(45°) of the plate.
         let e = eps(i);
         let expected = e * b(300.0) + (1.0 - e) * b(400.0);
-        assert!(((lh as f64 - expected) / expected).abs() < 1e-4, "{lh} vs {expected}");
+        assert!(
+            ((lh as f64 - expected) / expected).abs() < 1e-4,
+            "{lh} vs {expected}"
+        );
         let diff = (lh - lc) as f64;
         let expected_diff = (1.0 - e) * (b(400.0) - b(250.0));
         assert!(((diff - expected_diff) / expected_diff).abs() < 1e-4);
@@ -330,7 +345,10 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
         meshes.push(ground(&format!("hot{i}"), p.x, p.y, 1.5, 0.05));
     }
     let geom = geometry(meshes);
-    let mats = vec![material("ground", 1, 1.0, 0.0), material("hot", 2, 1.0, 0.0)];
+    let mats = vec![
+        material("ground", 1, 1.0, 0.0),
+        material("hot", 2, 1.0, 0.0),
+    ];
     let mut mm = vec![0u32];
     mm.extend(std::iter::repeat_n(1, points.len()));
     let optics = optics(&geom, mats, &mm);
@@ -345,11 +363,13 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
     };
-    let s = sensor(json!({"type": "line_scanner", "name": "scan", "ifov_rad": 0.003,
+    let s = sensor(
+        json!({"type": "line_scanner", "name": "scan", "ifov_rad": 0.003,
         "scan_angle_deg": 40.0, "samples_per_line": 160, "lines": 140,
         "scan_rate_hz": 10.0, "altitude_m": 300.0, "ground_speed_m_s": 10.0,
         "heading_deg": 0.0, "start": [0.0, 0.0], "oversample": 1,
-        "bands": [{"name": "LWIR", "response": [8.0, 14.0]}]}));
+        "bands": [{"name": "LWIR", "response": [8.0, 14.0]}]}),
+    );
     let (_, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
     let t = layer(&f, "apparent_temperature");
     let w = s.width();
@@ -357,7 +377,11 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
         let uv = s.project(p.as_dvec3()).expect("point is imaged");
         let (col, row) = (uv.x.floor() as usize, uv.y.floor() as usize);
         assert!(col < w && row < s.height(), "{p} → {uv}");
-        assert!(t[row * w + col] > 390.0, "{p} at ({col}, {row}): {} K", t[row * w + col]);
+        assert!(
+            t[row * w + col] > 390.0,
+            "{p} at ({col}, {row}): {} K",
+            t[row * w + col]
+        );
         // Ten pixels away the ground is cold.
         assert!(t[row * w + col + 10] < 285.0);
         assert!(t[(row + 10) * w + col] < 285.0);
@@ -370,7 +394,13 @@ fn busy_scene() -> (SceneGeometry, SceneOptics, Conditions, Sensor) {
     let mut meshes = vec![ground("ground", 0.0, 0.0, 500.0, 0.0)];
     for i in 0..6 {
         let x = -40.0 + 16.0 * i as f32;
-        meshes.push(ground(&format!("roof{i}"), x, 5.0 * i as f32, 4.0, 3.0 + i as f32));
+        meshes.push(ground(
+            &format!("roof{i}"),
+            x,
+            5.0 * i as f32,
+            4.0,
+            3.0 + i as f32,
+        ));
     }
     let geom = geometry(meshes);
     let mut glass = material("glass", 4, 0.3, 0.5);
@@ -400,14 +430,16 @@ fn busy_scene() -> (SceneGeometry, SceneOptics, Conditions, Sensor) {
         ground_temperature_k: 285.0,
         atmosphere: Atmosphere::None,
     };
-    let s = sensor(json!({"type": "frame", "name": "busy", "width": 48, "height": 37,
+    let s = sensor(
+        json!({"type": "frame", "name": "busy", "width": 48, "height": 37,
            "fov_deg": 50.0, "position": [10.0, -90.0, 60.0], "look_at": [0.0, 0.0, 0.0],
            "up": [0.0, 0.0, 1.0], "oversample": 2,
            "psf": {"type": "gaussian", "sigma_px": 0.6},
            "mtf": {"aperture_diameter_m": 0.02, "wavelength_um": 10.0, "fill_factor": 0.9},
            "nedt_k": 0.05, "bits": 14, "gain": 500.0, "seed": 42,
            "bands": [{"name": "LWIR", "response": [8.0, 12.0]},
-                     {"name": "MWIR", "response": [3.0, 5.0]}]}));
+                     {"name": "MWIR", "response": [3.0, 5.0]}]}),
+    );
     (geom, optics, cond, s)
 }
 
@@ -441,7 +473,12 @@ fn one_and_two_threads_give_bit_identical_images() {
         .iter()
         .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
     assert!(hi - lo > 5.0, "{lo}..{hi}");
-    assert!(a.stack.layers.iter().all(|l| l.data.iter().all(|v| v.is_finite())));
+    assert!(
+        a.stack
+            .layers
+            .iter()
+            .all(|l| l.data.iter().all(|v| v.is_finite()))
+    );
 }
 
 #[test]
@@ -455,8 +492,7 @@ fn tiles_merge_bit_for_bit_into_the_single_render() {
     let mut parts = Vec::new();
     for k in (1..=n).rev() {
         let rows = tile_rows(k, n, s.height());
-        let band = render_rows(&shader, &s, rows.clone(), &StageTimes::default(), &|_| {})
-            .unwrap();
+        let band = render_rows(&shader, &s, rows.clone(), &StageTimes::default(), &|_| {}).unwrap();
         let info = TileInfo {
             version: 1,
             scene_hash: "abc".into(),
@@ -499,7 +535,298 @@ fn embree_and_obvhs_render_the_same_image() {
     let (geom, optics, cond, s) = busy_scene();
     let (_, a) = render(&geom, &optics, &cond, &s, Backend::Embree);
     let (_, b) = render(&geom, &optics, &cond, &s, Backend::Obvhs);
-    let (ta, tb) = (layer(&a, "apparent_temperature"), layer(&b, "apparent_temperature"));
-    let differ = ta.iter().zip(tb).filter(|(x, y)| (*x - *y).abs() > 0.01).count();
+    let (ta, tb) = (
+        layer(&a, "apparent_temperature"),
+        layer(&b, "apparent_temperature"),
+    );
+    let differ = ta
+        .iter()
+        .zip(tb)
+        .filter(|(x, y)| (*x - *y).abs() > 0.01)
+        .count();
     assert!(differ == 0, "{differ} pixels differ by more than 0.01 K");
+}
+
+// ---------------------------------------------------------------------------
+// The command line: `irsig render` / `irsig merge` on a small scene file.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::util::{irsig_bin, repo_path};
+
+/// A small scene file in `dir`: ground, two buildings (one with a glass
+/// roof), the bundled materials and weather; one frame camera with noise,
+/// a Gaussian PSF and an MTF, `width × height` pixels.
+fn write_scene(dir: &Path, width: usize, height: usize, oversample: usize) -> PathBuf {
+    let scene = json!({
+        "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160.0,
+                 "utc_offset_hours": -4.0},
+        "time": "2025-06-21T14:00:00-04:00",
+        "weather": {"file": repo_path("scenes/town/weather.csv")},
+        "materials": [repo_path("scenes/materials.json")],
+        "objects": [
+            {"name": "ground", "material": "asphalt",
+             "shapes": [{"plane": {"size": [200.0, 200.0], "max_edge_m": 20.0}}]},
+            {"name": "shed", "parts": [{"name": "top", "material": "glass"},
+                                       {"name": "sides", "material": "brick"}],
+             "shapes": [{"box": {"size": [20.0, 12.0, 6.0], "bottom": false}}],
+             "instances": [{"translate": [-20.0, 10.0, 0.0]},
+                           {"translate": [25.0, -5.0, 0.0], "rotate_deg": [0.0, 0.0, 30.0]}]}
+        ],
+        "sensors": [{"type": "frame", "name": "cam", "width": width, "height": height,
+                     "fov_deg": 60.0, "position": [0.0, -120.0, 80.0],
+                     "look_at": [0.0, 0.0, 0.0], "oversample": oversample,
+                     "psf": {"type": "gaussian", "sigma_px": 0.5},
+                     "mtf": {"aperture_diameter_m": 0.01, "wavelength_um": 10.0},
+                     "nedt_k": 0.05, "bits": 12, "gain": 100.0, "seed": 7,
+                     "bands": [{"name": "LWIR", "response": [8.0, 12.0]},
+                               {"name": "MWIR", "response": [3.0, 5.0]}]}]
+    });
+    let path = dir.join("scene.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&scene).unwrap()).unwrap();
+    path
+}
+
+fn irsig(args: &[&str]) -> std::process::Output {
+    let out = Command::new(irsig_bin()).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "irsig {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn same_bytes(a: &Path, b: &Path) {
+    let (x, y) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+    assert!(x == y, "{} and {} differ", a.display(), b.display());
+}
+
+#[test]
+fn cli_render_is_identical_for_1_and_2_threads_and_tiles_merge_to_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 40, 30, 2);
+    let (d1, d2, dt, dm) = (
+        dir.path().join("t1"),
+        dir.path().join("t2"),
+        dir.path().join("tiles"),
+        dir.path().join("merged"),
+    );
+    irsig(&[
+        "--threads",
+        "1",
+        "render",
+        s(&scene),
+        "-o",
+        s(&d1),
+        "--quiet",
+    ]);
+    irsig(&[
+        "--threads",
+        "2",
+        "render",
+        s(&scene),
+        "-o",
+        s(&d2),
+        "--quiet",
+    ]);
+    for ext in ["exr", "img", "hdr", "png"] {
+        same_bytes(
+            &d1.join(format!("cam.{ext}")),
+            &d2.join(format!("cam.{ext}")),
+        );
+    }
+    // The image is sane: every layer finite, the scene in view.
+    let img = irsig::output::read_exr(d1.join("cam.exr")).unwrap();
+    for l in &img.layers {
+        assert!(l.data.iter().all(|v| v.is_finite()), "layer {}", l.name);
+    }
+    let t = img.layer("apparent_temperature").unwrap();
+    assert!(t.data.iter().all(|&v| (200.0..400.0).contains(&v)));
+    let ids = &img.layer("material_id").unwrap().data;
+    assert!(ids.iter().any(|&m| m >= 0.0) && ids.iter().any(|&m| m != ids[0]));
+    // Three tiles, in any order, merged: the same files.
+    for k in [2, 3, 1] {
+        irsig(&[
+            "render",
+            s(&scene),
+            "-o",
+            s(&dt),
+            "--tile",
+            &format!("{k}/3"),
+            "--quiet",
+        ]);
+    }
+    let tile1 = dt.join("cam.tile1-of-3.exr");
+    let before = std::fs::metadata(&tile1).unwrap().modified().unwrap();
+    // A complete tile is skipped when rerun.
+    irsig(&[
+        "render",
+        s(&scene),
+        "-o",
+        s(&dt),
+        "--tile",
+        "1/3",
+        "--quiet",
+    ]);
+    assert_eq!(
+        std::fs::metadata(&tile1).unwrap().modified().unwrap(),
+        before
+    );
+    let tiles: Vec<PathBuf> = (1..=3)
+        .map(|k| dt.join(format!("cam.tile{k}-of-3.exr")))
+        .collect();
+    let mut args = vec!["merge"];
+    args.extend(tiles.iter().map(|p| s(p)));
+    args.extend(["-o", s(&dm), "--quiet"]);
+    irsig(&args);
+    for ext in ["exr", "img", "hdr", "png"] {
+        same_bytes(
+            &d1.join(format!("cam.{ext}")),
+            &dm.join(format!("cam.{ext}")),
+        );
+    }
+    // A missing tile is an error naming it.
+    let out = Command::new(irsig_bin())
+        .args(["merge", s(&tiles[0]), s(&tiles[2]), "-o", s(&dm)])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("missing tile(s) 2/3"), "{err}");
+}
+
+#[test]
+fn a_killed_render_leaves_no_file_under_a_final_name() {
+    let dir = tempfile::tempdir().unwrap();
+    // Cheap to trace, slow to write: a big image of a simple scene.
+    let scene = write_scene(dir.path(), 1600, 1200, 1);
+    let out = dir.path().join("out");
+    let mut child = Command::new(irsig_bin())
+        .args(["render", s(&scene), "-o", s(&out), "--quiet"])
+        .spawn()
+        .unwrap();
+    // Wait for the EXR's temporary file to appear, then kill.
+    let start = std::time::Instant::now();
+    let mut tmp = None;
+    while start.elapsed() < std::time::Duration::from_secs(120) {
+        if let Some(st) = child.try_wait().unwrap() {
+            panic!("the render ended ({st}) before it could be killed");
+        }
+        tmp = std::fs::read_dir(&out).ok().and_then(|d| {
+            d.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .find(|n| n.ends_with(".tmp"))
+        });
+        if tmp.is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // `.cam.exr.XXXXXX.tmp` is being written: `cam.exr` must not exist.
+    let tmp = tmp.expect("no temporary output file appeared");
+    let name = tmp.trim_start_matches('.');
+    let final_name = &name[..name.find('.').unwrap() + 4];
+    assert!(
+        !out.join(final_name).exists(),
+        "{final_name} exists after the kill"
+    );
+    // Files written before it are complete; EXR first, so none here when
+    // the EXR was the one cut short.
+    if final_name == "cam.exr" {
+        for ext in ["exr", "img", "hdr", "png"] {
+            let p = out.join(format!("cam.{ext}"));
+            assert!(!p.exists(), "{} exists after the kill", p.display());
+        }
+    }
+}
+
+#[test]
+fn cli_render_errors_name_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 8, 6, 1);
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["render", "no/such/scene.json", "-o", "x"],
+            "no/such/scene.json",
+        ),
+        (&["render", s(&scene), "-o", "x", "--tile", "4/3"], "--tile"),
+        (
+            &[
+                "render",
+                s(&scene),
+                "-o",
+                "x",
+                "--times",
+                "2025-06-21T14:00:00-04:00/2025-06-21T15:00:00-04:00/0s",
+            ],
+            "--times",
+        ),
+        (
+            &["render", s(&scene), "-o", "x", "--sensor", "nope"],
+            "`nope`: no such sensor",
+        ),
+    ];
+    for (args, needle) in cases {
+        let out = Command::new(irsig_bin()).args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn slurm_script_submits_a_tile_array_and_a_dependent_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 8, 6, 1);
+    // A stand-in `sbatch` recording its arguments.
+    let bin = dir.path().join("bin");
+    std::fs::create_dir(&bin).unwrap();
+    let log = dir.path().join("sbatch.log");
+    let fake = format!(
+        "#!/bin/sh\necho \"$@\" >> {}\nn=$(wc -l < {})\necho \"$((1000 + n))\"\n",
+        log.display(),
+        log.display()
+    );
+    let sb = bin.join("sbatch");
+    std::fs::write(&sb, fake).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&sb, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap());
+    let out = Command::new("bash")
+        .arg(repo_path("scripts/slurm-render.sh"))
+        .args([s(&scene), s(&dir.path().join("out")), "4", "--seed", "3"])
+        .env("PATH", path)
+        .env("IRSIG", irsig_bin())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let calls = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = calls.lines().collect();
+    assert_eq!(lines.len(), 2, "{calls}");
+    assert!(lines[0].contains("--array=1-4"), "{}", lines[0]);
+    assert!(
+        lines[0].contains("--tile ${SLURM_ARRAY_TASK_ID}/4"),
+        "{}",
+        lines[0]
+    );
+    assert!(lines[0].contains("--seed 3"), "{}", lines[0]);
+    assert!(
+        lines[1].contains("--dependency=afterok:1001"),
+        "{}",
+        lines[1]
+    );
+    assert!(lines[1].contains(" merge "), "{}", lines[1]);
 }

@@ -330,11 +330,16 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
     let (lo, hi) = radiance
         .iter()
         .filter(|v| v.is_finite() && **v > 0.0)
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     if !lo.is_finite() {
         return vec![0.0; radiance.len()];
     }
-    let (t_lo, t_hi) = (apparent_temperature(band, lo), apparent_temperature(band, hi));
+    let (t_lo, t_hi) = (
+        apparent_temperature(band, lo),
+        apparent_temperature(band, hi),
+    );
     let nodes = ((t_hi - t_lo) as f64 / INVERSION_STEP_K).ceil() as usize + 3;
     if t_lo <= 0.0 || nodes > 200_000 {
         return radiance
@@ -343,7 +348,9 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
             .collect();
     }
     let t0 = t_lo as f64 - INVERSION_STEP_K;
-    let temps: Vec<f64> = (0..nodes).map(|k| t0 + k as f64 * INVERSION_STEP_K).collect();
+    let temps: Vec<f64> = (0..nodes)
+        .map(|k| t0 + k as f64 * INVERSION_STEP_K)
+        .collect();
     let table: Vec<f64> = temps
         .par_iter()
         .map(|&t| band.blackbody_radiance(t))
@@ -364,12 +371,7 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
 
 /// Apply the image-wide sensor effects to a complete [`RowBand`] (MTF, then
 /// NEdT noise with `seed`, then quantisation) and build the output layers.
-pub fn finish(
-    full: &RowBand,
-    sensor: &Sensor,
-    bands: &[Band],
-    seed: u64,
-) -> Result<Finished> {
+pub fn finish(full: &RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Result<Finished> {
     let (w, h) = (full.width, full.height);
     if full.rows != (0..h) || bands.len() != full.radiance.len() {
         return Err(Error::invalid(
@@ -398,7 +400,9 @@ pub fn finish(
             effects::add_noise(&mut l, w, 0, sigma, seed, b as u64);
         }
         let t = apparent_temperatures(band, &l);
-        let counts = fx.bits.map(|bits| effects::quantise(&l, bits, fx.gain, fx.offset));
+        let counts = fx
+            .bits
+            .map(|bits| effects::quantise(&l, bits, fx.gain, fx.offset));
         radiance_stack.push(format!("{}_radiance", cfg.name), l.clone())?;
         stack.push(format!("{}_radiance", cfg.name), l)?;
         if let Some(c) = counts {

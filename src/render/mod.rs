@@ -91,7 +91,9 @@ impl RenderConfig {
         let c: RenderConfig = serde_json::from_value(v.clone()).map_err(|e| {
             Error::parse(
                 location.clone().with_field("render"),
-                format!("{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples"),
+                format!(
+                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples"
+                ),
             )
         })?;
         let bad = |field: &str, msg: String| {
@@ -177,6 +179,15 @@ impl Fnv {
     pub fn with_state(state: u64) -> Self {
         Fnv(state)
     }
+}
+
+/// The description written into the outputs (ENVI `description`): the
+/// same for a render in one piece and its merged tiles.
+pub fn description(scene: &Path, backend: &str, sensor: &str, time: &str) -> String {
+    format!(
+        "irsig render of {} ({backend}), sensor {sensor} at {time}",
+        scene.display()
+    )
 }
 
 /// The output files of image `stem` in `dir`.

@@ -16,9 +16,9 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
+use super::path::PathTables;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
-use super::path::PathTables;
 use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
 use crate::radiometry::Band;
@@ -372,7 +372,13 @@ impl Session {
             max_bounces: self.config.max_bounces,
             offset_m: (1e-5 * size).max(1e-4),
         };
-        let paths = PathTables::new(&cond.atmosphere, sensor, bands, self.scene.site.altitude_m, size as f64)?;
+        let paths = PathTables::new(
+            &cond.atmosphere,
+            sensor,
+            bands,
+            self.scene.site.altitude_m,
+            size as f64,
+        )?;
         let shader = Shader::new(
             self.tracer.as_ref(),
             &self.scene.geometry,
@@ -392,7 +398,11 @@ impl Session {
             times.primary_trace(),
             times.shading(),
         ];
-        let sum: f64 = parts.iter().map(|d| d.as_secs_f64()).sum::<f64>().max(1e-12);
+        let sum: f64 = parts
+            .iter()
+            .map(|d| d.as_secs_f64())
+            .sum::<f64>()
+            .max(1e-12);
         let loop_wall = wall.saturating_sub(times.psf()).as_secs_f64();
         let share = |d: Duration| Duration::from_secs_f64(loop_wall * d.as_secs_f64() / sum);
         self.timings.ray_generation += share(parts[0]);
@@ -441,7 +451,9 @@ impl Session {
         };
         let series = times.len() > 1;
         let chosen: Vec<usize> = (0..self.sensors.len())
-            .filter(|&i| options.sensors.is_empty() || options.sensors.contains(&self.sensors[i].name))
+            .filter(|&i| {
+                options.sensors.is_empty() || options.sensors.contains(&self.sensors[i].name)
+            })
             .collect();
         // Which images still need work (tiles already complete are skipped).
         let mut jobs = Vec::new();
@@ -494,12 +506,13 @@ impl Session {
                 None => {
                     let f = self.finish(s, &band, seed)?;
                     let t0 = Instant::now();
-                    let desc = format!(
-                        "irsig render of {} ({}), sensor {} at {}",
-                        self.scene.path.display(),
-                        self.backend,
-                        self.sensors[s].name,
-                        time.to_rfc3339()
+                    let scene =
+                        std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone());
+                    let desc = super::description(
+                        &scene,
+                        self.backend.as_str(),
+                        &self.sensors[s].name,
+                        &time.to_rfc3339(),
                     );
                     write_outputs(out_dir, &stem, &f, &desc)?;
                     self.timings.output += t0.elapsed();
@@ -580,7 +593,9 @@ fn parse_duration(s: &str) -> Result<TimeDelta> {
         )
     };
     let s = s.trim();
-    let split = s.find(|c: char| !(c.is_ascii_digit() || c == '.')).ok_or_else(bad)?;
+    let split = s
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .ok_or_else(bad)?;
     let (num, unit) = s.split_at(split);
     let v: f64 = num.parse().map_err(|_| bad())?;
     let secs = match unit {
@@ -674,8 +689,7 @@ fn standin_thermal(session: &Session, times: &[DateTime<FixedOffset>]) -> Result
         }
         let temps = surface.temperature_k.clone();
         for f in 0..n {
-            surface.background_k[f] =
-                exposure.sky.background_temperature(f, &temps, t_air as f32);
+            surface.background_k[f] = exposure.sky.background_temperature(f, &temps, t_air as f32);
         }
         let sun = (sun_dirs[ti].z > 0.0).then_some(SunInput {
             direction: sun_dirs[ti],

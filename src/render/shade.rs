@@ -279,10 +279,7 @@ impl<'a> Shader<'a> {
         {
             return Err(crate::Error::invalid(
                 "scene optics",
-                format!(
-                    "material index {m}: expected < {}",
-                    optics.materials.len()
-                ),
+                format!("material index {m}: expected < {}", optics.materials.len()),
             ));
         }
         let planck = bands.first().map(|b| *b.planck()).unwrap_or_default();
@@ -296,9 +293,10 @@ impl<'a> Shader<'a> {
         for band in bands {
             let wl = band.wavelengths_um();
             let sky = match &conditions.sky {
-                Sky::Blackbody { temperature_k } => {
-                    wl.iter().map(|&l| planck.radiance(l, *temperature_k)).collect()
-                }
+                Sky::Blackbody { temperature_k } => wl
+                    .iter()
+                    .map(|&l| planck.radiance(l, *temperature_k))
+                    .collect(),
                 Sky::Atmosphere(c) => conditions.atmosphere.sky_radiance(c, band.grid())?,
             };
             let ground = wl
@@ -306,9 +304,7 @@ impl<'a> Shader<'a> {
                 .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
                 .collect();
             let sun = match conditions.sun {
-                Some(s) if s.direction.z > 0.0 => {
-                    solar_spectrum(&planck, wl, s.direct_normal_w_m2)
-                }
+                Some(s) if s.direction.z > 0.0 => solar_spectrum(&planck, wl, s.direct_normal_w_m2),
                 _ => vec![0.0; wl.len()],
             };
             let eps = emissivities
@@ -343,8 +339,8 @@ impl<'a> Shader<'a> {
             });
         let table = if lo.is_finite() && total > 0 {
             let t0 = (lo / PLANCK_TABLE_STEP_K).floor() * PLANCK_TABLE_STEP_K;
-            let nodes = (((hi - t0) / PLANCK_TABLE_STEP_K).ceil() as usize + 2)
-                .min(PLANCK_TABLE_MAX_NODES);
+            let nodes =
+                (((hi - t0) / PLANCK_TABLE_STEP_K).ceil() as usize + 2).min(PLANCK_TABLE_MAX_NODES);
             let mut values = Vec::with_capacity(nodes * total);
             for k in 0..nodes {
                 let t = t0 + k as f64 * PLANCK_TABLE_STEP_K;
@@ -416,8 +412,7 @@ impl<'a> Shader<'a> {
     /// spectrum.
     pub fn band_radiance(&self, b: usize, spectrum: &[f64]) -> f64 {
         let t = &self.bands[b];
-        t.band
-            .integrate(&spectrum[t.start..t.start + t.band.len()])
+        t.band.integrate(&spectrum[t.start..t.start + t.band.len()])
     }
 
     /// Global facet index of a hit.
@@ -472,8 +467,8 @@ impl<'a> Shader<'a> {
         if depth < self.options.max_bounces {
             for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
                 let Some(h) = hit else { continue };
-                let m = &self.optics.materials
-                    [self.optics.facet_material[self.facet_of(h)] as usize];
+                let m =
+                    &self.optics.materials[self.optics.facet_material[self.facet_of(h)] as usize];
                 if m.specular_fraction <= 0.0 && m.transmissivity <= 0.0 {
                     continue;
                 }
@@ -515,8 +510,10 @@ impl<'a> Shader<'a> {
                 self.miss_into(ray.dir, o);
                 continue;
             };
-            let spec_in = (refl[i] != usize::MAX).then(|| &sec_spec[refl[i] * n..(refl[i] + 1) * n]);
-            let behind = (trans[i] != usize::MAX).then(|| &sec_spec[trans[i] * n..(trans[i] + 1) * n]);
+            let spec_in =
+                (refl[i] != usize::MAX).then(|| &sec_spec[refl[i] * n..(refl[i] + 1) * n]);
+            let behind =
+                (trans[i] != usize::MAX).then(|| &sec_spec[trans[i] * n..(trans[i] + 1) * n]);
             self.leaving_into(ray, h, spec_in, behind, &mut b_t, &mut b_bg, o);
         }
     }

@@ -209,7 +209,9 @@ pub fn read_tile(path: &Path) -> Result<(TileInfo, RowBand)> {
             .ok_or_else(|| bad(format!("missing layer `{name}`")))?;
         match &c.sample_data {
             x::FlatSamples::F32(v) => Ok(v.clone()),
-            _ => Err(bad(format!("layer `{name}`: expected 32-bit float samples"))),
+            _ => Err(bad(format!(
+                "layer `{name}`: expected 32-bit float samples"
+            ))),
         }
     };
     let radiance = info
@@ -322,7 +324,12 @@ pub fn assemble(parts: &[(PathBuf, TileInfo, RowBand)]) -> Result<(TileInfo, Row
             ),
         ));
     }
-    let mut full = RowBand::empty(first.width, first.height, 0..first.height, first.bands.len());
+    let mut full = RowBand::empty(
+        first.width,
+        first.height,
+        0..first.height,
+        first.bands.len(),
+    );
     for (_, _, band) in parts {
         full.paste(band)?;
     }
@@ -359,10 +366,12 @@ pub fn sensor_from_scene_file(
     let v: serde_json::Value = serde_json::from_slice(&bytes)
         .map_err(|e| Error::parse(file.clone().at_line(e.line()), format!("{e}")))?;
     let config = super::RenderConfig::from_json(v.get("render"), &file)?;
-    let sensors = v
-        .get("sensors")
-        .and_then(|s| s.as_array())
-        .ok_or_else(|| Error::parse(file.clone().with_field("sensors"), "missing: expected an array"))?;
+    let sensors = v.get("sensors").and_then(|s| s.as_array()).ok_or_else(|| {
+        Error::parse(
+            file.clone().with_field("sensors"),
+            "missing: expected an array",
+        )
+    })?;
     for (i, s) in sensors.iter().enumerate() {
         if s.get("name").and_then(|n| n.as_str()) != Some(name) {
             continue;
@@ -418,20 +427,9 @@ pub fn merge_tiles(parts: &[PathBuf], out_dir: &Path) -> Result<Vec<String>> {
             ));
         }
         let finished = super::finish(&full, &sensor, &bands, info.seed)?;
-        let desc = format!(
-            "irsig merge of {} tiles of {} ({}), sensor {} at {}",
-            info_tiles(&group),
-            info.scene.display(),
-            info.backend,
-            info.sensor,
-            info.time
-        );
+        let desc = super::description(&info.scene, &info.backend, &info.sensor, &info.time);
         super::write_outputs(out_dir, &stem, &finished, &desc)?;
         done.push(stem);
     }
     Ok(done)
-}
-
-fn info_tiles(group: &[(PathBuf, TileInfo, RowBand)]) -> usize {
-    group.first().map_or(0, |g| g.1.tiles)
 }
