@@ -121,7 +121,7 @@ fn render(
     backend: Backend,
 ) -> (Vec<Band>, Finished) {
     let tracer = trace::build(geom, backend).unwrap();
-    let bands = sensor_bands(sensor, std::path::Path::new("."), 0.1).unwrap();
+    let bands = sensor_bands(sensor, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
     let shader = Shader::new(tracer.as_ref(), geom, optics, cond, &bands, OPTS).unwrap();
     let times = StageTimes::default();
     let rows = render_rows(&shader, sensor, 0..sensor.height(), &times, &|_| {}).unwrap();

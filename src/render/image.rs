@@ -296,17 +296,6 @@ pub struct Finished {
     pub wavelengths_um: Vec<f64>,
 }
 
-/// Response-weighted mean wavelength of a band, µm.
-pub fn band_centre_um(band: &Band) -> f64 {
-    let w = band.weights_um();
-    let s: f64 = w.iter().sum();
-    w.iter()
-        .zip(band.wavelengths_um())
-        .map(|(a, l)| a * l)
-        .sum::<f64>()
-        / s
-}
-
 /// Brightness temperature of band radiance `l`, K; 0 for a non-positive or
 /// non-finite radiance (documented sentinel; no NaN in outputs).
 pub fn apparent_temperature(band: &Band, l: f32) -> f32 {
@@ -391,13 +380,10 @@ pub fn finish(full: &RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Res
     for (b, (band, cfg)) in bands.iter().zip(&sensor.bands).enumerate() {
         let mut l = full.radiance[b].clone();
         if let Some(m) = &fx.mtf {
-            effects::apply_mtf(&mut l, w, h, m)?;
+            effects::apply_mtf(&mut l, w, h, &m.at(effects::band_centre_um(band)))?;
         }
-        if let Some(nedt) = fx.nedt_k {
-            let sigma = effects::radiance_sigma_from_nedt(nedt, fx.nedt_reference_k, |t| {
-                band.blackbody_radiance(t)
-            });
-            effects::add_noise(&mut l, w, 0, sigma, seed, b as u64);
+        if fx.nedt_k.is_some() {
+            effects::add_noise(&mut l, w, 0, fx.noise_sigma(band), seed, b as u64);
         }
         let t = apparent_temperatures(band, &l);
         let counts = fx
@@ -432,6 +418,6 @@ pub fn finish(full: &RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Res
     Ok(Finished {
         stack,
         radiance: radiance_stack,
-        wavelengths_um: bands.iter().map(band_centre_um).collect(),
+        wavelengths_um: bands.iter().map(effects::band_centre_um).collect(),
     })
 }

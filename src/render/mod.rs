@@ -35,9 +35,9 @@ use serde::Deserialize;
 pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
 pub use shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 
-use crate::output::{write_envi, write_exr, write_quicklook_png};
-use crate::radiometry::{Band, read_response_csv};
-use crate::sensor::{ResponseSpec, Sensor};
+use crate::output::write_image_set;
+use crate::radiometry::Band;
+use crate::sensor::Sensor;
 use crate::{Error, Location, Result};
 
 fn default_max_bounces() -> u32 {
@@ -133,24 +133,15 @@ impl RenderConfig {
 }
 
 /// The spectral bands of `sensor` on grids of at most `step_um`; response
-/// files are resolved against `base_dir` (the scene file's folder).
-pub fn sensor_bands(sensor: &Sensor, base_dir: &Path, step_um: f64) -> Result<Vec<Band>> {
-    sensor
-        .bands
-        .iter()
-        .map(|b| match &b.response {
-            ResponseSpec::Range([lo, hi]) => Band::flat(*lo, *hi, step_um),
-            ResponseSpec::File(p) => {
-                let path = if p.is_absolute() {
-                    p.clone()
-                } else {
-                    base_dir.join(p)
-                };
-                let resp = read_response_csv(&path)?;
-                Band::from_response(&resp, step_um)
-            }
-        })
-        .collect()
+/// files are resolved against `base_dir` (the scene file's folder), errors
+/// name `location` (the sensor in the scene file).
+pub fn sensor_bands(
+    sensor: &Sensor,
+    base_dir: &Path,
+    step_um: f64,
+    location: &Location,
+) -> Result<Vec<Band>> {
+    sensor.resolve_bands(base_dir, step_um, location)
 }
 
 /// FNV-1a, 64 bit: a stable hash of the inputs, for tile consistency.
@@ -202,15 +193,15 @@ pub fn output_paths(dir: &Path, stem: &str) -> [PathBuf; 4] {
 
 /// Write a finished image into `dir`: `STEM.exr` (all layers), `STEM.img` +
 /// `STEM.hdr` (ENVI, band radiances with centre wavelengths) and `STEM.png`
-/// (quick-look of the apparent temperature), each atomically.
+/// (quick-look of the apparent temperature), each atomically
+/// ([`crate::output::write_image_set`]).
 pub fn write_outputs(dir: &Path, stem: &str, f: &Finished, description: &str) -> Result<()> {
-    let [exr, img, _, png] = output_paths(dir, stem);
-    write_exr(&exr, &f.stack)?;
-    write_envi(&img, &f.radiance, Some(&f.wavelengths_um), description)?;
-    let t = f
-        .stack
-        .layer("apparent_temperature")
-        .ok_or_else(|| Error::Other("no apparent_temperature layer".into()))?;
-    write_quicklook_png(&png, f.stack.width, f.stack.height, &t.data, None)?;
+    let names: Vec<&str> = f.radiance.layers.iter().map(|l| l.name.as_str()).collect();
+    let spectral: Vec<(&str, f64)> = names
+        .iter()
+        .copied()
+        .zip(f.wavelengths_um.iter().copied())
+        .collect();
+    write_image_set(dir, stem, &f.stack, &spectral, description)?;
     Ok(())
 }

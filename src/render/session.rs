@@ -205,7 +205,7 @@ impl Session {
                     format!("`{}` is used twice: expected unique sensor names", s.name),
                 ));
             }
-            bands.push(sensor_bands(&s, &base, config.spectral_step_um)?);
+            bands.push(sensor_bands(&s, &base, config.spectral_step_um, &loc)?);
             sensors.push(s);
         }
         if sensors.is_empty() {

@@ -381,7 +381,7 @@ pub fn sensor_from_scene_file(
             .map_err(|e| Error::parse(loc.clone(), e.to_string()))?;
         let sensor = crate::sensor::Sensor::from_config(&c, &loc)?;
         let base = scene.parent().unwrap_or(Path::new("."));
-        let bands = super::sensor_bands(&sensor, base, config.spectral_step_um)?;
+        let bands = super::sensor_bands(&sensor, base, config.spectral_step_um, &loc)?;
         return Ok((sensor, bands));
     }
     Err(Error::parse(
