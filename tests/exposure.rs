@@ -1231,6 +1231,18 @@ fn solve_scene_from_a_scene_file() {
         );
     }
     assert!(seen.iter().all(|&n| n > 0), "{seen:?}");
+    // Per-facet layers at the image time for the render.
+    let (cos, bg) = (r.cos_incidence(0), r.background_temperature_k(0));
+    let up = r
+        .exposure
+        .facets
+        .normal
+        .iter()
+        .position(|n| n.z > 0.999)
+        .unwrap();
+    let sun_z = irsig::exposure::sun_directions(&scene.site, &[scene.time]).unwrap()[0].z;
+    assert!((cos[up] - sun_z).abs() < 1e-5);
+    assert!(bg.iter().all(|&b| b > air - 20.0 && b < 335.0));
     // Without weather, the error names the scene file and the field.
     std::fs::write(&path, text("")).unwrap();
     let scene = Scene::load(&path).unwrap();

@@ -15,7 +15,7 @@ use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::{Forcing, SlabProperties};
 use crate::trace::Tracer;
-use crate::weather::WeatherHistory;
+use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
 
 /// How each facet's temperature is obtained: the thermal side of a scene.
@@ -117,6 +117,8 @@ impl SceneThermalTimings {
 pub struct SceneThermal {
     /// Record times of the history.
     pub times: Vec<DateTime<FixedOffset>>,
+    /// The weather at each record time (interpolated).
+    pub records: Vec<WeatherRecord>,
     /// The image times, as given.
     pub image_times: Vec<DateTime<FixedOffset>>,
     /// Solar history, shape factors and background per facet.
@@ -141,6 +143,27 @@ impl SceneThermal {
         let r = self.temperatures.image_records[image];
         let s = &self.exposure.solar;
         (0..s.facet_count()).map(|f| s.sun_fraction(f)[r]).collect()
+    }
+    /// Cosine of the solar incidence angle of every facet at image time
+    /// `image` (0 at night or behind a single-sided facet).
+    pub fn cos_incidence(&self, image: usize) -> Vec<f32> {
+        let r = self.temperatures.image_records[image];
+        let s = &self.exposure.solar;
+        (0..s.facet_count())
+            .map(|f| s.cos_incidence(f)[r])
+            .collect()
+    }
+    /// Background temperature of every facet at image time `image`, K: the
+    /// radiative mean of the final temperatures of what its blocked
+    /// hemisphere rays hit, with the ground beyond the scene at the air
+    /// temperature ([`super::SkyView::background_temperature`]).
+    pub fn background_temperature_k(&self, image: usize) -> Vec<f32> {
+        let r = self.temperatures.image_records[image];
+        let air = self.records[r].air_temperature_k as f32;
+        let t = self.surface_temperature_k(image);
+        (0..t.len())
+            .map(|f| self.exposure.sky.background_temperature(f, t, air))
+            .collect()
     }
     /// Facets per second through the whole pipeline (rays + thermal).
     pub fn facets_per_second(&self) -> f64 {
@@ -218,6 +241,7 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
     let t3 = Instant::now();
     Ok(SceneThermal {
         times,
+        records,
         image_times: image_times.to_vec(),
         exposure,
         temperatures,
