@@ -1,1 +1,578 @@
-//! Tests: cli.
+//! Tests: cli. The malformed-input table (issue 8): each case feeds the real
+//! `irsig` binary a broken input and checks that it fails cleanly — exit
+//! status ≠ 0 and not killed by a signal, no panic — and that the message
+//! names the file (or option) and the line/field, and says what was
+//! expected.
+
+use std::process::Command;
+
+use crate::util::irsig_bin;
+
+/// One malformed input: files to write into a fresh directory, the
+/// arguments (`@` is replaced by that directory), and substrings the error
+/// message must contain (all of them).
+struct Case {
+    name: &'static str,
+    files: &'static [(&'static str, &'static [u8])],
+    args: &'static [&'static str],
+    expect: &'static [&'static str],
+}
+
+macro_rules! scene {
+    ($($t:tt)*) => { concat!(r#"{
+  "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4},
+  "time": "2025-06-21T14:00:00-04:00",
+  "materials": ["mats.json"],
+"#, $($t)*).as_bytes() };
+}
+
+/// A valid one-material database.
+const MATS: &[u8] = br#"{"materials": [
+  {"name": "slab", "id": 7, "density_kg_m3": 2300, "specific_heat_j_kg_k": 880,
+   "conductivity_w_m_k": 1.4, "thickness_m": 0.2, "solar_absorptivity": 0.7,
+   "thermal_emissivity": 0.92, "exposed_area": 0.0}
+]}
+"#;
+
+macro_rules! objects_box {
+    () => {
+        r#"  "objects": [{"name": "b", "shapes": [{"box": {"size": [1, 1, 1]}}], "material": "slab"}]
+}"#
+    };
+}
+
+macro_rules! weather_csv {
+    ($($t:tt)*) => { concat!("time,air_temperature_k,dew_point_k,pressure_pa,wind_speed_m_s,global_horizontal_w_m2\n", $($t)*).as_bytes() };
+}
+
+const GOOD_WEATHER: &[u8] = weather_csv!(
+    "2025-06-21T00:00:00-04:00,290,280,101325,2,0\n",
+    "2025-06-21T01:00:00-04:00,289,280,101325,2,0\n",
+    "2025-06-21T02:00:00-04:00,288,280,101325,2,0\n"
+);
+
+const CASES: &[Case] = &[
+    // ---- scene JSON
+    Case {
+        name: "scene: truncated JSON",
+        files: &[("scene.json", br#"{"site": {"latitude_deg": 43.1"#)],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "line 1", "EOF"],
+    },
+    Case {
+        name: "scene: binary garbage",
+        files: &[("scene.json", b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff\xfe")],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "UTF-8"],
+    },
+    Case {
+        name: "scene: latitude 95",
+        files: &[
+            ("mats.json", MATS),
+            (
+                "scene.json",
+                br#"{"site": {"latitude_deg": 95, "longitude_deg": 0, "altitude_m": 0, "utc_offset_hours": 0},
+ "time": "2025-06-21T14:00:00Z", "materials": ["mats.json"],
+ "objects": [{"name": "b", "shapes": [{"box": {"size": [1, 1, 1]}}], "material": "slab"}]}"#,
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "latitude", "95", "90"],
+    },
+    Case {
+        name: "scene: unknown material",
+        files: &[
+            ("mats.json", MATS),
+            (
+                "scene.json",
+                scene!(r#"  "objects": [{"name": "b", "shapes": [{"box": {"size": [1, 1, 1]}}], "material": "slabb"}]}"#),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "line 5", "objects[0].material", "slabb", "slab"],
+    },
+    Case {
+        name: "scene: missing geometry file",
+        files: &[
+            ("mats.json", MATS),
+            (
+                "scene.json",
+                scene!(r#"  "objects": [{"name": "b", "shapes": [{"obj": "geo/missing.obj"}], "material": "slab"}]}"#),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["missing.obj", "objects[0].shapes[0]"],
+    },
+    Case {
+        name: "scene: negative part thickness",
+        files: &[
+            ("mats.json", MATS),
+            (
+                "scene.json",
+                scene!(r#"  "objects": [{"name": "b", "shapes": [{"box": {"size": [1, 1, 1]}}], "material": "slab",
+    "parts": [{"name": "top", "material": "slab", "thickness_m": -0.1}]}]}"#),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "thickness_m", "-0.1", "> 0"],
+    },
+    Case {
+        name: "scene: unknown field",
+        files: &[
+            ("mats.json", MATS),
+            ("scene.json", scene!(r#"  "objcts": []}"#)),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "line 5", "objcts", "expected one of"],
+    },
+    Case {
+        name: "scene: missing material database",
+        files: &[("scene.json", scene!(r#"  "objects": []}"#))],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "line 4", "materials[0]", "mats.json", "not found"],
+    },
+    Case {
+        name: "scene: bad OBJ index",
+        files: &[
+            ("mats.json", MATS),
+            ("g.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"),
+            (
+                "scene.json",
+                scene!(r#"  "objects": [{"name": "b", "shapes": [{"obj": "g.obj"}], "material": "slab"}]}"#),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["g.obj", "line 4", "index 9", "have 3"],
+    },
+    Case {
+        name: "scene: OBJ vertex not a number",
+        files: &[
+            ("mats.json", MATS),
+            ("g.obj", b"v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"),
+            (
+                "scene.json",
+                scene!(r#"  "objects": [{"name": "b", "shapes": [{"obj": "g.obj"}], "material": "slab"}]}"#),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["g.obj", "line 2", "zero"],
+    },
+    Case {
+        name: "scene: box with NaN size",
+        files: &[
+            ("mats.json", MATS),
+            (
+                "scene.json",
+                scene!(r#"  "objects": [{"name": "b", "shapes": [{"box": {"size": [1, NaN, 1]}}], "material": "slab"}]}"#),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "line 5"],
+    },
+    Case {
+        name: "scene: time outside the weather history",
+        files: &[
+            ("mats.json", MATS),
+            ("w.csv", GOOD_WEATHER),
+            (
+                "scene.json",
+                scene!(r#"  "weather": {"file": "w.csv"},
+"#, objects_box!()),
+            ),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["scene.json", "weather.file", "2025-06-21T14:00:00-04:00", "2025-06-21T02:00:00-04:00"],
+    },
+    // ---- material databases
+    Case {
+        name: "materials: emissivity > 1",
+        files: &[
+            (
+                "mats.json",
+                br#"{"materials": [
+  {"name": "slab", "id": 7, "density_kg_m3": 2300, "specific_heat_j_kg_k": 880,
+   "conductivity_w_m_k": 1.4, "thickness_m": 0.2, "solar_absorptivity": 0.7,
+   "thermal_emissivity": 1.2, "exposed_area": 0.0}]}"#,
+            ),
+            ("scene.json", scene!(objects_box!())),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["mats.json", "line 4", "thermal_emissivity", "1.2", "0..=1"],
+    },
+    Case {
+        name: "materials: negative thickness",
+        files: &[
+            (
+                "mats.json",
+                br#"{"materials": [
+  {"name": "slab", "id": 7, "density_kg_m3": 2300, "specific_heat_j_kg_k": 880,
+   "conductivity_w_m_k": 1.4, "thickness_m": -0.2, "solar_absorptivity": 0.7,
+   "thermal_emissivity": 0.9, "exposed_area": 0.0}]}"#,
+            ),
+            ("scene.json", scene!(objects_box!())),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["mats.json", "line 3", "thickness_m", "-0.2", "> 0"],
+    },
+    Case {
+        name: "materials: number where a string is expected",
+        files: &[
+            ("mats.json", br#"{"materials": [{"name": 12}]}"#),
+            ("scene.json", scene!(objects_box!())),
+        ],
+        args: &["scene", "check", "@/scene.json"],
+        expect: &["mats.json", "line 1", "expected a string"],
+    },
+    Case {
+        name: "thermal: DIRSIG .mat with an unclosed block",
+        files: &[
+            ("w.csv", GOOD_WEATHER),
+            ("m.mat", b"MATERIAL_ENTRY {\n    ID = 1\n    NAME = Grass\n"),
+        ],
+        args: &[
+            "thermal", "--material", "@/m.mat", "--weather", "@/w.csv", "--site", "43,-77,0",
+            "--time", "2025-06-21T02:00:00-04:00",
+        ],
+        expect: &["m.mat", "line", "}"],
+    },
+    Case {
+        name: "thermal: DIRSIG .ems with a bad count",
+        files: &[
+            ("w.csv", GOOD_WEATHER),
+            ("e.ems", b"three\n1.0\n"),
+            (
+                "m.mat",
+                b"MATERIAL_ENTRY {\n  ID = 1\n  NAME = Grass\n  TEMP_SOLVER_NAME = Therm\n  TEMP_SOLVER {\n    SPECIFIC_HEAT = 0.4\n    MASS_DENSITY = 1.6\n    THERMAL_CONDUCTIVITY = 1.2\n    SOLAR_ABSORPTION = 0.7\n    THERMAL_EMISSIVITY = 0.9\n    EXPOSED_AREA = 0\n    THICKNESS = 5\n  }\n  SURFACE_PROPERTIES {\n    EMISSIVITY_PROP_NAME = ClassicEmissivity\n    EMISSIVITY_PROP {\n      FILENAME = e.ems\n    }\n  }\n}\n",
+            ),
+        ],
+        args: &[
+            "thermal", "--material", "@/m.mat", "--weather", "@/w.csv", "--site", "43,-77,0",
+            "--time", "2025-06-21T02:00:00-04:00",
+        ],
+        expect: &["e.ems", "line 1", "three"],
+    },
+    // ---- weather
+    Case {
+        name: "weather: empty file",
+        files: &[("w.csv", b"")],
+        args: &["weather", "show", "@/w.csv"],
+        expect: &["w.csv", "expected"],
+    },
+    Case {
+        name: "weather: NaN in a row",
+        files: &[(
+            "w.csv",
+            weather_csv!(
+                "2025-06-21T00:00:00-04:00,290,280,101325,2,0\n",
+                "2025-06-21T01:00:00-04:00,NaN,280,101325,2,0\n"
+            ),
+        )],
+        args: &["weather", "show", "@/w.csv"],
+        expect: &["w.csv", "line 3", "air_temperature_k", "NaN"],
+    },
+    Case {
+        name: "weather: times out of order",
+        files: &[(
+            "w.csv",
+            weather_csv!(
+                "2025-06-21T01:00:00-04:00,290,280,101325,2,0\n",
+                "2025-06-21T00:00:00-04:00,290,280,101325,2,0\n"
+            ),
+        )],
+        args: &["weather", "show", "@/w.csv"],
+        expect: &["w.csv", "line 3", "time", "increasing"],
+    },
+    Case {
+        name: "weather: short row",
+        files: &[(
+            "w.csv",
+            weather_csv!(
+                "2025-06-21T00:00:00-04:00,290,280,101325,2,0\n",
+                "2025-06-21T01:00:00-04:00,290,280\n"
+            ),
+        )],
+        args: &["weather", "show", "@/w.csv"],
+        expect: &["w.csv", "line 3", "6"],
+    },
+    Case {
+        name: "weather: binary garbage",
+        files: &[("w.bin", b"\x00\x01\x02\xff\xfe garbage \x00")],
+        args: &["weather", "show", "@/w.bin"],
+        expect: &["w.bin", "UTF-8"],
+    },
+    Case {
+        name: "weather: unrecognised format",
+        files: &[("w.txt", b"hello world\nthis is not weather\n")],
+        args: &["weather", "show", "@/w.txt"],
+        expect: &["w.txt", "line 1", "expected irsig CSV"],
+    },
+    Case {
+        name: "weather: .wth without a start date",
+        files: &[(
+            "w.wth",
+            b"2 1.0\n0.00 15.00 1000.00  0.68 10.00   5.00     0.00     0.00 1.00  0  0   0.00  0.00\n1.00 15.00 1000.00  0.68 10.00   5.00     0.00     0.00 1.00  0  0   0.00  0.00\n",
+        )],
+        args: &["weather", "show", "@/w.wth"],
+        expect: &["w.wth", "--start"],
+    },
+    Case {
+        name: "weather: .wth row with a letter",
+        files: &[(
+            "w.wth",
+            b"2 1.0\n0.00 15.00 1000.00  0.68 10.00   5.00     0.00     0.00 1.00  0  0   0.00  0.00\n1.00 15.00 1000.00  0.6x 10.00   5.00     0.00     0.00 1.00  0  0   0.00  0.00\n",
+        )],
+        args: &["weather", "show", "@/w.wth", "--start", "2025-06-21T00:00:00-04:00"],
+        expect: &["w.wth", "line 3"],
+    },
+    Case {
+        name: "weather: truncated EPW",
+        files: &[("w.epw", b"LOCATION,Rochester,NY,USA,TMY3,725290,43.12,-77.67,-5.0,169.0\nDESIGN CONDITIONS,0\n")],
+        args: &["weather", "show", "@/w.epw"],
+        expect: &["w.epw", "line"],
+    },
+    // ---- thermal
+    Case {
+        name: "thermal: unknown material",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slabb", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00",
+        ],
+        expect: &["slabb", "mats.json", "slab"],
+    },
+    Case {
+        name: "thermal: time outside the weather history",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-22T12:00:00-04:00",
+        ],
+        expect: &["w.csv", "--time", "2025-06-22T12:00:00-04:00"],
+    },
+    Case {
+        name: "thermal: site latitude 95",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "95,-77,0", "--time", "2025-06-21T02:00:00-04:00",
+        ],
+        expect: &["latitude", "95", "90"],
+    },
+    Case {
+        name: "thermal: unknown --back",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00", "--back",
+            "floating",
+        ],
+        expect: &["--back", "floating", "insulated"],
+    },
+    Case {
+        name: "thermal: missing weather file",
+        files: &[("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/nowhere.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00",
+        ],
+        expect: &["nowhere.csv", "No such file"],
+    },
+    // ---- sun
+    Case {
+        name: "sun: latitude 95",
+        files: &[],
+        args: &["sun", "--lat", "95", "--lon", "0", "--time", "2025-06-21T12:00:00Z"],
+        expect: &["lat", "95", "90"],
+    },
+    Case {
+        name: "sun: longitude 200",
+        files: &[],
+        args: &["sun", "--lat", "43", "--lon", "200", "--time", "2025-06-21T12:00:00Z"],
+        expect: &["lon", "200", "180"],
+    },
+    Case {
+        name: "sun: time without an offset",
+        files: &[],
+        args: &["sun", "--lat", "43", "--lon", "-77", "--time", "2025-06-21 12:00"],
+        expect: &["--time", "RFC 3339"],
+    },
+    // ---- radiance and response CSV
+    Case {
+        name: "radiance: response wavelengths decreasing",
+        files: &[("r.csv", b"wavelength_um,response\n8,0\n9,1\n8.5,1\n14,0\n")],
+        args: &["radiance", "--temperature", "300", "--response", "@/r.csv"],
+        expect: &["r.csv", "line 4", "wavelength_um", "increase"],
+    },
+    Case {
+        name: "radiance: response value not a number",
+        files: &[("r.csv", b"wavelength_um,response\n8,0\n9,one\n14,0\n")],
+        args: &["radiance", "--temperature", "300", "--response", "@/r.csv"],
+        expect: &["r.csv", "line 3", "one"],
+    },
+    Case {
+        name: "radiance: negative response",
+        files: &[("r.csv", b"8,0\n9,-1\n14,0\n")],
+        args: &["radiance", "--temperature", "300", "--response", "@/r.csv"],
+        expect: &["r.csv", "line 2", "-1"],
+    },
+    Case {
+        name: "radiance: inverted band",
+        files: &[],
+        args: &["radiance", "--temperature", "300", "--band", "14-8"],
+        expect: &["--band", "14-8"],
+    },
+    Case {
+        name: "radiance: unknown CODATA year",
+        files: &[],
+        args: &["radiance", "--temperature", "300", "--codata", "1999"],
+        expect: &["--codata", "1999", "2018"],
+    },
+    Case {
+        name: "radiance: negative temperature",
+        files: &[],
+        args: &["radiance", "--temperature", "-5"],
+        expect: &["--temperature", "-5"],
+    },
+    // ---- images
+    Case {
+        name: "info: binary garbage .exr",
+        files: &[("i.exr", b"\x76\x2f\x31\x01\x02\x00\x00\x00garbage")],
+        args: &["info", "@/i.exr"],
+        expect: &["i.exr"],
+    },
+    Case {
+        name: "info: ENVI header missing fields",
+        files: &[("i.hdr", b"ENVI\nsamples = 4\n"), ("i.img", b"\0\0\0\0")],
+        args: &["info", "@/i.hdr"],
+        expect: &["i.hdr", "lines"],
+    },
+    Case {
+        name: "info: unknown extension",
+        files: &[("i.jpg", b"\xff\xd8\xff")],
+        args: &["info", "@/i.jpg"],
+        expect: &["i.jpg", ".exr"],
+    },
+    Case {
+        name: "compare: truth image is garbage",
+        files: &[("a.exr", b"not an exr"), ("b.exr", b"not an exr")],
+        args: &["compare", "@/a.exr", "@/b.exr"],
+        expect: &["a.exr"],
+    },
+    // ---- command line values
+    Case {
+        name: "cli: unknown subcommand value",
+        files: &[],
+        args: &["scene", "frobnicate"],
+        expect: &["frobnicate"],
+    },
+    Case {
+        name: "cli: --threads 0",
+        files: &[],
+        args: &["--threads", "0", "sun", "--lat", "43", "--lon", "-77", "--time", "2025-06-21T12:00:00Z"],
+        expect: &["--threads", "1"],
+    },
+];
+
+/// Run one case; returns a description of what went wrong, if anything.
+fn run_case(case: &Case) -> Option<String> {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in case.files {
+        let p = dir.path().join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, bytes).unwrap();
+    }
+    let d = dir.path().to_str().unwrap();
+    let args: Vec<String> = case.args.iter().map(|a| a.replace('@', d)).collect();
+    let out = Command::new(irsig_bin())
+        .args(&args)
+        .current_dir(dir.path())
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let mut problems = Vec::new();
+    match out.status.code() {
+        None => problems.push(format!("killed by a signal ({:?})", out.status)),
+        Some(0) => problems.push("exit status 0".to_string()),
+        Some(_) => {}
+    }
+    if stderr.contains("panicked") {
+        problems.push("panicked".to_string());
+    }
+    for e in case.expect {
+        if !stderr.contains(e) {
+            problems.push(format!("message lacks `{e}`"));
+        }
+    }
+    if problems.is_empty() {
+        None
+    } else {
+        Some(format!(
+            "{}: {}\n    irsig {}\n    stderr: {}",
+            case.name,
+            problems.join(", "),
+            case.args.join(" "),
+            stderr.trim().replace('\n', "\n            ")
+        ))
+    }
+}
+
+#[test]
+fn malformed_input_table() {
+    assert!(CASES.len() >= 30, "the table needs at least 30 cases");
+    let failures: Vec<String> = CASES.iter().filter_map(run_case).collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} malformed-input cases failed:\n{}",
+        failures.len(),
+        CASES.len(),
+        failures.join("\n")
+    );
+}
+
+/// The table's fixtures are themselves valid where meant to be: the good
+/// weather file and material database pass `irsig thermal`, so each case
+/// fails for its own defect.
+#[test]
+fn malformed_input_table_baseline_is_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("w.csv"), GOOD_WEATHER).unwrap();
+    std::fs::write(dir.path().join("mats.json"), MATS).unwrap();
+    let out = Command::new(irsig_bin())
+        .current_dir(dir.path())
+        .args([
+            "thermal",
+            "--material",
+            "slab",
+            "--materials",
+            "mats.json",
+            "--weather",
+            "w.csv",
+            "--site",
+            "43,-77,0",
+            "--time",
+            "2025-06-21T02:00:00-04:00",
+            "--csv",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(s.lines().count(), 4, "{s}");
+    // And the scene skeleton passes `irsig scene check`.
+    std::fs::write(dir.path().join("scene.json"), scene!(objects_box!())).unwrap();
+    let out = Command::new(irsig_bin())
+        .current_dir(dir.path())
+        .args(["scene", "check", "scene.json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -5,7 +5,8 @@
 //! (or a rerun after a crash) sees either the old file, or the complete new
 //! one — never a truncated one. If the writer fails, or the process is killed
 //! part-way, nothing appears under the final name; the temporary file
-//! (`.NAME.XXXXXX.tmp`) is removed on error and on drop.
+//! (`.NAME.XXXXXX.tmp`) is removed on error and on drop. Files are created
+//! with mode 0666 minus the process umask, as `File::create` would.
 
 use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
@@ -39,11 +40,17 @@ impl AtomicFile {
             })?
             .to_string_lossy()
             .into_owned();
-        let tmp = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".tmp")
-            .tempfile_in(&dir)
-            .map_err(|e| Error::io(&path, e))?;
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        // The final file gets the permissions of any newly created file
+        // (0666 minus the umask, usually 0644), not tempfile's private 0600.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = builder.tempfile_in(&dir).map_err(|e| Error::io(&path, e))?;
         Ok(AtomicFile {
             path,
             writer: BufWriter::with_capacity(1 << 20, tmp),

@@ -1,0 +1,251 @@
+//! Tests: fuzz smoke. Every cargo-fuzz target's function (`fuzz/harness.rs`)
+//! runs on stable Rust over its seed corpus and a fixed set of seeded,
+//! deterministic mutations of it (byte flips, truncations, splices, numbers
+//! replaced by NaN/inf/huge/negative values, lines duplicated or dropped).
+//! The long coverage-guided runs are `scripts/fuzz` (cargo-fuzz); this keeps
+//! every reader's "never panic, always name the file" contract under
+//! `cargo test` on every machine.
+
+#[path = "../fuzz/harness.rs"]
+mod harness;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::util::repo_path;
+
+/// Values that break naive number handling.
+const NASTY: &[&str] = &[
+    "NaN",
+    "nan",
+    "inf",
+    "-inf",
+    "1e309",
+    "-1e309",
+    "-1",
+    "0",
+    "-0",
+    "1e-320",
+    "4294967296",
+    "18446744073709551616",
+    "-2147483649",
+    "999999999",
+    "",
+    " ",
+    "\"\"",
+    "null",
+    "[]",
+    "{}",
+    "1.5",
+    "0x10",
+    "9.",
+    ".",
+    "-",
+    "e5",
+];
+
+/// One random mutation of `input`.
+fn mutate(rng: &mut ChaCha8Rng, input: &[u8]) -> Vec<u8> {
+    let mut v = input.to_vec();
+    let n = v.len();
+    match rng.random_range(0..9) {
+        // Truncate.
+        0 if n > 0 => v.truncate(rng.random_range(0..n)),
+        // Flip a few bytes.
+        1 if n > 0 => {
+            for _ in 0..rng.random_range(1..4) {
+                let i = rng.random_range(0..n);
+                v[i] = rng.random();
+            }
+        }
+        // Delete a range.
+        2 if n > 0 => {
+            let a = rng.random_range(0..n);
+            let b = (a + rng.random_range(1..64)).min(n);
+            v.drain(a..b);
+        }
+        // Duplicate a range elsewhere.
+        3 if n > 0 => {
+            let a = rng.random_range(0..n);
+            let b = (a + rng.random_range(1..128)).min(n);
+            let chunk = v[a..b].to_vec();
+            let at = rng.random_range(0..=v.len());
+            v.splice(at..at, chunk);
+        }
+        // Replace a number-like token with a nasty value.
+        4 | 5 => {
+            let starts: Vec<usize> = (0..n)
+                .filter(|&i| v[i].is_ascii_digit() && (i == 0 || !v[i - 1].is_ascii_alphanumeric()))
+                .collect();
+            if !starts.is_empty() {
+                let a = starts[rng.random_range(0..starts.len())];
+                let mut b = a;
+                while b < n && (v[b].is_ascii_digit() || matches!(v[b], b'.' | b'e' | b'-')) {
+                    b += 1;
+                }
+                let s = NASTY[rng.random_range(0..NASTY.len())];
+                v.splice(a..b, s.bytes());
+            }
+        }
+        // Drop or duplicate a whole line.
+        6 => {
+            let lines: Vec<&[u8]> = input.split(|&c| c == b'\n').collect();
+            if lines.len() > 1 {
+                let i = rng.random_range(0..lines.len());
+                let mut out: Vec<&[u8]> = lines.clone();
+                if rng.random() {
+                    out.remove(i);
+                } else {
+                    out.insert(i, lines[i]);
+                }
+                v = out.join(&b'\n');
+            }
+        }
+        // Insert random bytes (binary garbage, NUL, invalid UTF-8).
+        7 => {
+            let at = rng.random_range(0..=n);
+            let k = rng.random_range(1..16);
+            let junk: Vec<u8> = (0..k).map(|_| rng.random()).collect();
+            v.splice(at..at, junk);
+        }
+        // Swap two characters' case / separators.
+        _ => {
+            if n > 0 {
+                let i = rng.random_range(0..n);
+                v[i] = match v[i] {
+                    b',' => b';',
+                    b' ' => b'\t',
+                    b'\n' => b'\r',
+                    c if c.is_ascii_alphabetic() => c ^ 0x20,
+                    _ => b',',
+                };
+            }
+        }
+    }
+    v
+}
+
+/// Mutations per target and seed (a few thousand per target in all);
+/// `IRSIG_FUZZ_SMOKE_N` overrides.
+fn mutations_per_seed(target: &str) -> usize {
+    if let Some(n) = std::env::var("IRSIG_FUZZ_SMOKE_N")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        return n;
+    }
+    match target {
+        // Loads materials and builds geometry: slower per input.
+        "scene_json" => 400,
+        // Large real tape7 files: fewer per seed.
+        "tape7" => 200,
+        _ => 600,
+    }
+}
+
+fn run_target(name: &str) {
+    let f = harness::TARGETS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .expect("target")
+        .1;
+    let seeds = harness::seeds(name, &repo_path(""));
+    if seeds.is_empty() {
+        eprintln!("notice: no seed files for {name} (../shared/data absent); skipping");
+        return;
+    }
+    // Seed-derived but stable stream: the same mutations on every run.
+    let mut rng = ChaCha8Rng::seed_from_u64(name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    }));
+    let per_seed = mutations_per_seed(name);
+    let (mut accepted, mut rejected) = (0usize, 0usize);
+    for (k, seed) in seeds.iter().enumerate() {
+        // The seeds are valid inputs: the reader must accept them.
+        assert!(f(seed), "{name}: seed {k} rejected");
+        let mut cur = seed.clone();
+        for i in 0..per_seed {
+            let m = mutate(&mut rng, &cur);
+            match std::panic::catch_unwind(|| f(&m)) {
+                Ok(true) => accepted += 1,
+                Ok(false) => rejected += 1,
+                Err(_) => {
+                    let dump =
+                        std::env::temp_dir().join(format!("irsig-fuzz-smoke-{name}-{k}-{i}"));
+                    let _ = std::fs::write(&dump, &m);
+                    panic!("{name}: input written to {} panicked", dump.display());
+                }
+            }
+            // Stack mutations a little, restarting from the seed regularly.
+            cur = if i % 4 == 3 { seed.clone() } else { m };
+            if cur.len() > 200_000 {
+                cur = seed.clone();
+            }
+        }
+    }
+    // The mutations reach both the accepting and the rejecting paths (a
+    // reader that rejects everything, or nothing, would not be tested).
+    eprintln!("{name}: {accepted} mutants accepted, {rejected} rejected");
+    assert!(
+        accepted > 0 && rejected > 0,
+        "{name}: {accepted} accepted, {rejected} rejected"
+    );
+}
+
+#[test]
+fn fuzz_smoke_scene_json() {
+    run_target("scene_json");
+}
+#[test]
+fn fuzz_smoke_obj() {
+    run_target("obj");
+}
+#[test]
+fn fuzz_smoke_material_json() {
+    run_target("material_json");
+}
+#[test]
+fn fuzz_smoke_dirsig_mat() {
+    run_target("dirsig_mat");
+}
+#[test]
+fn fuzz_smoke_dirsig_ems() {
+    run_target("dirsig_ems");
+}
+#[test]
+fn fuzz_smoke_weather() {
+    run_target("weather");
+}
+#[test]
+fn fuzz_smoke_tape7() {
+    run_target("tape7");
+}
+#[test]
+fn fuzz_smoke_response_csv() {
+    run_target("response_csv");
+}
+#[test]
+fn fuzz_smoke_params() {
+    run_target("params");
+}
+#[test]
+fn fuzz_smoke_points() {
+    run_target("points");
+}
+
+/// Tool, not a check: writes every target's seeds to
+/// `$IRSIG_FUZZ_WRITE_SEEDS/<target>/seed-N` for `scripts/fuzz`.
+#[test]
+#[ignore = "tool for scripts/fuzz: set IRSIG_FUZZ_WRITE_SEEDS"]
+fn write_seed_corpora() {
+    let Some(root) = std::env::var_os("IRSIG_FUZZ_WRITE_SEEDS") else {
+        return;
+    };
+    for (name, _) in harness::TARGETS {
+        let dir = std::path::Path::new(&root).join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        for (i, s) in harness::seeds(name, &repo_path("")).iter().enumerate() {
+            std::fs::write(dir.join(format!("seed-{i}")), s).unwrap();
+        }
+    }
+}
