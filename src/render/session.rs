@@ -12,7 +12,6 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use chrono::{DateTime, FixedOffset, TimeDelta};
-use glam::Vec3;
 use serde::Deserialize;
 
 use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
@@ -301,7 +300,7 @@ impl Session {
     /// computation and one thermal spin-up for the whole series).
     pub fn thermal(&mut self, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
         let t0 = Instant::now();
-        let states = standin_thermal(self, times)?;
+        let states = scene_thermal(self, times)?;
         self.timings.thermal += t0.elapsed();
         Ok(states)
     }
@@ -610,89 +609,56 @@ fn parse_duration(s: &str) -> Result<TimeDelta> {
     Ok(TimeDelta::milliseconds((secs * 1000.0).round() as i64))
 }
 
-/// STAND-IN for the scene-wide thermal solve (src/exposure, being landed):
-/// ray-traced sun fraction, incidence and shape factor at each image time,
-/// and a quasi-steady surface energy balance per facet (no heat storage):
-/// `α(E_b f cos σ + E_d F) + ε(F E_sky + (1−F) σ T_air⁴) + h (T_air − T) + q
-///  = ε σ T⁴`, `h` from McAdams. Fixed-temperature parts keep their value.
-fn standin_thermal(session: &Session, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
-    use crate::exposure::{ExposureParams, compute_exposure};
+/// The thermal state at each image time from the scene-wide solve
+/// ([`crate::exposure::solve_scene`]: per-facet solar history and sky view
+/// traced once, the two-pass slab model spun up over the history window
+/// covering all times), plus what the shading needs at each time: the
+/// sun's incidence, the background temperatures, the sky and the sun.
+fn scene_thermal(session: &Session, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
+    use crate::exposure::{SceneThermalParams, solve_scene};
     let scene = &session.scene;
-    let sigma = crate::radiometry::Constants::CODATA_2018.stefan_boltzmann_w_m2_k4();
-    let mut sun_dirs = Vec::new();
-    let mut records = Vec::new();
-    for t in times {
-        let rec = session.weather.at(*t)?;
-        let sp = session.weather.sun_position(*t)?;
-        let d = sp.direction_enu().as_vec3().normalize();
-        sun_dirs.push(if d.is_finite() { d } else { Vec3::NEG_Z });
-        records.push(rec);
-    }
-    let params = ExposureParams {
-        samples_per_edge: session.config.facet_samples,
-        ..ExposureParams::default()
-    };
-    let double: Vec<bool> = session
-        .optics
-        .facet_material
-        .iter()
-        .map(|&m| session.optics.materials[m as usize].double_sided)
-        .collect();
-    let exposure = compute_exposure(
-        session.tracer.as_ref(),
-        &scene.geometry,
-        &double,
-        &sun_dirs,
-        &params,
-    )?;
-    let parts = &scene.parts;
+    let mut params = SceneThermalParams::default();
+    params.exposure.samples_per_edge = session.config.facet_samples;
+    let solved = solve_scene(session.tracer.as_ref(), scene, times, &params)?;
     let n = scene.geometry.facet_count();
+    let shape = solved.shape_factor().to_vec();
     let mut conditions = Vec::new();
-    for (ti, rec) in records.iter().enumerate() {
+    let mut records = Vec::new();
+    for (ti, time) in times.iter().enumerate() {
+        let rec = session.weather.at(*time)?;
         let t_air = rec.air_temperature_k;
-        let h = crate::thermal::mcadams_h_w_m2_k(rec.wind_speed_m_s);
-        let mut surface = SurfaceState::uniform(n, t_air as f32);
-        for f in 0..n {
-            let p = &parts[session.optics.facet_material[f] as usize];
-            let m = &session.optics.materials[session.optics.facet_material[f] as usize];
-            let big_f = p
-                .shape_factor
-                .map(|v| v as f32)
-                .unwrap_or(exposure.sky.shape_factor[f]);
-            let sun_f = exposure.solar.sun_fraction(f)[ti];
-            let cos = exposure.solar.cos_incidence(f)[ti].max(0.0);
-            surface.shape_factor[f] = big_f;
-            surface.sun_fraction[f] = sun_f;
-            surface.cos_sun[f] = cos;
-            let t = match p.fixed_temperature_k {
-                Some(t) => t,
-                None => {
-                    let (eps, alpha) = (m.thermal_emissivity, m.solar_absorptivity);
-                    let fb = big_f as f64;
-                    let gain = alpha
-                        * (rec.direct_normal_w_m2 * (sun_f * cos) as f64
-                            + rec.diffuse_horizontal_w_m2 * fb)
-                        + eps * (fb * rec.sky_longwave_w_m2 + (1.0 - fb) * sigma * t_air.powi(4))
-                        + h * t_air
-                        + m.self_power_w_m2;
-                    // Newton on g(T) = eps σ T⁴ + h T − gain.
-                    let mut t = t_air;
-                    for _ in 0..30 {
-                        let g = eps * sigma * t.powi(4) + h * t - gain;
-                        let dg = 4.0 * eps * sigma * t.powi(3) + h;
-                        t -= g / dg;
-                    }
-                    t
-                }
-            };
-            surface.temperature_k[f] = t as f32;
+        let record = solved.temperatures.image_records[ti];
+        let temps = solved.surface_temperature_k(ti).to_vec();
+        let sun_fraction = solved.sun_fraction(ti);
+        let solar = &solved.exposure.solar;
+        let cos_sun: Vec<f32> = (0..n)
+            .map(|f| solar.cos_incidence(f)[record].max(0.0))
+            .collect();
+        let background_k: Vec<f32> = (0..n)
+            .map(|f| {
+                solved
+                    .exposure
+                    .sky
+                    .background_temperature(f, &temps, t_air as f32)
+            })
+            .collect();
+        let mut shape_factor = shape.clone();
+        for (f, sf) in shape_factor.iter_mut().enumerate() {
+            if let Some(v) = scene.parts[session.optics.facet_material[f] as usize].shape_factor {
+                *sf = v as f32;
+            }
         }
-        let temps = surface.temperature_k.clone();
-        for f in 0..n {
-            surface.background_k[f] = exposure.sky.background_temperature(f, &temps, t_air as f32);
-        }
-        let sun = (sun_dirs[ti].z > 0.0).then_some(SunInput {
-            direction: sun_dirs[ti],
+        let surface = SurfaceState {
+            temperature_k: temps,
+            shape_factor,
+            sun_fraction,
+            cos_sun,
+            background_k,
+        };
+        let sp = session.weather.sun_position(*time)?;
+        let d = sp.direction_enu().as_vec3().normalize_or_zero();
+        let sun = (d.z > 0.0).then_some(SunInput {
+            direction: d,
             direct_normal_w_m2: rec.direct_normal_w_m2,
         });
         let sky = match session.config.sky_temperature_k {
@@ -707,8 +673,9 @@ fn standin_thermal(session: &Session, times: &[DateTime<FixedOffset>]) -> Result
             sky,
             sun,
             ground_temperature_k: t_air,
-            atmosphere: session.atmosphere_at(rec)?,
+            atmosphere: session.atmosphere_at(&rec)?,
         });
+        records.push(rec);
     }
     Ok(ThermalStates {
         times: times.to_vec(),
