@@ -7,18 +7,24 @@
 //! Run: `cargo run --release --example exposure_bench -- [SCENE.json | TRIANGLES] [BACKEND] [SKY]`
 //! (defaults scenes/town/scene.json, embree, dirsig; SKY = dirsig |
 //! grid:DZxDA | stratified:N).
+//!
+//! With `IRSIG_BENCH_COMPARE=1` (scene files only) the thermal passes are
+//! solved again with the fine dedup quanta ([`Dedup::fine`]) and
+//! `SolveOptions::default()` as reference, and with other options, and the RMS and max
+//! difference of the image-time surface temperatures from the reference
+//! are printed.
 
 use std::path::Path;
 use std::time::Instant;
 
 use chrono::DateTime;
 use irsig::exposure::{
-    FacetThermal, FacetThermalSetup, SceneThermalParams, SkySampling, solve_scene,
-    solve_scene_temperatures,
+    Dedup, FacetThermal, FacetThermalSetup, SceneThermalParams, SkySampling, ThermalParams,
+    solve_facet_temperatures, solve_scene, solve_scene_temperatures,
 };
 use irsig::geometry::procedural::{TerrainParams, generate};
 use irsig::scene::Scene;
-use irsig::thermal::{BackBoundary, SlabProperties};
+use irsig::thermal::{BackBoundary, Forcing, SlabProperties, SolveOptions};
 use irsig::trace::{self, Backend};
 
 fn main() -> anyhow::Result<()> {
@@ -40,6 +46,7 @@ fn main() -> anyhow::Result<()> {
     };
 
     let t0 = Instant::now();
+    let mut setup_for_compare = None;
     let (geo, r, tracer_name, build) = if what.ends_with(".json") {
         let scene = Scene::load(Path::new(what))?;
         let load = t0.elapsed();
@@ -48,6 +55,7 @@ fn main() -> anyhow::Result<()> {
         let build = t1.elapsed();
         println!("scene {what} loaded in {:.2} s", load.as_secs_f64());
         let r = solve_scene(&*tracer, &scene, &[], &params)?;
+        setup_for_compare = Some(FacetThermalSetup::from_scene(&scene)?);
         (scene.geometry, r, tracer.name().to_string(), build)
     } else {
         let geo = generate(&TerrainParams::with_triangles(what.parse()?, 7));
@@ -143,5 +151,65 @@ fn main() -> anyhow::Result<()> {
         "surface temperatures at {}: {lo:.1} – {hi:.1} K",
         r.image_times[0].to_rfc3339()
     );
+    if std::env::var_os("IRSIG_BENCH_COMPARE").is_some()
+        && let Some(setup) = setup_for_compare
+    {
+        compare(&r, &setup)?;
+    }
+    Ok(())
+}
+
+/// Re-solves the thermal passes of `r` with the fine quanta (reference) and
+/// with the fast slab options, and prints their time and the difference of
+/// the image-time temperatures.
+fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyhow::Result<()> {
+    let forcing = Forcing::from_records(&r.records)?;
+    let images = &r.temperatures.image_records;
+    let solve = |p: &ThermalParams| {
+        let t = Instant::now();
+        let s =
+            solve_facet_temperatures(&r.exposure, &setup.kinds, &setup.props, &forcing, images, p)?;
+        anyhow::Ok((s, t.elapsed().as_secs_f64()))
+    };
+    let fine = ThermalParams {
+        dedup: Some(Dedup::fine()),
+        options: SolveOptions::default(),
+        ..Default::default()
+    };
+    let (reference, t_ref) = solve(&fine)?;
+    let report = |name: &str, s: &irsig::exposure::SceneTemperatures, secs: f64| {
+        let (a, b) = (
+            &s.surface_temperature_k[0],
+            &reference.surface_temperature_k[0],
+        );
+        let n = a.len() as f64;
+        let (sq, max) = a.iter().zip(b).fold((0.0f64, 0.0f64), |(sq, m), (x, y)| {
+            let d = (x - y).abs() as f64;
+            (sq + d * d, m.max(d))
+        });
+        let classes: Vec<usize> = s.passes.iter().map(|p| p.classes).collect();
+        println!(
+            "{name}: thermal {secs:.2} s, classes per pass {classes:?}; vs fine: RMS {:.3} K, max {max:.3} K",
+            (sq / n).sqrt()
+        );
+    };
+    report("fine quanta (reference)", &reference, t_ref);
+    report(
+        "default quanta",
+        &r.temperatures,
+        r.timings.thermal.as_secs_f64(),
+    );
+    let slow = ThermalParams {
+        options: SolveOptions::default(),
+        ..Default::default()
+    };
+    let (s, t) = solve(&slow)?;
+    report("default quanta + SolveOptions::default()", &s, t);
+    let fast0 = ThermalParams {
+        options: SolveOptions::fast(),
+        ..Default::default()
+    };
+    let (s, t) = solve(&fast0)?;
+    report("default quanta + fast options, no spin-up", &s, t);
     Ok(())
 }
