@@ -830,3 +830,47 @@ fn slurm_script_submits_a_tile_array_and_a_dependent_merge() {
     );
     assert!(lines[1].contains(" merge "), "{}", lines[1]);
 }
+
+#[test]
+fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 16, 12, 2);
+    let out = irsig(&["bench", "render", s(&scene), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["sensor"], "cam");
+    assert_eq!(r["backend"], "embree");
+    // Every pixel's N² sub-pixel rays, and the bare trace traced the same number.
+    assert_eq!(r["primary_rays"], 16 * 12 * 4);
+    let num = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
+    let stages = [
+        "load_s",
+        "bvh_build_s",
+        "rays_thermal_s",
+        "ray_generation_s",
+        "primary_trace_s",
+        "radiometry_s",
+        "sensor_s",
+        "output_s",
+    ];
+    for k in stages {
+        assert!(num(k) >= 0.0, "{k} = {}", num(k));
+    }
+    let sum: f64 = stages.iter().map(|k| num(k)).sum();
+    assert!((sum - num("total_s")).abs() < 1e-6 * sum.max(1.0), "{r}");
+    assert!(num("bare_trace_s") > 0.0 && num("facets") > 0.0, "{r}");
+    let pipeline = num("primary_trace_s") + num("radiometry_s") + num("sensor_s");
+    let ratio = num("pipeline_over_bare");
+    assert!((ratio - pipeline / num("bare_trace_s")).abs() <= 1e-9 * ratio.max(1.0));
+    // Outputs go to a temporary folder, not next to the scene.
+    assert!(!dir.path().join("cam.exr").exists());
+
+    let bad = Command::new(irsig_bin())
+        .args(["bench", "render", s(&scene), "--sensor", "nope"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("nope") && err.contains("cam"),
+        "{err}"
+    );
+}
