@@ -249,3 +249,25 @@ fn write_seed_corpora() {
         }
     }
 }
+
+/// Issue 8: the inputs `scripts/fuzz` found crashing (kept in
+/// `tests/data/fuzz/<target>/`) are rejected cleanly: an OBJ whose relative
+/// texture index overflowed inside tobj, a `.wth` header claiming ~10¹⁰ rows
+/// (allocation abort), a radiance-mode tape7 without `SOL_SCAT` (`expect`).
+#[test]
+fn r8_fuzz_crash_regressions() {
+    let root = repo_path("tests/data/fuzz");
+    let mut n = 0;
+    for (name, f) in harness::TARGETS {
+        let Ok(dir) = std::fs::read_dir(root.join(name)) else {
+            continue;
+        };
+        for e in dir {
+            let p = e.unwrap().path();
+            let data = std::fs::read(&p).unwrap();
+            assert!(!f(&data), "{}: accepted", p.display());
+            n += 1;
+        }
+    }
+    assert_eq!(n, 3, "expected the three crash inputs");
+}

@@ -231,3 +231,41 @@ proptest! {
         prop_assert!((tb - temperature_k).abs() < 1e-6 * temperature_k, "{} vs {}", tb, temperature_k);
     }
 }
+
+/// Issue 8, found by `scripts/fuzz` (target `obj`): a relative texture or
+/// normal index beyond those defined overflowed inside tobj
+/// (`vt * 2`, a panic with overflow checks); now the pre-scan reports it
+/// with its line.
+#[test]
+fn r8_obj_out_of_range_texture_and_normal_indices() {
+    use irsig::scene::obj::load_obj_str;
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+    let p = std::path::Path::new("t.obj");
+    for (face, what, idx) in [
+        ("f 1/1 2/-8 3/1\n", "texture", "-8"),
+        ("f 1/2 2/1 3/1\n", "texture", "2"),
+        ("f 1//1 2//-2 3//1\n", "normal", "-2"),
+        ("f 1/1/1 2/1/9 3/1/1\n", "normal", "9"),
+    ] {
+        let e = load_obj_str(&format!("{head}{face}"), p)
+            .err()
+            .unwrap_or_else(|| panic!("{face} accepted"));
+        let m = e.to_string();
+        assert!(
+            m.contains("t.obj:line 6") && m.contains(&format!("{what} index {idx}")),
+            "{m}"
+        );
+    }
+    // In range, all three forms load.
+    let ok = format!("{head}f 1/1/1 2/1/1 3/-1/-1\nf 1//1 2//1 3//1\nf 1/1 2/1 3/1\n");
+    let groups = load_obj_str(&ok, p).unwrap();
+    assert_eq!(
+        groups.iter().map(|g| g.mesh.indices.len()).sum::<usize>(),
+        3
+    );
+    // `vt` with one number is refused (tobj needs u and v).
+    let e = load_obj_str("v 0 0 0\nvt 0.5\n", p)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line 2") && e.contains("vt"), "{e}");
+}

@@ -261,7 +261,12 @@ impl Tape7 {
             needed.extend(["PTH_THRML", "SOL_SCAT"]);
         }
         for n in needed {
-            let col = t7.column(n).expect("checked above");
+            let Some(col) = t7.column(n) else {
+                return Err(Error::parse(
+                    loc(h + 1).with_field(n),
+                    format!("radiance-mode tape7 without a {n} column; irsig needs it"),
+                ));
+            };
             if let Some(k) = col.iter().position(|v| !v.is_finite()) {
                 return Err(Error::parse(
                     loc(first_data + k + 1).with_field(n),

@@ -37,6 +37,7 @@ pub fn load_obj_str(text: &str, path: &Path) -> Result<Vec<ObjGroup>> {
     // Pre-scan: usemtl names, and line-precise checks tobj does not report.
     let mut names: Vec<String> = Vec::new();
     let mut nverts = 0usize;
+    let (mut ntex, mut nnorm) = (0usize, 0usize);
     let mut body = String::with_capacity(text.len() + 32);
     body.push_str("mtllib irsig-usemtl-names\n");
     for (n, raw) in text.lines().enumerate() {
@@ -72,6 +73,28 @@ pub fn load_obj_str(text: &str, path: &Path) -> Result<Vec<ObjGroup>> {
                 }
                 nverts += 1;
             }
+            // Texture coordinates and normals: counted (and required to be
+            // numbers, as tobj reads them) so face indices can be checked;
+            // tobj multiplies unchecked indices (overflow, issue 8 fuzzing).
+            Some(kw @ ("vt" | "vn")) => {
+                let need = if kw == "vt" { 2 } else { 3 };
+                let v: Vec<&str> = it.collect();
+                if v.len() < need
+                    || v[..need]
+                        .iter()
+                        .any(|s| s.parse::<f32>().map_or(true, |x| !x.is_finite()))
+                {
+                    return Err(Error::parse(
+                        loc(),
+                        format!("`{kw}` needs {need} finite number(s), found `{line}`"),
+                    ));
+                }
+                if kw == "vt" {
+                    ntex += 1;
+                } else {
+                    nnorm += 1;
+                }
+            }
             Some("f") => {
                 let idx: Vec<&str> = it.collect();
                 if idx.len() < 3 {
@@ -81,24 +104,35 @@ pub fn load_obj_str(text: &str, path: &Path) -> Result<Vec<ObjGroup>> {
                     ));
                 }
                 for s in idx {
-                    let i: i64 = s
+                    // `v`, `v/vt`, `v//vn` or `v/vt/vn`; empty parts are absent.
+                    for (k, (part, what, have)) in s
                         .split('/')
-                        .next()
-                        .unwrap_or("")
-                        .parse()
-                        .map_err(|_| Error::parse(loc(), format!("bad face vertex `{s}`")))?;
-                    let ok = if i > 0 {
-                        i as usize <= nverts
-                    } else {
-                        i < 0 && (-i) as usize <= nverts
-                    };
-                    if !ok {
-                        return Err(Error::parse(
-                            loc(),
-                            format!(
-                                "face vertex index {i} refers to a vertex not defined before (have {nverts})"
-                            ),
-                        ));
+                        .zip([("vertex", nverts), ("texture", ntex), ("normal", nnorm)])
+                        .map(|(p, (w, h))| (p, w, h))
+                        .enumerate()
+                    {
+                        if k > 0 && part.is_empty() {
+                            continue;
+                        }
+                        let i: i64 = part
+                            .parse()
+                            .map_err(|_| Error::parse(loc(), format!("bad face vertex `{s}`")))?;
+                        // Texture/normal indices with none defined yet are
+                        // ignored by tobj (as the bundled files rely on), but
+                        // must stay small enough not to overflow in it.
+                        let ok = if i > 0 {
+                            i as usize <= have || (k > 0 && have == 0 && i <= i64::from(u32::MAX))
+                        } else {
+                            i < 0 && i.unsigned_abs() as usize <= have
+                        };
+                        if !ok {
+                            return Err(Error::parse(
+                                loc(),
+                                format!(
+                                    "face {what} index {i} refers to a {what} not defined before (have {have})"
+                                ),
+                            ));
+                        }
                     }
                 }
             }

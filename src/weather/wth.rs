@@ -95,7 +95,9 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         ));
     }
     let n = n as usize;
-    let mut records = Vec::with_capacity(n);
+    // Not `with_capacity(n)`: N comes from the file, and a corrupt header
+    // (`9999999193 0.25`) must be a row-count error, not an allocation abort.
+    let mut records = Vec::new();
     for (i, line) in lines {
         let loc = Location::file(path).at_line(i + 1);
         let line = line.trim_end();
