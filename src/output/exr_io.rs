@@ -43,11 +43,6 @@ pub fn write_exr(path: impl AsRef<Path>, stack: &ImageStack) -> Result<()> {
             ));
         }
     }
-    let channels: x::SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = stack
-        .layers
-        .iter()
-        .map(|l| x::AnyChannel::new(l.name.as_str(), x::FlatSamples::F32(l.data.clone())))
-        .collect();
     let mut attributes = x::LayerAttributes::named("irsig");
     attributes.other.insert(
         x::Text::from(ORDER_ATTRIBUTE),
@@ -59,27 +54,52 @@ pub fn write_exr(path: impl AsRef<Path>, stack: &ImageStack) -> Result<()> {
                 .collect(),
         ),
     );
-    let layer = x::Layer::new(
+    let layer = flat_exr_layer(
         (stack.width, stack.height),
+        attributes,
+        stack.layers.iter().map(|l| (l.name.as_str(), &l.data)),
+    );
+    write_flat_exr(path, layer, "OpenEXR")
+}
+
+/// A single flat EXR part with all its channels and attributes.
+pub type FlatExrLayer = x::Layer<x::AnyChannels<x::FlatSamples>>;
+
+/// One flat EXR part of `f32` channels `(name, data)` of `size`, with
+/// `attributes`, lossless ZIP compression.
+pub fn flat_exr_layer<'a>(
+    size: (usize, usize),
+    attributes: x::LayerAttributes,
+    channels: impl IntoIterator<Item = (&'a str, &'a Vec<f32>)>,
+) -> FlatExrLayer {
+    let channels: x::SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|(n, d)| x::AnyChannel::new(n, x::FlatSamples::F32(d.clone())))
+        .collect();
+    x::Layer::new(
+        size,
         attributes,
         x::Encoding::SMALL_LOSSLESS,
         x::AnyChannels::sort(channels),
-    );
+    )
+}
+
+/// Write one flat EXR part to `path`, atomically; `what` names the file kind
+/// in errors ("OpenEXR", "tile").
+pub fn write_flat_exr(path: &Path, layer: FlatExrLayer, what: &str) -> Result<()> {
     let image = x::Image::from_layer(layer);
     write_atomic(path, |w| {
         image
             .write()
             .non_parallel()
             .to_buffered(w)
-            .map_err(|e| Error::Other(format!("{}: writing OpenEXR: {e}", path.display())))
+            .map_err(|e| Error::Other(format!("{}: writing {what}: {e}", path.display())))
     })
 }
 
-/// Read an OpenEXR file written by [`write_exr`] (or any flat, single-part
-/// EXR) into an [`ImageStack`].
-pub fn read_exr(path: impl AsRef<Path>) -> Result<ImageStack> {
-    let path = path.as_ref();
-    let bad = |m: String| Error::parse(Location::file(path), m);
+/// Read the first flat part of an EXR file, all channels and attributes;
+/// `what` names the expected kind in errors ("OpenEXR image", "OpenEXR tile").
+pub fn read_flat_exr(path: &Path, what: &str) -> Result<FlatExrLayer> {
     if !path.exists() {
         return Err(Error::io(
             path,
@@ -94,8 +114,16 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<ImageStack> {
         .all_attributes()
         .non_parallel()
         .from_file(path)
-        .map_err(|e| bad(format!("not a readable OpenEXR image: {e}")))?;
-    let layer = image.layer_data;
+        .map_err(|e| Error::parse(Location::file(path), format!("not a readable {what}: {e}")))?;
+    Ok(image.layer_data)
+}
+
+/// Read an OpenEXR file written by [`write_exr`] (or any flat, single-part
+/// EXR) into an [`ImageStack`].
+pub fn read_exr(path: impl AsRef<Path>) -> Result<ImageStack> {
+    let path = path.as_ref();
+    let bad = |m: String| Error::parse(Location::file(path), m);
+    let layer = read_flat_exr(path, "OpenEXR image")?;
     let (width, height) = (layer.size.width(), layer.size.height());
     let mut layers: Vec<Layer> = layer
         .channel_data

@@ -13,7 +13,7 @@
 
 pub mod atomic;
 mod envi;
-mod exr_io;
+pub mod exr_io;
 mod quicklook;
 
 use std::path::{Path, PathBuf};

@@ -14,12 +14,11 @@
 
 use std::path::{Path, PathBuf};
 
-use exr::prelude::traits::*;
 use exr::prelude::{self as x};
 use serde::{Deserialize, Serialize};
 
 use super::image::{RowBand, TRUTH_LAYERS};
-use crate::output::write_atomic;
+use crate::output::exr_io::{flat_exr_layer, read_flat_exr, write_flat_exr};
 use crate::{Error, Location, Result};
 
 /// Name of the EXR attribute holding the [`TileInfo`] JSON.
@@ -133,51 +132,23 @@ pub fn write_tile(path: &Path, info: &TileInfo, band: &RowBand) -> Result<()> {
         .chain(TRUTH_LAYERS.iter().map(|s| s.to_string()))
         .collect();
     let data: Vec<&Vec<f32>> = band.radiance.iter().chain(&band.truth).collect();
-    let channels: x::SmallVec<[x::AnyChannel<x::FlatSamples>; 4]> = names
-        .iter()
-        .zip(&data)
-        .map(|(n, d)| x::AnyChannel::new(n.as_str(), x::FlatSamples::F32((*d).clone())))
-        .collect();
     let mut attributes = x::LayerAttributes::named("irsig-tile");
     attributes.other.insert(
         x::Text::from(TILE_ATTRIBUTE),
         x::AttributeValue::Text(x::Text::from(ascii_json(info)?.as_str())),
     );
-    let layer = x::Layer::new(
+    let layer = flat_exr_layer(
         (band.width, band.rows.len()),
         attributes,
-        x::Encoding::SMALL_LOSSLESS,
-        x::AnyChannels::sort(channels),
+        names.iter().map(String::as_str).zip(data),
     );
-    let image = x::Image::from_layer(layer);
-    write_atomic(path, |w| {
-        image
-            .write()
-            .non_parallel()
-            .to_buffered(w)
-            .map_err(|e| Error::Other(format!("{}: writing tile: {e}", path.display())))
-    })
+    write_flat_exr(path, layer, "tile")
 }
 
 /// Read a tile file: its metadata and rows.
 pub fn read_tile(path: &Path) -> Result<(TileInfo, RowBand)> {
     let bad = |m: String| Error::parse(Location::file(path), m);
-    if !path.exists() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
-        ));
-    }
-    let image = x::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .non_parallel()
-        .from_file(path)
-        .map_err(|e| bad(format!("not a readable OpenEXR tile: {e}")))?;
-    let layer = image.layer_data;
+    let layer = read_flat_exr(path, "OpenEXR tile")?;
     let info: TileInfo = match layer.attributes.other.get(&x::Text::from(TILE_ATTRIBUTE)) {
         Some(x::AttributeValue::Text(t)) => serde_json::from_str(&t.to_string())
             .map_err(|e| bad(format!("attribute `{TILE_ATTRIBUTE}`: {e}")))?,
