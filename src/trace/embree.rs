@@ -669,6 +669,26 @@ fn single_ray(r: &Ray) -> raw::RTCRay {
     }
 }
 
+/// Writes ray `r` into lane `i` of an `RTCRayN` packet (SoA): every field,
+/// with the mask all-ones (masks are compiled into Debian's Embree).
+macro_rules! fill_lane {
+    ($ray:expr, $i:expr, $r:expr) => {{
+        let (ray, i, r) = (&mut $ray, $i, $r);
+        ray.org_x[i] = r.origin.x;
+        ray.org_y[i] = r.origin.y;
+        ray.org_z[i] = r.origin.z;
+        ray.tnear[i] = r.tnear;
+        ray.dir_x[i] = r.dir.x;
+        ray.dir_y[i] = r.dir.y;
+        ray.dir_z[i] = r.dir.z;
+        ray.time[i] = 0.0;
+        ray.tfar[i] = r.tfar;
+        ray.mask[i] = u32::MAX;
+        ray.id[i] = i as u32;
+        ray.flags[i] = 0;
+    }};
+}
+
 /// Generates the packet paths for one width.
 macro_rules! packet_paths {
     ($w:literal, $isect_name:ident, $occl_name:ident, $rayhit:ty, $ray:ty, $isect:path, $occl:path) => {
@@ -682,19 +702,7 @@ macro_rules! packet_paths {
                         // Padding lanes repeat the first ray, marked invalid.
                         let r = rc.get(i).unwrap_or(&rc[0]);
                         valid.0[i] = if i < rc.len() { -1 } else { 0 };
-                        let ray = &mut rh.ray;
-                        ray.org_x[i] = r.origin.x;
-                        ray.org_y[i] = r.origin.y;
-                        ray.org_z[i] = r.origin.z;
-                        ray.tnear[i] = r.tnear;
-                        ray.dir_x[i] = r.dir.x;
-                        ray.dir_y[i] = r.dir.y;
-                        ray.dir_z[i] = r.dir.z;
-                        ray.time[i] = 0.0;
-                        ray.tfar[i] = r.tfar;
-                        ray.mask[i] = u32::MAX;
-                        ray.id[i] = i as u32;
-                        ray.flags[i] = 0;
+                        fill_lane!(rh.ray, i, r);
                         rh.hit.geomID[i] = raw::RTC_INVALID_GEOMETRY_ID;
                         rh.hit.instID[0][i] = raw::RTC_INVALID_GEOMETRY_ID;
                     }
@@ -726,18 +734,7 @@ macro_rules! packet_paths {
                     for i in 0..$w {
                         let r = rc.get(i).unwrap_or(&rc[0]);
                         valid.0[i] = if i < rc.len() { -1 } else { 0 };
-                        ray.org_x[i] = r.origin.x;
-                        ray.org_y[i] = r.origin.y;
-                        ray.org_z[i] = r.origin.z;
-                        ray.tnear[i] = r.tnear;
-                        ray.dir_x[i] = r.dir.x;
-                        ray.dir_y[i] = r.dir.y;
-                        ray.dir_z[i] = r.dir.z;
-                        ray.time[i] = 0.0;
-                        ray.tfar[i] = r.tfar;
-                        ray.mask[i] = u32::MAX;
-                        ray.id[i] = i as u32;
-                        ray.flags[i] = 0;
+                        fill_lane!(ray, i, r);
                     }
                     // SAFETY: as for the intersect path: committed scene,
                     // initialised context, aligned valid mask and ray packet.
