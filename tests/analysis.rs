@@ -694,8 +694,13 @@ use irsig::analysis::study::MaterialStudy;
 /// Asphalt and concrete on a horizontal facet under the town's weather
 /// (19–20 June 2025, Rochester NY) up to 20 June 14:00, default solver.
 fn town_study(params: &str) -> MaterialStudy {
+    town_study_at("2025-06-20T14:00:00-04:00", params)
+}
+
+/// [`town_study`] at another image time.
+fn town_study_at(time: &str, params: &str) -> MaterialStudy {
     let h = irsig::weather::load(&crate::util::repo_path("scenes/town/weather.csv")).unwrap();
-    let until = chrono::DateTime::parse_from_rfc3339("2025-06-20T14:00:00-04:00").unwrap();
+    let until = chrono::DateTime::parse_from_rfc3339(time).unwrap();
     let records = facet::records_until(&h, until).unwrap();
     let site = *h.site().unwrap();
     let opts = irsig::thermal::SolveOptions::default();
@@ -852,4 +857,64 @@ fn one_facet_calibration_recovers_known_material_within_intervals() {
         covered.iter().all(|&n| n >= 6),
         "covered {covered:?} of {seeds}"
     );
+}
+
+#[test]
+fn humidity_and_cloud_act_through_sky_longwave_and_insolation() {
+    let params = r#"[
+      {"kind": "weather", "property": "relative_humidity_offset", "low": -0.2, "high": 0.2},
+      {"kind": "weather", "property": "cloud_cover_offset", "low": -0.3, "high": 0.5},
+      {"kind": "material", "material": "concrete", "property": "density", "low": 1800, "high": 2600}
+    ]"#;
+    // Night (04:00): more humidity or cloud, more sky longwave, a warmer surface.
+    let night = town_study_at("2025-06-20T04:00:00-04:00", params);
+    let f = night.params.factors();
+    let out = night.output_names();
+    let oat = sensitivity::one_at_a_time(&f, &out, &|x: &[f64]| night.evaluate(x)).unwrap();
+    let (hum, cloud) = (&oat.effects[0][0], &oat.effects[0][1]);
+    assert!(hum.at_low < -0.05 && hum.at_high > 0.05, "{hum:?}");
+    // (Less cloud acts both ways at night: a colder sky now, but more sun
+    // stored the day before; more cloud is clearly warmer.)
+    assert!(cloud.at_high > 0.2, "{cloud:?}");
+    // The concrete parameter does not enter asphalt: exactly zero.
+    assert_eq!(oat.effects[0][2].swing(), 0.0);
+    // Sky longwave follows the Clark & Allen ratio, and the insolation the
+    // Kasten & Czeplak one (with the Erbs re-split at the site).
+    let rec = night.facet.records[night.time_index - 56]; // 14:00 the day before
+    assert!(rec.global_horizontal_w_m2 > 100.0);
+    let site = night.facet.site;
+    let w = night
+        .params
+        .apply_weather_at(&[0.1, 0.3, 2300.0], &[rec], Some(&site))
+        .unwrap()[0];
+    let eps = irsig::weather::physics::clark_allen_sky_emissivity;
+    let want = rec.sky_longwave_w_m2 * eps(w.dew_point_k, w.opaque_sky_cover)
+        / eps(rec.dew_point_k, rec.opaque_sky_cover);
+    assert_close!(w.sky_longwave_w_m2, want, 1e-9 * want);
+    assert!(w.sky_longwave_w_m2 > rec.sky_longwave_w_m2);
+    let kc = irsig::analysis::params::kasten_czeplak_cloud_ratio;
+    assert_close!(
+        w.global_horizontal_w_m2,
+        rec.global_horizontal_w_m2 * kc(w.total_sky_cover) / kc(rec.total_sky_cover),
+        1e-9
+    );
+    assert!(w.direct_normal_w_m2 < rec.direct_normal_w_m2);
+    // Zero offsets: the record unchanged.
+    let same = night
+        .params
+        .apply_weather_at(&[0.0, 0.0, 2300.0], &[rec], Some(&site))
+        .unwrap()[0];
+    assert_eq!(same, rec);
+    // Kasten & Czeplak: overcast passes 25 % of the clear-sky global.
+    assert_close!(kc(1.0), 0.25, 1e-15);
+    assert_close!(kc(0.0), 1.0, 1e-15);
+    // Day (14:00): more cloud, less sun, a cooler asphalt.
+    let day = town_study(params);
+    let oat = sensitivity::one_at_a_time(
+        &day.params.factors(),
+        &day.output_names(),
+        &|x: &[f64]| day.evaluate(x),
+    )
+    .unwrap();
+    assert!(oat.effects[0][1].at_high < -0.5, "{:?}", oat.effects[0][1]);
 }

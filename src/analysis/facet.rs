@@ -67,6 +67,8 @@ pub struct OneFacet {
     pub options: SolveOptions,
     /// Band of the radiance outputs.
     pub band: Band,
+    /// The site (solar positions of perturbed weather).
+    pub site: Site,
 }
 
 /// The records of `history` up to `until`, ending with the weather
@@ -143,6 +145,7 @@ impl OneFacet {
             shape_factor,
             options,
             band,
+            site: *site,
         })
     }
 

@@ -28,8 +28,24 @@
 //! 0.01–1, dew point recomputed), `insolation_scale` (multiplies direct,
 //! diffuse and global solar irradiance), `sky_longwave_offset_w_m2` (W/m²
 //! added to the downwelling longwave, clamped at 0), `cloud_cover_offset`
-//! (fraction added to total and opaque sky cover, clamped to 0–1; it acts
-//! only where the thermal model derives sky longwave from cloud cover).
+//! (fraction added to total and opaque sky cover, clamped to 0–1).
+//!
+//! The thermal model and the renderer take the sky longwave and the solar
+//! irradiances from the record, so humidity and cloud cover act through
+//! them, with the relations the weather loader fills missing fields with
+//! ([`crate::weather::physics`]):
+//! * sky longwave: multiplied by `ε_sky(T_dp', N') / ε_sky(T_dp, N)`, the
+//!   ratio of Clark & Allen (1978) sky emissivities with the TARP cloud
+//!   factor (opaque cover N) — more humidity or cloud, more longwave;
+//! * insolation (cloud cover only): global horizontal multiplied by the
+//!   Kasten & Czeplak (1980, Solar Energy 24, 177–189) cloud ratio
+//!   `(1 − 0.75 c'^3.4)/(1 − 0.75 c^3.4)` (c the total cover, fraction), and
+//!   direct normal and diffuse horizontal moved by the change of their
+//!   Erbs et al. (1982) split of the global value at the record's solar
+//!   zenith ([`ParamSet::apply_weather_at`] with the site; without a site
+//!   both scale with the global value).
+//!
+//! An offset of 0 leaves a record exactly as it is.
 //!
 //! Material properties (absolute values, SI): `conductivity` (W/(m·K)),
 //! `specific_heat` (J/(kg·K)), `density` (kg/m³), `thickness` (m),
@@ -41,7 +57,9 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::material::Material;
+use crate::sun::{self, Site};
 use crate::weather::WeatherRecord;
+use crate::weather::physics::{clark_allen_sky_emissivity, erbs_split};
 use crate::{Error, Location, Result};
 
 /// A weather property a parameter perturbs.
@@ -501,17 +519,35 @@ impl ParamSet {
 
     /// A copy of `weather` with the weather parameters set to `values`
     /// (one value per parameter, in order; material entries are ignored).
+    ///
+    /// Without a site a cloud-cover change scales the direct and diffuse
+    /// irradiance with the global one; see [`ParamSet::apply_weather_at`].
     pub fn apply_weather(
         &self,
         values: &[f64],
         weather: &[WeatherRecord],
+    ) -> Result<Vec<WeatherRecord>> {
+        self.apply_weather_at(values, weather, None)
+    }
+
+    /// [`ParamSet::apply_weather`] at `site`: a cloud-cover change moves
+    /// the direct and diffuse irradiance by the change of their Erbs split
+    /// at each record's solar position (see the module docs).
+    ///
+    /// # Errors
+    /// A wrong number of values; a solar-position error (bad site or time).
+    pub fn apply_weather_at(
+        &self,
+        values: &[f64],
+        weather: &[WeatherRecord],
+        site: Option<&Site>,
     ) -> Result<Vec<WeatherRecord>> {
         self.check_len(values)?;
         let mut w = weather.to_vec();
         for (p, &v) in self.params.iter().zip(values) {
             if let Target::Weather(wp) = p.target {
                 for r in &mut w {
-                    apply_weather_property(wp, v, r);
+                    apply_weather_property(wp, v, r, site)?;
                 }
             }
         }
@@ -567,7 +603,29 @@ pub fn dew_point_k(t_k: f64, rh: f64) -> f64 {
     243.04 * g / (17.625 - g) + 273.15
 }
 
-fn apply_weather_property(p: WeatherProperty, v: f64, r: &mut WeatherRecord) {
+/// Kasten & Czeplak (1980) ratio of cloudy to clear-sky global horizontal
+/// irradiance, `1 − 0.75 c^3.4`, for total sky cover `c` (fraction 0–1;
+/// their N/8 in oktas). Dimensionless.
+pub fn kasten_czeplak_cloud_ratio(total_sky_cover: f64) -> f64 {
+    1.0 - 0.75 * total_sky_cover.clamp(0.0, 1.0).powf(3.4)
+}
+
+/// Multiply the sky longwave of `r` by the Clark & Allen emissivity ratio
+/// between the record's current dew point / opaque cover and the old ones.
+fn rescale_sky_longwave(r: &mut WeatherRecord, old_dew_k: f64, old_opaque: f64) {
+    let old = clark_allen_sky_emissivity(old_dew_k, old_opaque);
+    let new = clark_allen_sky_emissivity(r.dew_point_k, r.opaque_sky_cover);
+    if old > 0.0 && new > 0.0 && old != new {
+        r.sky_longwave_w_m2 *= new / old;
+    }
+}
+
+fn apply_weather_property(
+    p: WeatherProperty,
+    v: f64,
+    r: &mut WeatherRecord,
+    site: Option<&Site>,
+) -> Result<()> {
     match p {
         WeatherProperty::AirTemperatureOffsetK => {
             // Same vapour pressure (dew point) in warmer/cooler air: the
@@ -590,10 +648,12 @@ fn apply_weather_property(p: WeatherProperty, v: f64, r: &mut WeatherRecord) {
             // Dew point moved by the Magnus change, so that a record whose
             // fields disagree slightly is left exactly as it is at v = 0.
             let old = r.relative_humidity;
+            let old_dew = r.dew_point_k;
             r.relative_humidity = (old + v).clamp(0.01, 1.0);
             r.dew_point_k += dew_point_k(r.air_temperature_k, r.relative_humidity)
                 - dew_point_k(r.air_temperature_k, old.max(0.01));
             r.dew_point_k = r.dew_point_k.min(r.air_temperature_k);
+            rescale_sky_longwave(r, old_dew, r.opaque_sky_cover);
         }
         WeatherProperty::InsolationScale => {
             r.direct_normal_w_m2 *= v;
@@ -604,8 +664,31 @@ fn apply_weather_property(p: WeatherProperty, v: f64, r: &mut WeatherRecord) {
             r.sky_longwave_w_m2 = (r.sky_longwave_w_m2 + v).max(0.0)
         }
         WeatherProperty::CloudCoverOffset => {
-            r.total_sky_cover = (r.total_sky_cover + v).clamp(0.0, 1.0);
-            r.opaque_sky_cover = (r.opaque_sky_cover + v).clamp(0.0, 1.0);
+            let (old_total, old_opaque) = (r.total_sky_cover, r.opaque_sky_cover);
+            r.total_sky_cover = (old_total + v).clamp(0.0, 1.0);
+            r.opaque_sky_cover = (old_opaque + v).clamp(0.0, 1.0);
+            rescale_sky_longwave(r, r.dew_point_k, old_opaque);
+            let k_old = kasten_czeplak_cloud_ratio(old_total);
+            let k_new = kasten_czeplak_cloud_ratio(r.total_sky_cover);
+            if k_new != k_old && r.global_horizontal_w_m2 > 0.0 {
+                let ghi = r.global_horizontal_w_m2;
+                let ghi_new = ghi * k_new / k_old;
+                match site {
+                    Some(site) => {
+                        let sp = sun::position_standard(site, r.time)?;
+                        let (b0, d0) = erbs_split(ghi, sp.apparent_zenith_deg, sp.distance_au);
+                        let (b1, d1) = erbs_split(ghi_new, sp.apparent_zenith_deg, sp.distance_au);
+                        r.direct_normal_w_m2 = (r.direct_normal_w_m2 + b1 - b0).max(0.0);
+                        r.diffuse_horizontal_w_m2 = (r.diffuse_horizontal_w_m2 + d1 - d0).max(0.0);
+                    }
+                    None => {
+                        r.direct_normal_w_m2 *= k_new / k_old;
+                        r.diffuse_horizontal_w_m2 *= k_new / k_old;
+                    }
+                }
+                r.global_horizontal_w_m2 = ghi_new;
+            }
         }
     }
+    Ok(())
 }
