@@ -918,3 +918,376 @@ fn humidity_and_cloud_act_through_sky_longwave_and_insolation() {
     .unwrap();
     assert!(oat.effects[0][1].at_high < -0.5, "{:?}", oat.effects[0][1]);
 }
+
+// ---- scene studies ----------------------------------------------------------
+
+use irsig::analysis::geo;
+use irsig::analysis::scene::{PixelPoint, SceneStudy};
+use irsig::render::session::Session;
+
+/// A tiny scene in `dir`: a 120 m asphalt plane and a concrete block
+/// (20 × 12 × 6 m), the town's weather, one 24×16 frame camera looking down
+/// at 45° with 2×2 sub-rays, a box PSF and no noise.
+fn tiny_scene(dir: &std::path::Path, atmosphere: Option<serde_json::Value>) -> std::path::PathBuf {
+    let mut scene = serde_json::json!({
+        "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160.0,
+                 "utc_offset_hours": -4.0},
+        "time": "2025-06-20T14:00:00-04:00",
+        "weather": {"file": crate::util::repo_path("scenes/town/weather.csv")},
+        "materials": [crate::util::repo_path("scenes/materials.json")],
+        "objects": [
+            {"name": "ground", "material": "asphalt",
+             "shapes": [{"plane": {"size": [120.0, 120.0], "max_edge_m": 30.0}}]},
+            {"name": "block", "material": "concrete",
+             "shapes": [{"box": {"size": [20.0, 12.0, 6.0], "bottom": false}}],
+             "instances": [{"translate": [0.0, 5.0, 0.0]}]}
+        ],
+        "sensors": [{"type": "frame", "name": "cam", "width": 24, "height": 16,
+                     "fov_deg": 60.0, "position": [0.0, -60.0, 60.0],
+                     "look_at": [0.0, 0.0, 0.0], "oversample": 2,
+                     "bands": [{"name": "LWIR", "response": [8.0, 12.0]}]}]
+    });
+    if let Some(a) = atmosphere {
+        scene["atmosphere"] = a;
+    }
+    let path = dir.join("scene.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&scene).unwrap()).unwrap();
+    path
+}
+
+fn write_params(dir: &std::path::Path, text: &str) -> std::path::PathBuf {
+    let p = dir.join("params.json");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn tiny_study(dir: &std::path::Path, params: &str, points: Vec<PixelPoint>) -> SceneStudy {
+    let session = Session::open(&tiny_scene(dir, None), irsig::trace::Backend::Embree).unwrap();
+    let time = session.scene.time;
+    let ps = ParamSet::load(
+        write_params(dir, params),
+        session.scene.materials.materials(),
+    )
+    .unwrap();
+    SceneStudy::new(session, 0, time, ps, points, Vec::new()).unwrap()
+}
+
+fn px(label: &str, x: f64, y: f64) -> PixelPoint {
+    PixelPoint {
+        label: label.into(),
+        x,
+        y,
+    }
+}
+
+#[test]
+fn scene_study_reproduces_the_render_and_responds_like_physics() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = r#"[
+      {"kind": "material", "material": "asphalt", "property": "solar_absorptivity", "low": 0.8, "high": 0.98},
+      {"kind": "material", "material": "asphalt", "property": "thermal_emissivity", "low": 0.85, "high": 0.98},
+      {"kind": "weather", "property": "cloud_cover_offset", "low": -0.2, "high": 0.4},
+      {"kind": "material", "material": "glass", "property": "density", "low": 2000, "high": 3000}
+    ]"#;
+    // Bottom rows see the open ground, the middle the block's roof or face.
+    let points = vec![px("ground", 3.5, 14.5), px("block", 12.5, 8.5)];
+    let mut study = tiny_study(dir.path(), params, points);
+    eprintln!("{study:?}");
+    let (sampled, neighbours) = study.facet_counts();
+    assert!(sampled >= 2 && neighbours >= 1, "{sampled} {neighbours}");
+    let x0 = study.params.nominal();
+    let nominal = study.pixels(&x0).unwrap();
+    // At the nominal parameters the pixels are the render's: same radiance
+    // as the renderer's own rows (box PSF, no noise).
+    let time = study.time;
+    let states = study.session.thermal(&[time]).unwrap();
+    let band = study
+        .session
+        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
+        .unwrap();
+    for (p, v) in study.points.iter().zip(&nominal) {
+        let k = p.y as usize * 24 + p.x as usize;
+        let rendered = band.radiance[0][k] as f64;
+        assert_close!(v.band_radiance_w_m2_sr, rendered, 1e-5 * rendered);
+        assert!(v.apparent_temperature_k > 280.0 && v.apparent_temperature_k < 340.0);
+    }
+    // The re-solved facets reproduce the scene-wide solve (its dedup
+    // merging error aside): the per-facet inputs are the scene's.
+    let res = study.resolve_residuals_k();
+    assert!(res.iter().all(|r| r.abs() < 0.5), "{res:?}");
+    let y0 = study.evaluate(&x0).unwrap();
+    assert_close!(y0[0], nominal[0].surface_temperature_k, 1e-9);
+    // Physics: more solar absorptivity warms the ground at 14:00; higher
+    // emissivity cools it (and raises its emission); glass is not in the
+    // scene: exactly no effect.
+    let names = study.output_names();
+    assert_eq!(names[1], "ground.apparent_temperature_k");
+    let oat = sensitivity::one_at_a_time(&study.params.factors(), &names, &|x: &[f64]| {
+        study.evaluate(x)
+    })
+    .unwrap();
+    let ground_t = &oat.effects[0];
+    assert!(
+        ground_t[0].at_high > 0.2 && ground_t[0].at_low < -0.2,
+        "{:?}",
+        ground_t[0]
+    );
+    assert!(ground_t[1].at_high < 0.0, "{:?}", ground_t[1]);
+    assert!(
+        oat.effects[0][2].swing() > 0.05,
+        "cloud {:?}",
+        oat.effects[0][2]
+    );
+    for (name, effects) in names.iter().zip(&oat.effects) {
+        assert_eq!(effects[3].swing(), 0.0, "{name}");
+    }
+}
+
+#[test]
+fn scene_calibration_recovers_absorptivity_within_its_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = r#"[
+      {"kind": "material", "material": "asphalt", "property": "solar_absorptivity", "low": 0.7, "high": 0.98, "nominal": 0.95}
+    ]"#;
+    let points: Vec<PixelPoint> = (0..6)
+        .map(|i| {
+            px(
+                &format!("p{i}"),
+                1.5 + 4.0 * i as f64,
+                14.5 - (i % 2) as f64,
+            )
+        })
+        .collect();
+    let study = tiny_study(dir.path(), params, points);
+    let true_x = [0.82];
+    let clean: Vec<f64> = study
+        .pixels(&true_x)
+        .unwrap()
+        .iter()
+        .map(|v| v.apparent_temperature_k)
+        .collect();
+    let noise = normals(7, clean.len());
+    let truth: Vec<f64> = clean.iter().zip(&noise).map(|(c, e)| c + 0.2 * e).collect();
+    let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
+        Ok(study
+            .pixels(x)?
+            .iter()
+            .map(|v| v.apparent_temperature_k)
+            .collect())
+    };
+    let c = calibrate::calibrate(
+        &study.params.factors(),
+        &truth,
+        &model,
+        CalibrationOptions {
+            restarts: 1,
+            ..CalibrationOptions::default()
+        },
+    )
+    .unwrap();
+    let p = &c.params[0];
+    assert!(c.initial.rmse > 1.0, "{}", c.initial.rmse);
+    assert!(p.ci_low <= 0.82 && 0.82 <= p.ci_high, "{p:?}");
+    assert!(p.ci_high - p.ci_low < 0.1, "{p:?}");
+}
+
+#[test]
+fn geodetic_to_enu_matches_the_ellipsoid_radii() {
+    let site = irsig::sun::Site::new(43.16, -77.61, 160.0).unwrap();
+    // A small step north is the meridian radius M = a(1−e²)/(1−e² sin²φ)^{3/2}
+    // times Δφ; a step east the prime-vertical radius N cos φ times Δλ.
+    let (a, f) = (geo::WGS84_A_M, geo::WGS84_F);
+    let e2 = f * (2.0 - f);
+    let s2 = 43.16f64.to_radians().sin().powi(2);
+    let m = a * (1.0 - e2) / (1.0 - e2 * s2).powf(1.5);
+    let n = a / (1.0 - e2 * s2).sqrt();
+    let d = 1e-4f64;
+    let north = geo::enu_from_geodetic(&site, 43.16 + d, -77.61, 160.0);
+    assert_close!(north.y, (m + 160.0) * d.to_radians(), 1e-3);
+    assert_close!(north.x, 0.0, 1e-6);
+    let east = geo::enu_from_geodetic(&site, 43.16, -77.61 + d, 160.0);
+    assert_close!(
+        east.x,
+        (n + 160.0) * 43.16f64.to_radians().cos() * d.to_radians(),
+        1e-3
+    );
+    // Up: the site itself is the origin; 10 m above it is z = 10.
+    assert_close!(
+        geo::enu_from_geodetic(&site, 43.16, -77.61, 170.0).z,
+        10.0,
+        1e-6
+    );
+    // Earth curvature: 1 km east drops below the tangent plane by ≈ d²/2R.
+    let km = 1000.0 / ((n + 160.0) * 43.16f64.to_radians().cos());
+    let p = geo::enu_from_geodetic(&site, 43.16, -77.61 + km.to_degrees(), 160.0);
+    assert_close!(p.z, -1000.0f64.powi(2) / (2.0 * n), 2e-3);
+}
+
+#[test]
+fn latlon_points_land_on_their_pixel_or_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let session =
+        Session::open(&tiny_scene(dir.path(), None), irsig::trace::Backend::Embree).unwrap();
+    let site = session.scene.site;
+    // The block's roof centre, (0, 5, 6) m ENU: invert the small-offset
+    // relation to lat/lon, then the point must project where the sensor
+    // projects the roof point.
+    let e2 = geo::WGS84_F * (2.0 - geo::WGS84_F);
+    let s2 = site.latitude_deg.to_radians().sin().powi(2);
+    let m = geo::WGS84_A_M * (1.0 - e2) / (1.0 - e2 * s2).powf(1.5) + site.altitude_m;
+    let lat = site.latitude_deg + (5.0 / m).to_degrees();
+    let at = irsig::Location::file("pts.csv").at_line(2);
+    let uv = geo::pixel_of_latlon(&session, 0, lat, site.longitude_deg, &at).unwrap();
+    let want = session.sensors[0]
+        .project(glam::DVec3::new(0.0, 5.0, 6.0))
+        .unwrap();
+    assert!((uv - want).length() < 0.01, "{uv} vs {want}");
+    // Through the CSV path: a point 1 km away falls outside the image.
+    let csvp = dir.path().join("pts.csv");
+    std::fs::write(
+        &csvp,
+        format!(
+            "id,lat,lon,value\nroof,{lat},{},300\nfar,{},{},300\n",
+            site.longitude_deg,
+            site.latitude_deg + 0.01,
+            site.longitude_deg
+        ),
+    )
+    .unwrap();
+    let pts = csv::read_truth_points(&csvp).unwrap();
+    let e = geo::points_to_pixels(&session, 0, &pts, &csvp)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("pts.csv") && e.contains("line 3") && e.contains("outside"),
+        "{e}"
+    );
+    let ok = geo::points_to_pixels(&session, 0, &pts[..1], &csvp).unwrap();
+    assert_eq!(
+        ok[0].position,
+        csv::PointPosition::Pixel { x: uv.x, y: uv.y }
+    );
+}
+
+#[test]
+fn cli_scene_sensitivity_and_diurnal_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path(), None);
+    let params = write_params(
+        dir.path(),
+        r#"[{"kind": "weather", "property": "relative_humidity_offset", "low": -0.2, "high": 0.2},
+            {"kind": "material", "material": "concrete", "property": "solar_absorptivity", "low": 0.5, "high": 0.8}]"#,
+    );
+    let plot = dir.path().join("tornado.png");
+    let (ok, out, err) = run_irsig(&[
+        "sensitivity".as_ref(),
+        scene.as_os_str(),
+        "--params".as_ref(),
+        params.as_os_str(),
+        "--per-material".as_ref(),
+        "2".as_ref(),
+        "--json".as_ref(),
+        "--plot".as_ref(),
+        plot.as_os_str(),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let outputs: Vec<String> = serde_json::from_value(v["outputs"].clone()).unwrap();
+    assert!(
+        outputs.contains(&"asphalt.apparent_temperature_k".to_string()),
+        "{outputs:?}"
+    );
+    assert!(
+        outputs.contains(&"concrete.apparent_temperature_k".to_string()),
+        "{outputs:?}"
+    );
+    assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
+    let (ok, out, err) = run_irsig(&[
+        "diurnal".as_ref(),
+        scene.as_os_str(),
+        "--target".as_ref(),
+        "block".as_ref(),
+        "--background".as_ref(),
+        "asphalt".as_ref(),
+        "--step".as_ref(),
+        "60".as_ref(),
+        "--samples".as_ref(),
+        "3".as_ref(),
+        "--json".as_ref(),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["times"].as_array().unwrap().len(), 25);
+    assert!(
+        v["apparent_temperature"]["max_abs_contrast"]
+            .as_f64()
+            .unwrap()
+            > 0.5
+    );
+    // An unknown target is named in the error.
+    let (ok, _, err) = run_irsig(&[
+        "diurnal".as_ref(),
+        scene.as_os_str(),
+        "--target".as_ref(),
+        "tower".as_ref(),
+        "--background".as_ref(),
+        "asphalt".as_ref(),
+    ]);
+    assert!(!ok && err.contains("`tower`"), "{err}");
+}
+
+#[test]
+fn cli_compare_latlon_points_against_a_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path(), None);
+    let out = dir.path().join("out");
+    let (ok, _, err) = run_irsig(&[
+        "render".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(ok, "{err}");
+    let exr = out.join("cam.exr");
+    let synth = image::read_image(&exr).unwrap();
+    let at = synth.layer("apparent_temperature").unwrap();
+    // Two points: the block's roof centre and a ground point 30 m south of
+    // the site, as lat/lon; truth = the rendered pixel + 1 K.
+    let session = Session::open(&scene, irsig::trace::Backend::Embree).unwrap();
+    let site = session.scene.site;
+    let e2 = geo::WGS84_F * (2.0 - geo::WGS84_F);
+    let s2 = site.latitude_deg.to_radians().sin().powi(2);
+    let m = geo::WGS84_A_M * (1.0 - e2) / (1.0 - e2 * s2).powf(1.5) + site.altitude_m;
+    let mut rows = String::from("id,lat,lon,value\n");
+    for (id, north, z) in [("roof", 5.0, 6.0), ("road", -30.0, 0.0)] {
+        let uv = session.sensors[0]
+            .project(glam::DVec3::new(0.0, north, z))
+            .unwrap();
+        let k = uv.y as usize * synth.width + uv.x as usize;
+        let lat = site.latitude_deg + (north / m).to_degrees();
+        rows += &format!(
+            "{id},{lat},{},{}\n",
+            site.longitude_deg,
+            at.data[k] as f64 + 1.0
+        );
+    }
+    let pts = dir.path().join("pts.csv");
+    std::fs::write(&pts, rows).unwrap();
+    let (ok, _, err) = run_irsig(&["compare".as_ref(), exr.as_os_str(), pts.as_os_str()]);
+    assert!(!ok && err.contains("--scene"), "{err}");
+    let (ok, out, err) = run_irsig(&[
+        "compare".as_ref(),
+        exr.as_os_str(),
+        pts.as_os_str(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let o = &v["points"]["overall"];
+    // (a point within a hair of a pixel edge may take the neighbour pixel)
+    assert_close!(o["bias"].as_f64().unwrap(), -1.0, 0.01);
+    assert_close!(o["rmse"].as_f64().unwrap(), 1.0, 0.01);
+    assert_eq!(v["points"]["points"].as_array().unwrap().len(), 2);
+}

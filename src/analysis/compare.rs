@@ -249,7 +249,7 @@ pub fn compare_points(
                     Location::file(points_file)
                         .at_line(pt.line)
                         .with_field("lat"),
-                    "lat/lon points need a georeferenced synthetic image, which this image is not; give pixel x,y columns",
+                    "lat/lon points must be georeferenced first: give the scene whose sensor made the image (`irsig compare --scene SCENE.json`), or pixel x,y columns",
                 ));
             }
         };
@@ -321,7 +321,7 @@ pub fn sample_points(
             let PointPosition::Pixel { x, y } = pt.position else {
                 return Err(Error::parse(
                     Location::file(points_file).at_line(pt.line).with_field("lat"),
-                    "lat/lon points need a georeferenced truth image, which this image is not; give pixel x,y columns",
+                    "lat/lon points must be georeferenced first: give the scene whose sensor made the image (`irsig compare --scene SCENE.json`), or pixel x,y columns",
                 ));
             };
             if x < 0.0 || y < 0.0 || x >= truth.width as f64 || y >= truth.height as f64 {

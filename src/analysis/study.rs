@@ -40,7 +40,8 @@ impl MaterialStudy {
     /// Surface temperatures at every record of material `k` with
     /// parameter values `x`.
     pub fn temperature_series(&self, x: &[f64], k: usize) -> Result<Vec<f64>> {
-        let w = self.params
+        let w = self
+            .params
             .apply_weather_at(x, &self.facet.records, Some(&self.facet.site))?;
         let m = self.params.apply_material(x, &self.materials[k])?;
         self.facet.surface_temperatures(&m, &w)
@@ -48,7 +49,8 @@ impl MaterialStudy {
 
     /// The outputs (see [`MaterialStudy::output_names`]) at `x`.
     pub fn evaluate(&self, x: &[f64]) -> Result<Vec<f64>> {
-        let w = self.params
+        let w = self
+            .params
             .apply_weather_at(x, &self.facet.records, Some(&self.facet.site))?;
         let i = self.time_index;
         if i >= w.len() {

@@ -9,14 +9,17 @@ use irsig::analysis::calibrate::{self, Calibration, CalibrationOptions};
 use irsig::analysis::csv;
 use irsig::analysis::facet;
 
-use super::sensitivity::{FacetArgs, ThermalArgs, build_study};
+use super::sensitivity::{FacetArgs, Samples, SceneArgs, Study, ThermalArgs, build_study};
 
 /// Arguments of `irsig calibrate`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = "\
-Scene form: POINTS.csv holds `x,y,value,material` (value = surface temperature
-in K at the image time); each point is predicted by the one-facet model of its
-material. One-facet form (--thermal): SERIES.csv holds
+Scene form: POINTS.csv holds `x,y,value` or `lat,lon,value` rows (pixel or
+geographic position in the sensor image, value at the image time: apparent
+temperature in K by default, see --quantity); each point is predicted at its
+pixel with the scene's per-facet inputs traced once, the facets under it
+re-solved and the pixel shaded through the render's radiometry.
+One-facet form (--thermal): SERIES.csv holds
 `time,surface_temperature_k` for one facet (as `irsig thermal`); the fitted
 material is written with -o as a material JSON file that
 `irsig thermal --material FITTED.json` reads.
@@ -40,6 +43,11 @@ pub struct Args {
     pub one: ThermalArgs,
     #[command(flatten)]
     pub facet: FacetArgs,
+    #[command(flatten)]
+    pub scene_args: SceneArgs,
+    /// What the scene-form truth values are.
+    #[arg(long, value_enum, default_value = "apparent-temperature")]
+    pub quantity: Quantity,
     /// Confidence level of the intervals.
     #[arg(long, default_value_t = 0.95)]
     pub confidence: f64,
@@ -51,96 +59,117 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The quantity of scene-form truth values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Quantity {
+    /// Surface temperature of the facet under the pixel centre, K.
+    SurfaceTemperature,
+    /// Apparent (band brightness) temperature at the sensor, K.
+    ApparentTemperature,
+    /// Band radiance at the sensor, W/m²/sr.
+    Radiance,
+}
+
+impl Quantity {
+    /// Index among a scene study's three outputs per point.
+    fn index(self) -> usize {
+        match self {
+            Quantity::SurfaceTemperature => 0,
+            Quantity::ApparentTemperature => 1,
+            Quantity::Radiance => 2,
+        }
+    }
+}
+
 /// Run `irsig calibrate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = CalibrationOptions {
         confidence: args.confidence,
         ..CalibrationOptions::default()
     };
-    let (result, fitted_material) =
-        if args.one.thermal {
-            anyhow::ensure!(
-                args.scene.is_none(),
-                "give either SCENE.json or --thermal, not both"
+    let (result, fitted_material) = if args.one.thermal {
+        anyhow::ensure!(
+            args.scene.is_none(),
+            "give either SCENE.json or --thermal, not both"
+        );
+        let series = csv::read_temperature_series(&args.truth)?;
+        let last = series.last().map(|s| s.0).context("empty series")?;
+        let last_s = last.to_rfc3339();
+        let study = match build_study(
+            None,
+            &args.one,
+            &args.facet,
+            &args.scene_args,
+            Samples::PerMaterial(0),
+            Some(&last_s),
+            &args.params,
+        )? {
+            Study::Facet(s) => s,
+            Study::Scene(_) => unreachable!("--thermal builds a one-facet study"),
+        };
+        let times: Vec<f64> = study
+            .facet
+            .records
+            .iter()
+            .map(|r| (r.time - study.facet.records[0].time).num_milliseconds() as f64 * 1e-3)
+            .collect();
+        let at: Vec<f64> = series
+            .iter()
+            .map(|(t, _)| (*t - study.facet.records[0].time).num_milliseconds() as f64 * 1e-3)
+            .collect();
+        if let Some((k, (t, _))) = series.iter().enumerate().find(|(k, _)| at[*k] < 0.0) {
+            anyhow::bail!(
+                "{}: line {}: {t} is before the first weather record",
+                args.truth.display(),
+                k + 2
             );
-            let series = csv::read_temperature_series(&args.truth)?;
-            let last = series.last().map(|s| s.0).context("empty series")?;
-            let last_s = last.to_rfc3339();
-            let study = build_study(None, &args.one, &args.facet, Some(&last_s), &args.params)?;
-            let times: Vec<f64> = study
-                .facet
-                .records
-                .iter()
-                .map(|r| (r.time - study.facet.records[0].time).num_milliseconds() as f64 * 1e-3)
-                .collect();
-            let at: Vec<f64> = series
-                .iter()
-                .map(|(t, _)| (*t - study.facet.records[0].time).num_milliseconds() as f64 * 1e-3)
-                .collect();
-            if let Some((k, (t, _))) = series.iter().enumerate().find(|(k, _)| at[*k] < 0.0) {
-                anyhow::bail!(
-                    "{}: line {}: {t} is before the first weather record",
-                    args.truth.display(),
-                    k + 2
-                );
-            }
-            let truth: Vec<f64> = series.iter().map(|s| s.1).collect();
-            let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
-                let ts = study.temperature_series(x, 0)?;
-                Ok(at.iter().map(|&t| interpolate(&times, &ts, t)).collect())
-            };
-            let c = calibrate::calibrate(&study.params.factors(), &truth, &model, opts)?;
-            let x: Vec<f64> = c.params.iter().map(|p| p.fitted).collect();
-            let m = study.params.apply_material(&x, &study.materials[0])?;
-            (c, Some(m))
-        } else {
-            let scene = args
-                .scene
-                .as_ref()
-                .context("give a SCENE.json, or --thermal …")?;
-            let pts = csv::read_truth_points(&args.truth)?;
-            let study = build_study(
-                Some(scene),
-                &args.one,
-                &args.facet,
-                args.time.as_deref(),
-                &args.params,
-            )?;
-            let mut which = Vec::with_capacity(pts.len());
-            let mut truth = Vec::with_capacity(pts.len());
-            for p in &pts {
-                let name = p.material.as_deref().with_context(|| {
+        }
+        let truth: Vec<f64> = series.iter().map(|s| s.1).collect();
+        let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
+            let ts = study.temperature_series(x, 0)?;
+            Ok(at.iter().map(|&t| interpolate(&times, &ts, t)).collect())
+        };
+        let c = calibrate::calibrate(&study.params.factors(), &truth, &model, opts)?;
+        let x: Vec<f64> = c.params.iter().map(|p| p.fitted).collect();
+        let m = study.params.apply_material(&x, &study.materials[0])?;
+        (c, Some(m))
+    } else {
+        let scene = args
+            .scene
+            .as_ref()
+            .context("give a SCENE.json, or --thermal …")?;
+        let study = build_study(
+            Some(scene),
+            &args.one,
+            &args.facet,
+            &args.scene_args,
+            Samples::Points(&args.truth),
+            args.time.as_deref(),
+            &args.params,
+        )?;
+        let pts = csv::read_truth_points(&args.truth)?;
+        let truth = pts
+            .iter()
+            .map(|p| {
+                p.value.with_context(|| {
                     format!(
-                        "{}: line {}: a `material` is needed to predict this point",
+                        "{}: line {}: no value (expected a `value` column)",
                         args.truth.display(),
                         p.line
                     )
-                })?;
-                let k = study
-                    .materials
-                    .iter()
-                    .position(|m| m.name == name)
-                    .with_context(|| {
-                        format!(
-                            "{}: line {}: material `{name}` is not used in the scene",
-                            args.truth.display(),
-                            p.line
-                        )
-                    })?;
-                which.push(k);
-                truth.push(p.value.with_context(|| {
-                    format!("{}: line {}: no value", args.truth.display(), p.line)
-                })?);
-            }
-            let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
-                let y = study.evaluate(x)?;
-                Ok(which.iter().map(|&k| y[2 * k]).collect())
-            };
-            (
-                calibrate::calibrate(&study.params.factors(), &truth, &model, opts)?,
-                None,
-            )
+                })
+            })
+            .collect::<anyhow::Result<Vec<f64>>>()?;
+        let q = args.quantity.index();
+        let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
+            let y = study.evaluate(x)?;
+            Ok((0..truth.len()).map(|k| y[3 * k + q]).collect())
         };
+        (
+            calibrate::calibrate(&study.params().factors(), &truth, &model, opts)?,
+            None,
+        )
+    };
     if let (Some(out), Some(m)) = (&args.output, &fitted_material) {
         facet::write_material_json(
             out,

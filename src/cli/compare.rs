@@ -11,7 +11,7 @@ use irsig::analysis::compare::{
 };
 use irsig::analysis::image::{Calibration, read_image};
 use irsig::analysis::stats::Agreement;
-use irsig::analysis::{csv, plot};
+use irsig::analysis::{csv, geo, plot};
 
 /// Arguments of `irsig compare`.
 #[derive(Debug, clap::Args)]
@@ -22,6 +22,10 @@ layer's radiance unit otherwise.
 
 CSV formats (header row; `#` comments):
   truth points    x,y,value[,material][,id]   (pixel x = column, y = row)
+                  lat,lon,value[,material][,id] (degrees; needs --scene: the scene
+                  whose sensor made the image; the point is dropped onto the
+                  scene surface, projected through the sensor, and refused when
+                  it falls outside the image)
   control points  synth_x,synth_y,truth_x,truth_y[,id]
 
 Examples:
@@ -65,6 +69,13 @@ pub struct Args {
     /// Histogram bins.
     #[arg(long, default_value_t = 64, value_name = "N")]
     pub bins: usize,
+    /// The scene whose sensor made the synthetic image: georeferences
+    /// lat/lon points (its site is the origin of its ENU frame).
+    #[arg(long, value_name = "SCENE.json")]
+    pub scene: Option<PathBuf>,
+    /// Sensor of --scene that made the image (default: the first).
+    #[arg(long, value_name = "NAME", requires = "scene")]
+    pub sensor: Option<String>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -116,7 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.points.is_none(),
             "--points samples a truth image; with a CSV truth the points are in TRUTH itself"
         );
-        let pts = csv::read_truth_points(&args.truth)?;
+        let pts = georeference(&args, csv::read_truth_points(&args.truth)?, &args.truth)?;
         report.points = Some(compare::compare_points(&synth, &pts, &args.truth, &opts)?);
     } else {
         let mut truth = read_image(&args.truth)?;
@@ -135,7 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             })?,
         );
         if let Some(pp) = &args.points {
-            let pts = csv::read_truth_points(pp)?;
+            let pts = georeference(&args, csv::read_truth_points(pp)?, pp)?;
             let pts = compare::sample_points(
                 &truth,
                 opts.truth_layer
@@ -183,6 +194,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         print_report(&report);
     }
     Ok(())
+}
+
+/// Lat/lon points of `file` to pixels through `--scene`'s sensor (pixel
+/// points pass unchanged; without lat/lon points the scene is not opened).
+fn georeference(
+    args: &Args,
+    pts: Vec<csv::TruthPoint>,
+    file: &std::path::Path,
+) -> anyhow::Result<Vec<csv::TruthPoint>> {
+    if !pts
+        .iter()
+        .any(|p| matches!(p.position, csv::PointPosition::LatLon { .. }))
+    {
+        return Ok(pts);
+    }
+    let Some(scene) = &args.scene else {
+        anyhow::bail!(
+            "{}: lat/lon points need --scene SCENE.json (the scene whose sensor made {}) to georeference the image",
+            file.display(),
+            args.synth.display()
+        );
+    };
+    let sa = super::sensitivity::SceneArgs {
+        sensor: args.sensor.clone(),
+        backend: irsig::trace::Backend::Embree,
+    };
+    let (session, s) = sa.open(scene)?;
+    Ok(geo::points_to_pixels(&session, s, &pts, file)?)
 }
 
 fn print_agreement(label: &str, a: &Agreement, unit: &str) {

@@ -10,17 +10,21 @@ use serde::Serialize;
 
 use irsig::analysis::diurnal::{self, ContrastSeries};
 use irsig::analysis::plot;
-use irsig::material::Material;
-use irsig::scene::Scene;
+use irsig::analysis::scene::{self as scene_study, PixelPoint};
+use irsig::render::session::Session;
 
-use super::sensitivity::{FacetArgs, parse_time, setup_scene};
+use super::sensitivity::{SceneArgs, parse_time};
 
 /// Arguments of `irsig diurnal`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = "\
-Objects stand for their dominant material (most facets); each material is
-solved once as a free-standing facet (--tilt/--azimuth/--shape-factor) over
-the weather history up to --to, and sampled every --step from --from.
+The scene's thermal state is computed at every sample time in one run (per-facet
+inputs traced once, one spin-up for the whole period), and up to --samples
+pixels of the sensor image that see the target (and the background) are shaded
+through the render's radiometry at each time: surface temperature of the facets
+under them, apparent temperature and band radiance at the sensor, averaged.
+The target is an object name or a material name; so is the background (the
+target object's own facets are left out of it).
 
 Example:
   irsig diurnal scenes/town/scene.json --target building_1 --background grass --plot contrast.png")]
@@ -42,8 +46,11 @@ pub struct Args {
     /// Sampling step in minutes.
     #[arg(long, value_name = "MIN", default_value_t = 15)]
     pub step: i64,
+    /// Pixels sampled per side (target, background).
+    #[arg(long, value_name = "N", default_value_t = 16)]
+    pub samples: usize,
     #[command(flatten)]
-    pub facet: FacetArgs,
+    pub scene_args: SceneArgs,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -55,56 +62,71 @@ pub struct Args {
 #[derive(Serialize)]
 struct Report {
     target: String,
-    target_material: String,
     background: String,
-    background_material: String,
+    sensor: String,
+    target_pixels: Vec<[f64; 2]>,
+    background_pixels: Vec<[f64; 2]>,
     times: Vec<String>,
     surface_temperature: ContrastSeries,
     apparent_temperature: ContrastSeries,
     band_radiance: ContrastSeries,
 }
 
-/// The material an object stands for (its most common part's), or the
-/// material of that name.
-fn resolve(scene: &Scene, name: &str, materials: &[Material]) -> anyhow::Result<Material> {
-    if let Some(o) = scene.objects.iter().position(|o| o.name == name) {
-        let mut count = vec![0usize; scene.parts.len()];
-        for (i, inst) in scene.geometry.instances.iter().enumerate() {
-            if scene.instance_object[i] == o {
-                for &p in &scene.mesh_parts[inst.mesh] {
-                    count[p as usize] += 1;
-                }
-            }
+/// Pixels of sensor `s` seeing object or material `name` (not object
+/// `exclude`).
+fn pixels_of(
+    session: &Session,
+    s: usize,
+    name: &str,
+    max: usize,
+    exclude: Option<usize>,
+) -> anyhow::Result<(Vec<PixelPoint>, Option<usize>)> {
+    let scene = &session.scene;
+    let object = scene.objects.iter().position(|o| o.name == name);
+    let material = scene
+        .materials
+        .materials()
+        .iter()
+        .position(|m| m.name == name);
+    anyhow::ensure!(
+        object.is_some() || material.is_some(),
+        "{}: `{name}` is neither an object ({}, …) nor a material of the scene",
+        scene.path.display(),
+        scene
+            .objects
+            .iter()
+            .take(8)
+            .map(|o| o.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let parts = scene.facet_parts();
+    let fobj = &session.optics.facet_object;
+    let select = |f: usize| {
+        let o = fobj[f] as usize;
+        if Some(o) == exclude {
+            return false;
         }
-        let p = (0..count.len())
-            .max_by_key(|&p| count[p])
-            .filter(|&p| count[p] > 0);
-        return Ok(
-            scene.part_material(p.with_context(|| format!("object `{name}` has no facets"))?)
-        );
-    }
-    if let Some(m) = materials.iter().find(|m| m.name == name) {
-        return Ok(m.clone());
-    }
-    scene.materials.get(name).cloned().with_context(|| {
-        format!(
-            "{}: `{name}` is neither an object ({}) nor a material of the scene",
-            scene.path.display(),
-            scene
-                .objects
-                .iter()
-                .take(8)
-                .map(|o| o.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
-    })
+        match object {
+            Some(want) => o == want,
+            None => Some(scene.parts[parts[f] as usize].material) == material,
+        }
+    };
+    let px = scene_study::pixels_seeing(session, s, name, max, &select);
+    anyhow::ensure!(
+        !px.is_empty(),
+        "`{name}` is not seen by sensor `{}` of {}: choose another object or --sensor",
+        session.sensors[s].name,
+        scene.path.display()
+    );
+    Ok((px, object))
 }
 
 /// Run `irsig diurnal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.step > 0, "--step must be a positive number of minutes");
-    let scene = Scene::load(&args.scene)?;
+    let (mut session, s) = args.scene_args.open(&args.scene)?;
+    let scene = &session.scene;
     let from: DateTime<FixedOffset> = match &args.from {
         Some(s) => parse_time("--from", s)?,
         None => {
@@ -123,41 +145,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => from + Duration::hours(24),
     };
     anyhow::ensure!(to > from, "--to must be after --from");
-    let setup = setup_scene(&scene, &args.facet, Some(to))?;
-    let target = resolve(&scene, &args.target, &setup.materials)?;
-    let background = resolve(&scene, &args.background, &setup.materials)?;
-    let f = &setup.facet;
-    anyhow::ensure!(
-        f.records[0].time <= from,
-        "{}: the weather starts at {}, after --from {from}",
-        args.scene.display(),
-        f.records[0].time
-    );
-    let t_s = |m: &Material| f.surface_temperatures(m, &f.records);
-    let (tt, tb) = (t_s(&target)?, t_s(&background)?);
-    let secs = |t: DateTime<FixedOffset>| (t - f.records[0].time).num_milliseconds() as f64 * 1e-3;
-    let xs: Vec<f64> = f.records.iter().map(|r| secs(r.time)).collect();
+    let sensor = session.sensors[s].name.clone();
     let mut times = Vec::new();
     let mut t = from;
     while t <= to {
         times.push(t);
         t += Duration::minutes(args.step);
     }
-    let lerp = |ys: &[f64], x: f64| {
-        let i = xs.partition_point(|&v| v <= x).clamp(1, xs.len() - 1);
-        let w = ((x - xs[i - 1]) / (xs[i] - xs[i - 1])).clamp(0.0, 1.0);
-        ys[i - 1] + w * (ys[i] - ys[i - 1])
-    };
+    anyhow::ensure!(
+        times.len() <= 2000,
+        "{} sample times: choose a longer --step or a shorter period",
+        times.len()
+    );
+    anyhow::ensure!(args.samples > 0, "--samples must be at least 1");
+    let (tp, tobj) = pixels_of(&session, s, &args.target, args.samples, None)?;
+    let (bp, _) = pixels_of(&session, s, &args.background, args.samples, tobj)?;
+    let states = session
+        .thermal(&times)
+        .with_context(|| format!("{}: thermal state over the period", args.scene.display()))?;
     let mut cols: [Vec<f64>; 6] = Default::default();
-    for &t in &times {
-        let x = secs(t);
-        let rec = f.records[f.index_at(t)?];
-        for (k, (m, ts)) in [(&target, &tt), (&background, &tb)].into_iter().enumerate() {
-            let temp = lerp(ts, x);
-            let l = f.band_radiance(m, &rec, temp);
-            cols[k].push(temp);
-            cols[2 + k].push(l);
-            cols[4 + k].push(f.apparent_temperature(l)?);
+    for (k, px) in [&tp, &bp].into_iter().enumerate() {
+        let series = scene_study::pixel_series(&session, s, px, &states.conditions)?;
+        for vals in series {
+            let n = vals.len() as f64;
+            cols[k].push(vals.iter().map(|v| v.surface_temperature_k).sum::<f64>() / n);
+            cols[2 + k].push(vals.iter().map(|v| v.band_radiance_w_m2_sr).sum::<f64>() / n);
+            cols[4 + k].push(vals.iter().map(|v| v.apparent_temperature_k).sum::<f64>() / n);
         }
     }
     let surface = diurnal::contrast_series("surface_temperature", "K", &times, &cols[0], &cols[1])?;
@@ -202,9 +215,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let report = Report {
         target: args.target.clone(),
-        target_material: target.name.clone(),
         background: args.background.clone(),
-        background_material: background.name.clone(),
+        sensor,
+        target_pixels: tp.iter().map(|p| [p.x, p.y]).collect(),
+        background_pixels: bp.iter().map(|p| [p.x, p.y]).collect(),
         times: times.iter().map(|t| t.to_rfc3339()).collect(),
         surface_temperature: surface,
         apparent_temperature: apparent,
@@ -215,11 +229,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     println!(
-        "{} ({}) vs {} ({}), {} to {}",
+        "{} ({} pixels) vs {} ({} pixels) in sensor `{}`, {} to {}",
         report.target,
-        report.target_material,
+        report.target_pixels.len(),
         report.background,
-        report.background_material,
+        report.background_pixels.len(),
+        report.sensor,
         from,
         to
     );

@@ -1,6 +1,8 @@
 //! `irsig sensitivity`: which inputs the temperatures and radiances are
 //! most sensitive to, by one-at-a-time bounds or Morris screening, with an
-//! estimated-error budget; on the one-facet thermal path per material.
+//! estimated-error budget: on a scene's sample pixels (per-facet inputs
+//! traced once, [`irsig::analysis::scene`]) or on the one-facet thermal
+//! path (`--thermal`).
 
 use std::path::PathBuf;
 
@@ -8,15 +10,21 @@ use anyhow::Context;
 use chrono::{DateTime, FixedOffset};
 use serde::Serialize;
 
+use std::path::Path;
+
+use irsig::analysis::csv::{self, PointPosition, TruthPoint};
 use irsig::analysis::facet::{self, FacetSpec, OneFacet};
+use irsig::analysis::geo;
 use irsig::analysis::params::ParamSet;
 use irsig::analysis::plot::{self, TornadoBar};
+use irsig::analysis::scene::{self as scene_study, PixelPoint, SceneStudy};
 use irsig::analysis::sensitivity::{self, ErrorBudget, Morris, MorrisOptions, Oat};
 use irsig::analysis::study::MaterialStudy;
 use irsig::material::Material;
-use irsig::scene::Scene;
+use irsig::render::session::Session;
 use irsig::sun::Site;
 use irsig::thermal::SolveOptions;
+use irsig::trace::Backend;
 use irsig::weather::{self, LoadOptions};
 
 /// The one-facet description shared by `sensitivity`, `calibrate` and
@@ -150,66 +158,123 @@ pub(crate) fn setup_thermal(
     })
 }
 
-/// The materials a scene uses (with part overrides of each material's most
-/// common part), its weather up to `until` (default the image time).
-pub(crate) fn setup_scene(
-    scene: &Scene,
-    f: &FacetArgs,
-    until: Option<DateTime<FixedOffset>>,
-) -> anyhow::Result<Setup> {
-    let until = until.unwrap_or(scene.time);
-    let wref = scene
-        .weather
-        .as_ref()
-        .with_context(|| format!("{}: the scene has no weather history", scene.path.display()))?;
-    let records = facet::records_until(&wref.history, until)?;
-    let facet = OneFacet::new(
-        records,
-        &scene.site,
-        &f.spec(),
-        f.options(),
-        facet::lwir_band()?,
-    )?;
-    // Count facets per part, then keep each material's most common part.
-    let mut count = vec![0usize; scene.parts.len()];
-    for inst in &scene.geometry.instances {
-        for &p in &scene.mesh_parts[inst.mesh] {
-            count[p as usize] += 1;
-        }
+/// Scene-form options shared by `sensitivity`, `calibrate` and `diurnal`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SceneArgs {
+    /// Sensor whose image the points and sample pixels refer to (default:
+    /// the scene's first).
+    #[arg(long, value_name = "NAME")]
+    pub sensor: Option<String>,
+    /// Ray-tracing backend: embree, embree-single or obvhs.
+    #[arg(long, default_value = "embree", value_name = "NAME")]
+    pub backend: Backend,
+}
+
+impl SceneArgs {
+    /// Open the scene's render session and pick the sensor.
+    pub(crate) fn open(&self, scene: &Path) -> anyhow::Result<(Session, usize)> {
+        let session = Session::open(scene, self.backend)?;
+        let s = match &self.sensor {
+            None => 0,
+            Some(n) => session
+                .sensors
+                .iter()
+                .position(|s| &s.name == n)
+                .with_context(|| {
+                    format!(
+                        "--sensor `{n}`: no such sensor in {} (it has {})",
+                        scene.display(),
+                        session
+                            .sensors
+                            .iter()
+                            .map(|s| s.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                })?,
+        };
+        Ok((session, s))
     }
-    let mut best: Vec<Option<usize>> = vec![None; scene.materials.len()];
-    for (p, part) in scene.parts.iter().enumerate() {
-        if count[p] == 0 || part.fixed_temperature_k.is_some() {
-            continue;
-        }
-        let b = &mut best[part.material];
-        if b.is_none_or(|q| count[q] < count[p]) {
-            *b = Some(p);
-        }
-    }
-    let materials: Vec<Material> = best
+}
+
+/// Truth or validation points of a CSV file as sample pixels of sensor `s`
+/// (lat/lon converted through the scene's site and the sensor).
+pub(crate) fn pixel_points(
+    session: &Session,
+    s: usize,
+    file: &Path,
+) -> anyhow::Result<(Vec<PixelPoint>, Vec<TruthPoint>)> {
+    let pts = csv::read_truth_points(file)?;
+    let pts = geo::points_to_pixels(session, s, &pts, file)?;
+    let px = pts
         .iter()
-        .flatten()
-        .map(|&p| scene.part_material(p))
+        .map(|p| match p.position {
+            PointPosition::Pixel { x, y } => PixelPoint {
+                label: p.id.clone(),
+                x,
+                y,
+            },
+            PointPosition::LatLon { .. } => unreachable!("converted above"),
+        })
         .collect();
-    anyhow::ensure!(
-        !materials.is_empty(),
-        "{}: no facet uses the thermal model",
-        scene.path.display()
-    );
-    Ok(Setup {
-        materials,
-        facet,
-        time: until,
-    })
+    Ok((px, pts))
+}
+
+/// A study: one-facet (`--thermal`) or on a scene.
+pub(crate) enum Study {
+    /// One free-standing facet per material.
+    Facet(Box<MaterialStudy>),
+    /// Sample pixels of a scene, per-facet inputs traced once.
+    Scene(Box<SceneStudy>),
+}
+
+impl Study {
+    pub(crate) fn params(&self) -> &ParamSet {
+        match self {
+            Study::Facet(s) => &s.params,
+            Study::Scene(s) => &s.params,
+        }
+    }
+    pub(crate) fn output_names(&self) -> Vec<String> {
+        match self {
+            Study::Facet(s) => s.output_names(),
+            Study::Scene(s) => s.output_names(),
+        }
+    }
+    pub(crate) fn evaluate(&self, x: &[f64]) -> irsig::Result<Vec<f64>> {
+        match self {
+            Study::Facet(s) => s.evaluate(x),
+            Study::Scene(s) => s.evaluate(x),
+        }
+    }
+    pub(crate) fn time(&self) -> String {
+        match self {
+            Study::Facet(s) => s.facet.records[s.time_index].time.to_rfc3339(),
+            Study::Scene(s) => s.time.to_rfc3339(),
+        }
+    }
+    /// Suffix of the outputs the tornado plot shows.
+    fn plotted(&self) -> &'static str {
+        match self {
+            Study::Facet(_) => ".surface_temperature_k",
+            Study::Scene(_) => ".apparent_temperature_k",
+        }
+    }
 }
 
 /// Arguments of `irsig sensitivity`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = "\
-Per material (one free-standing facet per material, geometry held fixed), the
-change of the surface temperature (K) and of the surface-leaving 8-14 um band
-radiance (W/m2/sr) at the image time, for each parameter of PARAMS.json, ranked.
+Scene form: at sample pixels of the scene's sensor image (--points POINTS.csv
+with x,y or lat,lon columns: one output group per point; default: up to
+--per-material pixels per material, averaged per material), the change of the
+surface temperature (K), the apparent temperature (K) and the band radiance at
+the sensor (W/m2/sr) at the image time, for each parameter of PARAMS.json,
+ranked. The scene's per-facet solar history, shape factor and background are
+traced once; each evaluation re-solves the slab model of the facets under the
+pixels (and their neighbours) and shades the pixels through the render's
+radiometry. --thermal: one free-standing facet per material (surface
+temperature and surface-leaving 8-14 um radiance).
 
   oat     each parameter at its low and high bound, the others nominal
   morris  Morris elementary effects: mu* (mean |effect|), mu, sigma, per full range
@@ -246,10 +311,19 @@ pub struct Args {
     pub one: ThermalArgs,
     #[command(flatten)]
     pub facet: FacetArgs,
+    #[command(flatten)]
+    pub scene_args: SceneArgs,
+    /// Validation points (scene form; CSV `x,y` or `lat,lon`, optional `id`).
+    #[arg(long, value_name = "POINTS.csv")]
+    pub points: Option<PathBuf>,
+    /// Sample pixels per material without --points (scene form).
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    pub per_material: usize,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
-    /// Write a tornado plot (surface temperatures).
+    /// Write a tornado plot (apparent temperatures; surface temperatures
+    /// with --thermal).
     #[arg(long, value_name = "OUT.png")]
     pub plot: Option<PathBuf>,
 }
@@ -275,48 +349,80 @@ struct Report {
     error_budget: Vec<ErrorBudget>,
 }
 
+/// What the sample pixels of a scene study are.
+pub(crate) enum Samples<'a> {
+    /// Points of a CSV file (one output group each).
+    Points(&'a Path),
+    /// Up to this many pixels per material (one group per material).
+    PerMaterial(usize),
+}
+
 pub(crate) fn build_study(
     scene: Option<&PathBuf>,
     one: &ThermalArgs,
     facet_args: &FacetArgs,
+    scene_args: &SceneArgs,
+    samples: Samples<'_>,
     time: Option<&str>,
     params: &std::path::Path,
-) -> anyhow::Result<MaterialStudy> {
+) -> anyhow::Result<Study> {
     let time = time.map(|t| parse_time("--time", t)).transpose()?;
-    let setup = match (scene, one.thermal) {
+    match (scene, one.thermal) {
         (Some(_), true) => anyhow::bail!("give either SCENE.json or --thermal, not both"),
         (None, false) => {
             anyhow::bail!("give a SCENE.json, or --thermal --material … --weather … --time …")
         }
-        (None, true) => setup_thermal(one, facet_args, time.context("--thermal needs --time")?)?,
-        (Some(p), false) => {
-            let scene = Scene::load(p)?;
-            setup_scene(&scene, facet_args, time)?
+        (None, true) => {
+            let setup = setup_thermal(one, facet_args, time.context("--thermal needs --time")?)?;
+            let params = ParamSet::load(params, &setup.materials)?;
+            let time_index = setup.facet.index_at(setup.time)?;
+            Ok(Study::Facet(Box::new(MaterialStudy {
+                facet: setup.facet,
+                materials: setup.materials,
+                params,
+                time_index,
+            })))
         }
-    };
-    let params = ParamSet::load(params, &setup.materials)?;
-    let time_index = setup.facet.index_at(setup.time)?;
-    Ok(MaterialStudy {
-        facet: setup.facet,
-        materials: setup.materials,
-        params,
-        time_index,
-    })
+        (Some(p), false) => {
+            let (session, s) = scene_args.open(p)?;
+            let time = time.unwrap_or(session.scene.time);
+            let params = ParamSet::load(params, session.scene.materials.materials())?;
+            let (points, groups) = match samples {
+                Samples::Points(file) => (pixel_points(&session, s, file)?.0, Vec::new()),
+                Samples::PerMaterial(n) => scene_study::material_samples(&session, s, n),
+            };
+            anyhow::ensure!(
+                !points.is_empty(),
+                "{}: sensor `{}` sees no facet that uses the thermal model",
+                p.display(),
+                session.sensors[s].name
+            );
+            let study = SceneStudy::new(session, s, time, params, points, groups)?;
+            Ok(Study::Scene(Box::new(study)))
+        }
+    }
 }
 
 /// Run `irsig sensitivity`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let samples = match &args.points {
+        Some(p) => Samples::Points(p),
+        None => Samples::PerMaterial(args.per_material),
+    };
     let study = build_study(
         args.scene.as_ref(),
         &args.one,
         &args.facet,
+        &args.scene_args,
+        samples,
         args.time.as_deref(),
         &args.params,
     )?;
-    let factors = study.params.factors();
+    let factors = study.params().factors();
     let outputs = study.output_names();
     let model = |x: &[f64]| study.evaluate(x);
-    let time = study.facet.records[study.time_index].time.to_rfc3339();
+    let time = study.time();
+    let plotted = study.plotted();
     let mut report = Report {
         method: match args.method {
             Method::Oat => "oat",
@@ -341,9 +447,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             for (o, name) in outputs
                 .iter()
                 .enumerate()
-                .filter(|(_, n)| n.ends_with("temperature_k"))
+                .filter(|(_, n)| n.ends_with(plotted))
             {
-                let mat = name.trim_end_matches(".surface_temperature_k");
+                let mat = name.trim_end_matches(plotted);
                 for (i, e) in oat.effects[o].iter().enumerate() {
                     if e.swing() > 0.0 {
                         bars.push(TornadoBar {
@@ -372,9 +478,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             for (o, name) in outputs
                 .iter()
                 .enumerate()
-                .filter(|(_, n)| n.ends_with("temperature_k"))
+                .filter(|(_, n)| n.ends_with(plotted))
             {
-                let mat = name.trim_end_matches(".surface_temperature_k");
+                let mat = name.trim_end_matches(plotted);
                 for (i, e) in m.effects[o].iter().enumerate() {
                     if e.mu_star > 0.0 {
                         bars.push(TornadoBar {
@@ -391,7 +497,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = &args.plot {
         let (title, legend) = match args.method {
             Method::Oat => (
-                "Surface temperature change at the parameter bounds",
+                if plotted.contains("apparent") {
+                    "Apparent temperature change at the parameter bounds"
+                } else {
+                    "Surface temperature change at the parameter bounds"
+                },
                 ["low bound", "high bound"],
             ),
             Method::Morris => (
