@@ -53,7 +53,10 @@ impl PathTables {
                             &PathGeometry {
                                 sensor_altitude_m: sensor_alt,
                                 target_altitude_m: ground_altitude_m,
-                                range_m: r.max((sensor_alt - ground_altitude_m).abs().min(r)),
+                                // Nodes nearer than the sensor's height above the
+                                // ground are unreachable for ground targets: clamp
+                                // them to the shortest possible (vertical) path.
+                                range_m: r.max((sensor_alt - ground_altitude_m).abs()),
                             },
                             b.grid(),
                         )?;
