@@ -684,3 +684,43 @@ fn r8_builtin_atmosphere_renders_from_above_the_ground() {
     })
     .unwrap();
 }
+
+/// Issue 8, found by `scripts/fuzz` (target `weather`): an EPW row of year
+/// 0 whose missing global irradiance is filled from the solar position (ΔT
+/// of year 0 exceeds SPA's ±10⁴ s) failed with an error naming neither the
+/// file nor the row; now it names both and what needed the sun.
+#[test]
+fn r8_weather_fill_solar_position_error_names_file_and_line() {
+    use irsig::weather::{LoadOptions, detect_format, load_str};
+    let text = "LOCATION,,,,,,4,8,5,1\n\n\n\n\n\n\n\n\
+                0,6,2,8,0,,1,1,6,99700,,,4,1,9999,4,,,,,0,0,6,0\n\
+                1,6,2,1,0,,1,0,0,0,,,6,5,3,1,,,,,8,8,0,1";
+    let p = std::path::Path::new("year0.epw");
+    let format = detect_format(p, text).unwrap();
+    let e = load_str(text, p, format, &LoadOptions::default())
+        .err()
+        .expect("year 0 accepted")
+        .to_string();
+    assert!(
+        e.contains("year0.epw:line 9") && e.contains("solar position") && e.contains("delta_t"),
+        "{e}"
+    );
+}
+
+/// Issue 8, found by `scripts/fuzz` (target `tape7`): a first spectral row
+/// at wavenumber 0 was accepted (only later rows were checked), giving an
+/// infinite wavelength; now it is an error naming the file, line and FREQ.
+#[test]
+fn r8_tape7_zero_first_wavenumber_is_an_error() {
+    let p = std::path::Path::new("zero.tape7");
+    let text =
+        "M F00\n    FREQ COMBIN    H2CH4\n 0.0000  1.010000\n  705.0  1.0000 1.0000\n -9999.\n";
+    let e = irsig::atmosphere::Tape7::parse(text, p)
+        .err()
+        .expect("wavenumber 0 accepted")
+        .to_string();
+    assert!(
+        e.contains("zero.tape7:line 3") && e.contains("FREQ") && e.contains("positive"),
+        "{e}"
+    );
+}

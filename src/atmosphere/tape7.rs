@@ -220,6 +220,15 @@ impl Tape7 {
                 ),
             ));
         }
+        if wavenumber_cm[0] <= 0.0 {
+            return Err(Error::parse(
+                loc(first_data + 1).with_field("FREQ"),
+                format!(
+                    "wavenumbers must be positive: the first is {}",
+                    wavenumber_cm[0]
+                ),
+            ));
+        }
         let increasing = wavenumber_cm[1] > wavenumber_cm[0];
         for k in 1..wavenumber_cm.len() {
             let (p, q) = (wavenumber_cm[k - 1], wavenumber_cm[k]);

@@ -310,7 +310,13 @@ pub(crate) fn complete(
                     ),
                 )
             })?;
-            sun::position_standard(&s, raw.time + parsed.irradiance_offset)
+            let t = raw.time + parsed.irradiance_offset;
+            sun::position_standard(&s, t).map_err(|e| {
+                Error::parse(
+                    loc.clone(),
+                    format!("{what} needs the solar position at {t}: {e}"),
+                )
+            })
         };
         let (dni, dhi, ghi) = match (
             raw.direct_normal_w_m2,
