@@ -18,6 +18,7 @@ pub type Target = fn(&[u8]) -> bool;
 pub const TARGETS: &[(&str, Target)] = &[
     ("scene_json", scene_json),
     ("obj", obj),
+    ("gltf", gltf),
     ("material_json", material_json),
     ("dirsig_mat", dirsig_mat),
     ("dirsig_ems", dirsig_ems),
@@ -105,6 +106,28 @@ pub fn scene_json(data: &[u8]) -> bool {
 pub fn obj(data: &[u8]) -> bool {
     let p = Path::new("fuzz.obj");
     match irsig::scene::obj::load_obj_str(&text(data), p) {
+        Ok(groups) => {
+            for g in &groups {
+                let n = g.mesh.positions.len() as u32;
+                for v in &g.mesh.positions {
+                    assert!(v.is_finite(), "non-finite vertex {v} accepted");
+                }
+                for t in &g.mesh.indices {
+                    for &i in t {
+                        assert!(i < n, "index {i} out of {n} vertices");
+                    }
+                }
+            }
+            true
+        }
+        Err(e) => check_error(&e, p),
+    }
+}
+
+/// glTF 2.0, JSON or binary (`load_gltf_slice`, external buffers refused).
+pub fn gltf(data: &[u8]) -> bool {
+    let p = Path::new("fuzz.glb");
+    match irsig::scene::gltf::load_gltf_slice(data, p, None) {
         Ok(groups) => {
             for g in &groups {
                 let n = g.mesh.positions.len() as u32;
@@ -416,5 +439,73 @@ pub fn seeds(target: &str, repo: &Path) -> Vec<Vec<u8>> {
     };
     let mut out: Vec<Vec<u8>> = files.iter().filter_map(|f| std::fs::read(f).ok()).collect();
     out.extend(inline.iter().map(|s| s.as_bytes().to_vec()));
+    if target == "gltf" {
+        out.extend(gltf_seeds());
+    }
     out
+}
+
+/// Two glTF seeds, the same document as `.gltf` (base64 data URI) and as
+/// GLB: a cube (8 vertices, `u8` indices) under a rotated, translated node
+/// with a scaled child, a triangle strip with `u16` indices, and an
+/// unindexed triangle fan.
+fn gltf_seeds() -> Vec<Vec<u8>> {
+    use base64::Engine;
+    let mut bin: Vec<u8> = Vec::new();
+    let f32s = |bin: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    let cube: Vec<f32> = (0..8)
+        .flat_map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+        .collect();
+    f32s(&mut bin, &cube); // 0..96
+    let idx: [u8; 36] = [
+        0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1,
+        4, 5, 7, 4, 7, 6,
+    ];
+    bin.extend(idx); // 96..132
+    f32s(&mut bin, &[0., 0., 0., 0., 0., 1., 1., 0., 0., 1., 0., 1.]); // 132..180
+    for i in [0u16, 1, 2, 3] {
+        bin.extend(i.to_le_bytes()); // 180..188
+    }
+    f32s(
+        &mut bin,
+        &[0., 0., 0., 1., 0., 0., 1., 0., -1., 0., 0., -1.],
+    ); // 188..236
+    let doc = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,2]}],
+"nodes":[{"name":"root","translation":[5,0,1],"rotation":[0,0.7071068,0,0.7071068],"children":[1]},
+{"mesh":0,"scale":[2,3,4]},{"mesh":1,"matrix":[1,0,0,0,0,1,0,0,0,0,1,0,0,2,0,1]}],
+"meshes":[{"name":"cube","primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]},
+{"name":"flat","primitives":[{"attributes":{"POSITION":2},"indices":3,"mode":5,"material":1},
+{"attributes":{"POSITION":4},"mode":6}]}],
+"materials":[{"name":"brick"},{"name":"glass"}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":8,"type":"VEC3","min":[0,0,0],"max":[1,1,1]},
+{"bufferView":1,"componentType":5121,"count":36,"type":"SCALAR"},
+{"bufferView":2,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,0,1]},
+{"bufferView":3,"componentType":5123,"count":4,"type":"SCALAR"},
+{"bufferView":4,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,-1],"max":[1,0,0]}],
+"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":96},{"buffer":0,"byteOffset":96,"byteLength":36},
+{"buffer":0,"byteOffset":132,"byteLength":48},{"buffer":0,"byteOffset":180,"byteLength":8},
+{"buffer":0,"byteOffset":188,"byteLength":48}],
+"buffers":[{"byteLength":236URI}]}"#;
+    let uri = format!(
+        r#","uri":"data:application/octet-stream;base64,{}""#,
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let text = doc.replace("URI", &uri).into_bytes();
+    // GLB (glTF 2.0 §4.4): header, JSON chunk (space-padded), BIN chunk.
+    let mut json = doc.replace("URI", "").into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::new();
+    glb.extend(b"glTF");
+    glb.extend(2u32.to_le_bytes());
+    glb.extend((total as u32).to_le_bytes());
+    glb.extend((json.len() as u32).to_le_bytes());
+    glb.extend(0x4E4F_534Au32.to_le_bytes());
+    glb.extend(json);
+    glb.extend((bin.len() as u32).to_le_bytes());
+    glb.extend(0x004E_4942u32.to_le_bytes());
+    glb.extend(bin);
+    vec![text, glb]
 }

@@ -201,6 +201,10 @@ fn fuzz_smoke_obj() {
     run_target("obj");
 }
 #[test]
+fn fuzz_smoke_gltf() {
+    run_target("gltf");
+}
+#[test]
 fn fuzz_smoke_material_json() {
     run_target("material_json");
 }

@@ -698,8 +698,7 @@ fn r8_weather_fill_solar_position_error_names_file_and_line() {
     let p = std::path::Path::new("year0.epw");
     let format = detect_format(p, text).unwrap();
     let e = load_str(text, p, format, &LoadOptions::default())
-        .err()
-        .expect("year 0 accepted")
+        .expect_err("year 0 accepted")
         .to_string();
     assert!(
         e.contains("year0.epw:line 9") && e.contains("solar position") && e.contains("delta_t"),
@@ -716,8 +715,7 @@ fn r8_tape7_zero_first_wavenumber_is_an_error() {
     let text =
         "M F00\n    FREQ COMBIN    H2CH4\n 0.0000  1.010000\n  705.0  1.0000 1.0000\n -9999.\n";
     let e = irsig::atmosphere::Tape7::parse(text, p)
-        .err()
-        .expect("wavenumber 0 accepted")
+        .expect_err("wavenumber 0 accepted")
         .to_string();
     assert!(
         e.contains("zero.tape7:line 3") && e.contains("FREQ") && e.contains("positive"),

@@ -551,3 +551,276 @@ fn scene_weather_is_loaded_and_must_cover_the_image_time() {
     let h = &s.weather.as_ref().unwrap().history;
     assert_eq!(h.end() - h.start(), chrono::TimeDelta::hours(48));
 }
+
+// ---------------------------------------------------------------- glTF
+
+/// A unit cube `[0, 1]³` (glTF axes), faces counter-clockwise from outside:
+/// 8 vertices and 36 `u16` indices.
+fn gltf_cube() -> (Vec<[f32; 3]>, Vec<u16>) {
+    let v: Vec<[f32; 3]> = (0..8)
+        .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+        .collect();
+    let mut idx = Vec::new();
+    // Each face: its four corners in cyclic order, then oriented outward.
+    for (axis, side) in [(0, 0), (0, 1), (1, 0), (1, 1), (2, 0), (2, 1)] {
+        let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+        let corner = |u: usize, w: usize| -> u16 { ((side << axis) | (u << a) | (w << b)) as u16 };
+        let mut q = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
+        // (a, b, axis) is a cyclic order: this quad's normal is +axis.
+        if side == 0 {
+            q.reverse();
+        }
+        idx.extend([q[0], q[1], q[2], q[0], q[2], q[3]]);
+    }
+    (v, idx)
+}
+
+/// A glTF document (JSON) and its one buffer: a cube mesh `crate`
+/// (material `painted_steel`) under a node translated by `(10, 0, 0)` with
+/// a child scaled by 2, a mirrored second instance (scale −1 in x) at
+/// `(0, 0, -5)`, and a triangle-strip quad `panel` (material `glass`,
+/// facing +Y = up).
+fn gltf_doc() -> (serde_json::Value, Vec<u8>) {
+    let (v, idx) = gltf_cube();
+    let mut bin = Vec::new();
+    for p in &v {
+        for c in p {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    let idx_off = bin.len();
+    for i in &idx {
+        bin.extend(i.to_le_bytes());
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let quad_off = bin.len();
+    // Strip order 0 1 2 3 on y = 0: (0,0,0) (0,0,1) (1,0,0) (1,0,1); the
+    // first triangle (0,0,0) (0,0,1) (1,0,0) faces +Y.
+    for p in [
+        [0.0f32, 0.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 0.0, 1.0],
+    ] {
+        for c in p {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 2, 3]}],
+        "nodes": [
+            {"name": "placed", "translation": [10.0, 0.0, 0.0], "children": [1]},
+            {"mesh": 0, "scale": [2.0, 2.0, 2.0]},
+            {"mesh": 0, "translation": [0.0, 0.0, -5.0], "scale": [-1.0, 1.0, 1.0]},
+            {"mesh": 1, "translation": [0.0, 3.0, 0.0]},
+        ],
+        "meshes": [
+            {"name": "crate", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]},
+            {"name": "panel", "primitives": [{"attributes": {"POSITION": 2}, "mode": 5, "material": 1}]},
+        ],
+        "materials": [{"name": "painted_steel"}, {"name": "glass"}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]},
+            {"bufferView": 1, "componentType": 5123, "count": 36, "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 96},
+            {"buffer": 0, "byteOffset": idx_off, "byteLength": 72},
+            {"buffer": 0, "byteOffset": quad_off, "byteLength": 48},
+        ],
+        "buffers": [{"byteLength": bin.len()}],
+    });
+    (doc, bin)
+}
+
+/// `.gltf` text with the buffer as a base64 `data:` URI.
+fn gltf_embedded(mut doc: serde_json::Value, bin: &[u8]) -> String {
+    use base64::Engine;
+    doc["buffers"][0]["uri"] = serde_json::json!(format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(bin)
+    ));
+    doc.to_string()
+}
+
+/// Binary glTF (GLB): header, JSON chunk, BIN chunk (glTF 2.0 §4.4).
+fn glb(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = doc.to_string().into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(0x4E4F_534Au32.to_le_bytes());
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(0x004E_4942u32.to_le_bytes());
+    out.extend(bin);
+    out
+}
+
+/// Issue 3/8: glTF import — node transforms (translation, scale, a
+/// mirroring scale), Y-up to Z-up, strips, grouping by material name; the
+/// `.gltf` (data URI), `.glb` and external-buffer forms give the same
+/// triangles.
+#[test]
+fn gltf_meshes_nodes_axes_and_groups() {
+    use irsig::scene::load_gltf;
+    let d = tempfile::tempdir().unwrap();
+    let (doc, bin) = gltf_doc();
+    let embedded = write(d.path(), "m.gltf", &gltf_embedded(doc.clone(), &bin));
+    let binary = d.path().join("m.glb");
+    std::fs::write(&binary, glb(&doc, &bin)).unwrap();
+    let mut ext = doc.clone();
+    ext["buffers"][0]["uri"] = serde_json::json!("m.bin");
+    std::fs::write(d.path().join("m.bin"), &bin).unwrap();
+    let external = write(d.path(), "ext.gltf", &ext.to_string());
+    let groups = load_gltf(&embedded).unwrap();
+    for other in [&binary, &external] {
+        let g = load_gltf(other).unwrap();
+        assert_eq!(g.len(), groups.len());
+        for (a, b) in g.iter().zip(&groups) {
+            assert_eq!(a.mesh.positions, b.mesh.positions);
+            assert_eq!(a.mesh.indices, b.mesh.indices);
+        }
+    }
+    let names: Vec<(&str, Option<&str>)> = groups
+        .iter()
+        .map(|g| (g.name.as_str(), g.material_name.as_deref()))
+        .collect();
+    assert_eq!(
+        names,
+        [("crate", Some("painted_steel")), ("panel", Some("glass"))]
+    );
+    let crate_ = &groups[0].mesh;
+    assert_eq!(crate_.indices.len(), 24, "two cubes of 12 triangles");
+    // Both cubes closed and outward: volume 2³ + 1 (the mirrored one keeps
+    // its faces outward).
+    let v = signed_volume(&crate_.positions, &crate_.indices);
+    assert!((v - 9.0).abs() < 1e-4, "{v}");
+    // Placement, Y-up → Z-up (x, y, z) → (x, −z, y): the scaled cube spans
+    // x 10..12, y −2..0, z 0..2; the mirrored one x −1..0, y 5..4 → 4..5.
+    let bounds = |pts: &[Vec3]| {
+        pts.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        })
+    };
+    let (lo, hi) = bounds(&crate_.positions[..8]);
+    assert!(lo.abs_diff_eq(Vec3::new(10.0, -2.0, 0.0), 1e-6), "{lo}");
+    assert!(hi.abs_diff_eq(Vec3::new(12.0, 0.0, 2.0), 1e-6), "{hi}");
+    let (lo, hi) = bounds(&crate_.positions[8..]);
+    assert!(lo.abs_diff_eq(Vec3::new(-1.0, 4.0, 0.0), 1e-6), "{lo}");
+    assert!(hi.abs_diff_eq(Vec3::new(0.0, 5.0, 1.0), 1e-6), "{hi}");
+    // The strip: two triangles, both facing up (+Z) at height 3.
+    let panel = &groups[1].mesh;
+    assert_eq!(panel.indices.len(), 2);
+    for t in 0..2 {
+        let (n, a) = triangle_normal_area(&panel.triangle(t));
+        assert!(
+            n.abs_diff_eq(Vec3::Z, 1e-6) && (a - 0.5).abs() < 1e-6,
+            "{n} {a}"
+        );
+    }
+    assert!(panel.positions.iter().all(|p| p.z == 3.0));
+}
+
+/// A scene object made of a glTF file: its material names map to parts and
+/// the database; errors name the file and the glTF field.
+#[test]
+fn gltf_in_a_scene_and_errors_name_file_and_field() {
+    use irsig::scene::load_gltf;
+    let d = tempfile::tempdir().unwrap();
+    let (doc, bin) = gltf_doc();
+    let p = small_scene(
+        d.path(),
+        r#"{
+  "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4},
+  "time": "2025-06-21T14:00:00-04:00",
+  "materials": ["../materials.json"],
+  "objects": [{"name": "yard", "shapes": [{"gltf": "geo/m.glb"}],
+               "parts": [{"name": "glass", "material": "glass", "fixed_temperature_k": 300}]}]
+}"#,
+    );
+    std::fs::write(p.parent().unwrap().join("geo/m.glb"), glb(&doc, &bin)).unwrap();
+    let s = Scene::load(&p).unwrap();
+    assert_eq!(s.geometry.facet_count(), 26);
+    let parts = s.facet_parts();
+    let names: Vec<String> = parts
+        .iter()
+        .map(|&q| s.part_material(q as usize).name.clone())
+        .collect();
+    assert_eq!(names.iter().filter(|n| **n == "painted_steel").count(), 24);
+    assert_eq!(names.iter().filter(|n| **n == "glass").count(), 2);
+
+    // Errors.
+    let case = |name: &str, doc: &serde_json::Value, bin: &[u8]| {
+        let f = write(d.path(), name, &gltf_embedded(doc.clone(), bin));
+        load_gltf(&f).unwrap_err().to_string()
+    };
+    let mut bad = doc.clone();
+    bad["accessors"][1]["count"] = serde_json::json!(40);
+    let e = case("long.gltf", &bad, &bin);
+    assert!(
+        e.contains("long.gltf")
+            && e.contains("meshes[0].primitives[0].indices")
+            && e.contains("does not fit"),
+        "{e}"
+    );
+    let mut bin9 = bin.clone();
+    bin9[96..98].copy_from_slice(&9u16.to_le_bytes());
+    let e = case("idx.gltf", &doc, &bin9);
+    assert!(
+        e.contains("idx.gltf") && e.contains("is 9, beyond the 8 vertices"),
+        "{e}"
+    );
+    let mut nan = bin.clone();
+    nan[0..4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let e = case("nan.gltf", &doc, &nan);
+    assert!(
+        e.contains("attributes.POSITION") && e.contains("finite"),
+        "{e}"
+    );
+    let mut bad = doc.clone();
+    bad["nodes"][1]["children"] = serde_json::json!([0]);
+    let e = case("cycle.gltf", &bad, &bin);
+    assert!(
+        e.contains("cycle.gltf") && e.contains("expected a tree"),
+        "{e}"
+    );
+    let e = case("short.gltf", &doc, &bin[..100]);
+    assert!(e.contains("buffers[0]") && e.contains("byteLength"), "{e}");
+    let f = d.path().join("cut.glb");
+    std::fs::write(&f, &glb(&doc, &bin)[..60]).unwrap();
+    let e = load_gltf(&f).unwrap_err().to_string();
+    assert!(e.contains("cut.glb") && e.contains("glTF"), "{e}");
+    let e = load_gltf(&d.path().join("absent.glb"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("absent.glb"), "{e}");
+    // In a scene: the shape's field and the glTF's.
+    std::fs::write(
+        p.parent().unwrap().join("geo/m.glb"),
+        &glb(&doc, &bin)[..60],
+    )
+    .unwrap();
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("objects[0].shapes[0].gltf") && e.contains("m.glb"),
+        "{e}"
+    );
+}

@@ -24,7 +24,7 @@
 //! - **Objects → shapes → groups → parts → facets.** An object's shapes are
 //!   merged into one mesh (stored once) and placed by each of its instances.
 //!   Each shape yields triangles in face groups (`top`/`sides`/`bottom` of a
-//!   box, OBJ `usemtl` names, heightmap classes); a shape's `part` puts all
+//!   box, OBJ `usemtl` names, glTF material names, heightmap classes); a shape's `part` puts all
 //!   of its faces in one group of that name. A group maps to the object's
 //!   part of the same name; else to an implicit part with the object's
 //!   `material`; else to the database material of the same name.
@@ -180,8 +180,8 @@ pub struct PartSpec {
     pub shape_factor: Option<f64>,
 }
 
-/// One shape of an object: exactly one of the geometry keys (`obj`, `box`,
-/// `plane`, `heightmap`, `cylinder`, `cone`, `sphere`, `gable_roof`).
+/// One shape of an object: exactly one of the geometry keys (`obj`, `gltf`,
+/// `box`, `plane`, `heightmap`, `cylinder`, `cone`, `sphere`, `gable_roof`).
 #[derive(Debug, Clone, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeSpec {
@@ -195,6 +195,12 @@ pub struct ShapeSpec {
     /// `usemtl` names, else the `o`/`g` names.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obj: Option<String>,
+    /// A glTF 2.0 file, `.gltf` or `.glb` (relative to the scene file): the
+    /// triangles of the default scene's meshes placed by their nodes, Y-up
+    /// turned to Z-up; groups are the glTF material names, else the mesh
+    /// names.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gltf: Option<String>,
     /// A box standing on the origin.
     #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
     pub box_: Option<BoxSpec>,

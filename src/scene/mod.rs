@@ -17,6 +17,7 @@
 //! JSON path and line) rather than stopping at the first.
 
 pub mod file;
+pub mod gltf;
 pub mod jsonloc;
 pub mod obj;
 pub mod primitives;
@@ -39,6 +40,7 @@ use crate::sun::Site;
 use crate::weather::{LoadOptions, WeatherHistory};
 
 pub use file::SceneFile;
+pub use gltf::load_gltf;
 pub use obj::{ObjGroup, load_obj};
 use primitives::GroupedMesh;
 
@@ -628,6 +630,7 @@ impl Loader {
     fn shape_mesh(&mut self, s: &file::ShapeSpec, at: &str) -> Option<GroupedMesh> {
         let kinds = [
             ("obj", s.obj.is_some()),
+            ("gltf", s.gltf.is_some()),
             ("box", s.box_.is_some()),
             ("plane", s.plane.is_some()),
             ("heightmap", s.heightmap.is_some()),
@@ -641,7 +644,7 @@ impl Loader {
             self.err(
                 at,
                 format!(
-                    "a shape needs exactly one of obj, box, plane, heightmap, cylinder, cone, sphere, gable_roof; found {}",
+                    "a shape needs exactly one of obj, gltf, box, plane, heightmap, cylinder, cone, sphere, gable_roof; found {}",
                     if given.is_empty() { "none".to_string() } else { given.join(", ") }
                 ),
             );
@@ -653,9 +656,14 @@ impl Loader {
             None::<GroupedMesh>
         };
         let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
-        if let Some(p) = &s.obj {
+        let mesh_file = match (&s.obj, &s.gltf) {
+            (Some(p), _) => Some((p, "obj", load_obj as fn(&Path) -> Result<Vec<ObjGroup>>)),
+            (None, Some(p)) => Some((p, "gltf", load_gltf as fn(&Path) -> Result<Vec<ObjGroup>>)),
+            (None, None) => None,
+        };
+        if let Some((p, kind, load)) = mesh_file {
             let path = self.resolve(p);
-            return match load_obj(&path) {
+            return match load(&path) {
                 Ok(groups) => {
                     let mut m = GroupedMesh::default();
                     for g in groups {
@@ -670,7 +678,11 @@ impl Loader {
                     }
                     Some(m)
                 }
-                Err(e) => bad(self, "obj", format!("cannot load OBJ: {e}")),
+                Err(e) => bad(
+                    self,
+                    kind,
+                    format!("cannot load {}: {e}", kind.to_uppercase()),
+                ),
             };
         }
         if let Some(b) = &s.box_ {
