@@ -51,6 +51,12 @@ pub struct Args {
     /// Confidence level of the intervals.
     #[arg(long, default_value_t = 0.95)]
     pub confidence: f64,
+    /// Nelder–Mead iterations per run.
+    #[arg(long, default_value_t = 400, value_name = "N")]
+    pub max_iters: u64,
+    /// Nelder–Mead restarts from the best point.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub restarts: usize,
     /// Write the fitted material (one-facet form) as material JSON.
     #[arg(short = 'o', long, value_name = "FITTED.json")]
     pub output: Option<PathBuf>,
@@ -85,7 +91,8 @@ impl Quantity {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = CalibrationOptions {
         confidence: args.confidence,
-        ..CalibrationOptions::default()
+        max_iters: args.max_iters,
+        restarts: args.restarts,
     };
     let (result, fitted_material) = if args.one.thermal {
         anyhow::ensure!(

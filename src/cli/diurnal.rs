@@ -146,6 +146,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     anyhow::ensure!(to > from, "--to must be after --from");
     let sensor = session.sensors[s].name.clone();
+    let report_sensor = sensor.clone();
+    let band_name = session.sensors[s].bands[0].name.clone();
     let mut times = Vec::new();
     let mut t = from;
     while t <= to {
@@ -200,8 +202,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         plot::curves(
             p,
             &format!(
-                "{} vs {}: apparent temperature (8–14 µm)",
-                args.target, args.background
+                "{} vs {}: apparent temperature, {} band {}",
+                args.target, args.background, report_sensor, band_name
             ),
             &format!("hours after {}", from.format("%Y-%m-%d %H:%M %:z")),
             "K",

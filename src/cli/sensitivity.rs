@@ -322,6 +322,9 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// Bars in the tornado plot (the largest effects).
+    #[arg(long, default_value_t = 24, value_name = "N")]
+    pub plot_bars: usize,
     /// Write a tornado plot (apparent temperatures; surface temperatures
     /// with --thermal).
     #[arg(long, value_name = "OUT.png")]
@@ -347,6 +350,9 @@ struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     morris: Option<Morris>,
     error_budget: Vec<ErrorBudget>,
+    /// Scene form: the sample pixels (label, x, y).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    points: Vec<(String, f64, f64)>,
 }
 
 /// What the sample pixels of a scene study are.
@@ -433,6 +439,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         oat: None,
         morris: None,
         error_budget: Vec::new(),
+        points: match &study {
+            Study::Scene(s) => s
+                .points
+                .iter()
+                .map(|p| (p.label.clone(), p.x, p.y))
+                .collect(),
+            Study::Facet(_) => Vec::new(),
+        },
     };
     let mut bars = Vec::new();
     match args.method {
@@ -509,7 +523,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 ["mu (signed mean)", "mu* (mean |effect|)"],
             ),
         };
-        plot::tornado(p, title, "ΔT (K)", legend, &bars)?;
+        let total = bars.len();
+        bars.sort_by(|a, b| {
+            let m = |t: &TornadoBar| t.at_low.abs().max(t.at_high.abs());
+            m(b).total_cmp(&m(a))
+        });
+        bars.truncate(args.plot_bars.max(1));
+        let title = if total > bars.len() {
+            format!("{title} (largest {} of {total})", bars.len())
+        } else {
+            title.to_string()
+        };
+        plot::tornado(p, &title, "ΔT (K)", legend, &bars)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
