@@ -849,6 +849,7 @@ fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
         "ray_generation_s",
         "primary_trace_s",
         "radiometry_s",
+        "secondary_s",
         "sensor_s",
         "output_s",
     ];
@@ -861,6 +862,9 @@ fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
     let pipeline = num("primary_trace_s") + num("radiometry_s") + num("sensor_s");
     let ratio = num("pipeline_over_bare");
     assert!((ratio - pipeline / num("bare_trace_s")).abs() <= 1e-9 * ratio.max(1.0));
+    let with = (pipeline + num("secondary_s")) / num("bare_trace_s");
+    assert!((num("with_secondary_over_bare") - with).abs() <= 1e-9 * with.max(1.0));
+    assert!(num("secondary_hits") <= num("primary_rays"), "{r}");
     // Outputs go to a temporary folder, not next to the scene.
     assert!(!dir.path().join("cam.exr").exists());
 
@@ -873,4 +877,179 @@ fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
         !bad.status.success() && err.contains("nope") && err.contains("cam"),
         "{err}"
     );
+}
+
+/// A spectral, angle-dependent emissivity: rows at 0°, 40°, 70°, 90°
+/// over 3–14 µm, falling with angle and with structure in both bands.
+fn spectral_material(name: &str, id: u32, scale: f64) -> Material {
+    use irsig::material::EmissivityCurve;
+    let wl = vec![3.0, 3.7, 4.4, 5.0, 8.0, 9.2, 10.5, 12.0, 14.0];
+    let normal = [0.82, 0.90, 0.75, 0.93, 0.96, 0.70, 0.91, 0.97, 0.94];
+    let angles = vec![0.0, 40.0, 70.0, 90.0];
+    let fall = [1.0, 0.97, 0.8, 0.0];
+    let mut m = material(name, id, 0.9, 0.0);
+    m.emissivity_curve = Some(EmissivityCurve {
+        wavelengths_um: wl,
+        emissivity: fall
+            .iter()
+            .map(|f| normal.iter().map(|e| e * f * scale).collect())
+            .collect(),
+        angles_deg: angles,
+    });
+    m
+}
+
+#[test]
+fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
+    use irsig::atmosphere::{BuiltinAtmosphere, SkyConditions, SurfaceMet};
+    use irsig::render::FastMiss;
+    use irsig::render::path::PathTables;
+    use irsig::trace::{Coherence, Ray};
+    // Ground, tilted panels at many view angles, a double-sided fin seen
+    // from both faces.
+    let mut meshes = vec![ground("ground", 0.0, 0.0, 200.0, 0.0)];
+    for i in 0..8 {
+        let x = -70.0 + 20.0 * i as f32;
+        let tilt = 10.0 * i as f32;
+        let (s, c) = tilt.to_radians().sin_cos();
+        meshes.push(quad(
+            &format!("panel{i}"),
+            [
+                Vec3::new(x - 6.0, -6.0 * c, 6.0 + 6.0 * s),
+                Vec3::new(x + 6.0, -6.0 * c, 6.0 + 6.0 * s),
+                Vec3::new(x + 6.0, 6.0 * c, 6.0 - 6.0 * s),
+                Vec3::new(x - 6.0, 6.0 * c, 6.0 - 6.0 * s),
+            ],
+        ));
+    }
+    meshes.push(quad(
+        "fin",
+        [
+            Vec3::new(-30.0, 40.0, 0.0),
+            Vec3::new(30.0, 40.0, 0.0),
+            Vec3::new(30.0, 40.0, 25.0),
+            Vec3::new(-30.0, 40.0, 25.0),
+        ],
+    ));
+    let geom = geometry(meshes);
+    // Spectral + angular; spectral normal-only (Fresnel fall-off); grey,
+    // specular and transmissive, double-sided.
+    let mut fresnel = spectral_material("fresnel", 2, 0.95);
+    if let Some(c) = &mut fresnel.emissivity_curve {
+        c.emissivity.truncate(1);
+        c.angles_deg.clear();
+    }
+    let mut window = material("window", 3, 0.6, 0.4);
+    window.transmissivity = 0.25;
+    window.double_sided = true;
+    let mats = vec![
+        spectral_material("paint", 1, 1.0),
+        fresnel,
+        window,
+        material("soil", 4, 0.93, 0.0),
+    ];
+    let mm = [3, 1, 0, 1, 2, 0, 3, 0, 1, 2];
+    let optics = optics(&geom, mats, &mm);
+    let mut surface = state(
+        &geom,
+        &[
+            292.0, 301.5, 318.2, 276.9, 333.3, 299.9, 288.1, 310.7, 305.0, 340.2,
+        ],
+    );
+    for (i, f) in (0..surface.len()).zip(0..) {
+        surface.shape_factor[i] = 0.4 + 0.06 * (f % 10) as f32;
+        surface.sun_fraction[i] = if f % 3 == 0 { 0.0 } else { 0.7 };
+        surface.cos_sun[i] = 0.2 + 0.07 * (f % 11) as f32;
+        surface.background_k[i] = 280.0 + 2.5 * (f % 13) as f32;
+    }
+    let met = SurfaceMet {
+        air_temperature_k: 296.0,
+        relative_humidity: 0.7,
+        pressure_pa: 100_500.0,
+        ground_altitude_m: 150.0,
+    };
+    let atmosphere = Atmosphere::Builtin(BuiltinAtmosphere::new(met).unwrap());
+    let cond = Conditions {
+        surface,
+        sky: Sky::Atmosphere(SkyConditions {
+            air_temperature_k: 296.0,
+            sky_longwave_w_m2: 360.0,
+        }),
+        sun: Some(SunInput {
+            direction: Vec3::new(0.4, -0.3, 0.85).normalize(),
+            direct_normal_w_m2: 800.0,
+        }),
+        ground_temperature_k: 290.0,
+        atmosphere,
+    };
+    let s = sensor(
+        json!({"type": "frame", "name": "cam", "width": 64, "height": 48,
+           "fov_deg": 70.0, "position": [20.0, -160.0, 90.0], "look_at": [0.0, 10.0, 0.0],
+           "up": [0.0, 0.0, 1.0], "oversample": 2,
+           "bands": [{"name": "LWIR", "response": [8.0, 12.0]},
+                     {"name": "MWIR", "response": [3.0, 5.0]}]}),
+    );
+    let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
+    let paths = PathTables::new(&cond.atmosphere, &s, &bands, 150.0, 400.0)
+        .unwrap()
+        .expect("a path atmosphere");
+    let tracer = trace::build(&geom, Backend::Embree).unwrap();
+    let mut rays: Vec<Ray> = Vec::new();
+    for row in 0..s.height() {
+        s.rays_for_row(row, &mut rays);
+    }
+    let hits = trace::intersect_all(tracer.as_ref(), &rays, Coherence::Coherent);
+    for bounces in [0, 2] {
+        let opts = ShadeOptions {
+            max_bounces: bounces,
+            offset_m: 1e-3,
+        };
+        let shader = Shader::new(tracer.as_ref(), &geom, &optics, &cond, &bands, opts)
+            .unwrap()
+            .with_path(Some(paths.clone()));
+        let nl = shader.spectrum_len();
+        let mut spectra = vec![0.0; rays.len() * nl];
+        shader.shade_primary(&rays, &hits, &mut spectra);
+        let (mut fast, mut secondary, mut misses) = (0, 0, 0);
+        let mut worst = 0.0f64;
+        let mut out = [0f32; 2];
+        let mut angles = std::collections::BTreeSet::new();
+        for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
+            match hit {
+                None => {
+                    shader.fast_miss(ray, &mut out);
+                    misses += 1;
+                }
+                Some(h) => match shader.fast_primary(ray, h, &mut out) {
+                    Ok(()) => {
+                        fast += 1;
+                        let n = h.ng.normalize();
+                        angles.insert((ray.dir.dot(n).abs().acos().to_degrees() / 10.0) as u32);
+                    }
+                    Err(FastMiss::Secondary) => {
+                        secondary += 1;
+                        continue;
+                    }
+                    Err(e) => panic!("ray {i}: {e:?}"),
+                },
+            }
+            for (b, &v) in out.iter().enumerate() {
+                let r = shader.band_radiance(b, &spectra[i * nl..(i + 1) * nl]);
+                assert!(r > 0.0);
+                let rel = (v as f64 - r).abs() / r;
+                worst = worst.max(rel);
+                assert!(rel <= 1e-5, "ray {i} band {b}: fast {v}, reference {r}");
+            }
+        }
+        // Every kind of hit was compared: fast hits over many view angles
+        // (the fin and window are specular only when bounces remain).
+        assert!(fast > 4000 && misses > 0, "{fast} fast, {misses} misses");
+        assert!(angles.len() >= 6, "view angles (10° bins) {angles:?}");
+        if bounces == 0 {
+            assert_eq!(secondary, 0);
+        } else {
+            assert!(secondary > 100, "{secondary}");
+        }
+        eprintln!("max bounces {bounces}: worst relative difference {worst:.2e}");
+    }
 }

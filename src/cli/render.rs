@@ -76,7 +76,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         eprintln!(
             "{} facets, {} primary rays; time {:.2} s: load {:.2}, BVH {:.2}, rays+thermal {:.2}, \
-             ray generation {:.2}, primary trace {:.2}, radiometry {:.2}, sensor {:.2}, output {:.2}",
+             ray generation {:.2}, primary trace {:.2}, radiometry {:.2}, \
+             secondary rays ({} hits) {:.2}, sensor {:.2}, output {:.2}",
             session.scene.geometry.facet_count(),
             t.primary_rays,
             t.total().as_secs_f64(),
@@ -86,6 +87,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             t.ray_generation.as_secs_f64(),
             t.primary_trace.as_secs_f64(),
             t.radiometry.as_secs_f64(),
+            t.secondary_hits,
+            t.secondary.as_secs_f64(),
             t.sensor.as_secs_f64(),
             t.output.as_secs_f64(),
         );

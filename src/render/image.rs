@@ -108,9 +108,13 @@ pub struct StageTimes {
     ray_generation: AtomicU64,
     primary_trace: AtomicU64,
     shading: AtomicU64,
+    secondary: AtomicU64,
     psf: AtomicU64,
     /// Primary rays traced.
     pub primary_rays: AtomicU64,
+    /// Primary hits shaded by the spectral reference (specular or
+    /// transmissive materials: secondary rays).
+    pub secondary_hits: AtomicU64,
 }
 
 impl StageTimes {
@@ -125,10 +129,16 @@ impl StageTimes {
     pub fn primary_trace(&self) -> Duration {
         Duration::from_nanos(self.primary_trace.load(Ordering::Relaxed))
     }
-    /// Radiometry including secondary rays and band integration,
-    /// thread-seconds.
+    /// Radiometry of the primary hits and misses that spawn no secondary
+    /// rays (band radiances, truth values), thread-seconds.
     pub fn shading(&self) -> Duration {
         Duration::from_nanos(self.shading.load(Ordering::Relaxed))
+    }
+    /// Primary hits on specular or transmissive materials: secondary-ray
+    /// tracing and the spectral radiometry of those hits and of the
+    /// secondary ones, thread-seconds.
+    pub fn secondary(&self) -> Duration {
+        Duration::from_nanos(self.secondary.load(Ordering::Relaxed))
     }
     /// PSF reduction, wall-clock.
     pub fn psf(&self) -> Duration {
@@ -136,68 +146,112 @@ impl StageTimes {
     }
 }
 
-/// One traced row: per band the oversampled band radiances, and the truth
-/// values of the row's pixels.
-struct RowOut {
-    radiance: Vec<Vec<f32>>,
-    truth: Vec<[f32; 6]>,
+/// Per-thread working memory of [`trace_row`], reused from row to row.
+#[derive(Default)]
+struct Scratch {
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    /// Indices of the hits left to the spectral reference.
+    slow: Vec<usize>,
+    slow_rays: Vec<Ray>,
+    slow_hits: Vec<Option<Hit>>,
+    spectra: Vec<f64>,
+    bands: Vec<f32>,
 }
 
-fn trace_row(shader: &Shader, sensor: &Sensor, row: usize, times: &StageTimes) -> RowOut {
+/// Trace and shade image row `row`: per band the band radiance of every
+/// sub-pixel ray into `radiance` (`bands × rays_per_row`, band-major), the
+/// truth values of the row's pixels into `truth`.
+fn trace_row(
+    shader: &Shader,
+    sensor: &Sensor,
+    row: usize,
+    times: &StageTimes,
+    sc: &mut Scratch,
+    radiance: &mut [f32],
+    truth: &mut [[f32; 6]],
+) {
     let t0 = Instant::now();
-    let mut rays: Vec<Ray> = Vec::with_capacity(sensor.rays_per_row());
-    sensor.rays_for_row(row, &mut rays);
+    sc.rays.clear();
+    sensor.rays_for_row(row, &mut sc.rays);
+    let nr = sc.rays.len();
     let t1 = Instant::now();
-    let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
+    sc.hits.clear();
+    sc.hits.resize(nr, None);
     shader
         .tracer()
-        .intersect(&rays, Coherence::Coherent, &mut hits);
+        .intersect(&sc.rays, Coherence::Coherent, &mut sc.hits);
     let t2 = Instant::now();
-    let nl = shader.spectrum_len();
-    let mut spectra = vec![0.0f64; rays.len() * nl];
-    shader.shade_primary(&rays, &hits, &mut spectra);
-    let radiance: Vec<Vec<f32>> = (0..shader.band_count())
-        .map(|b| {
-            spectra
-                .chunks_exact(nl)
-                .map(|s| shader.band_radiance(b, s) as f32)
-                .collect()
-        })
-        .collect();
+    let nb = shader.band_count();
+    sc.bands.resize(nb, 0.0);
+    sc.slow.clear();
+    for (i, (ray, hit)) in sc.rays.iter().zip(&sc.hits).enumerate() {
+        match hit {
+            None => shader.fast_miss(ray, &mut sc.bands),
+            Some(h) => {
+                if shader.fast_primary(ray, h, &mut sc.bands).is_err() {
+                    sc.slow.push(i);
+                    continue;
+                }
+            }
+        }
+        for (b, &v) in sc.bands.iter().enumerate() {
+            radiance[b * nr + i] = v;
+        }
+    }
     // Truth of each pixel's centre sub-ray (sub-row and sub-column ⌊N/2⌋).
     let n = sensor.oversample();
     let ws = sensor.width() * n;
     let s = &shader.conditions().surface;
     let optics = shader.optics();
-    let truth = (0..sensor.width())
-        .map(|col| {
-            let k = (n / 2) * ws + col * n + n / 2;
-            match &hits[k] {
-                None => MISS_TRUTH,
-                Some(h) => {
-                    let f = shader.facet_of(h);
-                    let m = &optics.materials[optics.facet_material[f] as usize];
-                    let depth = h.t * rays[k].dir.length();
-                    [
-                        s.temperature_k[f],
-                        m.id as f32,
-                        optics.facet_object[f] as f32,
-                        s.shape_factor[f],
-                        s.sun_fraction[f],
-                        if depth.is_finite() { depth } else { 0.0 },
-                    ]
-                }
+    for (col, t) in truth.iter_mut().enumerate() {
+        let k = (n / 2) * ws + col * n + n / 2;
+        *t = match &sc.hits[k] {
+            None => MISS_TRUTH,
+            Some(h) => {
+                let f = shader.facet_of(h);
+                let m = &optics.materials[optics.facet_material[f] as usize];
+                let depth = h.t * sc.rays[k].dir.length();
+                [
+                    s.temperature_k[f],
+                    m.id as f32,
+                    optics.facet_object[f] as f32,
+                    s.shape_factor[f],
+                    s.sun_fraction[f],
+                    if depth.is_finite() { depth } else { 0.0 },
+                ]
             }
-        })
-        .collect();
+        };
+    }
     let t3 = Instant::now();
+    // Hits with secondary rays (or off the Planck table): the spectral
+    // reference.
+    if !sc.slow.is_empty() {
+        sc.slow_rays.clear();
+        sc.slow_hits.clear();
+        for &i in &sc.slow {
+            sc.slow_rays.push(sc.rays[i]);
+            sc.slow_hits.push(sc.hits[i]);
+        }
+        let nl = shader.spectrum_len();
+        sc.spectra.clear();
+        sc.spectra.resize(sc.slow.len() * nl, 0.0);
+        shader.shade_primary(&sc.slow_rays, &sc.slow_hits, &mut sc.spectra);
+        for (&i, spectrum) in sc.slow.iter().zip(sc.spectra.chunks_exact(nl)) {
+            for b in 0..nb {
+                radiance[b * nr + i] = shader.band_radiance(b, spectrum) as f32;
+            }
+        }
+    }
+    let t4 = Instant::now();
     StageTimes::add(&times.ray_generation, t1 - t0);
     StageTimes::add(&times.primary_trace, t2 - t1);
     StageTimes::add(&times.shading, t3 - t2);
+    StageTimes::add(&times.secondary, t4 - t3);
+    times.primary_rays.fetch_add(nr as u64, Ordering::Relaxed);
     times
-        .primary_rays
-        .fetch_add(rays.len() as u64, Ordering::Relaxed);
-    RowOut { radiance, truth }
+        .secondary_hits
+        .fetch_add(sc.slow.len() as u64, Ordering::Relaxed);
 }
 
 /// Render image rows `rows` of `sensor`: trace and shade the primary rays of
@@ -218,7 +272,8 @@ pub fn render_rows(
             format!("{rows:?}: expected a non-empty range within 0..{h}"),
         ));
     }
-    if shader.band_count() != sensor.bands.len() {
+    let nb = shader.band_count();
+    if nb != sensor.bands.len() {
         return Err(Error::invalid(
             "bands",
             format!(
@@ -231,51 +286,53 @@ pub fn render_rows(
     let psf = sensor.effects.psf;
     let halo = psf.halo_px();
     let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
-    let outs: Vec<RowOut> = traced
-        .clone()
-        .into_par_iter()
-        .map(|r| {
-            let o = trace_row(shader, sensor, r, times);
-            progress(1);
-            o
-        })
-        .collect();
-    let t0 = Instant::now();
-    let mut band = RowBand::empty(w, h, rows.clone(), shader.band_count());
     let ws = w * n;
-    for b in 0..shader.band_count() {
+    // One image row: n sub-rows of ws sub-pixels, per band.
+    let per_row = n * ws;
+    let mut over = vec![0.0f32; traced.len() * nb * per_row];
+    let mut truth = vec![[0.0f32; 6]; traced.len() * w];
+    over.par_chunks_mut(nb * per_row)
+        .zip(truth.par_chunks_mut(w))
+        .enumerate()
+        .for_each_init(Scratch::default, |sc, (i, (radiance, truth))| {
+            trace_row(shader, sensor, traced.start + i, times, sc, radiance, truth);
+            progress(1);
+        });
+    let t0 = Instant::now();
+    let mut band = RowBand::empty(w, h, rows.clone(), nb);
+    let band_rows = |b: usize| {
+        over.chunks_exact(nb * per_row)
+            .map(move |r| &r[b * per_row..(b + 1) * per_row])
+    };
+    for b in 0..nb {
         let reduced = match psf {
             // Box weights do not depend on the position in the image:
             // reduce the traced rows alone.
             Psf::Box => {
-                let mut over = Vec::with_capacity(traced.len() * n * ws);
-                for o in &outs {
-                    over.extend_from_slice(&o.radiance[b]);
+                let mut img = Vec::with_capacity(traced.len() * per_row);
+                for r in band_rows(b) {
+                    img.extend_from_slice(r);
                 }
-                effects::reduce_oversampled(&over, w, traced.len(), n, psf)?
+                effects::reduce_oversampled(&img, w, traced.len(), n, psf)?
             }
             // Other PSFs: place the traced rows in a full-height image so
             // every weight is computed exactly as in a full render.
             _ => {
-                let mut over = vec![0.0f32; h * n * ws];
-                for (o, r) in outs.iter().zip(traced.clone()) {
-                    over[r * n * ws..(r + 1) * n * ws].copy_from_slice(&o.radiance[b]);
+                let mut img = vec![0.0f32; h * per_row];
+                for (src, r) in band_rows(b).zip(traced.clone()) {
+                    img[r * per_row..(r + 1) * per_row].copy_from_slice(src);
                 }
-                let full = effects::reduce_oversampled(&over, w, h, n, psf)?;
+                let full = effects::reduce_oversampled(&img, w, h, n, psf)?;
                 full[traced.start * w..traced.end * w].to_vec()
             }
         };
         let skip = (rows.start - traced.start) * w;
         band.radiance[b].copy_from_slice(&reduced[skip..skip + rows.len() * w]);
     }
-    for (i, o) in outs[rows.start - traced.start..][..rows.len()]
-        .iter()
-        .enumerate()
-    {
-        for (col, t) in o.truth.iter().enumerate() {
-            for (l, v) in t.iter().enumerate() {
-                band.truth[l][i * w + col] = *v;
-            }
+    let skip = (rows.start - traced.start) * w;
+    for (i, t) in truth[skip..skip + rows.len() * w].iter().enumerate() {
+        for (l, v) in t.iter().enumerate() {
+            band.truth[l][i] = *v;
         }
     }
     StageTimes::add(&times.psf, t0.elapsed());

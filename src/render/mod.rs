@@ -33,7 +33,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
-pub use shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
+pub use shade::{
+    Conditions, FastMiss, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState,
+};
 
 use crate::output::write_image_set;
 use crate::radiometry::Band;

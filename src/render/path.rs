@@ -68,12 +68,18 @@ impl PathTables {
         Ok(Some(PathTables { ranges_m, bands }))
     }
 
+    /// The nodes bracketing range `r` (m): `(i, t)` with `r` at fraction
+    /// `t` (clamped to [0, 1]) from node `i − 1` to node `i`.
+    pub fn locate(&self, r: f64) -> (usize, f64) {
+        let x = &self.ranges_m;
+        let i = x.partition_point(|&v| v <= r).clamp(1, x.len() - 1);
+        (i, ((r - x[i - 1]) / (x[i] - x[i - 1])).clamp(0.0, 1.0))
+    }
+
     /// Apply the path of range `r` to band `b`'s leaving spectrum in place:
     /// `L ← L·τ₂ + L_u`.
     pub fn apply(&self, b: usize, r: f64, spectrum: &mut [f64]) {
-        let x = &self.ranges_m;
-        let i = x.partition_point(|&v| v <= r).clamp(1, x.len() - 1);
-        let t = ((r - x[i - 1]) / (x[i] - x[i - 1])).clamp(0.0, 1.0);
+        let (i, t) = self.locate(r);
         let (t0, l0) = &self.bands[b][i - 1];
         let (t1, l1) = &self.bands[b][i];
         for (j, v) in spectrum.iter_mut().enumerate() {

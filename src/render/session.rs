@@ -93,14 +93,20 @@ pub struct Timings {
     pub ray_generation: Duration,
     /// Primary-ray tracing (packets).
     pub primary_trace: Duration,
-    /// Radiometry: the big equation, secondary rays, band integration.
+    /// Radiometry of the primary rays that spawn no secondary rays: the
+    /// big equation band-integrated, truth values.
     pub radiometry: Duration,
+    /// Primary hits on specular or transmissive materials: secondary-ray
+    /// tracing and the spectral radiometry of those hits.
+    pub secondary: Duration,
     /// Sensor: PSF reduction, MTF, noise, quantisation, apparent temperature.
     pub sensor: Duration,
     /// Writing files.
     pub output: Duration,
     /// Primary rays traced.
     pub primary_rays: u64,
+    /// Primary hits that spawned secondary rays.
+    pub secondary_hits: u64,
 }
 
 impl Timings {
@@ -112,6 +118,7 @@ impl Timings {
             + self.ray_generation
             + self.primary_trace
             + self.radiometry
+            + self.secondary
             + self.sensor
             + self.output
     }
@@ -396,6 +403,7 @@ impl Session {
             times.ray_generation(),
             times.primary_trace(),
             times.shading(),
+            times.secondary(),
         ];
         let sum: f64 = parts
             .iter()
@@ -407,10 +415,11 @@ impl Session {
         self.timings.ray_generation += share(parts[0]);
         self.timings.primary_trace += share(parts[1]);
         self.timings.radiometry += share(parts[2]);
+        self.timings.secondary += share(parts[3]);
         self.timings.sensor += times.psf();
-        self.timings.primary_rays += times
-            .primary_rays
-            .load(std::sync::atomic::Ordering::Relaxed);
+        let load = |c: &std::sync::atomic::AtomicU64| c.load(std::sync::atomic::Ordering::Relaxed);
+        self.timings.primary_rays += load(&times.primary_rays);
+        self.timings.secondary_hits += load(&times.secondary_hits);
         Ok(band)
     }
 

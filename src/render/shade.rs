@@ -35,6 +35,17 @@
 //! interpolated linearly (relative error ≤ 2·10⁻⁶, i.e. < 10⁻⁴ K in
 //! brightness temperature, at 3–14 µm; temperatures off the table are
 //! evaluated exactly), and emissivity per material on a 1° angle grid.
+//!
+//! Primary rays take [`Shader::fast_primary`] where no secondary ray is
+//! needed: the band radiance at the sensor in one fused pass per band over
+//! single-precision tables with the band weights (response × trapezoid,
+//! times τ₂ per range node of the path table) folded in; for a material
+//! whose emissivity is flat within a band (grey, at each angle row) ε and
+//! r leave the sums and the band radiance is a handful of lookups in
+//! per-band integrals over the Planck table (`Σ w·τ₂·B(T_k)`, `Σ w·τ₂·L_sky`,
+//! `Σ w·τ₂·E_s`). Both use the same interpolations as the spectral
+//! reference ([`Shader::shade`] + [`Shader::band_radiance`]), so they agree
+//! with it to rounding (≤ 2·10⁻⁷ relative measured in `tests/render.rs`).
 
 use glam::Vec3;
 
@@ -224,6 +235,94 @@ struct PlanckTable {
     values: Vec<f64>,
 }
 
+/// One band's tables for [`Shader::fast_primary`], single precision, the
+/// quadrature weights (response × trapezoid) folded in where they multiply.
+#[derive(Debug, Clone)]
+struct FastBand {
+    /// Number of wavelengths, rounded up to a multiple of [`LANES`]; every
+    /// row below is padded with zeros to it (zero weight: the padding adds
+    /// nothing).
+    len: usize,
+    /// Planck's function on [`Shader`]'s temperature table, `nodes × len`.
+    planck: Vec<f32>,
+    /// Quadrature weights × response, µm.
+    w: Vec<f32>,
+    /// Sky spectral radiance.
+    sky: Vec<f32>,
+    /// Solar spectral irradiance normal to the sun.
+    sun: Vec<f32>,
+    /// Per material: `ANGLE_ROWS × len` emissivities.
+    eps: Vec<Vec<f32>>,
+    /// Band radiance of a ray leaving the scene upward (sky) and downward
+    /// (ground beyond), W·m⁻²·sr⁻¹.
+    miss_sky: f64,
+    miss_ground: f64,
+    /// Per material: when its emissivity is the same at every wavelength
+    /// of the band (at each angle row), the `ANGLE_ROWS` values.
+    grey: Vec<Option<Vec<f64>>>,
+    /// Band integrals with the plain weights (no path).
+    plain: Integrals,
+}
+
+/// Band integrals `Σ_λ q(λ)·X(λ)` of one band for one weighting `q`
+/// (`w`, or `w·τ₂` at one range node): what a hit on a material that is
+/// grey within the band needs, since ε and r then leave the sums.
+#[derive(Debug, Clone)]
+struct Integrals {
+    /// Per node of the Planck table: `Σ q·B(λ, T_k)`.
+    planck: Vec<f64>,
+    /// `Σ q·L_sky`.
+    sky: f64,
+    /// `Σ q·E_s`.
+    sun: f64,
+}
+
+impl Integrals {
+    fn new(q: &[f64], t: &BandTables, table: &PlanckTable, total: usize) -> Self {
+        let dot = |v: &[f64]| q.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+        let nl = t.band.len();
+        Integrals {
+            planck: table
+                .values
+                .chunks(total)
+                .map(|node| dot(&node[t.start..t.start + nl]))
+                .collect(),
+            sky: dot(&t.sky),
+            sun: dot(&t.sun),
+        }
+    }
+
+    /// `Σ q·B(T)` at table node `k` + fraction `f`.
+    #[inline]
+    fn planck_at(&self, k: usize, f: f64) -> f64 {
+        let p = &self.planck;
+        p[k] + f * (p[k + 1] - p[k])
+    }
+}
+
+/// The sensor path folded into the band weights, per range node of the
+/// [`PathTables`]: `w·τ₂(λ)` per band and the band path radiance `Σ w·L_u`.
+#[derive(Debug, Clone)]
+struct FastPath {
+    /// Per band, per node: `w·τ₂` on the band's grid.
+    weighted_tau: Vec<Vec<Vec<f32>>>,
+    /// Per band, per node: `Σ w·L_u`, W·m⁻²·sr⁻¹.
+    path_radiance: Vec<Vec<f64>>,
+    /// Per band, per node: the band integrals weighted by `w·τ₂`.
+    integrals: Vec<Vec<Integrals>>,
+}
+
+/// Which primary hits [`Shader::fast_primary`] leaves to the spectral
+/// reference ([`Shader::shade_primary`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FastMiss {
+    /// The material is specular or transmissive and the bounce budget
+    /// allows secondary rays.
+    Secondary,
+    /// A temperature lies off the tabulated Planck function.
+    OffTable,
+}
+
 /// The radiance of rays: per ray, the spectral radiance on every band's
 /// grid, bands concatenated.
 pub struct Shader<'a> {
@@ -238,6 +337,8 @@ pub struct Shader<'a> {
     planck: Planck,
     table: PlanckTable,
     path: Option<PathTables>,
+    fast: Vec<FastBand>,
+    fast_path: Option<FastPath>,
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -354,6 +455,51 @@ impl<'a> Shader<'a> {
                 values: Vec::new(),
             }
         };
+        let fast = tables
+            .iter()
+            .map(|t| {
+                let nl = t.band.len();
+                let len = nl.div_ceil(LANES) * LANES;
+                // Rows of `nl` values, each padded with zeros to `len`.
+                let pad = |v: &[f64]| -> Vec<f32> {
+                    v.chunks(nl)
+                        .flat_map(|r| {
+                            r.iter()
+                                .map(|&x| x as f32)
+                                .chain(std::iter::repeat_n(0.0, len - nl))
+                        })
+                        .collect()
+                };
+                let planck: Vec<f64> = table
+                    .values
+                    .chunks(total)
+                    .flat_map(|node| &node[t.start..t.start + nl])
+                    .copied()
+                    .collect();
+                let grey = t
+                    .eps
+                    .iter()
+                    .map(|e| {
+                        let rows: Vec<&[f64]> = e.chunks(nl).collect();
+                        rows.iter()
+                            .all(|r| r.iter().all(|&x| x == r[0]))
+                            .then(|| rows.iter().map(|r| r[0]).collect())
+                    })
+                    .collect();
+                FastBand {
+                    len,
+                    grey,
+                    plain: Integrals::new(t.band.weights_um(), t, &table, total),
+                    planck: pad(&planck),
+                    w: pad(t.band.weights_um()),
+                    sky: pad(&t.sky),
+                    sun: pad(&t.sun),
+                    eps: t.eps.iter().map(|e| pad(e)).collect(),
+                    miss_sky: t.band.integrate(&t.sky),
+                    miss_ground: t.band.integrate(&t.ground),
+                }
+            })
+            .collect();
         Ok(Shader {
             tracer,
             offsets: geometry.facet_offsets(),
@@ -366,14 +512,225 @@ impl<'a> Shader<'a> {
             planck,
             table,
             path: None,
+            fast,
+            fast_path: None,
         })
     }
 
     /// The same shader applying the sensor path's τ₂ and L_u to primary
-    /// hits ([`Shader::shade_primary`]); `None`: no atmosphere.
+    /// hits ([`Shader::shade_primary`], [`Shader::fast_primary`]); `None`:
+    /// no atmosphere.
     pub fn with_path(mut self, path: Option<PathTables>) -> Self {
+        self.fast_path = path.as_ref().map(|p| FastPath {
+            weighted_tau: self
+                .bands
+                .iter()
+                .enumerate()
+                .map(|(b, t)| {
+                    p.bands[b]
+                        .iter()
+                        .map(|(tau, _)| {
+                            let len = t.band.len().div_ceil(LANES) * LANES;
+                            let mut v: Vec<f32> = t
+                                .band
+                                .weights_um()
+                                .iter()
+                                .zip(tau)
+                                .map(|(w, x)| (w * x) as f32)
+                                .collect();
+                            v.resize(len, 0.0);
+                            v
+                        })
+                        .collect()
+                })
+                .collect(),
+            path_radiance: self
+                .bands
+                .iter()
+                .enumerate()
+                .map(|(b, t)| {
+                    p.bands[b]
+                        .iter()
+                        .map(|(_, lu)| t.band.integrate(lu))
+                        .collect()
+                })
+                .collect(),
+            integrals: self
+                .bands
+                .iter()
+                .enumerate()
+                .map(|(b, t)| {
+                    p.bands[b]
+                        .iter()
+                        .map(|(tau, _)| {
+                            let q: Vec<f64> = t
+                                .band
+                                .weights_um()
+                                .iter()
+                                .zip(tau)
+                                .map(|(w, x)| w * x)
+                                .collect();
+                            Integrals::new(&q, t, &self.table, self.total)
+                        })
+                        .collect()
+                })
+                .collect(),
+        });
         self.path = path;
         self
+    }
+
+    /// Whether a hit on facet `f` spawns secondary rays (specular or
+    /// transmissive material, bounce budget left).
+    pub fn spawns_secondary(&self, f: usize) -> bool {
+        let m = &self.optics.materials[self.optics.facet_material[f] as usize];
+        self.options.max_bounces > 0 && (m.specular_fraction > 0.0 || m.transmissivity > 0.0)
+    }
+
+    /// Band radiance (W·m⁻²·sr⁻¹, one per band into `out`) at the sensor of
+    /// a primary ray that leaves the scene: the sky above the horizon, the
+    /// ground beyond below it (no path, as [`Shader::shade_primary`]).
+    pub fn fast_miss(&self, ray: &Ray, out: &mut [f32]) {
+        for (o, fb) in out.iter_mut().zip(&self.fast) {
+            *o = if ray.dir.z >= 0.0 {
+                fb.miss_sky
+            } else {
+                fb.miss_ground
+            } as f32;
+        }
+    }
+
+    /// Band radiances at the sensor (W·m⁻²·sr⁻¹, one per band into `out`)
+    /// of the primary ray `ray` (unit direction) hitting `h`, without the
+    /// spectral intermediate of [`Shader::shade_primary`]: per band one
+    /// fused pass over the grid of
+    ///
+    /// ```text
+    /// Σ_λ w·τ₂(λ, R) · [ε·B(T) + r·(env + (1 − s)·E_s·cos σ·f_sun/π) + t·env]
+    ///   + Σ_λ w·L_u(λ, R),      r = max(1 − ε − t, 0),
+    ///   env = F·L_sky + (1 − F)·B(T_bg)
+    /// ```
+    ///
+    /// (the big equation of the module docs with `L_spec = L_behind = env`,
+    /// which is what the reference evaluates for a hit without secondary
+    /// rays), with the same interpolations as the reference — ε linear in
+    /// the 1° angle rows, B linear on the Planck table, τ₂ and L_u linear
+    /// in range — so the two agree to single-precision rounding
+    /// (~10⁻⁶ relative; `tests/render.rs` checks ≤ 10⁻⁵). The band weights
+    /// `w` (response × trapezoid) are folded into `w·τ₂` and `Σ w·L_u`
+    /// per range node, which is exact because both are linear in the range
+    /// interpolation. Returns `Err` (and leaves `out` alone) for hits that
+    /// need the reference: secondary rays, or temperatures off the table.
+    pub fn fast_primary(&self, ray: &Ray, h: &Hit, out: &mut [f32]) -> Result<(), FastMiss> {
+        let f = self.facet_of(h);
+        if self.spawns_secondary(f) {
+            return Err(FastMiss::Secondary);
+        }
+        let s = &self.conditions.surface;
+        let (kt, ft) = self
+            .table_position(s.temperature_k[f] as f64)
+            .ok_or(FastMiss::OffTable)?;
+        let (kg, fg) = self
+            .table_position(s.background_k[f] as f64)
+            .ok_or(FastMiss::OffTable)?;
+        let mi = self.optics.facet_material[f] as usize;
+        let m = &self.optics.materials[mi];
+        let (_, nrm, d) = self.hit_frame(ray, h);
+        let cos_view = (-d.dot(nrm)).clamp(0.0, 1.0) as f64;
+        let theta = cos_view.acos().to_degrees();
+        let a0 = (theta.floor() as usize).min(ANGLE_ROWS - 2);
+        let ta = theta - a0 as f64;
+        let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+        let front = h.ng.dot(d) < 0.0;
+        let sun_w = if front || m.double_sided {
+            (s.cos_sun[f] as f64).max(0.0) * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
+                / std::f64::consts::PI
+        } else {
+            0.0
+        };
+        let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_w;
+        let tr = m.transmissivity.clamp(0.0, 1.0);
+        let node = match (&self.path, &self.fast_path) {
+            (Some(p), Some(_)) => Some(p.locate((h.t * ray.dir.length()) as f64)),
+            _ => None,
+        };
+        for (b, fb) in self.fast.iter().enumerate() {
+            if let Some(g) = &fb.grey[mi] {
+                // ε and r leave the sums: Σ q·ε·B(T) = ε·Σ q·B(T), …
+                let eps = g[a0] + ta * (g[a0 + 1] - g[a0]);
+                let r = (1.0 - eps - tr).max(0.0);
+                let (bt, bg, sky, sun, lu) = match (node, &self.fast_path) {
+                    (Some((i, x)), Some(fp)) => {
+                        let (p, q) = (&fp.integrals[b][i - 1], &fp.integrals[b][i]);
+                        let lerp = |a: f64, b: f64| a + x * (b - a);
+                        let u = &fp.path_radiance[b];
+                        (
+                            lerp(p.planck_at(kt, ft), q.planck_at(kt, ft)),
+                            lerp(p.planck_at(kg, fg), q.planck_at(kg, fg)),
+                            lerp(p.sky, q.sky),
+                            lerp(p.sun, q.sun),
+                            lerp(u[i - 1], u[i]),
+                        )
+                    }
+                    _ => {
+                        let p = &fb.plain;
+                        (p.planck_at(kt, ft), p.planck_at(kg, fg), p.sky, p.sun, 0.0)
+                    }
+                };
+                let env = big_f * sky + (1.0 - big_f) * bg;
+                let v = eps * bt + r * (env + sd * sun) + tr * env;
+                out[b] = (v + lu) as f32;
+                continue;
+            }
+            let nl = fb.len;
+            let e = &fb.eps[mi];
+            let row = |k: usize| &fb.planck[k * nl..(k + 1) * nl];
+            let (q0, q1, fr, lu) = match (node, &self.fast_path) {
+                (Some((i, x)), Some(fp)) => {
+                    let u = &fp.path_radiance[b];
+                    (
+                        &fp.weighted_tau[b][i - 1][..],
+                        &fp.weighted_tau[b][i][..],
+                        x as f32,
+                        u[i - 1] + x * (u[i] - u[i - 1]),
+                    )
+                }
+                _ => (&fb.w[..], &fb.w[..], 0.0, 0.0),
+            };
+            let sum = band_sum(
+                &BandStreams {
+                    e0: &e[a0 * nl..(a0 + 1) * nl],
+                    e1: &e[(a0 + 1) * nl..(a0 + 2) * nl],
+                    t0: row(kt),
+                    t1: row(kt + 1),
+                    g0: row(kg),
+                    g1: row(kg + 1),
+                    q0,
+                    q1,
+                    sky: &fb.sky,
+                    sun: &fb.sun,
+                },
+                [ta as f32, ft as f32, fg as f32, fr],
+                big_f as f32,
+                sd as f32,
+                tr as f32,
+            );
+            out[b] = (sum as f64 + lu) as f32;
+        }
+        Ok(())
+    }
+
+    /// Node `k` and fraction of temperature `t` on the Planck table, when
+    /// it lies on it.
+    fn table_position(&self, t: f64) -> Option<(usize, f64)> {
+        let tab = &self.table;
+        let x = (t - tab.t0) / PLANCK_TABLE_STEP_K;
+        if tab.nodes >= 2 && x >= 0.0 && x < (tab.nodes - 1) as f64 {
+            let k = x as usize;
+            Some((k, x - k as f64))
+        } else {
+            None
+        }
     }
 
     /// [`Shader::shade`] for primary rays (unit directions, from the
@@ -590,4 +947,56 @@ impl<'a> Shader<'a> {
             }
         }
     }
+}
+
+/// The spectral rows one band of [`Shader::fast_primary`] reads (all of
+/// the band's length): emissivity at the two angle rows, Planck at the two
+/// table nodes of the surface and of the background temperature, `w·τ₂` at
+/// the two range nodes, sky radiance and solar irradiance.
+struct BandStreams<'s> {
+    e0: &'s [f32],
+    e1: &'s [f32],
+    t0: &'s [f32],
+    t1: &'s [f32],
+    g0: &'s [f32],
+    g1: &'s [f32],
+    q0: &'s [f32],
+    q1: &'s [f32],
+    sky: &'s [f32],
+    sun: &'s [f32],
+}
+
+/// Lanes of the partial sums of [`band_sum`] (a fixed order: the result
+/// does not depend on the machine), and the padding of its rows.
+const LANES: usize = 8;
+
+/// `Σ_λ w·τ₂ · [ε·B(T) + r·(env + sd·E_s) + tr·env]` over one band (see
+/// [`Shader::fast_primary`]); `frac` = the interpolation fractions of
+/// angle, temperature, background temperature and range. All rows are
+/// [`FastBand::len`] long, a multiple of [`LANES`].
+#[inline]
+fn band_sum(s: &BandStreams, frac: [f32; 4], big_f: f32, sd: f32, tr: f32) -> f32 {
+    let [ta, ft, fg, fr] = frac;
+    let one_f = 1.0 - big_f;
+    let one_t = 1.0 - tr;
+    let lane = |v: &[f32], c: usize| -> [f32; LANES] {
+        v[c..c + LANES].try_into().expect("rows are whole lanes")
+    };
+    let mut acc = [0f32; LANES];
+    for c in (0..s.e0.len()).step_by(LANES) {
+        let (e0, e1, t0, t1) = (lane(s.e0, c), lane(s.e1, c), lane(s.t0, c), lane(s.t1, c));
+        let (g0, g1, q0, q1) = (lane(s.g0, c), lane(s.g1, c), lane(s.q0, c), lane(s.q1, c));
+        let (sky, sun) = (lane(s.sky, c), lane(s.sun, c));
+        for l in 0..LANES {
+            let eps = e0[l] + ta * (e1[l] - e0[l]);
+            let bt = t0[l] + ft * (t1[l] - t0[l]);
+            let bg = g0[l] + fg * (g1[l] - g0[l]);
+            let wt = q0[l] + fr * (q1[l] - q0[l]);
+            let env = big_f * sky[l] + one_f * bg;
+            let r = one_t - eps;
+            let r = if r > 0.0 { r } else { 0.0 };
+            acc[l] += wt * (eps * bt + r * (env + sd * sun[l]) + tr * env);
+        }
+    }
+    acc.iter().sum()
 }
