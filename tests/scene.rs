@@ -796,6 +796,15 @@ fn gltf_in_a_scene_and_errors_name_file_and_field() {
         "{e}"
     );
     let mut bad = doc.clone();
+    bad["meshes"][1]["primitives"][0]["attributes"]["POSITION"] = serde_json::json!(9);
+    let e = case("pos.gltf", &bad, &bin);
+    assert!(
+        e.contains("pos.gltf")
+            && e.contains("meshes[1].primitives[0].attributes.POSITION")
+            && e.contains("accessor 9 does not exist"),
+        "{e}"
+    );
+    let mut bad = doc.clone();
     bad["nodes"][1]["children"] = serde_json::json!([0]);
     let e = case("cycle.gltf", &bad, &bin);
     assert!(
@@ -808,6 +817,13 @@ fn gltf_in_a_scene_and_errors_name_file_and_field() {
     std::fs::write(&f, &glb(&doc, &bin)[..60]).unwrap();
     let e = load_gltf(&f).unwrap_err().to_string();
     assert!(e.contains("cut.glb") && e.contains("glTF"), "{e}");
+    // A GLB header declaring fewer bytes than itself (an unchecked
+    // subtraction inside the gltf crate).
+    let mut tiny = glb(&doc, &bin);
+    tiny[8..12].copy_from_slice(&5u32.to_le_bytes());
+    std::fs::write(&f, &tiny).unwrap();
+    let e = load_gltf(&f).unwrap_err().to_string();
+    assert!(e.contains("cut.glb") && e.contains("12-byte header"), "{e}");
     let e = load_gltf(&d.path().join("absent.glb"))
         .unwrap_err()
         .to_string();

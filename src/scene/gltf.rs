@@ -43,7 +43,20 @@ pub fn load_gltf(path: &Path) -> Result<Vec<ObjGroup>> {
 /// are an error).
 pub fn load_gltf_slice(data: &[u8], path: &Path, base: Option<&Path>) -> Result<Vec<ObjGroup>> {
     let at = |field: &str| Location::file(path).with_field(field.to_string());
-    let doc = ::gltf::Gltf::from_slice(data).map_err(|e| match e {
+    // The crate subtracts the 12-byte header from the GLB's declared length
+    // unchecked (an overflow panic with overflow checks): check it first.
+    if let Some(len) = data
+        .strip_prefix(b"glTF")
+        .and_then(|rest| rest.get(4..8))
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        && len < 12
+    {
+        return Err(Error::parse(
+            Location::file(path),
+            format!("GLB header declares {len} bytes in all: expected at least the 12-byte header"),
+        ));
+    }
+    let invalid = |e: ::gltf::Error| match e {
         ::gltf::Error::Validation(errs) => {
             let (field, what) = errs
                 .first()
@@ -65,7 +78,34 @@ pub fn load_gltf_slice(data: &[u8], path: &Path, base: Option<&Path>) -> Result<
             Location::file(path),
             format!("not a glTF 2.0 file (JSON or GLB): {other}"),
         ),
-    })?;
+    };
+    let ::gltf::Gltf { document, blob } =
+        ::gltf::Gltf::from_slice_without_validation(data).map_err(invalid)?;
+    // The crate's validation indexes the accessors by each primitive's
+    // POSITION unchecked (a panic when out of range): check that first.
+    let root = document.into_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (k, prim) in mesh.primitives.iter().enumerate() {
+            let positions =
+                ::gltf::json::validation::Checked::Valid(::gltf::json::mesh::Semantic::Positions);
+            if let Some(i) = prim.attributes.get(&positions)
+                && i.value() >= root.accessors.len()
+            {
+                return Err(Error::parse(
+                    at(&format!("meshes[{m}].primitives[{k}].attributes.POSITION")),
+                    format!(
+                        "accessor {} does not exist ({} accessors)",
+                        i.value(),
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    let doc = ::gltf::Gltf {
+        document: ::gltf::Document::from_json(root).map_err(invalid)?,
+        blob,
+    };
     let buffers = load_buffers(&doc, path, base)?;
 
     // Roots: the default scene, else the first, else every node no other
