@@ -1142,6 +1142,16 @@ fn latlon_points_land_on_their_pixel_or_are_refused() {
         .project(glam::DVec3::new(0.0, 5.0, 6.0))
         .unwrap();
     assert!((uv - want).length() < 0.01, "{uv} vs {want}");
+    // Ground 3 m north of the block is hidden from the camera (south of it,
+    // looking down at 45°): refused, not silently given the block's pixel.
+    let hidden = site.latitude_deg + (14.0 / m).to_degrees();
+    let e = geo::pixel_of_latlon(&session, 0, hidden, site.longitude_deg, &at)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("hidden") && e.contains("pts.csv"), "{e}");
+    // …while ground south of the block is seen.
+    let open = site.latitude_deg + (-20.0 / m).to_degrees();
+    geo::pixel_of_latlon(&session, 0, open, site.longitude_deg, &at).unwrap();
     // Through the CSV path: a point 1 km away falls outside the image.
     let csvp = dir.path().join("pts.csv");
     std::fs::write(
@@ -1290,4 +1300,71 @@ fn cli_compare_latlon_points_against_a_render() {
     assert_close!(o["bias"].as_f64().unwrap(), -1.0, 0.01);
     assert_close!(o["rmse"].as_f64().unwrap(), 1.0, 0.01);
     assert_eq!(v["points"]["points"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn scene_model_matches_a_full_render_of_the_perturbed_scene() {
+    // Fixed-geometry model at asphalt α = 0.78, k = 1.2 vs the whole chain
+    // (scene-wide solve, render) of a scene whose materials say so.
+    let dir = tempfile::tempdir().unwrap();
+    let params = r#"[
+      {"kind": "material", "material": "asphalt", "property": "solar_absorptivity", "low": 0.7, "high": 0.98},
+      {"kind": "material", "material": "asphalt", "property": "conductivity", "low": 0.4, "high": 2.0}
+    ]"#;
+    let points: Vec<PixelPoint> = [(2.5, 15.5), (20.5, 14.5), (12.5, 12.5), (12.5, 8.5)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, y))| px(&format!("p{i}"), x, y))
+        .collect();
+    let study = tiny_study(dir.path(), params, points.clone());
+    let x = [0.78, 1.2];
+    let model = study.pixels(&x).unwrap();
+    let nominal = study.pixels(&study.params.nominal()).unwrap();
+    // The perturbed scene: its own materials file.
+    let mut db: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(crate::util::repo_path("scenes/materials.json")).unwrap(),
+    )
+    .unwrap();
+    for m in db["materials"].as_array_mut().unwrap() {
+        if m["name"] == "asphalt" {
+            m["solar_absorptivity"] = 0.78.into();
+            m["conductivity_w_m_k"] = 1.2.into();
+        }
+    }
+    let mats = dir.path().join("materials_truth.json");
+    std::fs::write(&mats, db.to_string()).unwrap();
+    let mut scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
+            .unwrap();
+    scene["materials"] = serde_json::json!([mats]);
+    let truth_path = dir.path().join("truth.json");
+    std::fs::write(&truth_path, scene.to_string()).unwrap();
+    let mut truth = Session::open(&truth_path, irsig::trace::Backend::Embree).unwrap();
+    let t = truth.scene.time;
+    let states = truth.thermal(&[t]).unwrap();
+    let band = truth
+        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
+        .unwrap();
+    let bt = |l: f64| {
+        irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
+            .unwrap()
+            .brightness_temperature(l)
+            .unwrap()
+    };
+    for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
+        let k = p.y as usize * 24 + p.x as usize;
+        let full = bt(band.radiance[0][k] as f64);
+        let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
+        eprintln!(
+            "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
+            p.label
+        );
+        // The change is captured to within a few per cent of itself
+        // (and ≤ 0.1 K).
+        assert!(
+            (mt - full).abs() <= 0.1_f64.min(0.05 * (full - nt).abs()).max(0.01),
+            "{}: model {mt} vs full {full} (nominal {nt})",
+            p.label
+        );
+    }
 }

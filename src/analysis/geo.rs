@@ -12,6 +12,7 @@ use glam::{DVec2, DVec3};
 
 use super::csv::{PointPosition, TruthPoint};
 use crate::render::session::Session;
+use crate::sensor::Geometry;
 use crate::sun::Site;
 use crate::trace::{Coherence, Ray};
 use crate::{Error, Location, Result};
@@ -59,7 +60,8 @@ pub fn enu_from_geodetic(origin: &Site, lat_deg: f64, lon_deg: f64, h_m: f64) ->
 /// z at the site's altitude), and is projected through the sensor.
 ///
 /// # Errors
-/// The point is behind the sensor or outside its image (naming `what`).
+/// The point is behind the sensor, outside its image, or hidden from the
+/// sensor by the scene (naming `what`).
 pub fn pixel_of_latlon(
     session: &Session,
     s: usize,
@@ -91,7 +93,36 @@ pub fn pixel_of_latlon(
     let sensor = &session.sensors[s];
     let (w, h) = (sensor.width() as f64, sensor.height() as f64);
     match sensor.project(p) {
-        Some(uv) if uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w && uv.y < h => Ok(uv),
+        Some(uv) if uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w && uv.y < h => {
+            // Seen, or hidden behind something nearer the sensor?
+            let eye = match &sensor.geometry {
+                Geometry::Frame(c) => c.position(),
+                Geometry::LineScanner(l) => l.ray(uv.y as usize, uv.x, 0.0).origin.as_dvec3(),
+            };
+            let to_eye = eye - p;
+            let dist = to_eye.length();
+            let lift = 1e-3 * dist.max(1.0);
+            let ray = Ray {
+                origin: (p + to_eye / dist * lift).as_vec3(),
+                dir: (to_eye / dist).as_vec3(),
+                tnear: 0.0,
+                tfar: (dist - 2.0 * lift).max(0.0) as f32,
+            };
+            let mut blocked = [false];
+            session
+                .tracer
+                .occluded(&[ray], Coherence::Incoherent, &mut blocked);
+            if blocked[0] {
+                return Err(Error::parse(
+                    what.clone(),
+                    format!(
+                        "({lat_deg}, {lon_deg}) = ENU ({:.1}, {:.1}, {:.1}) m is hidden from sensor `{}` by the scene (pixel ({:.1}, {:.1}) sees something nearer)",
+                        p.x, p.y, p.z, sensor.name, uv.x, uv.y
+                    ),
+                ));
+            }
+            Ok(uv)
+        }
         Some(uv) => Err(Error::parse(
             what.clone(),
             format!(

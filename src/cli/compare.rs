@@ -25,7 +25,7 @@ CSV formats (header row; `#` comments):
                   lat,lon,value[,material][,id] (degrees; needs --scene: the scene
                   whose sensor made the image; the point is dropped onto the
                   scene surface, projected through the sensor, and refused when
-                  it falls outside the image)
+                  it falls outside the image or is hidden from the sensor)
   control points  synth_x,synth_y,truth_x,truth_y[,id]
 
 Examples:
