@@ -1182,7 +1182,7 @@ fn latlon_points_land_on_their_pixel_or_are_refused() {
 #[test]
 fn cli_scene_sensitivity_and_diurnal_run() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = tiny_scene(dir.path(), None);
+    let scene = tiny_scene(dir.path(), Some(serde_json::json!({"model": "builtin"})));
     let params = write_params(
         dir.path(),
         r#"[{"kind": "weather", "property": "relative_humidity_offset", "low": -0.2, "high": 0.2},
@@ -1361,6 +1361,75 @@ fn scene_model_matches_a_full_render_of_the_perturbed_scene() {
         );
         // The change is captured to within a few per cent of itself
         // (and ≤ 0.1 K).
+        assert!(
+            (mt - full).abs() <= 0.1_f64.min(0.05 * (full - nt).abs()).max(0.01),
+            "{}: model {mt} vs full {full} (nominal {nt})",
+            p.label
+        );
+    }
+}
+
+#[test]
+fn scene_model_of_humidity_and_cloud_matches_a_render_with_that_weather() {
+    // With the built-in atmosphere (sky radiance and sensor path from the
+    // weather): the model at RH +0.15 and cloud +0.3 vs a full render with a
+    // weather file holding those records.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = tiny_scene(dir.path(), Some(serde_json::json!({"model": "builtin"})));
+    let session = Session::open(&scene, irsig::trace::Backend::Embree).unwrap();
+    let time = session.scene.time;
+    let ps = ParamSet::load(
+        write_params(
+            dir.path(),
+            r#"[{"kind": "weather", "property": "relative_humidity_offset", "low": -0.3, "high": 0.3},
+                {"kind": "weather", "property": "cloud_cover_offset", "low": 0, "high": 0.5}]"#,
+        ),
+        session.scene.materials.materials(),
+    )
+    .unwrap();
+    let site = session.scene.site;
+    let x = [0.15, 0.3];
+    let records = ps
+        .apply_weather_at(&x, session.weather.records(), Some(&site))
+        .unwrap();
+    let history = irsig::weather::WeatherHistory::new(records, Some(site)).unwrap();
+    let wpath = dir.path().join("weather_truth.csv");
+    let mut f = std::fs::File::create(&wpath).unwrap();
+    irsig::weather::write_csv(&history, &[], &mut f).unwrap();
+    drop(f);
+    let points = vec![
+        px("ground", 3.5, 14.5),
+        px("far", 20.5, 2.5),
+        px("mid", 12.5, 8.5),
+    ];
+    let study = SceneStudy::new(session, 0, time, ps, points.clone(), Vec::new()).unwrap();
+    let model = study.pixels(&x).unwrap();
+    let nominal = study.pixels(&study.params.nominal()).unwrap();
+    let mut s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    s["weather"] = serde_json::json!({"file": wpath});
+    let truth_path = dir.path().join("truth.json");
+    std::fs::write(&truth_path, s.to_string()).unwrap();
+    let mut truth = Session::open(&truth_path, irsig::trace::Backend::Embree).unwrap();
+    let states = truth.thermal(&[time]).unwrap();
+    let band = truth
+        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
+        .unwrap();
+    let bt = |l: f64| {
+        irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
+            .unwrap()
+            .brightness_temperature(l)
+            .unwrap()
+    };
+    for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
+        let k = p.y as usize * 24 + p.x as usize;
+        let full = bt(band.radiance[0][k] as f64);
+        let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
+        eprintln!(
+            "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
+            p.label
+        );
+        assert!((full - nt).abs() > 0.1, "the weather change should show");
         assert!(
             (mt - full).abs() <= 0.1_f64.min(0.05 * (full - nt).abs()).max(0.01),
             "{}: model {mt} vs full {full} (nominal {nt})",
