@@ -1212,6 +1212,24 @@ fn cli_scene_sensitivity_and_diurnal_run() {
         "{outputs:?}"
     );
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
+    // Morris screening on the scene, text report.
+    let (ok, out, err) = run_irsig(&[
+        "sensitivity".as_ref(),
+        scene.as_os_str(),
+        "--params".as_ref(),
+        params.as_os_str(),
+        "--per-material".as_ref(),
+        "1".as_ref(),
+        "--method".as_ref(),
+        "morris".as_ref(),
+        "--trajectories".as_ref(),
+        "3".as_ref(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("scene study: ") && out.contains("mu*"),
+        "{out}"
+    );
     let (ok, out, err) = run_irsig(&[
         "diurnal".as_ref(),
         scene.as_os_str(),

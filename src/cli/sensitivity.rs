@@ -541,6 +541,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     println!("sensitivity ({}) at {}", report.method, report.time);
+    if let Study::Scene(s) = &study {
+        let (sampled, neighbours) = s.facet_counts();
+        println!(
+            "scene study: {} sample pixels of sensor `{}`; per evaluation {sampled} facets under them and {neighbours} neighbours re-solved",
+            s.points.len(),
+            s.session.sensors[s.sensor].name
+        );
+    }
     for (o, name) in outputs.iter().enumerate() {
         println!("{name}:");
         if let Some(oat) = &report.oat {
