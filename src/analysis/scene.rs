@@ -29,7 +29,9 @@
 //!    PSF; the render's other PSFs also weight neighbouring pixels) and its
 //!    apparent temperature the band brightness temperature of that mean.
 //!
-//! Facets farther away keep their rendered temperatures, so what a sampled
+//! A material parameter applies to every part of that material and replaces
+//! a part's own override of the same property (the part's other overrides
+//! stay). Facets farther away keep their rendered temperatures, so what a sampled
 //! facet reflects of them does not follow the parameters. No parameter of
 //! [`super::params`] changes the geometry, so none needs a full render;
 //! emissivity acts both on the slab model and on the optics of the shading
