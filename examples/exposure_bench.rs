@@ -9,22 +9,23 @@
 //! grid:DZxDA | stratified:N).
 //!
 //! With `IRSIG_BENCH_COMPARE=1` (scene files only) the thermal passes are
-//! solved again with the fine dedup quanta ([`Dedup::fine`]) and
-//! `SolveOptions::default()` as reference, and with other options, and the RMS and max
-//! difference of the image-time surface temperatures from the reference
-//! are printed.
+//! solved again with the fine reference ([`ThermalParams::fine_reference`]:
+//! per class, fine dedup quanta, `SolveOptions::default()`) and with other
+//! settings (linearized bin widths and orders, the old per-class default),
+//! and the RMS and max difference of the image-time surface temperatures
+//! from the reference are printed.
 
 use std::path::Path;
 use std::time::Instant;
 
 use chrono::DateTime;
 use irsig::exposure::{
-    Dedup, FacetThermal, FacetThermalSetup, SceneThermalParams, SkySampling, ThermalParams,
-    solve_facet_temperatures, solve_scene, solve_scene_temperatures,
+    Dedup, FacetThermal, FacetThermalSetup, LinearizedParams, SceneThermalParams, SkySampling,
+    ThermalMethod, ThermalParams, solve_facet_temperatures, solve_scene, solve_scene_temperatures,
 };
 use irsig::geometry::procedural::{TerrainParams, generate};
 use irsig::scene::Scene;
-use irsig::thermal::{BackBoundary, Forcing, SlabProperties, SolveOptions};
+use irsig::thermal::{BackBoundary, Forcing, SlabProperties};
 use irsig::trace::{self, Backend};
 
 fn main() -> anyhow::Result<()> {
@@ -171,12 +172,7 @@ fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyh
             solve_facet_temperatures(&r.exposure, &setup.kinds, &setup.props, &forcing, images, p)?;
         anyhow::Ok((s, t.elapsed().as_secs_f64()))
     };
-    let fine = ThermalParams {
-        dedup: Some(Dedup::fine()),
-        options: SolveOptions::default(),
-        ..Default::default()
-    };
-    let (reference, t_ref) = solve(&fine)?;
+    let (reference, t_ref) = solve(&ThermalParams::fine_reference())?;
     let report = |name: &str, s: &irsig::exposure::SceneTemperatures, secs: f64| {
         let (a, b) = (
             &s.surface_temperature_k[0],
@@ -189,27 +185,36 @@ fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyh
         });
         let classes: Vec<usize> = s.passes.iter().map(|p| p.classes).collect();
         println!(
-            "{name}: thermal {secs:.2} s, classes per pass {classes:?}; vs fine: RMS {:.3} K, max {max:.3} K",
+            "{name}: thermal {secs:.2} s, classes/references per pass {classes:?}; vs fine: RMS {:.3} K, max {max:.3} K",
             (sq / n).sqrt()
         );
     };
-    report("fine quanta (reference)", &reference, t_ref);
+    report("fine quanta + SolveOptions::default() (reference)", &reference, t_ref);
     report(
-        "default quanta",
+        "this run's settings",
         &r.temperatures,
         r.timings.thermal.as_secs_f64(),
     );
-    let slow = ThermalParams {
-        options: SolveOptions::default(),
+    let lin = |bin_k: f32, second_order: bool| ThermalParams {
+        method: ThermalMethod::Linearized(LinearizedParams {
+            bin_k,
+            second_order,
+            ..Default::default()
+        }),
         ..Default::default()
     };
-    let (s, t) = solve(&slow)?;
-    report("default quanta + SolveOptions::default()", &s, t);
-    let fast0 = ThermalParams {
-        options: SolveOptions::fast(),
-        ..Default::default()
-    };
-    let (s, t) = solve(&fast0)?;
-    report("default quanta + fast options, no spin-up", &s, t);
+    for (name, p) in [
+        ("linearized, bins 3 K, second order (default)", lin(3.0, true)),
+        ("linearized, bins 3 K, first order", lin(3.0, false)),
+        ("linearized, bins 1 K, second order", lin(1.0, true)),
+        ("linearized, bins 6 K, second order", lin(6.0, true)),
+        (
+            "per class, default quanta + scene_options (old default)",
+            ThermalParams::per_class(Some(Dedup::default()), ThermalParams::scene_options()),
+        ),
+    ] {
+        let (s, t) = solve(&p)?;
+        report(name, &s, t);
+    }
     Ok(())
 }

@@ -42,6 +42,7 @@
 
 mod facets;
 mod history;
+mod linear;
 mod pipeline;
 pub mod sampling;
 mod sky;
@@ -61,7 +62,8 @@ pub use pipeline::{
 pub use sky::{BackgroundEntry, SkySampling, SkyView, sky_view};
 pub use solar::{SolarHistory, solar_history};
 pub use solve::{
-    Dedup, FacetThermal, PassStats, SceneTemperatures, ThermalParams, solve_facet_temperatures,
+    Dedup, FacetThermal, LinearizedParams, PassStats, SceneTemperatures, ThermalMethod,
+    ThermalParams, solve_facet_temperatures,
 };
 
 use crate::geometry::SceneGeometry;

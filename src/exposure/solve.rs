@@ -108,17 +108,64 @@ impl Dedup {
     }
 }
 
+/// Parameters of the linearised scene solve
+/// ([`ThermalMethod::Linearized`]; method in [`super::linear`]'s docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearizedParams {
+    /// Width of the bins of the predicted temperature change (at the first
+    /// and last image records and its daily mean) that share one
+    /// reference facet, K (default 3 K).
+    pub bin_k: f32,
+    /// Add the second-order correction for the curvature of the emission
+    /// (default true).
+    pub second_order: bool,
+    /// Slab options of the reference solves (default
+    /// [`SolveOptions::default`]: they are few, so the accurate grid and
+    /// spin-up cost little).
+    pub options: SolveOptions,
+}
+
+impl Default for LinearizedParams {
+    fn default() -> Self {
+        LinearizedParams {
+            bin_k: 3.0,
+            second_order: true,
+            options: SolveOptions::default(),
+        }
+    }
+}
+
+/// How the scene-wide solve gets each facet's temperatures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ThermalMethod {
+    /// A few nonlinear reference solves per property set and a
+    /// Green's-matrix product per facet (default; fast).
+    Linearized(LinearizedParams),
+    /// One nonlinear slab solve per dedup class
+    /// ([`ThermalParams::dedup`], [`ThermalParams::options`]).
+    PerClass,
+}
+
+impl Default for ThermalMethod {
+    fn default() -> Self {
+        ThermalMethod::Linearized(LinearizedParams::default())
+    }
+}
+
 /// Parameters of the scene-wide solve.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ThermalParams {
     /// Passes (≥ 1; default 2): pass `p ≥ 2` uses pass `p−1`'s neighbour
     /// temperatures as background.
     pub passes: u32,
-    /// Options of the slab solver (grid, sub-steps, spin-up; default
-    /// [`ThermalParams::scene_options`]).
+    /// Options of the slab solver of [`ThermalMethod::PerClass`] (grid,
+    /// sub-steps, spin-up; default [`ThermalParams::scene_options`]).
     pub options: SolveOptions,
-    /// Dedup quanta; `None` solves every facet on its own.
+    /// Dedup quanta of [`ThermalMethod::PerClass`]; `None` solves every
+    /// facet on its own.
     pub dedup: Option<Dedup>,
+    /// The method (default [`ThermalMethod::Linearized`]).
+    pub method: ThermalMethod,
 }
 
 impl Default for ThermalParams {
@@ -127,12 +174,31 @@ impl Default for ThermalParams {
             passes: 2,
             options: ThermalParams::scene_options(),
             dedup: Some(Dedup::default()),
+            method: ThermalMethod::default(),
         }
     }
 }
 
 impl ThermalParams {
-    /// The slab options of scene solves: [`SolveOptions::fast`] (8 cells,
+    /// The per-class (dedup) solve with these quanta and slab options.
+    pub fn per_class(dedup: Option<Dedup>, options: SolveOptions) -> Self {
+        ThermalParams {
+            options,
+            dedup,
+            method: ThermalMethod::PerClass,
+            ..ThermalParams::default()
+        }
+    }
+
+    /// The reference of the accuracy figures: every facet's exact inputs
+    /// to fine quanta ([`Dedup::fine`]), [`SolveOptions::default`].
+    pub fn fine_reference() -> Self {
+        ThermalParams::per_class(Some(Dedup::fine()), SolveOptions::default())
+    }
+}
+
+impl ThermalParams {
+    /// The slab options of per-class scene solves: [`SolveOptions::fast`] (8 cells,
     /// one sub-step per 15-min record) with one spin-up day. On the bundled
     /// town this is about twice as fast as [`SolveOptions::default`] (12
     /// cells, up to 3 spin-up days) and within RMS 0.17 K, max 0.27 K of
@@ -263,6 +329,23 @@ pub fn solve_facet_temperatures(
     }
     if params.passes == 0 {
         return Err(Error::invalid("passes", "expected at least 1 pass"));
+    }
+    if let ThermalMethod::Linearized(lp) = &params.method {
+        if !(lp.bin_k.is_finite() && lp.bin_k > 0.0) {
+            return Err(Error::invalid(
+                "bin_k",
+                format!("expected a positive bin width (K), got {}", lp.bin_k),
+            ));
+        }
+        return super::linear::solve(
+            exposure,
+            kinds,
+            props,
+            forcing,
+            image_records,
+            params.passes,
+            lp,
+        );
     }
     let air4: Vec<f32> = forcing
         .air_temperature_k

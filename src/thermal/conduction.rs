@@ -38,7 +38,7 @@
 pub const STEFAN_BOLTZMANN_W_M2_K4: f64 = 5.670_374_419e-8;
 
 /// TR-BDF2 stage fraction γ = 2 − √2.
-const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
+pub(crate) const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
 
 /// A boundary heat-flux law, linear plus radiative in the boundary
 /// temperature `T` (K):
@@ -168,6 +168,9 @@ pub struct Slab {
     stats: StepStats,
     /// Interior factorisations for the two stage coefficients.
     factors: [Factor; 2],
+    /// Boundary-node temperatures (front, back) of the last step at its
+    /// start, after stage 1 and at its end, K (for the tangent model).
+    stage_boundary_k: [(f64, f64); 3],
 }
 
 /// Boundary-node flux values used by a stage: (front, back), W m⁻².
@@ -237,6 +240,7 @@ impl Slab {
                     ..Default::default()
                 },
             ],
+            stage_boundary_k: [(initial_k, initial_k); 3],
         }
     }
 
@@ -324,6 +328,23 @@ impl Slab {
         self.stats
     }
 
+    /// Heat capacity of each node's control volume, J m⁻² K⁻¹.
+    pub fn capacities_j_m2_k(&self) -> &[f64] {
+        &self.capacity
+    }
+
+    /// Conductance between node `j` and `j + 1`, W m⁻² K⁻¹.
+    pub fn conductances_w_m2_k(&self) -> &[f64] {
+        &self.conductance
+    }
+
+    /// Boundary-node temperatures (front, back) of the last [`Slab::step`]
+    /// at its start, after the trapezoidal stage (at `t + γΔt`) and at its
+    /// end, K: the points the tangent-linear model linearises about.
+    pub fn stage_boundary_k(&self) -> [(f64, f64); 3] {
+        self.stage_boundary_k
+    }
+
     /// Advance by `dt_s` seconds with TR-BDF2. `front(f)` and `back(f)` give
     /// the boundary conditions at the fraction `f ∈ {0, γ, 1}` of the step.
     pub fn step(
@@ -357,6 +378,8 @@ impl Slab {
         self.rhs[n] += c1 * qn_start;
         let (q0_mid, qn_mid) = self.stage(0, c1, front(GAMMA), back(GAMMA));
         // The stage-1 result is now in `temp`.
+        self.stage_boundary_k[0] = (self.t_start[0], self.t_start[n]);
+        self.stage_boundary_k[1] = (self.temp[0], self.temp[n]);
 
         // Stage 2 (BDF2 through tⁿ, t + γΔt to t + Δt):
         //   C U − w Δt (A U + g) = C [a U* − b Uⁿ],  a − b = 1.
@@ -367,6 +390,7 @@ impl Slab {
             self.rhs[i] = self.capacity[i] * (a * self.temp[i] - b * self.t_start[i]);
         }
         let (q0_end, qn_end) = self.stage(1, c2, front(1.0), back(1.0));
+        self.stage_boundary_k[2] = (self.temp[0], self.temp[n]);
 
         // Energy through each face with the scheme's quadrature: summing the
         // stages over all nodes, the conduction terms cancel and

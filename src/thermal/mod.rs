@@ -47,12 +47,14 @@
 
 pub mod balance;
 pub mod conduction;
+pub mod linear;
 
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::weather::WeatherRecord;
 pub use balance::{INTERIOR_AIR_K, INTERIOR_FILM_W_M2_K, mcadams_h_w_m2_k};
 pub use conduction::{Boundary, Grid, STEFAN_BOLTZMANN_W_M2_K4, Slab, StepStats, SurfaceFlux};
+pub use linear::{Linearization, SourceHistory, linearize, source_history, source_history_into};
 
 /// Angular frequency of the diurnal cycle, rad/s.
 pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
@@ -798,22 +800,7 @@ fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> P
     };
     for k in 0..n {
         let air = forcing.air_temperature_k[k];
-        let bg = match inputs.background {
-            Background::Air => air,
-            Background::Constant(t) => t,
-            Background::PerRecord(ts) => ts[k] as f64,
-        };
-        let ff = balance::FrontForcing {
-            air_temperature_k: air,
-            convection_w_m2_k: mcadams_h_w_m2_k(forcing.wind_speed_m_s[k]),
-            direct_normal_w_m2: forcing.direct_normal_w_m2[k],
-            diffuse_horizontal_w_m2: forcing.diffuse_horizontal_w_m2[k],
-            sky_longwave_w_m2: forcing.sky_longwave_w_m2[k],
-            sun_fraction: inputs.sun_fraction[k] as f64,
-            cos_incidence: inputs.cos_incidence[k] as f64,
-            shape_factor: inputs.shape_factor,
-            background_temperature_k: bg,
-        };
+        let ff = front_forcing_at(forcing, inputs, k);
         front.push(balance::front_flux(
             &ff,
             props.solar_absorptivity,
@@ -846,6 +833,28 @@ fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> P
     }
 }
 
+/// What the front balance needs at record `k` of a facet.
+#[inline]
+fn front_forcing_at(forcing: &Forcing, inputs: &FacetInputs, k: usize) -> balance::FrontForcing {
+    let air = forcing.air_temperature_k[k];
+    let bg = match inputs.background {
+        Background::Air => air,
+        Background::Constant(t) => t,
+        Background::PerRecord(ts) => ts[k] as f64,
+    };
+    balance::FrontForcing {
+        air_temperature_k: air,
+        convection_w_m2_k: mcadams_h_w_m2_k(forcing.wind_speed_m_s[k]),
+        direct_normal_w_m2: forcing.direct_normal_w_m2[k],
+        diffuse_horizontal_w_m2: forcing.diffuse_horizontal_w_m2[k],
+        sky_longwave_w_m2: forcing.sky_longwave_w_m2[k],
+        sun_fraction: inputs.sun_fraction[k] as f64,
+        cos_incidence: inputs.cos_incidence[k] as f64,
+        shape_factor: inputs.shape_factor,
+        background_temperature_k: bg,
+    }
+}
+
 #[inline]
 fn lerp_boundary(a: &Boundary, b: &Boundary, f: f64) -> Boundary {
     match (a, b) {
@@ -858,8 +867,16 @@ fn lerp_boundary(a: &Boundary, b: &Boundary, f: f64) -> Boundary {
     }
 }
 
-/// Advance the slab from record `k` to record `k + 1`.
-fn advance(slab: &mut Slab, p: &Prepared, times: &[f64], k: usize, max_substep_s: f64) {
+/// Advance the slab from record `k` to record `k + 1` (and the tangent
+/// model with it, when given).
+fn advance(
+    slab: &mut Slab,
+    p: &Prepared,
+    times: &[f64],
+    k: usize,
+    max_substep_s: f64,
+    mut tangent: Option<&mut linear::Tangent>,
+) {
     let span = times[k + 1] - times[k];
     let m = (span / max_substep_s).ceil().max(1.0) as usize;
     let dt = span / m as f64;
@@ -873,6 +890,19 @@ fn advance(slab: &mut Slab, p: &Prepared, times: &[f64], k: usize, max_substep_s
             |f| Boundary::Flux(fa.lerp(fb, base + f * scale)),
             |f| lerp_boundary(ba, bb, base + f * scale),
         );
+        if let Some(t) = tangent.as_deref_mut() {
+            let phi = [base, base + conduction::GAMMA * scale, base + scale];
+            let temps = slab.stage_boundary_k();
+            let deriv = |i: usize| {
+                let front = fa.lerp(fb, phi[i]).derivative(temps[i].0);
+                let back = match lerp_boundary(ba, bb, phi[i]) {
+                    Boundary::Flux(law) => law.derivative(temps[i].1),
+                    Boundary::Temperature(_) => 0.0,
+                };
+                (front, back)
+            };
+            t.step(dt, [deriv(0), deriv(1), deriv(2)], k, phi);
+        }
     }
 }
 
@@ -896,6 +926,18 @@ pub fn solve(
     inputs.validate(forcing.len())?;
     opts.validate()?;
     let p = prepare(props, forcing, inputs);
+    Ok(solve_prepared(props, forcing, &p, opts, None))
+}
+
+/// [`solve`] on validated, prepared inputs, optionally carrying the
+/// tangent-linear model along (see [`linear`]).
+fn solve_prepared(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    p: &Prepared,
+    opts: &SolveOptions,
+    mut tangent: Option<&mut linear::Tangent>,
+) -> ThermalSolution {
     let depth = props.column_depth_m();
     let mut slab = Slab::new(
         depth,
@@ -909,6 +951,9 @@ pub fn solve(
         let top = p.initial_surface_k;
         slab.set_temperatures(|x| top + (deep - top) * x / depth);
     }
+    if let Some(t) = tangent.as_deref_mut() {
+        t.init(&slab);
+    }
     let n = forcing.len();
     let times = &forcing.times_s;
 
@@ -921,7 +966,14 @@ pub fn solve(
         let mut start_state = slab.temperatures_k().to_vec();
         for _ in 0..opts.spinup.max_cycles {
             for k in 0..k_p {
-                advance(&mut slab, &p, times, k, opts.max_substep_s);
+                advance(
+                    &mut slab,
+                    p,
+                    times,
+                    k,
+                    opts.max_substep_s,
+                    tangent.as_deref_mut(),
+                );
             }
             spinup_cycles += 1;
             // Periodicity: how much the state changed over the cycle.
@@ -948,8 +1000,21 @@ pub fn solve(
     surface.push(slab.front_k());
     back.push(slab.back_k());
     flux.push(p.front[0].flux(slab.front_k()));
+    if let Some(t) = tangent.as_deref_mut() {
+        t.record(0);
+    }
     for k in 0..n - 1 {
-        advance(&mut slab, &p, times, k, opts.max_substep_s);
+        advance(
+            &mut slab,
+            p,
+            times,
+            k,
+            opts.max_substep_s,
+            tangent.as_deref_mut(),
+        );
+        if let Some(t) = tangent.as_deref_mut() {
+            t.record(k + 1);
+        }
         surface.push(slab.front_k());
         back.push(slab.back_k());
         flux.push(p.front[k + 1].flux(slab.front_k()));
@@ -983,7 +1048,7 @@ pub fn solve(
         None
     };
 
-    Ok(ThermalSolution {
+    ThermalSolution {
         surface_temperature_k: surface,
         back_temperature_k: back,
         net_front_flux_w_m2: flux,
@@ -996,5 +1061,5 @@ pub fn solve(
             stored_change_j_m2: stored_change,
         },
         stats: slab.stats(),
-    })
+    }
 }

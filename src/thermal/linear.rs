@@ -1,0 +1,615 @@
+//! The tangent-linear slab model: how a facet's surface-temperature history
+//! responds to its surface heat sources, for the scene-wide solve of many
+//! facets that share one material.
+//!
+//! # Why
+//! In the slab model only the emission `εσT⁴` is nonlinear: conduction,
+//! convection `h(u)(T_air − T)` and film coefficients are linear in the
+//! temperatures, and every facet-specific input — absorbed direct solar
+//! `α E_dn s cos θ`, diffuse `α F E_d`, sky longwave `ε F E_sky`, background
+//! `ε(1−F)σT_bg⁴`, self power — enters only through the temperature-free
+//! part `S` of the boundary flux law `q = S − H·T − R·T⁴`
+//! ([`super::SurfaceFlux::source_w_m2`]). Facets with the same properties
+//! therefore share one discrete operator and differ only in their source
+//! histories `S_k` (front) and `B_k` (the back face, when it is exposed).
+//!
+//! # What
+//! [`linearize`] solves one facet (the *reference*) with the full nonlinear
+//! model and carries the tangent-linear model of every TR-BDF2 step along
+//! (the derivative of the discrete scheme itself: stage equations
+//! linearised about the reference's stage temperatures, the same
+//! tridiagonal operators, Thomas solves with one right-hand side per
+//! source record). The result, [`Linearization`], holds the Green's
+//! matrices `G[t][k] = ∂T(t)/∂S_k` (K per W m⁻²) of the front (and back)
+//! node temperature at every record `t` with respect to the front (and back)
+//! source at every record `k` — spin-up included: with `c` spin-up cycles
+//! of the first period, `∂x₀/∂S = Σ_{j<c} Φʲ Ψ` where `Φ = ∂x(P)/∂x(0)`,
+//! `Ψ = ∂x(P)/∂S` are the one-period maps, taken from the real run's first
+//! period (the reference is periodic to within the spin-up tolerance there).
+//!
+//! A facet with sources `S' = S + ΔS` then has, to first order,
+//! `T'(t) = T(t) + Σ_k G[t][k] ΔS_k` ([`Linearization::predict`]). The
+//! neglected term is the curvature of the emission,
+//! `r = −εσ[(T+Δ)⁴ − T⁴ − 4T³Δ] = −εσΔ²(6T² + 4TΔ + Δ²)` (W m⁻²); the
+//! second-order correction adds `G r(Δ)` with `Δ` the first-order change
+//! (one fixed-point iteration of `Δ = G(ΔS + r(Δ))`), leaving an error
+//! of third order in `Δ`.
+//!
+//! The tangent-linear and adjoint views give the same matrix (one forward
+//! sweep with one column per source, or one backward sweep per output
+//! record); the forward sweep is used because every output record is needed
+//! (the neighbours' temperature histories drive the background term of the
+//! second pass). Reference: the tangent-linear model of a discrete scheme,
+//! e.g. Errico, "What is an adjoint model?", Bull. Amer. Meteor. Soc.
+//! 78(11), 1997, doi:10.1175/1520-0477(1997)078<2577:WIAAM>2.0.CO;2.
+
+use super::conduction::{GAMMA, Slab};
+use super::{
+    BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions, ThermalSolution, prepare,
+    solve_prepared,
+};
+use crate::error::Result;
+use crate::thermal::Boundary;
+
+/// The surface-source histories of one facet (the temperature-free part of
+/// its boundary flux laws at each record), W m⁻².
+#[derive(Debug, Clone, PartialEq)]
+pub struct SourceHistory {
+    /// Front surface: absorbed solar and longwave, `h·T_air`, self power.
+    pub front_w_m2: Vec<f64>,
+    /// Back face, for [`BackBoundary::Exposed`] only (None otherwise: the
+    /// back law is then the same for every facet of the material).
+    pub back_w_m2: Option<Vec<f64>>,
+}
+
+/// The source histories of a facet (validated like [`super::solve`]).
+pub fn source_history(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    inputs: &FacetInputs,
+) -> Result<SourceHistory> {
+    props.validate()?;
+    forcing.validate()?;
+    inputs.validate(forcing.len())?;
+    let p = prepare(props, forcing, inputs);
+    Ok(SourceHistory {
+        front_w_m2: p.front.iter().map(|f| f.source_w_m2).collect(),
+        back_w_m2: matches!(props.back, BackBoundary::Exposed { .. }).then(|| {
+            p.back
+                .iter()
+                .map(|b| match b {
+                    Boundary::Flux(f) => f.source_w_m2,
+                    Boundary::Temperature(_) => 0.0,
+                })
+                .collect()
+        }),
+    })
+}
+
+/// [`source_history`] into caller buffers (one value per record; `back` is
+/// filled only for an exposed back), without allocating: for scene solves
+/// over many facets. The properties and forcing are not validated here
+/// (the caller has); the facet inputs are.
+pub fn source_history_into(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    inputs: &FacetInputs,
+    front: &mut [f64],
+    back: &mut [f64],
+) -> Result<()> {
+    let n = forcing.len();
+    inputs.validate(n)?;
+    let f_back = inputs
+        .back_shape_factor
+        .unwrap_or(1.0 - inputs.shape_factor);
+    let exposed = match props.back {
+        BackBoundary::Exposed { fraction } => Some(fraction),
+        _ => None,
+    };
+    for k in 0..n {
+        let ff = super::front_forcing_at(forcing, inputs, k);
+        front[k] = super::balance::front_flux(
+            &ff,
+            props.solar_absorptivity,
+            props.thermal_emissivity,
+            props.self_power_w_m2,
+        )
+        .source_w_m2;
+        if let Some(a) = exposed {
+            back[k] =
+                super::balance::exposed_back_flux(&ff, props.thermal_emissivity, f_back, a)
+                    .source_w_m2;
+        }
+    }
+    Ok(())
+}
+
+/// A reference facet's nonlinear solution and its Green's matrices.
+#[derive(Debug, Clone)]
+pub struct Linearization {
+    /// Records of the history.
+    pub records: usize,
+    /// The nonlinear solution of the reference facet.
+    pub solution: ThermalSolution,
+    /// The reference's source histories.
+    pub sources: SourceHistory,
+    /// `εσ` of the front face, W m⁻² K⁻⁴.
+    pub front_radiative_w_m2_k4: f64,
+    /// `a·εσ` of an exposed back face (0 otherwise), W m⁻² K⁻⁴.
+    pub back_radiative_w_m2_k4: f64,
+    /// `∂T_front(t)/∂S_k`, row-major `[t][k]`, K per W m⁻².
+    pub front_from_front: Vec<f64>,
+    /// `∂T_front(t)/∂B_k` (exposed back only, else empty).
+    pub front_from_back: Vec<f64>,
+    /// `∂T_back(t)/∂S_k` (exposed back only, else empty).
+    pub back_from_front: Vec<f64>,
+    /// `∂T_back(t)/∂B_k` (exposed back only, else empty).
+    pub back_from_back: Vec<f64>,
+}
+
+impl Linearization {
+    /// Whether the back face has its own source (exposed back).
+    pub fn has_back(&self) -> bool {
+        !self.front_from_back.is_empty()
+    }
+
+    /// Front-surface temperature history of a facet with the same
+    /// properties and weather and source histories `front` (and `back`,
+    /// required when [`Linearization::has_back`]), K: the reference's plus
+    /// the Green's matrices times the source differences, plus (when
+    /// `second_order`) the correction for the curvature of the emission
+    /// (module docs).
+    pub fn predict(&self, front: &[f64], back: Option<&[f64]>, second_order: bool) -> Vec<f64> {
+        let n = self.records;
+        assert_eq!(front.len(), n, "one front source per record");
+        let ds: Vec<f64> = front
+            .iter()
+            .zip(&self.sources.front_w_m2)
+            .map(|(a, b)| a - b)
+            .collect();
+        let db: Option<Vec<f64>> = if self.has_back() {
+            let back = back.expect("an exposed back needs its source history");
+            let r = self.sources.back_w_m2.as_ref().expect("exposed back");
+            Some(back.iter().zip(r).map(|(a, b)| a - b).collect())
+        } else {
+            None
+        };
+        let apply = |g_front: &[f64], g_back: &[f64], x: &[f64], y: Option<&[f64]>| {
+            let mut out = vec![0.0; n];
+            for (t, o) in out.iter_mut().enumerate() {
+                let row = &g_front[t * n..(t + 1) * n];
+                let mut s: f64 = row.iter().zip(x).map(|(g, v)| g * v).sum();
+                if let Some(y) = y {
+                    let row = &g_back[t * n..(t + 1) * n];
+                    s += row.iter().zip(y).map(|(g, v)| g * v).sum::<f64>();
+                }
+                *o = s;
+            }
+            out
+        };
+        let mut d = apply(
+            &self.front_from_front,
+            &self.front_from_back,
+            &ds,
+            db.as_deref(),
+        );
+        if second_order {
+            let t_ref = &self.solution.surface_temperature_k;
+            let rf: Vec<f64> = d
+                .iter()
+                .zip(t_ref)
+                .map(|(&dt, &t)| emission_curvature(self.front_radiative_w_m2_k4, t, dt))
+                .collect();
+            let rb = if self.has_back() {
+                let db = db.as_deref().expect("exposed back");
+                let dback = apply(&self.back_from_front, &self.back_from_back, &ds, Some(db));
+                Some(
+                    dback
+                        .iter()
+                        .zip(&self.solution.back_temperature_k)
+                        .map(|(&dt, &t)| emission_curvature(self.back_radiative_w_m2_k4, t, dt))
+                        .collect::<Vec<f64>>(),
+                )
+            } else {
+                None
+            };
+            let c = apply(
+                &self.front_from_front,
+                &self.front_from_back,
+                &rf,
+                rb.as_deref(),
+            );
+            d.iter_mut().zip(c).for_each(|(a, b)| *a += b);
+        }
+        d.iter()
+            .zip(&self.solution.surface_temperature_k)
+            .map(|(a, b)| a + b)
+            .collect()
+    }
+}
+
+/// The neglected curvature of the emission `−R T⁴` about `t_k` for a change
+/// `dt_k`: `−R[(T+Δ)⁴ − T⁴ − 4T³Δ] = −RΔ²(6T² + 4TΔ + Δ²)`, W m⁻².
+#[inline]
+pub fn emission_curvature(radiative_w_m2_k4: f64, t_k: f64, dt_k: f64) -> f64 {
+    -radiative_w_m2_k4 * dt_k * dt_k * (6.0 * t_k * t_k + 4.0 * t_k * dt_k + dt_k * dt_k)
+}
+
+/// Solves the reference facet with the nonlinear model and returns its
+/// Green's matrices (module docs). Errors as [`super::solve`].
+pub fn linearize(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    inputs: &FacetInputs,
+    opts: &SolveOptions,
+) -> Result<Linearization> {
+    let sources = source_history(props, forcing, inputs)?;
+    opts.validate()?;
+    let p = prepare(props, forcing, inputs);
+    let n = forcing.len();
+    let has_back = sources.back_w_m2.is_some();
+    let fixed_back = matches!(props.back, BackBoundary::Ground { .. });
+    // The end of the first period (spin-up cycle) within the real run.
+    let times = &forcing.times_s;
+    let period = opts.spinup.period_s;
+    let k_p = times.partition_point(|&t| t <= times[0] + period + 1e-6) - 1;
+    let mut tangent = Tangent::new(n, has_back, fixed_back, k_p);
+    let solution = solve_prepared(props, forcing, &p, opts, Some(&mut tangent));
+    let cycles = solution.spinup_cycles as usize;
+    let (front_from_front, front_from_back, back_from_front, back_from_back) =
+        tangent.green(cycles);
+    let (front_radiative, back_radiative) = match props.back {
+        BackBoundary::Exposed { fraction } => {
+            let r = props.thermal_emissivity * super::STEFAN_BOLTZMANN_W_M2_K4;
+            (r, fraction * r)
+        }
+        _ => (
+            props.thermal_emissivity * super::STEFAN_BOLTZMANN_W_M2_K4,
+            0.0,
+        ),
+    };
+    Ok(Linearization {
+        records: n,
+        solution,
+        sources,
+        front_radiative_w_m2_k4: front_radiative,
+        back_radiative_w_m2_k4: back_radiative,
+        front_from_front,
+        front_from_back,
+        back_from_front,
+        back_from_back,
+    })
+}
+
+/// The tangent-linear state carried along a nonlinear solve: the
+/// sensitivity `P` of every node temperature to every source record and to
+/// the state at the start of the real run.
+///
+/// Columns: front sources `0..R`, back sources `R..2R` (exposed back
+/// only), then one column per node (the initial state). `P` is stored
+/// node-major (`P[node][column]`), so every operation is a vector operation
+/// over the columns.
+#[derive(Debug, Clone)]
+pub(crate) struct Tangent {
+    records: usize,
+    has_back: bool,
+    fixed_back: bool,
+    /// Record at the end of the first period (0: no spin-up period).
+    k_p: usize,
+    nodes: usize,
+    cols: usize,
+    capacity: Vec<f64>,
+    conductance: Vec<f64>,
+    p: Vec<f64>,
+    star: Vec<f64>,
+    rhs: Vec<f64>,
+    cp: Vec<f64>,
+    /// Rows 0 (front) and `nodes − 1` (back) of `P` at each record.
+    out_front: Vec<f64>,
+    out_back: Vec<f64>,
+    /// `P` at record `k_p`.
+    period: Vec<f64>,
+    active: bool,
+}
+
+impl Tangent {
+    fn new(records: usize, has_back: bool, fixed_back: bool, k_p: usize) -> Tangent {
+        Tangent {
+            records,
+            has_back,
+            fixed_back,
+            k_p,
+            nodes: 0,
+            cols: 0,
+            capacity: Vec::new(),
+            conductance: Vec::new(),
+            p: Vec::new(),
+            star: Vec::new(),
+            rhs: Vec::new(),
+            cp: Vec::new(),
+            out_front: Vec::new(),
+            out_back: Vec::new(),
+            period: Vec::new(),
+            active: false,
+        }
+    }
+
+    /// Called when the slab is built: remember its operators. The tangent
+    /// becomes active at the start of the real run ([`Tangent::record`]
+    /// with record 0).
+    pub(crate) fn init(&mut self, slab: &Slab) {
+        self.capacity = slab.capacities_j_m2_k().to_vec();
+        self.conductance = slab.conductances_w_m2_k().to_vec();
+        self.nodes = self.capacity.len();
+        let src = if self.has_back { 2 } else { 1 } * self.records;
+        self.cols = src + self.nodes;
+        let size = self.nodes * self.cols;
+        self.p = vec![0.0; size];
+        self.star = vec![0.0; size];
+        self.rhs = vec![0.0; size];
+        self.cp = vec![0.0; self.nodes];
+        self.out_front = vec![0.0; self.records * self.cols];
+        self.out_back = if self.has_back {
+            vec![0.0; self.records * self.cols]
+        } else {
+            Vec::new()
+        };
+        self.active = false;
+    }
+
+    /// The real run is at record `t`: store the sensitivities (record 0
+    /// starts the tangent with `P = [0 | I]`).
+    pub(crate) fn record(&mut self, t: usize) {
+        let (nodes, cols) = (self.nodes, self.cols);
+        if t == 0 {
+            self.p.iter_mut().for_each(|v| *v = 0.0);
+            let src = cols - nodes;
+            for i in 0..nodes {
+                self.p[i * cols + src + i] = 1.0;
+            }
+            if self.fixed_back {
+                let last = nodes - 1;
+                self.p[last * cols + src + last] = 0.0;
+            }
+            self.active = true;
+        }
+        self.out_front[t * cols..(t + 1) * cols].copy_from_slice(&self.p[..cols]);
+        if self.has_back {
+            let last = (nodes - 1) * cols;
+            self.out_back[t * cols..(t + 1) * cols].copy_from_slice(&self.p[last..last + cols]);
+        }
+        if t == self.k_p && t > 0 {
+            self.period = self.p.clone();
+        }
+    }
+
+    /// One TR-BDF2 step of the tangent model: `dt` s, boundary-flux
+    /// derivatives `dq/dT` (front, back) at the step's start, stage 1 and
+    /// end, the record interval `k` and the interval fractions `phi` of those
+    /// three instants.
+    pub(crate) fn step(&mut self, dt: f64, deriv: [(f64, f64); 3], k: usize, phi: [f64; 3]) {
+        if !self.active {
+            return;
+        }
+        let (nodes, cols) = (self.nodes, self.cols);
+        let n = nodes - 1;
+        let c1 = 0.5 * GAMMA * dt;
+        let a = 1.0 / (GAMMA * (2.0 - GAMMA));
+        let b = (1.0 - GAMMA) * (1.0 - GAMMA) / (GAMMA * (2.0 - GAMMA));
+        let c2 = (1.0 - GAMMA) / (2.0 - GAMMA) * dt;
+        // Stage 1 right-hand side: C P + c1 (A P + D_start P + σ(0)) + c1 σ(γ).
+        for i in 0..nodes {
+            let row = i * cols;
+            let cap = self.capacity[i];
+            let kl = if i > 0 { self.conductance[i - 1] } else { 0.0 };
+            let kr = if i < n { self.conductance[i] } else { 0.0 };
+            let mut diag = cap - c1 * (kl + kr);
+            if i == 0 {
+                diag += c1 * deriv[0].0;
+            }
+            if i == n && !self.fixed_back {
+                diag += c1 * deriv[0].1;
+            }
+            for j in 0..cols {
+                let mut v = diag * self.p[row + j];
+                if i > 0 {
+                    v += c1 * kl * self.p[row - cols + j];
+                }
+                if i < n {
+                    v += c1 * kr * self.p[row + cols + j];
+                }
+                self.rhs[row + j] = v;
+            }
+        }
+        let w_k = c1 * ((1.0 - phi[0]) + (1.0 - phi[1]));
+        let w_k1 = c1 * (phi[0] + phi[1]);
+        self.add_sources(k, w_k, w_k1);
+        if self.fixed_back {
+            let row = n * cols;
+            self.rhs[row..row + cols].iter_mut().for_each(|v| *v = 0.0);
+        }
+        solve_tridiagonal(
+            &self.capacity,
+            &self.conductance,
+            c1,
+            deriv[1],
+            self.fixed_back,
+            &mut self.cp,
+            &self.rhs,
+            &mut self.star,
+            cols,
+        );
+        // Stage 2: C (a P* − b P) + c2 σ(1).
+        for i in 0..nodes {
+            let cap = self.capacity[i];
+            let row = i * cols;
+            let (o, st, pp) = (
+                &mut self.rhs[row..row + cols],
+                &self.star[row..row + cols],
+                &self.p[row..row + cols],
+            );
+            for j in 0..cols {
+                o[j] = cap * (a * st[j] - b * pp[j]);
+            }
+        }
+        self.add_sources(k, c2 * (1.0 - phi[2]), c2 * phi[2]);
+        if self.fixed_back {
+            let row = n * cols;
+            self.rhs[row..row + cols].iter_mut().for_each(|v| *v = 0.0);
+        }
+        solve_tridiagonal(
+            &self.capacity,
+            &self.conductance,
+            c2,
+            deriv[2],
+            self.fixed_back,
+            &mut self.cp,
+            &self.rhs,
+            &mut self.p,
+            cols,
+        );
+    }
+
+    /// Add the unit source perturbations of records `k` and `k + 1` with
+    /// weights `w_k`, `w_k1` to the boundary rows of `rhs`.
+    fn add_sources(&mut self, k: usize, w_k: f64, w_k1: f64) {
+        let cols = self.cols;
+        let r = self.records;
+        self.rhs[k] += w_k;
+        self.rhs[k + 1] += w_k1;
+        if self.has_back {
+            let row = (self.nodes - 1) * cols;
+            self.rhs[row + r + k] += w_k;
+            self.rhs[row + r + k + 1] += w_k1;
+        }
+    }
+
+    /// The Green's matrices `[t][k]` (front←front, front←back, back←front,
+    /// back←back) with `cycles` spin-up cycles folded in.
+    fn green(&self, cycles: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (nodes, cols, r) = (self.nodes, self.cols, self.records);
+        let src = cols - nodes;
+        // X = Σ_{j<c} Φʲ Ψ: sensitivity of the real run's start state to the
+        // sources, nodes × src.
+        let mut x = vec![0.0; nodes * src];
+        if cycles > 0 && !self.period.is_empty() {
+            let psi = |i: usize, j: usize| self.period[i * cols + j];
+            let phi = |i: usize, l: usize| self.period[i * cols + src + l];
+            let mut term: Vec<f64> = (0..nodes * src).map(|q| psi(q / src, q % src)).collect();
+            x.copy_from_slice(&term);
+            for _ in 1..cycles {
+                let mut next = vec![0.0; nodes * src];
+                for i in 0..nodes {
+                    for l in 0..nodes {
+                        let f = phi(i, l);
+                        if f == 0.0 {
+                            continue;
+                        }
+                        for j in 0..src {
+                            next[i * src + j] += f * term[l * src + j];
+                        }
+                    }
+                }
+                term = next;
+                x.iter_mut().zip(&term).for_each(|(a, b)| *a += b);
+            }
+        }
+        let fold = |out: &[f64]| -> Vec<f64> {
+            let mut g = vec![0.0; r * src];
+            for t in 0..r {
+                let row = &out[t * cols..(t + 1) * cols];
+                let gt = &mut g[t * src..(t + 1) * src];
+                gt.copy_from_slice(&row[..src]);
+                for l in 0..nodes {
+                    let f = row[src + l];
+                    if f != 0.0 {
+                        gt.iter_mut()
+                            .zip(&x[l * src..(l + 1) * src])
+                            .for_each(|(a, b)| *a += f * b);
+                    }
+                }
+            }
+            g
+        };
+        let split = |g: Vec<f64>| -> (Vec<f64>, Vec<f64>) {
+            if !self.has_back {
+                return (g, Vec::new());
+            }
+            let mut a = Vec::with_capacity(r * r);
+            let mut b = Vec::with_capacity(r * r);
+            for t in 0..r {
+                a.extend_from_slice(&g[t * src..t * src + r]);
+                b.extend_from_slice(&g[t * src + r..(t + 1) * src]);
+            }
+            (a, b)
+        };
+        let (ff, fb) = split(fold(&self.out_front));
+        let (bf, bb) = if self.has_back {
+            split(fold(&self.out_back))
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        (ff, fb, bf, bb)
+    }
+}
+
+/// Solve `(C − c A − c D) X = rhs` for `cols` right-hand sides (node-major),
+/// `A` the conduction operator, `D = diag(d_front, 0, …, d_back)`; with a
+/// fixed back the last row is `X_n = rhs_n` (Thomas algorithm, Press et al.,
+/// *Numerical Recipes*, 3rd ed., §2.4).
+#[allow(clippy::too_many_arguments)]
+fn solve_tridiagonal(
+    capacity: &[f64],
+    conductance: &[f64],
+    c: f64,
+    d: (f64, f64),
+    fixed_back: bool,
+    cp: &mut [f64],
+    rhs: &[f64],
+    x: &mut [f64],
+    cols: usize,
+) {
+    let nodes = capacity.len();
+    let n = nodes - 1;
+    let mut prev_cp = 0.0;
+    for i in 0..nodes {
+        let kl = if i > 0 { conductance[i - 1] } else { 0.0 };
+        let kr = if i < n { conductance[i] } else { 0.0 };
+        let (lower, upper, diag) = if i == n && fixed_back {
+            (0.0, 0.0, 1.0)
+        } else {
+            let mut diag = capacity[i] + c * (kl + kr);
+            if i == 0 {
+                diag -= c * d.0;
+            }
+            if i == n {
+                diag -= c * d.1;
+            }
+            (-c * kl, -c * kr, diag)
+        };
+        let inv = 1.0 / (diag - lower * prev_cp);
+        cp[i] = upper * inv;
+        prev_cp = cp[i];
+        let row = i * cols;
+        if i == 0 {
+            for j in 0..cols {
+                x[j] = rhs[j] * inv;
+            }
+        } else {
+            let (done, cur) = x.split_at_mut(row);
+            let prev = &done[row - cols..];
+            for j in 0..cols {
+                cur[j] = (rhs[row + j] - lower * prev[j]) * inv;
+            }
+        }
+    }
+    for i in (0..n).rev() {
+        let row = i * cols;
+        let (cur, next) = x.split_at_mut(row + cols);
+        let cur = &mut cur[row..];
+        let f = cp[i];
+        for j in 0..cols {
+            cur[j] -= f * next[j];
+        }
+    }
+}
