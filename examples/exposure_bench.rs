@@ -204,10 +204,20 @@ fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyh
         ..Default::default()
     };
     for (name, p) in [
-        ("linearized, bins 3 K, second order (default)", lin(3.0, true)),
-        ("linearized, bins 3 K, first order", lin(3.0, false)),
-        ("linearized, bins 1 K, second order", lin(1.0, true)),
+        ("linearized, bins 3 K, first order (default)", lin(3.0, false)),
+        ("linearized, bins 3 K, second order", lin(3.0, true)),
+        ("linearized, bins 1 K, first order", lin(1.0, false)),
+        ("linearized, bins 6 K, first order", lin(6.0, false)),
         ("linearized, bins 6 K, second order", lin(6.0, true)),
+        ("linearized, bins 12 K, second order", lin(12.0, true)),
+        (
+            "linearized, one reference per material, second order",
+            lin(1e4, true),
+        ),
+        (
+            "linearized, one reference per material, first order",
+            lin(1e4, false),
+        ),
         (
             "per class, default quanta + scene_options (old default)",
             ThermalParams::per_class(Some(Dedup::default()), ThermalParams::scene_options()),

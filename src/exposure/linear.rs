@@ -29,7 +29,7 @@
 //! not depend on the thread count.
 
 use std::collections::BTreeMap;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
@@ -38,17 +38,26 @@ use super::solve::{FacetThermal, LinearizedParams, PassStats, SceneTemperatures}
 use crate::thermal::{self, Background, FacetInputs, Forcing, Linearization, SlabProperties};
 use crate::{Error, Result};
 
+/// Facets per work item of the parallel loops.
+const CHUNK: usize = 256;
+
 /// A reference facet's linearisation in the layout the per-facet products
-/// use: `f32`, column-major (`g[k·R + t] = ∂T(t)/∂S_k`).
+/// use: `f32`, column-major (`g[k·R + t] = ∂T(t)/∂S_k`), plus the rows of
+/// the image records row-major.
 struct Reference {
-    records: usize,
     has_back: bool,
     gt_ff: Vec<f32>,
     gt_fb: Vec<f32>,
     gt_bf: Vec<f32>,
     gt_bb: Vec<f32>,
-    s_front: Vec<f64>,
-    s_back: Vec<f64>,
+    /// Rows `[i][k]` of `∂T_front(rows[i])/∂S_k` and `/∂B_k`.
+    rows_ff: Vec<f32>,
+    rows_fb: Vec<f32>,
+    /// Column means `(1/R) Σ_t ∂T_front(t)/∂S_k` and `/∂B_k`.
+    mean_ff: Vec<f32>,
+    mean_fb: Vec<f32>,
+    s_front: Vec<f32>,
+    s_back: Vec<f32>,
     t_front: Vec<f32>,
     t_back: Vec<f32>,
     r_front: f32,
@@ -57,7 +66,7 @@ struct Reference {
 }
 
 impl Reference {
-    fn new(lin: Linearization) -> Reference {
+    fn new(lin: Linearization, rows: &[usize]) -> Reference {
         let r = lin.records;
         let transpose = |g: &[f64]| -> Vec<f32> {
             if g.is_empty() {
@@ -71,27 +80,37 @@ impl Reference {
             }
             out
         };
+        let pick = |g: &[f64]| -> Vec<f32> {
+            if g.is_empty() {
+                return Vec::new();
+            }
+            rows.iter()
+                .flat_map(|&t| g[t * r..(t + 1) * r].iter().map(|&v| v as f32))
+                .collect()
+        };
+        let mean = |g: &[f64]| -> Vec<f32> {
+            if g.is_empty() {
+                return Vec::new();
+            }
+            (0..r)
+                .map(|k| ((0..r).map(|t| g[t * r + k]).sum::<f64>() / r as f64) as f32)
+                .collect()
+        };
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
         Reference {
-            records: r,
             has_back: lin.has_back(),
             gt_ff: transpose(&lin.front_from_front),
             gt_fb: transpose(&lin.front_from_back),
             gt_bf: transpose(&lin.back_from_front),
             gt_bb: transpose(&lin.back_from_back),
-            s_front: lin.sources.front_w_m2.clone(),
-            s_back: lin.sources.back_w_m2.clone().unwrap_or_default(),
-            t_front: lin
-                .solution
-                .surface_temperature_k
-                .iter()
-                .map(|&t| t as f32)
-                .collect(),
-            t_back: lin
-                .solution
-                .back_temperature_k
-                .iter()
-                .map(|&t| t as f32)
-                .collect(),
+            rows_ff: pick(&lin.front_from_front),
+            rows_fb: pick(&lin.front_from_back),
+            mean_ff: mean(&lin.front_from_front),
+            mean_fb: mean(&lin.front_from_back),
+            s_front: f32s(&lin.sources.front_w_m2),
+            s_back: lin.sources.back_w_m2.as_deref().map(f32s).unwrap_or_default(),
+            t_front: f32s(&lin.solution.surface_temperature_k),
+            t_back: f32s(&lin.solution.back_temperature_k),
             r_front: lin.front_radiative_w_m2_k4 as f32,
             r_back: lin.back_radiative_w_m2_k4 as f32,
             spinup_change_k: lin.solution.spinup_change_k.unwrap_or(0.0),
@@ -99,8 +118,7 @@ impl Reference {
     }
 }
 
-/// `y = Gᵀ-stored matrix × x` (column-major `g[k·R + t]`), accumulated into
-/// `y` when `add`.
+/// `y (+)= G x` for a column-major `G` (`g[k·R + t]`).
 #[inline]
 fn matvec(g: &[f32], x: &[f32], y: &mut [f32], add: bool) {
     let r = y.len();
@@ -118,127 +136,25 @@ fn matvec(g: &[f32], x: &[f32], y: &mut [f32], add: bool) {
     }
 }
 
-/// Row `t` of a column-major matrix times `x`.
+/// `a · b`, in eight lanes (vectorisable).
 #[inline]
-fn row_dot(g: &[f32], t: usize, x: &[f32]) -> f32 {
-    let r = x.len();
-    x.iter().enumerate().map(|(k, &xk)| xk * g[k * r + t]).sum()
+fn dot(a: &[f32], b: &[f32]) -> f32 {
+    let mut acc = [0.0f32; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for i in 0..8 {
+            acc[i] += x[i] * y[i];
+        }
+    }
+    let tail: f32 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    acc.iter().sum::<f32>() + tail
 }
 
 /// `−R Δ²(6T² + 4TΔ + Δ²)`, the emission curvature (f32).
 #[inline]
 fn curvature(r: f32, t: f32, d: f32) -> f32 {
     -r * d * d * (6.0 * t * t + 4.0 * t * d + d * d)
-}
-
-/// Scratch buffers of one facet evaluation.
-#[derive(Default)]
-struct Scratch {
-    front: Vec<f64>,
-    back: Vec<f64>,
-    ds: Vec<f32>,
-    db: Vec<f32>,
-    d: Vec<f32>,
-    dback: Vec<f32>,
-    rf: Vec<f32>,
-    rb: Vec<f32>,
-    bg: Vec<f32>,
-}
-
-impl Scratch {
-    fn new(r: usize) -> Scratch {
-        Scratch {
-            front: vec![0.0; r],
-            back: vec![0.0; r],
-            ds: vec![0.0; r],
-            db: vec![0.0; r],
-            d: vec![0.0; r],
-            dback: vec![0.0; r],
-            rf: vec![0.0; r],
-            rb: vec![0.0; r],
-            bg: Vec::with_capacity(r),
-        }
-    }
-}
-
-/// What to compute for a facet.
-#[derive(Clone, Copy)]
-enum Want<'a> {
-    /// The first-order change at every record (into `Scratch::d`).
-    FirstOrder,
-    /// The temperature at every record.
-    History,
-    /// The temperature at these records only.
-    Records(&'a [usize]),
-}
-
-/// Temperature change (or temperature) of a facet with sources in
-/// `s.front`/`s.back` from `rep`, per `want`; the result is in `s.d`
-/// (change for `FirstOrder`, temperature otherwise, at every record or
-/// at the wanted records' positions).
-fn evaluate(rep: &Reference, second_order: bool, want: Want, s: &mut Scratch) {
-    let r = rep.records;
-    for k in 0..r {
-        s.ds[k] = (s.front[k] - rep.s_front[k]) as f32;
-    }
-    if rep.has_back {
-        for k in 0..r {
-            s.db[k] = (s.back[k] - rep.s_back[k]) as f32;
-        }
-    }
-    matvec(&rep.gt_ff, &s.ds, &mut s.d, false);
-    if rep.has_back {
-        matvec(&rep.gt_fb, &s.db, &mut s.d, true);
-    }
-    if matches!(want, Want::FirstOrder) {
-        return;
-    }
-    if second_order {
-        for k in 0..r {
-            s.rf[k] = curvature(rep.r_front, rep.t_front[k], s.d[k]);
-        }
-        if rep.has_back {
-            matvec(&rep.gt_bf, &s.ds, &mut s.dback, false);
-            matvec(&rep.gt_bb, &s.db, &mut s.dback, true);
-            for k in 0..r {
-                s.rb[k] = curvature(rep.r_back, rep.t_back[k], s.dback[k]);
-            }
-        }
-        match want {
-            Want::Records(records) => {
-                for (i, &t) in records.iter().enumerate() {
-                    let mut c = row_dot(&rep.gt_ff, t, &s.rf);
-                    if rep.has_back {
-                        c += row_dot(&rep.gt_fb, t, &s.rb);
-                    }
-                    s.dback[i] = s.d[t] + c;
-                }
-                for (i, &t) in records.iter().enumerate() {
-                    s.d[i] = s.dback[i] + rep.t_front[t];
-                }
-                return;
-            }
-            _ => {
-                matvec(&rep.gt_ff, &s.rf, &mut s.d, true);
-                if rep.has_back {
-                    matvec(&rep.gt_fb, &s.rb, &mut s.d, true);
-                }
-            }
-        }
-    }
-    match want {
-        Want::Records(records) => {
-            for (i, &t) in records.iter().enumerate() {
-                s.dback[i] = s.d[t] + rep.t_front[t];
-            }
-            s.d[..records.len()].copy_from_slice(&s.dback[..records.len()]);
-        }
-        _ => s
-            .d
-            .iter_mut()
-            .zip(&rep.t_front)
-            .for_each(|(d, t)| *d += t),
-    }
 }
 
 /// Everything fixed over the passes.
@@ -251,14 +167,11 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    /// Background history of `facet` from the previous pass's `T⁴`
-    /// histories (`prev4[f·R + k]`) into `out`; false when it sees only
-    /// sky (or in pass 1). Same rule as the dedup path.
-    fn background(&self, facet: usize, prev4: Option<&[f32]>, out: &mut Vec<f32>) -> bool {
-        out.clear();
-        let Some(prev4) = prev4 else {
-            return false;
-        };
+    /// `σ(T_bg⁴ − T_air⁴)` history of `facet` from the previous pass's
+    /// `T⁴` histories (`prev4[f·R + k]`) into `out` (W m⁻²); false when it
+    /// sees only sky. `T_bg⁴` is the radiative mean of the dedup path
+    /// ([`super::solve_facet_temperatures`]).
+    fn background_excess(&self, facet: usize, prev4: &[f32], out: &mut [f32]) -> bool {
         let r = self.air4.len();
         let sky = &self.exposure.sky;
         let g = sky.ground_weight[facet];
@@ -267,7 +180,9 @@ impl Ctx<'_> {
         if den <= 0.0 {
             return false;
         }
-        out.extend(self.air4.iter().map(|a| g * a));
+        out.iter_mut()
+            .zip(&self.air4)
+            .for_each(|(o, a)| *o = g * a);
         for e in entries {
             let j = e.facet as usize;
             match self.kinds[j] {
@@ -283,59 +198,38 @@ impl Ctx<'_> {
                 }
             }
         }
-        let inv = 1.0 / den;
-        out.iter_mut().for_each(|o| *o = (*o * inv).sqrt().sqrt());
+        let k = thermal::STEFAN_BOLTZMANN_W_M2_K4 as f32 / den;
+        let sa = thermal::STEFAN_BOLTZMANN_W_M2_K4 as f32;
+        out.iter_mut()
+            .zip(&self.air4)
+            .for_each(|(o, a)| *o = *o * k - sa * a);
         true
     }
 
-    /// The source histories of a solved facet into `s.front`/`s.back`.
-    fn sources(&self, facet: usize, prev4: Option<&[f32]>, s: &mut Scratch) -> Result<()> {
-        let FacetThermal::Solve(pi) = self.kinds[facet] else {
-            unreachable!("sources of solved facets only")
-        };
-        let mut bg = std::mem::take(&mut s.bg);
-        let background = if self.background(facet, prev4, &mut bg) {
-            Background::PerRecord(&bg)
-        } else {
-            Background::Air
-        };
-        let inputs = self.inputs(facet, background);
-        let r = thermal::source_history_into(
-            &self.props[pi as usize],
-            self.forcing,
-            &inputs,
-            &mut s.front,
-            &mut s.back,
-        )
-        .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")));
-        s.bg = bg;
-        r
-    }
-
-    fn inputs<'b>(&'b self, facet: usize, background: Background<'b>) -> FacetInputs<'b> {
+    fn inputs(&self, facet: usize) -> FacetInputs<'_> {
         let exposure = self.exposure;
         FacetInputs {
             sun_fraction: exposure.solar.sun_fraction(facet),
             cos_incidence: exposure.solar.cos_incidence(facet),
             shape_factor: exposure.sky.shape_factor[facet] as f64,
             back_shape_factor: exposure.sky.back_shape_factor(facet).map(f64::from),
-            background,
+            background: Background::Air,
         }
     }
 
-    /// Linearise about `facet` with pass-1 inputs.
-    fn linearize(&self, facet: usize, lp: &LinearizedParams) -> Result<Reference> {
+    fn props_of(&self, facet: usize) -> &SlabProperties {
         let FacetThermal::Solve(pi) = self.kinds[facet] else {
-            unreachable!("references are solved facets")
+            unreachable!("solved facets only")
         };
-        let lin = thermal::linearize(
-            &self.props[pi as usize],
-            self.forcing,
-            &self.inputs(facet, Background::Air),
-            &lp.options,
-        )
-        .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
-        Ok(Reference::new(lin))
+        &self.props[pi as usize]
+    }
+
+    /// Linearise about `facet` (air as background).
+    fn linearize(&self, facet: usize, lp: &LinearizedParams, rows: &[usize]) -> Result<Reference> {
+        let lin =
+            thermal::linearize(self.props_of(facet), self.forcing, &self.inputs(facet), &lp.options)
+                .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
+        Ok(Reference::new(lin, rows))
     }
 }
 
@@ -373,6 +267,37 @@ fn prop_key(p: &SlabProperties) -> Vec<u64> {
     k
 }
 
+/// Per-facet pass-1 sources (air as background), for solved facets.
+struct Sources {
+    /// `[f][k]` front source, W m⁻² (0 for fixed facets).
+    front: Vec<f32>,
+    /// Slot of each facet's back source (`u32::MAX`: no exposed back).
+    back_slot: Vec<u32>,
+    /// `[slot][k]` back source, W m⁻².
+    back: Vec<f32>,
+}
+
+/// Scratch buffers of one worker.
+struct Scratch {
+    ds: Vec<f32>,
+    db: Vec<f32>,
+    d: Vec<f32>,
+    dback: Vec<f32>,
+    bg: Vec<f32>,
+}
+
+impl Scratch {
+    fn new(r: usize) -> Scratch {
+        Scratch {
+            ds: vec![0.0; r],
+            db: vec![0.0; r],
+            d: vec![0.0; r],
+            dback: vec![0.0; r],
+            bg: vec![0.0; r],
+        }
+    }
+}
+
 /// The linearised solve (module docs). Inputs are validated by the caller.
 pub(super) fn solve(
     exposure: &Exposure,
@@ -397,6 +322,13 @@ pub(super) fn solve(
             .map(|&t| (t as f32).powi(4))
             .collect(),
     };
+    let first = *image_records.first().unwrap_or(&(r - 1));
+    let last = *image_records.last().unwrap_or(&(r - 1));
+    // Rows kept row-major: the image records, then the first and last.
+    let mut rows: Vec<usize> = image_records.to_vec();
+    rows.extend([first, last]);
+    let (row_first, row_last) = (image_records.len(), image_records.len() + 1);
+
     // 1. Groups of equal property sets.
     let mut group_ids: BTreeMap<Vec<u64>, u32> = BTreeMap::new();
     let prop_group: Vec<u32> = props
@@ -411,22 +343,85 @@ pub(super) fn solve(
         FacetThermal::Solve(pi) => Some(prop_group[pi as usize] as usize),
         FacetThermal::Fixed(_) => None,
     };
-    let solved: Vec<usize> = (0..n).filter(|&f| group_of(f).is_some()).collect();
+    let exposed = |f: usize| match kinds[f] {
+        FacetThermal::Solve(pi) => {
+            matches!(props[pi as usize].back, thermal::BackBoundary::Exposed { .. })
+        }
+        FacetThermal::Fixed(_) => false,
+    };
 
-    // 2. Per group, the facet with the median daily-mean front source.
-    let means: Vec<Result<f64>> = solved
-        .par_iter()
+    // 2. Pass-1 sources of every facet, and their daily means.
+    let mut back_slot = vec![u32::MAX; n];
+    let mut slots = 0u32;
+    for (f, s) in back_slot.iter_mut().enumerate() {
+        if exposed(f) {
+            *s = slots;
+            slots += 1;
+        }
+    }
+    // Group representatives' property sets → source models.
+    let mut group_props: Vec<Option<&SlabProperties>> = vec![None; groups];
+    for (p, &g) in props.iter().zip(&prop_group) {
+        group_props[g as usize].get_or_insert(p);
+    }
+    let models: Vec<thermal::SourceModel> = group_props
+        .iter()
+        .map(|p| thermal::SourceModel::new(p.expect("every group has a property set"), forcing))
+        .collect();
+    type Chunk = (Vec<f32>, Vec<f32>, Vec<f64>);
+    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
         .map_init(
             || Scratch::new(r),
-            |s, &f| {
-                ctx.sources(f, None, s)?;
-                Ok(s.front.iter().sum::<f64>() / r as f64)
+            |s, c| {
+                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                let mut front = vec![0.0f32; range.len() * r];
+                let mut back = Vec::new();
+                let mut means = vec![0.0f64; range.len()];
+                for (i, f) in range.enumerate() {
+                    let Some(g) = group_of(f) else {
+                        continue;
+                    };
+                    let model = &models[g];
+                    let out = &mut front[i * r..(i + 1) * r];
+                    model.front_into(
+                        exposure.solar.sun_fraction(f),
+                        exposure.solar.cos_incidence(f),
+                        exposure.sky.shape_factor[f] as f64,
+                        out,
+                    );
+                    means[i] = out.iter().map(|&v| v as f64).sum::<f64>() / r as f64;
+                    if model.has_back() {
+                        let f_back = exposure
+                            .sky
+                            .back_shape_factor(f)
+                            .map_or(1.0 - exposure.sky.shape_factor[f] as f64, f64::from);
+                        model.back_into(f_back, &mut s.ds);
+                        back.extend_from_slice(&s.ds);
+                    }
+                }
+                (front, back, means)
             },
         )
         .collect();
+    let mut src = Sources {
+        front: Vec::with_capacity(n * r),
+        back_slot,
+        back: Vec::with_capacity(slots as usize * r),
+    };
+    let mut means = Vec::with_capacity(n);
+    for (f, b, m) in chunks {
+        src.front.extend(f);
+        src.back.extend(b);
+        means.extend(m);
+    }
+
+    // 3. Per group, the facet with the median daily-mean source, linearised.
     let mut per_group: Vec<Vec<(f64, usize)>> = vec![Vec::new(); groups];
-    for (&f, m) in solved.iter().zip(means) {
-        per_group[group_of(f).expect("solved")].push((m?, f));
+    for (f, &m) in means.iter().enumerate() {
+        if let Some(g) = group_of(f) {
+            per_group[g].push((m, f));
+        }
     }
     let centre: Vec<usize> = per_group
         .iter_mut()
@@ -439,33 +434,71 @@ pub(super) fn solve(
         })
         .collect();
     drop(per_group);
+    let dbg = std::env::var_os("IRSIG_LINEAR_TIMING").is_some();
+    if dbg {
+        eprintln!(
+            "linear: {groups} groups, {slots} exposed-back facets; sources {:.3} s",
+            t_start.elapsed().as_secs_f64()
+        );
+        let seen: std::collections::HashSet<u32> = (0..n)
+            .flat_map(|f| exposure.sky.background(f).iter().map(|e| e.facet))
+            .collect();
+        eprintln!("linear: {} facets are seen by others", seen.len());
+    }
     let centre_refs: Vec<Option<Reference>> = centre
         .par_iter()
-        .map(|&f| (f != usize::MAX).then(|| ctx.linearize(f, lp)).transpose())
+        .map(|&f| {
+            (f != usize::MAX)
+                .then(|| ctx.linearize(f, lp, &rows))
+                .transpose()
+        })
         .collect::<Result<_>>()?;
 
-    // 3. Bins by the first-order prediction from the group's centre.
-    let first = *image_records.first().unwrap_or(&(r - 1));
-    let last = *image_records.last().unwrap_or(&(r - 1));
-    let features: Vec<Result<[f32; 3]>> = solved
-        .par_iter()
+    if dbg {
+        eprintln!("linear: centres {:.3} s", t_start.elapsed().as_secs_f64());
+    }
+    // Source differences of facet `f` from `rep` into `s.ds`/`s.db`.
+    let diff = |f: usize, rep: &Reference, s: &mut Scratch| {
+        let sf = &src.front[f * r..(f + 1) * r];
+        for ((o, a), b) in s.ds.iter_mut().zip(sf).zip(&rep.s_front) {
+            *o = a - b;
+        }
+        if rep.has_back {
+            let slot = src.back_slot[f] as usize;
+            let sb = &src.back[slot * r..(slot + 1) * r];
+            for ((o, a), b) in s.db.iter_mut().zip(sb).zip(&rep.s_back) {
+                *o = a - b;
+            }
+        }
+    };
+
+    // 4. Bins of the first-order change from the group's centre.
+    let features: Vec<(usize, [f32; 3])> = (0..n)
+        .into_par_iter()
+        .filter_map(|f| group_of(f).map(|g| (f, g)))
         .map_init(
             || Scratch::new(r),
-            |s, &f| {
-                ctx.sources(f, None, s)?;
-                let rep = centre_refs[group_of(f).expect("solved")]
-                    .as_ref()
-                    .expect("non-empty group");
-                evaluate(rep, false, Want::FirstOrder, s);
-                let mean = s.d.iter().sum::<f32>() / r as f32;
-                Ok([s.d[first], s.d[last], mean])
+            |s, (f, g)| {
+                let rep = centre_refs[g].as_ref().expect("non-empty group");
+                diff(f, rep, s);
+                let row = |i: usize| {
+                    let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                    if rep.has_back {
+                        v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                    }
+                    v
+                };
+                let mut mean = dot(&rep.mean_ff, &s.ds);
+                if rep.has_back {
+                    mean += dot(&rep.mean_fb, &s.db);
+                }
+                (f, [row(row_first), row(row_last), mean])
             },
         )
         .collect();
-    let w = lp.bin_k.max(1e-3);
+    let w = lp.bin_k;
     let mut bins: BTreeMap<(usize, [i32; 3]), Vec<(usize, [f32; 3])>> = BTreeMap::new();
-    for (&f, x) in solved.iter().zip(features) {
-        let x = x?;
+    for (f, x) in features {
         let key = x.map(|v| (v / w).round() as i32);
         bins.entry((group_of(f).expect("solved"), key))
             .or_default()
@@ -491,67 +524,175 @@ pub(super) fn solve(
         }
     }
     drop(bins);
+    if dbg {
+        eprintln!("linear: bins {:.3} s", t_start.elapsed().as_secs_f64());
+    }
     let refs: Vec<Reference> = bin_rep
         .par_iter()
-        .map(|&f| ctx.linearize(f, lp))
+        .map(|&f| ctx.linearize(f, lp, &rows))
         .collect::<Result<_>>()?;
     let max_spin = refs
         .iter()
         .chain(centre_refs.iter().flatten())
         .map(|x| x.spinup_change_k)
         .fold(0.0, f64::max);
+    drop(centre_refs);
     let setup = t_start.elapsed();
 
-    // 4. The passes.
+    // 5. The passes. Pass 1 takes the stored sources; a later pass adds the
+    // background excess over the air, `c·σ(T_bg⁴ − T_air⁴)`. A pass that
+    // is not the last yields full (first-order) histories for the next
+    // one's backgrounds; the last one yields the image records, second
+    // order with the curvature `r` of pass 1's first-order change.
+    // Facets some facet sees: the ones whose histories a later pass needs.
+    let mut needed = vec![false; n];
+    if passes > 1 {
+        for f in 0..n {
+            for e in exposure.sky.background(f) {
+                needed[e.facet as usize] = true;
+            }
+        }
+    }
     let mut stats = Vec::new();
     let mut prev4: Option<Vec<f32>> = None;
+    let mut resid: Vec<f32> = Vec::new();
+    let mut resid_back: Vec<f32> = Vec::new();
     let mut prev_image: Option<Vec<Vec<f32>>> = None;
     let mut image = Vec::new();
     for p in 0..passes {
         let t0 = Instant::now();
         let last_pass = p + 1 == passes;
-        let want = if last_pass {
-            Want::Records(image_records)
-        } else {
-            Want::History
-        };
+        let keep_resid = p == 0 && lp.second_order;
         let width = if last_pass { image_records.len() } else { r };
-        let mut out = vec![0.0f32; n * width];
         let prev = prev4.as_deref();
-        out.par_chunks_mut(width.max(1) * 256)
-            .enumerate()
-            .try_for_each_init(
+        let (resid_in, resid_back_in) = (&resid, &resid_back);
+        type Out = (Vec<f32>, Vec<f32>, Vec<f32>);
+        let chunks: Vec<Out> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map_init(
                 || Scratch::new(r),
-                |s, (c, chunk)| -> Result<()> {
-                    for (i, o) in chunk.chunks_mut(width.max(1)).enumerate() {
-                        let f = c * 256 + i;
-                        match kinds[f] {
-                            FacetThermal::Fixed(t) => o.iter_mut().for_each(|v| *v = t),
-                            FacetThermal::Solve(_) => {
-                                ctx.sources(f, prev, s)?;
-                                let rep = &refs[ref_of[f] as usize];
-                                evaluate(rep, lp.second_order, want, s);
-                                o.copy_from_slice(&s.d[..width]);
+                |s, c| {
+                    let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                    let mut out = vec![0.0f32; range.len() * width];
+                    let mut res = Vec::new();
+                    let mut res_back = Vec::new();
+                    for (i, f) in range.enumerate() {
+                        let o = &mut out[i * width..(i + 1) * width];
+                        if let FacetThermal::Fixed(t) = kinds[f] {
+                            o.iter_mut().for_each(|v| *v = t);
+                            if keep_resid {
+                                res.extend(std::iter::repeat_n(0.0, r));
+                            }
+                            continue;
+                        }
+                        let rep = &refs[ref_of[f] as usize];
+                        diff(f, rep, s);
+                        if let Some(prev) = prev
+                            && ctx.background_excess(f, prev, &mut s.bg)
+                        {
+                            let (cf, cb) = thermal::background_coefficients(
+                                ctx.props_of(f),
+                                exposure.sky.shape_factor[f] as f64,
+                                exposure.sky.back_shape_factor(f).map(f64::from),
+                            );
+                            let (cf, cb) = (cf as f32, cb as f32);
+                            for (d, e) in s.ds.iter_mut().zip(&s.bg) {
+                                *d += cf * e;
+                            }
+                            if rep.has_back {
+                                for (d, e) in s.db.iter_mut().zip(&s.bg) {
+                                    *d += cb * e;
+                                }
+                            }
+                        }
+                        let full = keep_resid || (!last_pass && needed[f]);
+                        if full {
+                            matvec(&rep.gt_ff, &s.ds, &mut s.d, false);
+                            if rep.has_back {
+                                matvec(&rep.gt_fb, &s.db, &mut s.d, true);
+                            }
+                        }
+                        if keep_resid {
+                            let start = res.len();
+                            res.extend(
+                                s.d.iter()
+                                    .zip(&rep.t_front)
+                                    .map(|(&d, &t)| curvature(rep.r_front, t, d)),
+                            );
+                            if rep.has_back {
+                                matvec(&rep.gt_bf, &s.ds, &mut s.dback, false);
+                                matvec(&rep.gt_bb, &s.db, &mut s.dback, true);
+                                res_back.extend(
+                                    s.dback
+                                        .iter()
+                                        .zip(&rep.t_back)
+                                        .map(|(&d, &t)| curvature(rep.r_back, t, d)),
+                                );
+                            }
+                            if last_pass {
+                                // One pass: the correction on this pass's own change.
+                                s.ds.iter_mut()
+                                    .zip(&res[start..])
+                                    .for_each(|(d, c)| *d += c);
+                                if rep.has_back {
+                                    let rb = &res_back[res_back.len() - r..];
+                                    s.db.iter_mut().zip(rb).for_each(|(d, c)| *d += c);
+                                }
+                            }
+                        } else if last_pass && lp.second_order {
+                            let rf = &resid_in[f * r..(f + 1) * r];
+                            s.ds.iter_mut().zip(rf).for_each(|(d, c)| *d += c);
+                            if rep.has_back {
+                                let slot = src.back_slot[f] as usize;
+                                let rb = &resid_back_in[slot * r..(slot + 1) * r];
+                                s.db.iter_mut().zip(rb).for_each(|(d, c)| *d += c);
+                            }
+                        }
+                        if last_pass {
+                            for (i, &t) in image_records.iter().enumerate() {
+                                let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                                if rep.has_back {
+                                    v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                                }
+                                o[i] = rep.t_front[t] + v;
+                            }
+                        } else if full {
+                            for ((o, d), t) in o.iter_mut().zip(&s.d).zip(&rep.t_front) {
+                                *o = t + d;
+                            }
+                        } else {
+                            // No facet sees this one: its history is not
+                            // needed, only the image records.
+                            for (i, &t) in image_records.iter().enumerate() {
+                                let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                                if rep.has_back {
+                                    v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                                }
+                                o[t] = rep.t_front[t] + v;
                             }
                         }
                     }
-                    Ok(())
+                    (out, res, res_back)
                 },
-            )?;
+            )
+            .collect();
+        let mut out = Vec::with_capacity(n * width);
+        let mut res = Vec::new();
+        let mut res_back = Vec::new();
+        for (o, a, b) in chunks {
+            out.extend(o);
+            res.extend(a);
+            res_back.extend(b);
+        }
+        if keep_resid {
+            resid = res;
+            resid_back = res_back;
+        }
         // Image-time temperatures and, for a later pass, the T⁴ histories.
-        image = image_records
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| {
-                (0..n)
-                    .map(|f| {
-                        if last_pass {
-                            out[f * width + i]
-                        } else {
-                            out[f * width + t]
-                        }
-                    })
-                    .collect::<Vec<f32>>()
+        image = (0..image_records.len())
+            .map(|i| {
+                let col = if last_pass { i } else { image_records[i] };
+                (0..n).map(|f| out[f * width + col]).collect::<Vec<f32>>()
             })
             .collect();
         if !last_pass {
@@ -565,14 +706,10 @@ pub(super) fn solve(
                 .fold(0.0, f64::max)
         });
         stats.push(PassStats {
-            solved_facets: solved.len(),
+            solved_facets: n - kinds.iter().filter(|k| matches!(k, FacetThermal::Fixed(_))).count(),
             classes: refs.len(),
             reused_facets: 0,
-            setup: if p == 0 {
-                setup
-            } else {
-                std::time::Duration::ZERO
-            },
+            setup: if p == 0 { setup } else { Duration::ZERO },
             solve: t0.elapsed(),
             max_spinup_change_k: max_spin,
             max_change_from_previous_pass_k: change,

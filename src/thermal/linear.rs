@@ -124,6 +124,120 @@ pub fn source_history_into(
     Ok(())
 }
 
+/// The source histories of every facet of one property set under one
+/// weather history, with the air as background, as affine functions of the
+/// facet's inputs: front `S_k = base_k + F·shape_k + s_k·max(cos θ_k, 0)·sun_k`,
+/// exposed back `B_k = back_base_k + F_b·back_shape_k` (W m⁻²). The
+/// coefficients are evaluated from the balance itself
+/// ([`super::balance::front_flux`], [`super::balance::exposed_back_flux`]),
+/// which is affine in `F`, `F_b` and `s·cos θ`; this makes a facet's source
+/// history three operations per record, for scenes of many facets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SourceModel {
+    base: Vec<f64>,
+    shape: Vec<f64>,
+    sun: Vec<f64>,
+    back_base: Vec<f64>,
+    back_shape: Vec<f64>,
+}
+
+impl SourceModel {
+    /// The model of `props` under `forcing` (not validated here).
+    pub fn new(props: &SlabProperties, forcing: &Forcing) -> SourceModel {
+        let n = forcing.len();
+        let one = vec![1.0f32; n];
+        let zero = vec![0.0f32; n];
+        let eval = |sun: &[f32], cos: &[f32], f: f64, f_back: f64| {
+            let inputs = FacetInputs {
+                back_shape_factor: Some(f_back),
+                ..FacetInputs::new(sun, cos, f)
+            };
+            let mut front = vec![0.0; n];
+            let mut back = vec![0.0; n];
+            for k in 0..n {
+                let ff = super::front_forcing_at(forcing, &inputs, k);
+                front[k] = super::balance::front_flux(
+                    &ff,
+                    props.solar_absorptivity,
+                    props.thermal_emissivity,
+                    props.self_power_w_m2,
+                )
+                .source_w_m2;
+                if let BackBoundary::Exposed { fraction } = props.back {
+                    back[k] = super::balance::exposed_back_flux(
+                        &ff,
+                        props.thermal_emissivity,
+                        f_back,
+                        fraction,
+                    )
+                    .source_w_m2;
+                }
+            }
+            (front, back)
+        };
+        let (s0, b0) = eval(&zero, &zero, 0.0, 0.0);
+        let (s1, b1) = eval(&zero, &zero, 1.0, 1.0);
+        let (s2, _) = eval(&one, &one, 0.0, 0.0);
+        let sub = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>();
+        let exposed = matches!(props.back, BackBoundary::Exposed { .. });
+        SourceModel {
+            shape: sub(&s1, &s0),
+            sun: sub(&s2, &s0),
+            base: s0,
+            back_shape: if exposed { sub(&b1, &b0) } else { Vec::new() },
+            back_base: if exposed { b0 } else { Vec::new() },
+        }
+    }
+
+    /// Whether the back face has a source (exposed back).
+    pub fn has_back(&self) -> bool {
+        !self.back_base.is_empty()
+    }
+
+    /// Front source history of a facet (sun fraction, cos θ, shape factor
+    /// `f`) into `out`, W m⁻².
+    pub fn front_into(&self, sun_fraction: &[f32], cos_incidence: &[f32], f: f64, out: &mut [f32]) {
+        for k in 0..out.len() {
+            let sc = (sun_fraction[k].clamp(0.0, 1.0) * cos_incidence[k].max(0.0)) as f64;
+            out[k] = (self.base[k] + f * self.shape[k] + sc * self.sun[k]) as f32;
+        }
+    }
+
+    /// Back source history (back shape factor `f_back`) into `out`, W m⁻²
+    /// (zeros without an exposed back).
+    pub fn back_into(&self, f_back: f64, out: &mut [f32]) {
+        if !self.has_back() {
+            out.iter_mut().for_each(|v| *v = 0.0);
+            return;
+        }
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = (self.back_base[k] + f_back * self.back_shape[k]) as f32;
+        }
+    }
+}
+
+/// How a facet's sources depend on its background: `∂S/∂(σT_bg⁴)` of the
+/// front (`ε(1 − F)`) and of an exposed back (`a·ε(1 − F_b)`, 0 otherwise),
+/// dimensionless (the background term of [`super::balance::front_flux`] and
+/// [`super::balance::exposed_back_flux`]). A change of the background from
+/// `T₁` to `T₂` at a record changes the sources there by these times
+/// `σ(T₂⁴ − T₁⁴)`.
+pub fn background_coefficients(
+    props: &SlabProperties,
+    shape_factor: f64,
+    back_shape_factor: Option<f64>,
+) -> (f64, f64) {
+    let eps = props.thermal_emissivity;
+    let front = eps * (1.0 - shape_factor);
+    let back = match props.back {
+        BackBoundary::Exposed { fraction } => {
+            fraction * eps * (1.0 - back_shape_factor.unwrap_or(1.0 - shape_factor))
+        }
+        _ => 0.0,
+    };
+    (front, back)
+}
+
 /// A reference facet's nonlinear solution and its Green's matrices.
 #[derive(Debug, Clone)]
 pub struct Linearization {

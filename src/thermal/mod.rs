@@ -54,7 +54,10 @@ use crate::material::Material;
 use crate::weather::WeatherRecord;
 pub use balance::{INTERIOR_AIR_K, INTERIOR_FILM_W_M2_K, mcadams_h_w_m2_k};
 pub use conduction::{Boundary, Grid, STEFAN_BOLTZMANN_W_M2_K4, Slab, StepStats, SurfaceFlux};
-pub use linear::{Linearization, SourceHistory, linearize, source_history, source_history_into};
+pub use linear::{
+    Linearization, SourceHistory, SourceModel, background_coefficients, linearize, source_history,
+    source_history_into,
+};
 
 /// Angular frequency of the diurnal cycle, rad/s.
 pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
