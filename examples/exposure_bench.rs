@@ -47,7 +47,6 @@ fn main() -> anyhow::Result<()> {
     };
 
     let t0 = Instant::now();
-    let mut setup_for_compare = None;
     let (geo, r, tracer_name, build) = if what.ends_with(".json") {
         let scene = Scene::load(Path::new(what))?;
         let load = t0.elapsed();
@@ -56,7 +55,6 @@ fn main() -> anyhow::Result<()> {
         let build = t1.elapsed();
         println!("scene {what} loaded in {:.2} s", load.as_secs_f64());
         let r = solve_scene(&*tracer, &scene, &[], &params)?;
-        setup_for_compare = Some(FacetThermalSetup::from_scene(&scene)?);
         (scene.geometry, r, tracer.name().to_string(), build)
     } else {
         let geo = generate(&TerrainParams::with_triangles(what.parse()?, 7));
@@ -110,6 +108,10 @@ fn main() -> anyhow::Result<()> {
     );
     println!("build (geometry + BVH): {:.2} s", build.as_secs_f64());
     println!(
+        "{} facets on the ground (deep-ground back boundary)",
+        r.ground_facets
+    );
+    println!(
         "rays: {:.2} s — solar {:.1} M rays in {:.2} s ({:.2} Mrays/s), sky {:.1} M rays in {:.2} s ({:.2} Mrays/s)",
         tm.rays.as_secs_f64(),
         s.solar_rays as f64 * 1e-6,
@@ -152,10 +154,8 @@ fn main() -> anyhow::Result<()> {
         "surface temperatures at {}: {lo:.1} – {hi:.1} K",
         r.image_times[0].to_rfc3339()
     );
-    if std::env::var_os("IRSIG_BENCH_COMPARE").is_some()
-        && let Some(setup) = setup_for_compare
-    {
-        compare(&r, &setup)?;
+    if std::env::var_os("IRSIG_BENCH_COMPARE").is_some() && what.ends_with(".json") {
+        compare(&r, &r.setup)?;
     }
     Ok(())
 }
@@ -189,7 +189,11 @@ fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyh
             (sq / n).sqrt()
         );
     };
-    report("fine quanta + SolveOptions::default() (reference)", &reference, t_ref);
+    report(
+        "fine quanta + SolveOptions::default() (reference)",
+        &reference,
+        t_ref,
+    );
     report(
         "this run's settings",
         &r.temperatures,
@@ -204,7 +208,10 @@ fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyh
         ..Default::default()
     };
     for (name, p) in [
-        ("linearized, bins 3 K, first order (default)", lin(3.0, false)),
+        (
+            "linearized, bins 3 K, first order (default)",
+            lin(3.0, false),
+        ),
         ("linearized, bins 3 K, second order", lin(3.0, true)),
         ("linearized, bins 1 K, first order", lin(1.0, false)),
         ("linearized, bins 6 K, first order", lin(6.0, false)),

@@ -1000,11 +1000,137 @@ fn second_order_correction_captures_emission_curvature() {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
         let (e1, e2) = (err(false), err(true));
-        assert!(size > 5.0, "{:?}: shading changes T by {size} K", props.back);
+        assert!(
+            size > 5.0,
+            "{:?}: shading changes T by {size} K",
+            props.back
+        );
         assert!(
             e2 < 0.06 && e2 < 0.15 * e1,
             "{:?}: ΔT {size:.2} K, first-order error {e1:.3} K, second-order {e2:.3} K",
             props.back
         );
+    }
+}
+
+/// The deep-ground back boundary: under constant weather a ground column
+/// (depth L, bottom held at T_deep) reaches the steady state where the
+/// surface balance equals the conduction down the column,
+/// `S − hT − εσT⁴ = k (T − T_deep)/L` (linear profile; exact for the finite
+/// volumes), while the same slab with an insulated back reaches the root of
+/// the surface balance alone — much hotter in sun, and the ground's surface
+/// lies between that and the deep temperature.
+#[test]
+fn ground_column_conducts_to_the_deep_soil() {
+    let times: Vec<f64> = (0..=96).map(|i| i as f64 * 900.0).collect();
+    let forcing = Forcing::constant(&times, 290.0, 2.0, 600.0, 80.0, 330.0);
+    let sun = vec![1.0f32; times.len()];
+    let cos = vec![0.7f32; times.len()];
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let (depth, deep) = (0.3, 280.0);
+    let soil = SlabProperties {
+        conductivity_w_m_k: 1.0,
+        density_kg_m3: 1600.0,
+        specific_heat_j_kg_k: 1000.0,
+        thickness_m: 0.1,
+        solar_absorptivity: 0.8,
+        thermal_emissivity: 0.95,
+        self_power_w_m2: 0.0,
+        back: BackBoundary::Ground {
+            deep_temperature_k: Some(deep),
+            depth_m: Some(depth),
+        },
+    };
+    let opts = SolveOptions {
+        spinup: Spinup {
+            max_cycles: 40,
+            period_s: DAY_S,
+            tolerance_k: 1e-6,
+        },
+        ..SolveOptions::default()
+    };
+    let s = thermal::source_history(&soil, &forcing, &inputs)
+        .unwrap()
+        .front_w_m2[0];
+    let (h, r) = (mcadams_h_w_m2_k(2.0), 0.95 * STEFAN_BOLTZMANN_W_M2_K4);
+    let balance = |t: f64| s - h * t - r * t.powi(4);
+    let ground = thermal::solve(&soil, &forcing, &inputs, &opts).unwrap();
+    let t_ground = *ground.surface_temperature_k.last().unwrap();
+    let root = bisect(
+        |t| balance(t) - soil.conductivity_w_m_k * (t - deep) / depth,
+        200.0,
+        400.0,
+    );
+    let insulated = soil.with_back(BackBoundary::Insulated);
+    let t_ins = *thermal::solve(&insulated, &forcing, &inputs, &opts)
+        .unwrap()
+        .surface_temperature_k
+        .last()
+        .unwrap();
+    let root_ins = bisect(balance, 200.0, 400.0);
+    eprintln!(
+        "ground {t_ground:.4} K (steady root {root:.4}), insulated {t_ins:.4} K (root {root_ins:.4})"
+    );
+    assert!((t_ground - root).abs() < 0.01, "{t_ground} vs {root}");
+    assert!((t_ins - root_ins).abs() < 0.01, "{t_ins} vs {root_ins}");
+    assert!(deep < t_ground && t_ground < t_ins - 3.0);
+}
+
+/// The affine source model of a material equals the balance's source
+/// history for any facet inputs (front and exposed back), and the
+/// background coefficients give the change of the sources with `σT_bg⁴`.
+#[test]
+fn source_model_matches_the_balance() {
+    let (forcing, cos) = one_clear_day();
+    let n = forcing.len();
+    let sun: Vec<f32> = (0..n).map(|k| ((k * 7) % 5) as f32 / 4.0).collect();
+    for props in concrete_with_backs() {
+        let model = thermal::SourceModel::new(&props, &forcing);
+        for (f, fb) in [(1.0, None), (0.3, Some(0.8)), (0.0, Some(0.0))] {
+            let inputs = FacetInputs {
+                back_shape_factor: fb,
+                ..FacetInputs::new(&sun, &cos, f)
+            };
+            let exact = thermal::source_history(&props, &forcing, &inputs).unwrap();
+            let mut front = vec![0.0f32; n];
+            model.front_into(&sun, &cos, f, &mut front);
+            for (a, b) in front.iter().zip(&exact.front_w_m2) {
+                assert!(
+                    (*a as f64 - b).abs() < 1e-3 * b.abs().max(1.0),
+                    "{a} vs {b}"
+                );
+            }
+            assert_eq!(model.has_back(), exact.back_w_m2.is_some());
+            if let Some(back) = &exact.back_w_m2 {
+                let mut out = vec![0.0f32; n];
+                model.back_into(fb.unwrap_or(1.0 - f), &mut out);
+                for (a, b) in out.iter().zip(back) {
+                    assert!(
+                        (*a as f64 - b).abs() < 1e-3 * b.abs().max(1.0),
+                        "{a} vs {b}"
+                    );
+                }
+            }
+            // A background of 300 K instead of the air.
+            let bg = vec![300.0f32; n];
+            let warm = FacetInputs {
+                background: Background::PerRecord(&bg),
+                ..inputs
+            };
+            let w = thermal::source_history(&props, &forcing, &warm).unwrap();
+            let (cf, cb) = thermal::background_coefficients(&props, f, fb);
+            for k in 0..n {
+                let excess = STEFAN_BOLTZMANN_W_M2_K4
+                    * (300f64.powi(4) - forcing.air_temperature_k[k].powi(4));
+                let d = w.front_w_m2[k] - exact.front_w_m2[k];
+                assert!(
+                    (d - cf * excess).abs() < 1e-6 * excess.abs().max(1.0),
+                    "{d}"
+                );
+                if let (Some(a), Some(b)) = (&w.back_w_m2, &exact.back_w_m2) {
+                    assert!((a[k] - b[k] - cb * excess).abs() < 1e-6 * excess.abs().max(1.0));
+                }
+            }
+        }
     }
 }

@@ -17,13 +17,20 @@
 //!    facet closest to the bin's centroid, linearised. The neglected
 //!    curvature of the emission grows with the square of the distance from
 //!    the reference, so narrow bins bound it.
-//! 4. Each pass, each facet: `T = T_ref + G·ΔS (+ G·r(Δ))`, the second term
-//!    the second-order correction for the emission's curvature
-//!    ([`LinearizedParams::second_order`]). Pass 1 takes the air as
-//!    background; pass `p ≥ 2` builds every facet's background from the
-//!    previous pass's full temperature histories, exactly as
-//!    [`super::solve_facet_temperatures`]'s dedup path does — only the
-//!    sources change, so the references and their matrices are reused.
+//! 4. Each pass, each facet: `T = T_ref + G·ΔS`, plus, in the last pass
+//!    and with [`LinearizedParams::second_order`], `G·r(Δ)` for the
+//!    curvature of the emission. Pass 1 takes the air as background; pass
+//!    `p ≥ 2` adds to each facet's sources its background's excess over the
+//!    air, `c·σ(T_bg⁴ − T_air⁴)` ([`thermal::background_coefficients`]),
+//!    with `T_bg⁴` the radiative mean of the previous pass's temperatures of
+//!    what its blocked hemisphere rays hit — the rule of the per-class path
+//!    ([`super::solve_facet_temperatures`]). Only the sources change, so the
+//!    references and their matrices serve every pass. A pass before the last
+//!    computes full histories only for the facets some facet sees; the last
+//!    one only the image records (a row of `G` each).
+//!
+//! The sources of all facets of a property set come from one
+//! [`thermal::SourceModel`] (affine in `F`, `F_b`, `s·cos θ`).
 //!
 //! Work is per facet and per reference, in facet order; the result does
 //! not depend on the thread count.
@@ -108,7 +115,12 @@ impl Reference {
             mean_ff: mean(&lin.front_from_front),
             mean_fb: mean(&lin.front_from_back),
             s_front: f32s(&lin.sources.front_w_m2),
-            s_back: lin.sources.back_w_m2.as_deref().map(f32s).unwrap_or_default(),
+            s_back: lin
+                .sources
+                .back_w_m2
+                .as_deref()
+                .map(f32s)
+                .unwrap_or_default(),
             t_front: f32s(&lin.solution.surface_temperature_k),
             t_back: f32s(&lin.solution.back_temperature_k),
             r_front: lin.front_radiative_w_m2_k4 as f32,
@@ -180,9 +192,7 @@ impl Ctx<'_> {
         if den <= 0.0 {
             return false;
         }
-        out.iter_mut()
-            .zip(&self.air4)
-            .for_each(|(o, a)| *o = g * a);
+        out.iter_mut().zip(&self.air4).for_each(|(o, a)| *o = g * a);
         for e in entries {
             let j = e.facet as usize;
             match self.kinds[j] {
@@ -226,9 +236,13 @@ impl Ctx<'_> {
 
     /// Linearise about `facet` (air as background).
     fn linearize(&self, facet: usize, lp: &LinearizedParams, rows: &[usize]) -> Result<Reference> {
-        let lin =
-            thermal::linearize(self.props_of(facet), self.forcing, &self.inputs(facet), &lp.options)
-                .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
+        let lin = thermal::linearize(
+            self.props_of(facet),
+            self.forcing,
+            &self.inputs(facet),
+            &lp.options,
+        )
+        .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
         Ok(Reference::new(lin, rows))
     }
 }
@@ -345,7 +359,10 @@ pub(super) fn solve(
     };
     let exposed = |f: usize| match kinds[f] {
         FacetThermal::Solve(pi) => {
-            matches!(props[pi as usize].back, thermal::BackBoundary::Exposed { .. })
+            matches!(
+                props[pi as usize].back,
+                thermal::BackBoundary::Exposed { .. }
+            )
         }
         FacetThermal::Fixed(_) => false,
     };
@@ -434,17 +451,6 @@ pub(super) fn solve(
         })
         .collect();
     drop(per_group);
-    let dbg = std::env::var_os("IRSIG_LINEAR_TIMING").is_some();
-    if dbg {
-        eprintln!(
-            "linear: {groups} groups, {slots} exposed-back facets; sources {:.3} s",
-            t_start.elapsed().as_secs_f64()
-        );
-        let seen: std::collections::HashSet<u32> = (0..n)
-            .flat_map(|f| exposure.sky.background(f).iter().map(|e| e.facet))
-            .collect();
-        eprintln!("linear: {} facets are seen by others", seen.len());
-    }
     let centre_refs: Vec<Option<Reference>> = centre
         .par_iter()
         .map(|&f| {
@@ -454,9 +460,6 @@ pub(super) fn solve(
         })
         .collect::<Result<_>>()?;
 
-    if dbg {
-        eprintln!("linear: centres {:.3} s", t_start.elapsed().as_secs_f64());
-    }
     // Source differences of facet `f` from `rep` into `s.ds`/`s.db`.
     let diff = |f: usize, rep: &Reference, s: &mut Scratch| {
         let sf = &src.front[f * r..(f + 1) * r];
@@ -497,7 +500,8 @@ pub(super) fn solve(
         )
         .collect();
     let w = lp.bin_k;
-    let mut bins: BTreeMap<(usize, [i32; 3]), Vec<(usize, [f32; 3])>> = BTreeMap::new();
+    type Members = Vec<(usize, [f32; 3])>;
+    let mut bins: BTreeMap<(usize, [i32; 3]), Members> = BTreeMap::new();
     for (f, x) in features {
         let key = x.map(|v| (v / w).round() as i32);
         bins.entry((group_of(f).expect("solved"), key))
@@ -524,9 +528,6 @@ pub(super) fn solve(
         }
     }
     drop(bins);
-    if dbg {
-        eprintln!("linear: bins {:.3} s", t_start.elapsed().as_secs_f64());
-    }
     let refs: Vec<Reference> = bin_rep
         .par_iter()
         .map(|&f| ctx.linearize(f, lp, &rows))
@@ -541,9 +542,10 @@ pub(super) fn solve(
 
     // 5. The passes. Pass 1 takes the stored sources; a later pass adds the
     // background excess over the air, `c·σ(T_bg⁴ − T_air⁴)`. A pass that
-    // is not the last yields full (first-order) histories for the next
-    // one's backgrounds; the last one yields the image records, second
-    // order with the curvature `r` of pass 1's first-order change.
+    // is not the last yields (first-order) histories of the facets others
+    // see, for the next one's backgrounds; the last one yields the image
+    // records (with the second-order correction, from its own first-order
+    // history).
     // Facets some facet sees: the ones whose histories a later pass needs.
     let mut needed = vec![false; n];
     if passes > 1 {
@@ -555,34 +557,24 @@ pub(super) fn solve(
     }
     let mut stats = Vec::new();
     let mut prev4: Option<Vec<f32>> = None;
-    let mut resid: Vec<f32> = Vec::new();
-    let mut resid_back: Vec<f32> = Vec::new();
     let mut prev_image: Option<Vec<Vec<f32>>> = None;
     let mut image = Vec::new();
     for p in 0..passes {
         let t0 = Instant::now();
         let last_pass = p + 1 == passes;
-        let keep_resid = p == 0 && lp.second_order;
         let width = if last_pass { image_records.len() } else { r };
         let prev = prev4.as_deref();
-        let (resid_in, resid_back_in) = (&resid, &resid_back);
-        type Out = (Vec<f32>, Vec<f32>, Vec<f32>);
-        let chunks: Vec<Out> = (0..n.div_ceil(CHUNK))
+        let chunks: Vec<Vec<f32>> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map_init(
                 || Scratch::new(r),
                 |s, c| {
                     let range = c * CHUNK..((c + 1) * CHUNK).min(n);
                     let mut out = vec![0.0f32; range.len() * width];
-                    let mut res = Vec::new();
-                    let mut res_back = Vec::new();
                     for (i, f) in range.enumerate() {
                         let o = &mut out[i * width..(i + 1) * width];
                         if let FacetThermal::Fixed(t) = kinds[f] {
                             o.iter_mut().for_each(|v| *v = t);
-                            if keep_resid {
-                                res.extend(std::iter::repeat_n(0.0, r));
-                            }
                             continue;
                         }
                         let rep = &refs[ref_of[f] as usize];
@@ -605,47 +597,25 @@ pub(super) fn solve(
                                 }
                             }
                         }
-                        let full = keep_resid || (!last_pass && needed[f]);
+                        let second = last_pass && lp.second_order;
+                        let full = second || (!last_pass && needed[f]);
                         if full {
                             matvec(&rep.gt_ff, &s.ds, &mut s.d, false);
                             if rep.has_back {
                                 matvec(&rep.gt_fb, &s.db, &mut s.d, true);
                             }
                         }
-                        if keep_resid {
-                            let start = res.len();
-                            res.extend(
-                                s.d.iter()
-                                    .zip(&rep.t_front)
-                                    .map(|(&d, &t)| curvature(rep.r_front, t, d)),
-                            );
+                        if second {
+                            // T = T_ref + G (ΔS + r(Δ)), Δ = G ΔS.
                             if rep.has_back {
                                 matvec(&rep.gt_bf, &s.ds, &mut s.dback, false);
                                 matvec(&rep.gt_bb, &s.db, &mut s.dback, true);
-                                res_back.extend(
-                                    s.dback
-                                        .iter()
-                                        .zip(&rep.t_back)
-                                        .map(|(&d, &t)| curvature(rep.r_back, t, d)),
-                                );
-                            }
-                            if last_pass {
-                                // One pass: the correction on this pass's own change.
-                                s.ds.iter_mut()
-                                    .zip(&res[start..])
-                                    .for_each(|(d, c)| *d += c);
-                                if rep.has_back {
-                                    let rb = &res_back[res_back.len() - r..];
-                                    s.db.iter_mut().zip(rb).for_each(|(d, c)| *d += c);
+                                for ((db, d), t) in s.db.iter_mut().zip(&s.dback).zip(&rep.t_back) {
+                                    *db += curvature(rep.r_back, *t, *d);
                                 }
                             }
-                        } else if last_pass && lp.second_order {
-                            let rf = &resid_in[f * r..(f + 1) * r];
-                            s.ds.iter_mut().zip(rf).for_each(|(d, c)| *d += c);
-                            if rep.has_back {
-                                let slot = src.back_slot[f] as usize;
-                                let rb = &resid_back_in[slot * r..(slot + 1) * r];
-                                s.db.iter_mut().zip(rb).for_each(|(d, c)| *d += c);
+                            for ((ds, d), t) in s.ds.iter_mut().zip(&s.d).zip(&rep.t_front) {
+                                *ds += curvature(rep.r_front, *t, *d);
                             }
                         }
                         if last_pass {
@@ -672,22 +642,11 @@ pub(super) fn solve(
                             }
                         }
                     }
-                    (out, res, res_back)
+                    out
                 },
             )
             .collect();
-        let mut out = Vec::with_capacity(n * width);
-        let mut res = Vec::new();
-        let mut res_back = Vec::new();
-        for (o, a, b) in chunks {
-            out.extend(o);
-            res.extend(a);
-            res_back.extend(b);
-        }
-        if keep_resid {
-            resid = res;
-            resid_back = res_back;
-        }
+        let mut out: Vec<f32> = chunks.concat();
         // Image-time temperatures and, for a later pass, the T⁴ histories.
         image = (0..image_records.len())
             .map(|i| {
@@ -706,7 +665,10 @@ pub(super) fn solve(
                 .fold(0.0, f64::max)
         });
         stats.push(PassStats {
-            solved_facets: n - kinds.iter().filter(|k| matches!(k, FacetThermal::Fixed(_))).count(),
+            solved_facets: n - kinds
+                .iter()
+                .filter(|k| matches!(k, FacetThermal::Fixed(_)))
+                .count(),
             classes: refs.len(),
             reused_facets: 0,
             setup: if p == 0 { setup } else { Duration::ZERO },

@@ -13,8 +13,11 @@ use super::{
 use crate::geometry::SceneGeometry;
 use crate::scene::Scene;
 use crate::sun::Site;
-use crate::thermal::{Forcing, SlabProperties};
-use crate::trace::Tracer;
+use rayon::prelude::*;
+
+use super::FacetSamples;
+use crate::thermal::{BackBoundary, Forcing, SlabProperties};
+use crate::trace::{Coherence, Ray, Tracer};
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
 
@@ -83,8 +86,75 @@ impl FacetThermalSetup {
     }
 }
 
+impl FacetThermalSetup {
+    /// The facets that lie on the ground: solved with an insulated back
+    /// (a material with `exposed_area` 0: pavements, soil, grass, sand —
+    /// but also insulated roofs), facing up (normal `z ≥ 0.5`, slopes up to
+    /// 60°), with nothing of the scene below them (a ray from the facet's
+    /// centre straight down, started just under its plane, hits nothing).
+    /// Roofs, decks and bridges have the terrain below them; the terrain and
+    /// what lies on it do not.
+    pub fn ground_facets<T: Tracer + ?Sized>(
+        &self,
+        tracer: &T,
+        facets: &FacetSamples,
+    ) -> Vec<bool> {
+        let n = facets.len();
+        let candidate: Vec<usize> = (0..n)
+            .filter(|&f| match self.kinds.get(f) {
+                Some(FacetThermal::Solve(pi)) => {
+                    self.props[*pi as usize].back == BackBoundary::Insulated
+                        && facets.normal[f].z >= 0.5
+                }
+                _ => false,
+            })
+            .collect();
+        let rays: Vec<Ray> = candidate
+            .iter()
+            .map(|&f| {
+                let pts = facets.facet_points(f);
+                let c = pts.iter().copied().sum::<glam::Vec3>() / pts.len() as f32;
+                // Just under the plane, so the facet itself is not hit.
+                let origin = c - facets.normal[f] * facets.offset_m;
+                Ray::new(origin, glam::Vec3::NEG_Z)
+            })
+            .collect();
+        let mut hit = vec![false; rays.len()];
+        rays.par_chunks(4096)
+            .zip(hit.par_chunks_mut(4096))
+            .for_each(|(r, o)| tracer.occluded(r, Coherence::Coherent, o));
+        let mut ground = vec![false; n];
+        for (&f, h) in candidate.iter().zip(hit) {
+            ground[f] = !h;
+        }
+        ground
+    }
+
+    /// This setup with the deep-ground back boundary
+    /// ([`BackBoundary::GROUND`]) for the facets flagged in `ground` (the
+    /// insulated property sets they use get a ground twin).
+    pub fn with_ground(&self, ground: &[bool]) -> FacetThermalSetup {
+        let mut out = self.clone();
+        let mut twin: Vec<Option<u32>> = vec![None; self.props.len()];
+        for (f, k) in out.kinds.iter_mut().enumerate() {
+            if let FacetThermal::Solve(pi) = k
+                && ground.get(f).copied().unwrap_or(false)
+                && self.props[*pi as usize].back == BackBoundary::Insulated
+            {
+                let t = *twin[*pi as usize].get_or_insert_with(|| {
+                    out.props
+                        .push(self.props[*pi as usize].with_back(BackBoundary::GROUND));
+                    out.props.len() as u32 - 1
+                });
+                *pi = t;
+            }
+        }
+        out
+    }
+}
+
 /// Parameters of [`solve_scene_temperatures`].
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SceneThermalParams {
     /// The history window.
     pub window: HistoryWindow,
@@ -92,6 +162,20 @@ pub struct SceneThermalParams {
     pub exposure: ExposureParams,
     /// The thermal passes.
     pub thermal: ThermalParams,
+    /// Give the facets that lie on the ground the deep-ground back boundary
+    /// ([`FacetThermalSetup::ground_facets`]; default true).
+    pub ground: bool,
+}
+
+impl Default for SceneThermalParams {
+    fn default() -> Self {
+        SceneThermalParams {
+            window: HistoryWindow::default(),
+            exposure: ExposureParams::default(),
+            thermal: ThermalParams::default(),
+            ground: true,
+        }
+    }
 }
 
 /// Timings of [`solve_scene_temperatures`].
@@ -125,6 +209,11 @@ pub struct SceneThermal {
     pub exposure: Exposure,
     /// Surface temperatures at the image times, with per-pass statistics.
     pub temperatures: SceneTemperatures,
+    /// The thermal setup actually solved (with the ground facets' back
+    /// boundary when [`SceneThermalParams::ground`]).
+    pub setup: FacetThermalSetup,
+    /// Facets solved with the deep-ground back boundary.
+    pub ground_facets: usize,
     /// Where the time went.
     pub timings: SceneThermalTimings,
 }
@@ -229,6 +318,13 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
             }
         }
     }
+    let (setup, ground_facets) = if params.ground {
+        let ground = setup.ground_facets(tracer, &exposure.facets);
+        let count = ground.iter().filter(|&&g| g).count();
+        (setup.with_ground(&ground), count)
+    } else {
+        (setup.clone(), 0)
+    };
     let t2 = Instant::now();
     let temperatures = solve_facet_temperatures(
         &exposure,
@@ -245,6 +341,8 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
         image_times: image_times.to_vec(),
         exposure,
         temperatures,
+        setup,
+        ground_facets,
         timings: SceneThermalTimings {
             setup: t1 - t0,
             rays: t2 - t1,

@@ -2,7 +2,14 @@
 //! history, from its ray-traced inputs ([`Exposure`]) and the 1-D slab model
 //! ([`crate::thermal::solve`]).
 //!
-//! # Method
+//! Two methods ([`ThermalMethod`]): the default,
+//! [`ThermalMethod::Linearized`], solves a few reference facets per
+//! property set with the nonlinear model and every facet by their
+//! Green's matrices ([`super::linear`]); [`ThermalMethod::PerClass`], below,
+//! solves every class of facets with equal quantised inputs with the
+//! nonlinear model.
+//!
+//! # Per-class method
 //! 1. Facets whose inputs coincide are solved once. The dedup key is the
 //!    property set, the quantised shape factor(s), the sun-fraction history
 //!    and the quantised cos-incidence history (orientation enters the slab

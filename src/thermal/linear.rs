@@ -116,9 +116,8 @@ pub fn source_history_into(
         )
         .source_w_m2;
         if let Some(a) = exposed {
-            back[k] =
-                super::balance::exposed_back_flux(&ff, props.thermal_emissivity, f_back, a)
-                    .source_w_m2;
+            back[k] = super::balance::exposed_back_flux(&ff, props.thermal_emissivity, f_back, a)
+                .source_w_m2;
         }
     }
     Ok(())
