@@ -8,6 +8,9 @@
 //! (defaults scenes/town/scene.json, embree, dirsig; SKY = dirsig |
 //! grid:DZxDA | stratified:N).
 //!
+//! With `IRSIG_BENCH_GROUND=1` the facets on the ground get the deep-ground
+//! back boundary ([`SceneThermalParams::ground`]).
+//!
 //! With `IRSIG_BENCH_COMPARE=1` (scene files only) the thermal passes are
 //! solved again with the fine reference ([`ThermalParams::fine_reference`]:
 //! per class, fine dedup quanta, `SolveOptions::default()`) and with other
@@ -43,6 +46,7 @@ fn main() -> anyhow::Result<()> {
             sky,
             ..Default::default()
         },
+        ground: std::env::var_os("IRSIG_BENCH_GROUND").is_some(),
         ..Default::default()
     };
 

@@ -154,7 +154,7 @@ impl FacetThermalSetup {
 }
 
 /// Parameters of [`solve_scene_temperatures`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct SceneThermalParams {
     /// The history window.
     pub window: HistoryWindow,
@@ -163,19 +163,11 @@ pub struct SceneThermalParams {
     /// The thermal passes.
     pub thermal: ThermalParams,
     /// Give the facets that lie on the ground the deep-ground back boundary
-    /// ([`FacetThermalSetup::ground_facets`]; default true).
+    /// ([`FacetThermalSetup::ground_facets`]). Default false for now: the
+    /// scene study of `irsig::analysis` re-solves facets with their
+    /// materials' back boundaries and must apply the same rule before this
+    /// becomes the default.
     pub ground: bool,
-}
-
-impl Default for SceneThermalParams {
-    fn default() -> Self {
-        SceneThermalParams {
-            window: HistoryWindow::default(),
-            exposure: ExposureParams::default(),
-            thermal: ThermalParams::default(),
-            ground: true,
-        }
-    }
 }
 
 /// Timings of [`solve_scene_temperatures`].
