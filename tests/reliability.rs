@@ -309,6 +309,10 @@ struct RandomScene {
     boxes: Vec<([f64; 3], [f64; 2], f64, usize)>,
     /// A sphere: radius (m), height of its centre (m), material.
     sphere: Option<(f64, f64, usize)>,
+    /// A glTF model (`util::gltf_doc` as GLB: cubes of painted steel and a
+    /// glass panel): scale, position x, y (fraction of the ground's
+    /// half-size), rotation about z (degrees).
+    model: Option<(f64, [f64; 2], f64)>,
     /// Hourly weather rows: air temperature (K), dew-point depression (K),
     /// pressure (Pa), wind speed (m/s), wind direction (deg), direct normal
     /// and diffuse horizontal irradiance (W/m²), sky longwave (W/m²),
@@ -365,6 +369,7 @@ fn random_scene() -> impl Strategy<Value = RandomScene> {
                 0..4,
             ),
             proptest::option::of((0.5..10.0f64, -2.0..12.0f64, m)),
+            proptest::option::of((0.2..3.0f64, [-0.8..0.8f64, -0.8..0.8f64], 0.0..360.0f64)),
         ),
         (
             proptest::collection::vec(row, (WEATHER_HOURS_BEFORE + 2) as usize),
@@ -385,7 +390,7 @@ fn random_scene() -> impl Strategy<Value = RandomScene> {
     )
         .prop_map(
             |(
-                (site, when, ground, boxes, sphere),
+                (site, when, ground, boxes, sphere, model),
                 (weather, camera, scanner, builtin_atmosphere, render, obvhs),
             )| RandomScene {
                 site,
@@ -393,6 +398,7 @@ fn random_scene() -> impl Strategy<Value = RandomScene> {
                 ground,
                 boxes,
                 sphere,
+                model,
                 weather,
                 camera,
                 scanner,
@@ -461,6 +467,16 @@ fn write_random_scene(case: &RandomScene, dir: &std::path::Path) -> std::path::P
             "shapes": [{"sphere": {"radius": r}}],
             "material": name(mat),
             "transform": {"translate": [0.0, 0.0, z]},
+        }));
+    }
+    if let Some((scale, pos, rot)) = case.model {
+        let (doc, bin) = util::gltf_doc();
+        std::fs::write(dir.join("model.glb"), util::glb(&doc, &bin)).unwrap();
+        objects.push(json!({
+            "name": "model",
+            "shapes": [{"gltf": "model.glb"}],
+            "transform": {"translate": [pos[0] * side / 2.0, pos[1] * side / 2.0, 0.0],
+                          "rotate_deg": [0.0, 0.0, rot], "scale": scale},
         }));
     }
     let bands = json!([{"name": "LWIR", "response": [8.0, 12.0]},
@@ -629,9 +645,9 @@ fn render_random_scene(case: &RandomScene) -> Result<usize, TestCaseError> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: render_cases(), failure_persistence: None, ..ProptestConfig::default() })]
 
-    /// Issue 8: for any valid small scene — a plane, boxes and a sphere of
-    /// the bundled materials anywhere on Earth at any time of year, random
-    /// physical weather with a 24 h history, with or without the built-in
+    /// Issue 8: for any valid small scene — a plane, boxes, a sphere and a
+    /// glTF model of the bundled materials anywhere on Earth at any time of
+    /// year, random physical weather with a 24 h history, with or without the built-in
     /// atmosphere, a frame camera (oversampled, with or without noise and
     /// quantisation) and a line scanner, either backend — every output
     /// layer is finite and the temperatures plausible
@@ -654,6 +670,7 @@ fn r8_builtin_atmosphere_renders_from_above_the_ground() {
         ground: (60.0, 0),
         boxes: vec![([10.0, 8.0, 6.0], [0.3, -0.2], 30.0, 5)],
         sphere: Some((3.0, 4.0, 10)),
+        model: Some((1.5, [-0.4, 0.3], 45.0)),
         weather: (0..WEATHER_HOURS_BEFORE + 2)
             .map(|i| {
                 let day = (std::f64::consts::TAU * (i as f64 - 20.0) / 24.0).cos();
