@@ -76,7 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         eprintln!(
             "{} facets, {} primary rays; time {:.2} s: load {:.2}, BVH {:.2}, rays+thermal {:.2}, \
-             ray generation {:.2}, primary trace {:.2}, radiometry {:.2}, \
+             radiometry setup {:.2}, ray generation {:.2}, primary trace {:.2}, radiometry {:.2}, \
              secondary rays ({} hits) {:.2}, sensor {:.2}, output {:.2}",
             session.scene.geometry.facet_count(),
             t.primary_rays,
@@ -84,6 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             t.load.as_secs_f64(),
             t.bvh_build.as_secs_f64(),
             t.thermal.as_secs_f64(),
+            t.radiometry_setup.as_secs_f64(),
             t.ray_generation.as_secs_f64(),
             t.primary_trace.as_secs_f64(),
             t.radiometry.as_secs_f64(),

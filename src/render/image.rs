@@ -307,13 +307,28 @@ pub fn render_rows(
     for b in 0..nb {
         let reduced = match psf {
             // Box weights do not depend on the position in the image:
-            // reduce the traced rows alone.
+            // reduce each row in place, with the sums of
+            // `effects::reduce_oversampled` in its order (along x, then
+            // along y, weights 1/n, in f64), so the values are the same.
             Psf::Box => {
-                let mut img = Vec::with_capacity(traced.len() * per_row);
-                for r in band_rows(b) {
-                    img.extend_from_slice(r);
-                }
-                effects::reduce_oversampled(&img, w, traced.len(), n, psf)?
+                let wgt = 1.0 / n as f64;
+                let skip = rows.start - traced.start;
+                band.radiance[b]
+                    .par_chunks_mut(w)
+                    .zip(over.par_chunks(nb * per_row).skip(skip))
+                    .for_each(|(out, src)| {
+                        let src = &src[b * per_row..(b + 1) * per_row];
+                        for (x, o) in out.iter_mut().enumerate() {
+                            let mut y_sum = 0.0f64;
+                            for sub in src.chunks_exact(ws) {
+                                let px = &sub[x * n..(x + 1) * n];
+                                let x_sum: f64 = px.iter().map(|&v| wgt * v as f64).sum();
+                                y_sum += wgt * x_sum;
+                            }
+                            *o = y_sum as f32;
+                        }
+                    });
+                continue;
             }
             // Other PSFs: place the traced rows in a full-height image so
             // every weight is computed exactly as in a full render.
@@ -401,6 +416,14 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
         .par_iter()
         .map(|&t| band.blackbody_radiance(t))
         .collect();
+    // Where to start looking: for `nodes` equal steps of radiance from
+    // table[0], the partition point of the step's radiance (a short scan
+    // from there finds the same node as a binary search over the table).
+    let (l0, l_end) = (table[0], table[nodes - 1]);
+    let dl = (l_end - l0) / nodes as f64;
+    let start: Vec<usize> = (0..=nodes)
+        .map(|j| table.partition_point(|&x| x <= l0 + j as f64 * dl))
+        .collect();
     radiance
         .par_iter()
         .map(|&v| {
@@ -408,7 +431,22 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
                 return 0.0;
             }
             let v = v as f64;
-            let i = table.partition_point(|&x| x <= v).clamp(1, nodes - 1);
+            let j = if dl > 0.0 {
+                (((v - l0) / dl).max(0.0) as usize).min(nodes)
+            } else {
+                0
+            };
+            let i = if l0 + j as f64 * dl <= v {
+                // start[j] is the partition point of a radiance ≤ v: scan up.
+                let mut i = start[j];
+                while i < nodes && table[i] <= v {
+                    i += 1;
+                }
+                i
+            } else {
+                table.partition_point(|&x| x <= v)
+            };
+            let i = i.clamp(1, nodes - 1);
             let f = (v - table[i - 1]) / (table[i] - table[i - 1]);
             (temps[i - 1] + f * INVERSION_STEP_K) as f32
         })

@@ -89,6 +89,9 @@ pub struct Timings {
     pub bvh_build: Duration,
     /// Per-facet rays and thermal solve.
     pub thermal: Duration,
+    /// Per image time and sensor: the shading tables (spectra, emissivity
+    /// and Planck tables, band integrals, per-facet terms, path table).
+    pub radiometry_setup: Duration,
     /// Primary-ray generation.
     pub ray_generation: Duration,
     /// Primary-ray tracing (packets).
@@ -115,6 +118,7 @@ impl Timings {
         self.load
             + self.bvh_build
             + self.thermal
+            + self.radiometry_setup
             + self.ray_generation
             + self.primary_trace
             + self.radiometry
@@ -378,6 +382,7 @@ impl Session {
             max_bounces: self.config.max_bounces,
             offset_m: (1e-5 * size).max(1e-4),
         };
+        let t_setup = Instant::now();
         let paths = PathTables::new(
             &cond.atmosphere,
             sensor,
@@ -394,6 +399,7 @@ impl Session {
             opts,
         )?
         .with_path(paths);
+        self.timings.radiometry_setup += t_setup.elapsed();
         let times = StageTimes::default();
         let t0 = Instant::now();
         let band = render_rows(&shader, sensor, rows, &times, progress)?;

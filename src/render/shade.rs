@@ -323,6 +323,102 @@ pub enum FastMiss {
     OffTable,
 }
 
+impl PlanckTable {
+    /// Node `k` and fraction of temperature `t` (K), when it lies on the
+    /// table.
+    fn position(&self, t: f64) -> Option<(usize, f64)> {
+        let x = (t - self.t0) / PLANCK_TABLE_STEP_K;
+        if self.nodes >= 2 && x >= 0.0 && x < (self.nodes - 1) as f64 {
+            let k = x as usize;
+            Some((k, x - k as f64))
+        } else {
+            None
+        }
+    }
+}
+
+/// Row `a0` of the 1° emissivity tables and the fraction toward `a0 + 1`
+/// for the cosine of the view zenith `cos_view` (clamped to [0, 1]).
+#[inline]
+fn angle_row(cos_view: f32) -> (usize, f64) {
+    let theta = acos_unit(cos_view.clamp(0.0, 1.0) as f64).to_degrees();
+    // θ ≥ 0: truncation is the floor.
+    let a0 = (theta as usize).min(ANGLE_ROWS - 2);
+    (a0, theta - a0 as f64)
+}
+
+/// arccos x for 0 ≤ x ≤ 1, radians, to 3·10⁻⁸ (Abramowitz & Stegun,
+/// *Handbook of Mathematical Functions*, eq. 4.4.46: 2·10⁻⁸ with its
+/// ten-digit coefficients; 2·10⁻⁶° is far inside
+/// the 1° emissivity rows).
+#[inline]
+fn acos_unit(x: f64) -> f64 {
+    const A: [f64; 8] = [
+        1.570_796_305_0,
+        -0.214_598_801_6,
+        0.088_978_987_4,
+        -0.050_174_304_6,
+        0.030_891_881_0,
+        -0.017_088_125_6,
+        0.006_670_090_1,
+        -0.001_262_491_1,
+    ];
+    let p = A.iter().rev().fold(0.0, |acc, &a| acc * x + a);
+    (1.0 - x).max(0.0).sqrt() * p
+}
+
+/// [`Shader::facet_grey`] and [`Shader::facet_terms`] (no path).
+fn facet_terms(
+    optics: &SceneOptics,
+    conditions: &Conditions,
+    options: &ShadeOptions,
+    fast: &[FastBand],
+    table: &PlanckTable,
+) -> (Vec<u32>, Vec<[f32; 4]>) {
+    use rayon::prelude::*;
+    let s = &conditions.surface;
+    let nb = fast.len();
+    let facets = s.len();
+    let mut grey = vec![u32::MAX; facets];
+    let mut terms = vec![[0f32; 4]; facets * nb.max(1)];
+    grey.par_iter_mut()
+        .zip(terms.par_chunks_mut(nb.max(1)))
+        .enumerate()
+        .for_each(|(f, (g, terms))| {
+            let mi = optics.facet_material[f] as usize;
+            let m = &optics.materials[mi];
+            let secondary =
+                options.max_bounces > 0 && (m.specular_fraction > 0.0 || m.transmissivity > 0.0);
+            if nb == 0 || secondary || fast.iter().any(|fb| fb.grey[mi].is_none()) {
+                return;
+            }
+            let (Some((kt, ft)), Some((kg, fg))) = (
+                table.position(s.temperature_k[f] as f64),
+                table.position(s.background_k[f] as f64),
+            ) else {
+                return;
+            };
+            let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+            let sun_front = (s.cos_sun[f] as f64).max(0.0)
+                * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
+                / std::f64::consts::PI;
+            let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_front;
+            let tr = m.transmissivity.clamp(0.0, 1.0);
+            for (t, fb) in terms.iter_mut().zip(fast) {
+                let p = &fb.plain;
+                let env = big_f * p.sky + (1.0 - big_f) * p.planck_at(kg, fg);
+                *t = [
+                    p.planck_at(kt, ft) as f32,
+                    env as f32,
+                    (sd * p.sun) as f32,
+                    (tr * env) as f32,
+                ];
+            }
+            *g = mi as u32;
+        });
+    (grey, terms)
+}
+
 /// The radiance of rays: per ray, the spectral radiance on every band's
 /// grid, bands concatenated.
 pub struct Shader<'a> {
@@ -339,6 +435,15 @@ pub struct Shader<'a> {
     path: Option<PathTables>,
     fast: Vec<FastBand>,
     fast_path: Option<FastPath>,
+    /// Per facet (empty once a path is set): the material index where a
+    /// hit on the facet takes [`Shader::fast_primary`]'s per-facet terms
+    /// (a material grey in every band, no secondary rays, temperatures on
+    /// the table), `u32::MAX` elsewhere.
+    facet_grey: Vec<u32>,
+    /// Per facet, per band: the view-independent terms of the band
+    /// radiance `[Σw·B(T), env, (1 − s)·Σw·E_s·cos σ·f_sun/π, t·env]`
+    /// with `env = F·Σw·L_sky + (1 − F)·Σw·B(T_bg)`.
+    facet_terms: Vec<[f32; 4]>,
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -455,7 +560,7 @@ impl<'a> Shader<'a> {
                 values: Vec::new(),
             }
         };
-        let fast = tables
+        let fast: Vec<FastBand> = tables
             .iter()
             .map(|t| {
                 let nl = t.band.len();
@@ -500,7 +605,10 @@ impl<'a> Shader<'a> {
                 }
             })
             .collect();
+        let (facet_grey, facet_terms) = facet_terms(optics, conditions, &options, &fast, &table);
         Ok(Shader {
+            facet_grey,
+            facet_terms,
             tracer,
             offsets: geometry.facet_offsets(),
             optics,
@@ -521,6 +629,11 @@ impl<'a> Shader<'a> {
     /// hits ([`Shader::shade_primary`], [`Shader::fast_primary`]); `None`:
     /// no atmosphere.
     pub fn with_path(mut self, path: Option<PathTables>) -> Self {
+        if path.is_some() {
+            // The per-facet terms hold for the plain weights only.
+            self.facet_grey = Vec::new();
+            self.facet_terms = Vec::new();
+        }
         self.fast_path = path.as_ref().map(|p| FastPath {
             weighted_tau: self
                 .bands
@@ -623,6 +736,29 @@ impl<'a> Shader<'a> {
     /// need the reference: secondary rays, or temperatures off the table.
     pub fn fast_primary(&self, ray: &Ray, h: &Hit, out: &mut [f32]) -> Result<(), FastMiss> {
         let f = self.facet_of(h);
+        if let Some(&mi) = self.facet_grey.get(f).filter(|&&m| m != u32::MAX) {
+            // Grey material, no path: the view-independent terms are
+            // precomputed per facet; only ε(θ) and r(θ) remain.
+            let mi = mi as usize;
+            let m = &self.optics.materials[mi];
+            let (_, nrm, d) = self.hit_frame(ray, h);
+            let (a0, ta) = angle_row(-d.dot(nrm));
+            let lit = h.ng.dot(d) < 0.0 || m.double_sided;
+            let tr = m.transmissivity.clamp(0.0, 1.0);
+            let nb = self.fast.len();
+            let terms = &self.facet_terms[f * nb..(f + 1) * nb];
+            for ((o, fb), t) in out.iter_mut().zip(&self.fast).zip(terms) {
+                let Some(g) = &fb.grey[mi] else {
+                    unreachable!("facet_grey only lists materials grey in every band")
+                };
+                let eps = g[a0] + ta * (g[a0 + 1] - g[a0]);
+                let r = (1.0 - eps - tr).max(0.0);
+                let [x, env, w, z] = t.map(|v| v as f64);
+                let v = eps * x + r * (env + if lit { w } else { 0.0 }) + z;
+                *o = v as f32;
+            }
+            return Ok(());
+        }
         if self.spawns_secondary(f) {
             return Err(FastMiss::Secondary);
         }
@@ -636,10 +772,7 @@ impl<'a> Shader<'a> {
         let mi = self.optics.facet_material[f] as usize;
         let m = &self.optics.materials[mi];
         let (_, nrm, d) = self.hit_frame(ray, h);
-        let cos_view = (-d.dot(nrm)).clamp(0.0, 1.0) as f64;
-        let theta = cos_view.acos().to_degrees();
-        let a0 = (theta.floor() as usize).min(ANGLE_ROWS - 2);
-        let ta = theta - a0 as f64;
+        let (a0, ta) = angle_row(-d.dot(nrm));
         let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
@@ -723,14 +856,7 @@ impl<'a> Shader<'a> {
     /// Node `k` and fraction of temperature `t` on the Planck table, when
     /// it lies on it.
     fn table_position(&self, t: f64) -> Option<(usize, f64)> {
-        let tab = &self.table;
-        let x = (t - tab.t0) / PLANCK_TABLE_STEP_K;
-        if tab.nodes >= 2 && x >= 0.0 && x < (tab.nodes - 1) as f64 {
-            let k = x as usize;
-            Some((k, x - k as f64))
-        } else {
-            None
-        }
+        self.table.position(t)
     }
 
     /// [`Shader::shade`] for primary rays (unit directions, from the
@@ -999,4 +1125,16 @@ fn band_sum(s: &BandStreams, frac: [f32; 4], big_f: f32, sd: f32, tr: f32) -> f3
         }
     }
     acc.iter().sum()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn acos_unit_is_within_its_published_bound() {
+        for i in 0..=100_000 {
+            let x = i as f64 / 100_000.0;
+            let err = (super::acos_unit(x) - x.acos()).abs();
+            assert!(err <= 3e-8, "acos({x}): error {err}");
+        }
+    }
 }
