@@ -1056,3 +1056,28 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
         eprintln!("max bounces {bounces}, path {path}: worst relative difference {worst:.2e}");
     }
 }
+
+#[test]
+fn tabulated_apparent_temperatures_match_the_exact_inversion() {
+    use irsig::render::image::{apparent_temperature, apparent_temperatures};
+    // Radiances of 200–400 K blackbodies in an MWIR and an LWIR band, plus
+    // values in between, against the exact per-pixel inversion.
+    for band in [
+        Band::flat(3.0, 5.0, 0.1).unwrap(),
+        Band::flat(8.0, 14.0, 0.1).unwrap(),
+    ] {
+        let radiance: Vec<f32> = (0..4000)
+            .map(|i| band.blackbody_radiance(200.0 + 0.05 * i as f64 + 0.0123) as f32)
+            .chain([0.0, -1.0, f32::NAN])
+            .collect();
+        let t = apparent_temperatures(&band, &radiance);
+        let mut worst = 0.0f32;
+        for (&l, &ti) in radiance.iter().zip(&t) {
+            let exact = apparent_temperature(&band, l);
+            worst = worst.max((ti - exact).abs());
+        }
+        // f32 resolves 3·10⁻⁵ K at 400 K; the table adds < 3·10⁻⁵ K.
+        assert!(worst < 1e-4, "worst {worst} K");
+        assert_eq!(&t[4000..], &[0.0, 0.0, 0.0]);
+    }
+}

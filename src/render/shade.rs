@@ -741,9 +741,18 @@ impl<'a> Shader<'a> {
             // precomputed per facet; only ε(θ) and r(θ) remain.
             let mi = mi as usize;
             let m = &self.optics.materials[mi];
-            let (_, nrm, d) = self.hit_frame(ray, h);
-            let (a0, ta) = angle_row(-d.dot(nrm));
-            let lit = h.ng.dot(d) < 0.0 || m.double_sided;
+            // cos of the view zenith from the normal facing the ray,
+            // |d·n| / (|d|·|n|), with one square root.
+            let dn = ray.dir.dot(h.ng);
+            let norm = (ray.dir.length_squared() * h.ng.length_squared()).sqrt();
+            let cos_view = if norm > 0.0 {
+                dn.abs() / norm
+            } else {
+                let (_, nrm, d) = self.hit_frame(ray, h);
+                -d.dot(nrm)
+            };
+            let (a0, ta) = angle_row(cos_view);
+            let lit = dn < 0.0 || m.double_sided;
             let tr = m.transmissivity.clamp(0.0, 1.0);
             let nb = self.fast.len();
             let terms = &self.facet_terms[f * nb..(f + 1) * nb];
