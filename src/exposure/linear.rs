@@ -70,11 +70,56 @@ struct Reference {
     r_front: f32,
     r_back: f32,
     spinup_change_k: f64,
+    /// The reference's shape factors and `s·max(cos θ, 0)` history.
+    f: f32,
+    f_back: f32,
+    sc: Vec<f32>,
+    /// `G·∂S/∂F`, `G·∂B/∂F_b` of the front (and back) node, K per unit.
+    g_shape: Vec<f32>,
+    g_back_shape: Vec<f32>,
+    gb_shape: Vec<f32>,
+    gb_back_shape: Vec<f32>,
+}
+
+/// What a facet's sources are made of (see [`thermal::SourceModel`]).
+#[derive(Clone, Copy)]
+struct FacetState<'a> {
+    f: f32,
+    f_back: f32,
+    sun_fraction: &'a [f32],
+    cos_incidence: &'a [f32],
 }
 
 impl Reference {
-    fn new(lin: Linearization, rows: &[usize]) -> Reference {
+    fn new(
+        lin: Linearization,
+        rows: &[usize],
+        model: &thermal::SourceModel,
+        st: FacetState,
+    ) -> Reference {
         let r = lin.records;
+        let times = |g: &[f64], v: &[f64]| -> Vec<f32> {
+            if g.is_empty() || v.is_empty() {
+                return Vec::new();
+            }
+            (0..r)
+                .map(|t| {
+                    g[t * r..(t + 1) * r]
+                        .iter()
+                        .zip(v)
+                        .map(|(a, b)| a * b)
+                        .sum::<f64>() as f32
+                })
+                .collect()
+        };
+        let shape = model.front_per_shape_factor();
+        let back_shape = model.back_per_shape_factor();
+        let extra = (
+            times(&lin.front_from_front, shape),
+            times(&lin.front_from_back, back_shape),
+            times(&lin.back_from_front, shape),
+            times(&lin.back_from_back, back_shape),
+        );
         let transpose = |g: &[f64]| -> Vec<f32> {
             if g.is_empty() {
                 return Vec::new();
@@ -126,8 +171,23 @@ impl Reference {
             r_front: lin.front_radiative_w_m2_k4 as f32,
             r_back: lin.back_radiative_w_m2_k4 as f32,
             spinup_change_k: lin.solution.spinup_change_k.unwrap_or(0.0),
+            f: st.f,
+            f_back: st.f_back,
+            sc: sunlit_cos(st).collect(),
+            g_shape: extra.0,
+            g_back_shape: extra.1,
+            gb_shape: extra.2,
+            gb_back_shape: extra.3,
         }
     }
+}
+
+/// `s·max(cos θ, 0)` at each record.
+fn sunlit_cos<'a>(st: FacetState<'a>) -> impl Iterator<Item = f32> + 'a {
+    st.sun_fraction
+        .iter()
+        .zip(st.cos_incidence)
+        .map(|(s, c)| s.clamp(0.0, 1.0) * c.max(0.0))
 }
 
 /// `y (+)= G x` for a column-major `G` (`g[k·R + t]`).
@@ -235,7 +295,13 @@ impl Ctx<'_> {
     }
 
     /// Linearise about `facet` (air as background).
-    fn linearize(&self, facet: usize, lp: &LinearizedParams, rows: &[usize]) -> Result<Reference> {
+    fn linearize(
+        &self,
+        facet: usize,
+        lp: &LinearizedParams,
+        rows: &[usize],
+        model: &thermal::SourceModel,
+    ) -> Result<Reference> {
         let lin = thermal::linearize(
             self.props_of(facet),
             self.forcing,
@@ -243,7 +309,19 @@ impl Ctx<'_> {
             &lp.options,
         )
         .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
-        Ok(Reference::new(lin, rows))
+        Ok(Reference::new(lin, rows, model, self.state(facet)))
+    }
+
+    /// The inputs a facet's sources are made of.
+    fn state(&self, facet: usize) -> FacetState<'_> {
+        let sky = &self.exposure.sky;
+        let f = sky.shape_factor[facet];
+        FacetState {
+            f,
+            f_back: sky.back_shape_factor(facet).unwrap_or(1.0 - f),
+            sun_fraction: self.exposure.solar.sun_fraction(facet),
+            cos_incidence: self.exposure.solar.cos_incidence(facet),
+        }
     }
 }
 
@@ -298,6 +376,8 @@ struct Scratch {
     d: Vec<f32>,
     dback: Vec<f32>,
     bg: Vec<f32>,
+    x: Vec<f32>,
+    tmp: Vec<f32>,
 }
 
 impl Scratch {
@@ -308,6 +388,8 @@ impl Scratch {
             d: vec![0.0; r],
             dback: vec![0.0; r],
             bg: vec![0.0; r],
+            x: vec![0.0; r],
+            tmp: vec![0.0; r],
         }
     }
 }
@@ -409,11 +491,7 @@ pub(super) fn solve(
                     );
                     means[i] = out.iter().map(|&v| v as f64).sum::<f64>() / r as f64;
                     if model.has_back() {
-                        let f_back = exposure
-                            .sky
-                            .back_shape_factor(f)
-                            .map_or(1.0 - exposure.sky.shape_factor[f] as f64, f64::from);
-                        model.back_into(f_back, &mut s.ds);
+                        model.back_into(ctx.state(f).f_back as f64, &mut s.ds);
                         back.extend_from_slice(&s.ds);
                     }
                 }
@@ -451,11 +529,17 @@ pub(super) fn solve(
         })
         .collect();
     drop(per_group);
+    let g_of = |f: usize| group_of(f).expect("references are solved facets");
+    // α E_dn per record and group (f32): the weight of s·cos θ.
+    let sun32: Vec<Vec<f32>> = models
+        .iter()
+        .map(|m| m.front_per_sunlit_cos().iter().map(|&v| v as f32).collect())
+        .collect();
     let centre_refs: Vec<Option<Reference>> = centre
         .par_iter()
         .map(|&f| {
             (f != usize::MAX)
-                .then(|| ctx.linearize(f, lp, &rows))
+                .then(|| ctx.linearize(f, lp, &rows, &models[g_of(f)]))
                 .transpose()
         })
         .collect::<Result<_>>()?;
@@ -530,7 +614,7 @@ pub(super) fn solve(
     drop(bins);
     let refs: Vec<Reference> = bin_rep
         .par_iter()
-        .map(|&f| ctx.linearize(f, lp, &rows))
+        .map(|&f| ctx.linearize(f, lp, &rows, &models[g_of(f)]))
         .collect::<Result<_>>()?;
     let max_spin = refs
         .iter()
@@ -579,6 +663,7 @@ pub(super) fn solve(
                         }
                         let rep = &refs[ref_of[f] as usize];
                         diff(f, rep, s);
+                        let mut bgc = None;
                         if let Some(prev) = prev
                             && ctx.background_excess(f, prev, &mut s.bg)
                         {
@@ -588,6 +673,7 @@ pub(super) fn solve(
                                 exposure.sky.back_shape_factor(f).map(f64::from),
                             );
                             let (cf, cb) = (cf as f32, cb as f32);
+                            bgc = Some((cf, cb));
                             for (d, e) in s.ds.iter_mut().zip(&s.bg) {
                                 *d += cf * e;
                             }
@@ -600,16 +686,72 @@ pub(super) fn solve(
                         let second = last_pass && lp.second_order;
                         let full = second || (!last_pass && needed[f]);
                         if full {
-                            matvec(&rep.gt_ff, &s.ds, &mut s.d, false);
-                            if rep.has_back {
-                                matvec(&rep.gt_fb, &s.db, &mut s.d, true);
+                            // ΔS = ΔF·∂S/∂F + Δ(s cos θ)·αE_dn (+ the
+                            // background's): the F terms are one column
+                            // each, the sun's is zero at night.
+                            let st = ctx.state(f);
+                            let sun = &sun32[group_of(f).expect("solved")];
+                            for ((x, sc), (rsc, w)) in
+                                s.x.iter_mut()
+                                    .zip(sunlit_cos(st))
+                                    .zip(rep.sc.iter().zip(sun))
+                            {
+                                *x = (sc - rsc) * w;
+                            }
+                            let (df, dfb) = (st.f - rep.f, st.f_back - rep.f_back);
+                            let node = |gt_f: &[f32],
+                                        gt_b: &[f32],
+                                        g_shape: &[f32],
+                                        g_back_shape: &[f32],
+                                        y: &mut [f32],
+                                        x: &[f32],
+                                        tmp: &mut [f32]| {
+                                matvec(gt_f, x, y, false);
+                                for (v, g) in y.iter_mut().zip(g_shape) {
+                                    *v += df * g;
+                                }
+                                if rep.has_back {
+                                    for (v, g) in y.iter_mut().zip(g_back_shape) {
+                                        *v += dfb * g;
+                                    }
+                                }
+                                if let Some((cf, cb)) = bgc {
+                                    for (t, e) in tmp.iter_mut().zip(&s.bg) {
+                                        *t = cf * e;
+                                    }
+                                    matvec(gt_f, tmp, y, true);
+                                    if rep.has_back {
+                                        for (t, e) in tmp.iter_mut().zip(&s.bg) {
+                                            *t = cb * e;
+                                        }
+                                        matvec(gt_b, tmp, y, true);
+                                    }
+                                }
+                            };
+                            node(
+                                &rep.gt_ff,
+                                &rep.gt_fb,
+                                &rep.g_shape,
+                                &rep.g_back_shape,
+                                &mut s.d,
+                                &s.x,
+                                &mut s.tmp,
+                            );
+                            if second && rep.has_back {
+                                node(
+                                    &rep.gt_bf,
+                                    &rep.gt_bb,
+                                    &rep.gb_shape,
+                                    &rep.gb_back_shape,
+                                    &mut s.dback,
+                                    &s.x,
+                                    &mut s.tmp,
+                                );
                             }
                         }
                         if second {
                             // T = T_ref + G (ΔS + r(Δ)), Δ = G ΔS.
                             if rep.has_back {
-                                matvec(&rep.gt_bf, &s.ds, &mut s.dback, false);
-                                matvec(&rep.gt_bb, &s.db, &mut s.dback, true);
                                 for ((db, d), t) in s.db.iter_mut().zip(&s.dback).zip(&rep.t_back) {
                                     *db += curvature(rep.r_back, *t, *d);
                                 }

@@ -193,6 +193,22 @@ impl SourceModel {
         !self.back_base.is_empty()
     }
 
+    /// `∂S_k/∂F` per record, W m⁻².
+    pub fn front_per_shape_factor(&self) -> &[f64] {
+        &self.shape
+    }
+
+    /// `∂S_k/∂(s·max(cos θ, 0))` per record (the absorbed direct-normal
+    /// irradiance `α E_dn`), W m⁻².
+    pub fn front_per_sunlit_cos(&self) -> &[f64] {
+        &self.sun
+    }
+
+    /// `∂B_k/∂F_b` per record (empty without an exposed back), W m⁻².
+    pub fn back_per_shape_factor(&self) -> &[f64] {
+        &self.back_shape
+    }
+
     /// Front source history of a facet (sun fraction, cos θ, shape factor
     /// `f`) into `out`, W m⁻².
     pub fn front_into(&self, sun_fraction: &[f32], cos_incidence: &[f32], f: f64, out: &mut [f32]) {
