@@ -1081,3 +1081,16 @@ fn tabulated_apparent_temperatures_match_the_exact_inversion() {
         assert_eq!(&t[4000..], &[0.0, 0.0, 0.0]);
     }
 }
+
+#[test]
+fn finish_refuses_a_non_finite_value_and_names_the_layer() {
+    use irsig::render::RowBand;
+    let s = sensor(nadir_camera(8, 6, 20.0, 1));
+    let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
+    let mut rows = RowBand::empty(8, 6, 0..6, bands.len());
+    rows.radiance[0].fill(9.0);
+    assert!(finish(&rows, &s, &bands, 1).is_ok());
+    rows.truth[5][47] = f32::INFINITY;
+    let e = finish(&rows, &s, &bands, 1).unwrap_err().to_string();
+    assert!(e.contains("depth") && e.contains("inf"), "{e}");
+}

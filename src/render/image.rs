@@ -504,7 +504,13 @@ pub fn finish(full: &RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Res
         stack.push(*name, v.clone())?;
     }
     for l in &stack.layers {
-        if let Some(v) = l.data.iter().find(|v| !v.is_finite()) {
+        // A branch-free scan in parallel; the value is looked up only when
+        // there is one.
+        let bad = l
+            .data
+            .par_chunks(1 << 16)
+            .any(|c| c.iter().fold(false, |acc, v| acc | !v.is_finite()));
+        if let Some(v) = l.data.iter().find(|v| bad && !v.is_finite()) {
             return Err(Error::Other(format!(
                 "layer `{}` of sensor `{}` has a non-finite value ({v}): refusing to write it",
                 l.name, sensor.name
