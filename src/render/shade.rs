@@ -45,7 +45,7 @@
 //! per-band integrals over the Planck table (`Σ w·τ₂·B(T_k)`, `Σ w·τ₂·L_sky`,
 //! `Σ w·τ₂·E_s`). Both use the same interpolations as the spectral
 //! reference ([`Shader::shade`] + [`Shader::band_radiance`]), so they agree
-//! with it to rounding (≤ 2·10⁻⁷ relative measured in `tests/render.rs`).
+//! with it to rounding (≤ 6·10⁻⁷ relative measured in `tests/render.rs`).
 
 use glam::Vec3;
 
