@@ -8,8 +8,9 @@
 //! (defaults scenes/town/scene.json, embree, dirsig; SKY = dirsig |
 //! grid:DZxDA | stratified:N).
 //!
-//! With `IRSIG_BENCH_GROUND=1` the facets on the ground get the deep-ground
-//! back boundary ([`SceneThermalParams::ground`]).
+//! The facets on the ground get the deep-ground back boundary
+//! ([`SceneThermalParams::ground`], the default); `IRSIG_BENCH_GROUND=0`
+//! solves them with their materials' insulated backs instead.
 //!
 //! With `IRSIG_BENCH_COMPARE=1` (scene files only) the thermal passes are
 //! solved again with the fine reference ([`ThermalParams::fine_reference`]:
@@ -46,7 +47,7 @@ fn main() -> anyhow::Result<()> {
             sky,
             ..Default::default()
         },
-        ground: std::env::var_os("IRSIG_BENCH_GROUND").is_some(),
+        ground: std::env::var("IRSIG_BENCH_GROUND").map_or(true, |v| v != "0"),
         ..Default::default()
     };
 

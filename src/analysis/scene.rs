@@ -45,13 +45,15 @@ use rayon::prelude::*;
 use super::params::ParamSet;
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 use crate::exposure::{
-    Exposure, ExposureParams, FacetThermal, FacetThermalSetup, HistoryWindow, ThermalParams,
-    compute_exposure, history_times, sun_directions,
+    Exposure, ExposureParams, FacetThermal, FacetThermalSetup, HistoryWindow, SceneThermalParams,
+    ThermalParams, compute_exposure, history_times, sun_directions,
 };
 use crate::render::path::PathTables;
 use crate::render::session::{AtmosphereConfig, Session};
 use crate::render::{Conditions, ShadeOptions, Shader, Sky};
-use crate::thermal::{self, Background, FacetInputs, Forcing, SlabProperties, SolveOptions};
+use crate::thermal::{
+    self, BackBoundary, Background, FacetInputs, Forcing, SlabProperties, SolveOptions,
+};
 use crate::trace::{Coherence, Hit, Ray};
 use crate::weather::WeatherRecord;
 use crate::{Error, Result};
@@ -309,6 +311,10 @@ pub struct SceneStudy {
     image_record: usize,
     exposure: Exposure,
     kinds: Vec<FacetThermal>,
+    /// Facets on the ground (the render's rule,
+    /// [`FacetThermalSetup::ground_facets`]): an insulated back becomes the
+    /// deep-ground boundary, as in the scene-wide solve.
+    ground: Vec<bool>,
     facet_part: Vec<u32>,
     sampled: Vec<usize>,
     neighbours: Vec<usize>,
@@ -405,6 +411,11 @@ impl SceneStudy {
                 exposure.sky.shape_factor[f] = v;
             }
         }
+        let ground = if SceneThermalParams::default().ground {
+            setup.ground_facets(session.tracer.as_ref(), &exposure.facets)
+        } else {
+            vec![false; exposure.facets.len()]
+        };
         let kinds = setup.kinds;
         let solved = |f: &usize| matches!(kinds[*f], FacetThermal::Solve(_));
         let mut sampled: Vec<usize> = tracked
@@ -447,6 +458,7 @@ impl SceneStudy {
             image_record,
             exposure,
             kinds,
+            ground,
             facet_part,
             sampled,
             neighbours,
@@ -528,10 +540,25 @@ impl SceneStudy {
             .apply_weather_at(x, &self.history, Some(&site))?;
         let forcing = Forcing::from_records(&w)?;
         let props = self.part_props(x)?;
+        // The ground twin of each part's properties (deep-ground back
+        // boundary where the back is insulated), as the scene solve's
+        // `FacetThermalSetup::with_ground`.
+        let ground_props: Vec<Option<SlabProperties>> = props
+            .iter()
+            .map(|p| {
+                p.filter(|p| p.back == BackBoundary::Insulated)
+                    .map(|p| p.with_back(BackBoundary::GROUND))
+            })
+            .collect();
         let prop = |f: usize| -> Result<&SlabProperties> {
-            props[self.facet_part[f] as usize]
-                .as_ref()
-                .ok_or_else(|| Error::Other(format!("facet {f} has a fixed temperature")))
+            let part = self.facet_part[f] as usize;
+            let own = props[part].as_ref();
+            let p = if self.ground[f] {
+                ground_props[part].as_ref().or(own)
+            } else {
+                own
+            };
+            p.ok_or_else(|| Error::Other(format!("facet {f} has a fixed temperature")))
         };
         let pass1: Vec<Vec<f32>> = self
             .neighbours

@@ -154,7 +154,7 @@ impl FacetThermalSetup {
 }
 
 /// Parameters of [`solve_scene_temperatures`].
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SceneThermalParams {
     /// The history window.
     pub window: HistoryWindow,
@@ -163,11 +163,21 @@ pub struct SceneThermalParams {
     /// The thermal passes.
     pub thermal: ThermalParams,
     /// Give the facets that lie on the ground the deep-ground back boundary
-    /// ([`FacetThermalSetup::ground_facets`]). Default false for now: the
-    /// scene study of `irsig::analysis` re-solves facets with their
-    /// materials' back boundaries and must apply the same rule before this
-    /// becomes the default.
+    /// ([`FacetThermalSetup::ground_facets`]). Default true; the scene
+    /// study of `irsig::analysis` applies the same rule when it re-solves
+    /// facets.
     pub ground: bool,
+}
+
+impl Default for SceneThermalParams {
+    fn default() -> Self {
+        SceneThermalParams {
+            window: HistoryWindow::default(),
+            exposure: ExposureParams::default(),
+            thermal: ThermalParams::default(),
+            ground: true,
+        }
+    }
 }
 
 /// Timings of [`solve_scene_temperatures`].
