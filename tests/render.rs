@@ -859,6 +859,9 @@ fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
     }
     let sum: f64 = stages.iter().map(|k| num(k)).sum();
     assert!((sum - num("total_s")).abs() < 1e-6 * sum.max(1.0), "{r}");
+    // The thermal passes are part of the per-facet stage, and took time.
+    let solve = num("thermal_solve_s");
+    assert!(solve > 0.0 && solve <= num("rays_thermal_s"), "{r}");
     assert!(num("bare_trace_s") > 0.0 && num("facets") > 0.0, "{r}");
     let pipeline = num("primary_trace_s") + num("radiometry_s") + num("sensor_s");
     let ratio = num("pipeline_over_bare");

@@ -205,6 +205,8 @@ struct RenderReport {
     load_s: f64,
     bvh_build_s: f64,
     rays_thermal_s: f64,
+    /// Of `rays_thermal_s`: the thermal passes (slab model) alone.
+    thermal_solve_s: f64,
     /// Shading tables and per-facet terms (per image time and sensor).
     radiometry_setup_s: f64,
     ray_generation_s: f64,
@@ -240,6 +242,7 @@ fn timings_since(
         load: a.load - b.load,
         bvh_build: a.bvh_build - b.bvh_build,
         thermal: a.thermal - b.thermal,
+        thermal_solve: a.thermal_solve - b.thermal_solve,
         radiometry_setup: a.radiometry_setup - b.radiometry_setup,
         ray_generation: a.ray_generation - b.ray_generation,
         primary_trace: a.primary_trace - b.primary_trace,
@@ -366,6 +369,7 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         load_s: secs(t.load),
         bvh_build_s: secs(t.bvh_build),
         rays_thermal_s: secs(t.thermal),
+        thermal_solve_s: secs(t.thermal_solve),
         radiometry_setup_s: secs(t.radiometry_setup),
         ray_generation_s: secs(t.ray_generation),
         primary_trace_s: secs(t.primary_trace),
@@ -409,6 +413,7 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         ("load", r.load_s),
         ("BVH build", r.bvh_build_s),
         ("per-facet rays + thermal", r.rays_thermal_s),
+        ("  of which thermal solve", r.thermal_solve_s),
         ("radiometry setup", r.radiometry_setup_s),
         ("primary ray generation", r.ray_generation_s),
         ("primary trace", r.primary_trace_s),
@@ -420,6 +425,11 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
     ] {
         writeln!(out, "{stage:<36} {v:>10.3}")?;
     }
+    writeln!(
+        out,
+        "thermal solve: {:.1} % of the render",
+        100.0 * r.thermal_solve_s / r.total_s.max(f64::MIN_POSITIVE)
+    )?;
     writeln!(
         out,
         "primary pipeline (trace + radiometry + sensor): {:.3} s, {:.2} Mray/s",

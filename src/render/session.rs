@@ -87,8 +87,11 @@ pub struct Timings {
     pub load: Duration,
     /// Building the BVH.
     pub bvh_build: Duration,
-    /// Per-facet rays and thermal solve.
+    /// Per-facet rays and thermal solve (setup, rays, thermal passes).
     pub thermal: Duration,
+    /// Of [`Timings::thermal`]: the thermal passes alone (the slab model
+    /// over every facet, without the per-facet rays).
+    pub thermal_solve: Duration,
     /// Per image time and sensor: the shading tables (spectra, emissivity
     /// and Planck tables, band integrals, per-facet terms, path table).
     pub radiometry_setup: Duration,
@@ -172,6 +175,9 @@ pub struct ThermalStates {
     pub conditions: Vec<Conditions>,
     /// Per time: the weather record.
     pub records: Vec<WeatherRecord>,
+    /// Where the scene-wide solve's time went (history setup, per-facet
+    /// rays, thermal passes).
+    pub timings: crate::exposure::SceneThermalTimings,
 }
 
 fn parse_at<T: for<'de> Deserialize<'de>>(
@@ -313,6 +319,7 @@ impl Session {
         let t0 = Instant::now();
         let states = scene_thermal(self, times)?;
         self.timings.thermal += t0.elapsed();
+        self.timings.thermal_solve += states.timings.thermal;
         Ok(states)
     }
 
@@ -696,5 +703,6 @@ fn scene_thermal(session: &Session, times: &[DateTime<FixedOffset>]) -> Result<T
         times: times.to_vec(),
         conditions,
         records,
+        timings: solved.timings,
     })
 }
