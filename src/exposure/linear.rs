@@ -63,8 +63,6 @@ struct Reference {
     /// Column means `(1/R) Σ_t ∂T_front(t)/∂S_k` and `/∂B_k`.
     mean_ff: Vec<f32>,
     mean_fb: Vec<f32>,
-    s_front: Vec<f32>,
-    s_back: Vec<f32>,
     t_front: Vec<f32>,
     t_back: Vec<f32>,
     r_front: f32,
@@ -159,13 +157,6 @@ impl Reference {
             rows_fb: pick(&lin.front_from_back),
             mean_ff: mean(&lin.front_from_front),
             mean_fb: mean(&lin.front_from_back),
-            s_front: f32s(&lin.sources.front_w_m2),
-            s_back: lin
-                .sources
-                .back_w_m2
-                .as_deref()
-                .map(f32s)
-                .unwrap_or_default(),
             t_front: f32s(&lin.solution.surface_temperature_k),
             t_back: f32s(&lin.solution.back_temperature_k),
             r_front: lin.front_radiative_w_m2_k4 as f32,
@@ -359,16 +350,6 @@ fn prop_key(p: &SlabProperties) -> Vec<u64> {
     k
 }
 
-/// Per-facet pass-1 sources (air as background), for solved facets.
-struct Sources {
-    /// `[f][k]` front source, W m⁻² (0 for fixed facets).
-    front: Vec<f32>,
-    /// Slot of each facet's back source (`u32::MAX`: no exposed back).
-    back_slot: Vec<u32>,
-    /// `[slot][k]` back source, W m⁻².
-    back: Vec<f32>,
-}
-
 /// Scratch buffers of one worker.
 struct Scratch {
     ds: Vec<f32>,
@@ -439,25 +420,8 @@ pub(super) fn solve(
         FacetThermal::Solve(pi) => Some(prop_group[pi as usize] as usize),
         FacetThermal::Fixed(_) => None,
     };
-    let exposed = |f: usize| match kinds[f] {
-        FacetThermal::Solve(pi) => {
-            matches!(
-                props[pi as usize].back,
-                thermal::BackBoundary::Exposed { .. }
-            )
-        }
-        FacetThermal::Fixed(_) => false,
-    };
-
-    // 2. Pass-1 sources of every facet, and their daily means.
-    let mut back_slot = vec![u32::MAX; n];
-    let mut slots = 0u32;
-    for (f, s) in back_slot.iter_mut().enumerate() {
-        if exposed(f) {
-            *s = slots;
-            slots += 1;
-        }
-    }
+    // 2. Source models per group; a facet's pass-1 sources (air as
+    // background) are formed on the fly from them, never stored.
     // Group representatives' property sets → source models.
     let mut group_props: Vec<Option<&SlabProperties>> = vec![None; groups];
     for (p, &g) in props.iter().zip(&prop_group) {
@@ -467,49 +431,48 @@ pub(super) fn solve(
         .iter()
         .map(|p| thermal::SourceModel::new(p.expect("every group has a property set"), forcing))
         .collect();
-    type Chunk = (Vec<f32>, Vec<f32>, Vec<f64>);
-    let chunks: Vec<Chunk> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map_init(
-            || Scratch::new(r),
-            |s, c| {
-                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-                let mut front = vec![0.0f32; range.len() * r];
-                let mut back = Vec::new();
-                let mut means = vec![0.0f64; range.len()];
-                for (i, f) in range.enumerate() {
-                    let Some(g) = group_of(f) else {
-                        continue;
-                    };
-                    let model = &models[g];
-                    let out = &mut front[i * r..(i + 1) * r];
-                    model.front_into(
-                        exposure.solar.sun_fraction(f),
-                        exposure.solar.cos_incidence(f),
-                        exposure.sky.shape_factor[f] as f64,
-                        out,
-                    );
-                    means[i] = out.iter().map(|&v| v as f64).sum::<f64>() / r as f64;
-                    if model.has_back() {
-                        model.back_into(ctx.state(f).f_back as f64, &mut s.ds);
-                        back.extend_from_slice(&s.ds);
-                    }
-                }
-                (front, back, means)
-            },
-        )
+    let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    // ∂S/∂F, ∂B/∂F_b and α E_dn (the weight of s·cos θ) per record and
+    // group (f32).
+    let shape32: Vec<Vec<f32>> = models
+        .iter()
+        .map(|m| f32s(m.front_per_shape_factor()))
         .collect();
-    let mut src = Sources {
-        front: Vec::with_capacity(n * r),
-        back_slot,
-        back: Vec::with_capacity(slots as usize * r),
-    };
-    let mut means = Vec::with_capacity(n);
-    for (f, b, m) in chunks {
-        src.front.extend(f);
-        src.back.extend(b);
-        means.extend(m);
-    }
+    let back_shape32: Vec<Vec<f32>> = models
+        .iter()
+        .map(|m| f32s(m.back_per_shape_factor()))
+        .collect();
+    let sun32: Vec<Vec<f32>> = models
+        .iter()
+        .map(|m| f32s(m.front_per_sunlit_cos()))
+        .collect();
+    // Daily means of the front sources: mean(base) + F·mean(∂S/∂F) +
+    // mean(s cos θ · αE_dn).
+    let base_mean: Vec<f64> = models
+        .iter()
+        .map(|m| {
+            let mut out = vec![0.0f32; r];
+            m.front_into(&vec![0.0; r], &vec![0.0; r], 0.0, &mut out);
+            out.iter().map(|&v| v as f64).sum::<f64>() / r as f64
+        })
+        .collect();
+    let shape_mean: Vec<f64> = models
+        .iter()
+        .map(|m| m.front_per_shape_factor().iter().sum::<f64>() / r as f64)
+        .collect();
+    let means: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|f| {
+            let Some(g) = group_of(f) else {
+                return 0.0;
+            };
+            let sun: f64 = sunlit_cos(ctx.state(f))
+                .zip(&sun32[g])
+                .map(|(sc, w)| (sc * w) as f64)
+                .sum();
+            base_mean[g] + exposure.sky.shape_factor[f] as f64 * shape_mean[g] + sun / r as f64
+        })
+        .collect();
 
     // 3. Per group, the facet with the median daily-mean source, linearised.
     let mut per_group: Vec<Vec<(f64, usize)>> = vec![Vec::new(); groups];
@@ -530,11 +493,6 @@ pub(super) fn solve(
         .collect();
     drop(per_group);
     let g_of = |f: usize| group_of(f).expect("references are solved facets");
-    // α E_dn per record and group (f32): the weight of s·cos θ.
-    let sun32: Vec<Vec<f32>> = models
-        .iter()
-        .map(|m| m.front_per_sunlit_cos().iter().map(|&v| v as f32).collect())
-        .collect();
     let centre_refs: Vec<Option<Reference>> = centre
         .par_iter()
         .map(|&f| {
@@ -544,17 +502,24 @@ pub(super) fn solve(
         })
         .collect::<Result<_>>()?;
 
-    // Source differences of facet `f` from `rep` into `s.ds`/`s.db`.
+    // Source differences of facet `f` from `rep` into `s.ds`/`s.db`:
+    // `ΔF·∂S/∂F + Δ(s cos θ)·αE_dn` and `ΔF_b·∂B/∂F_b`.
     let diff = |f: usize, rep: &Reference, s: &mut Scratch| {
-        let sf = &src.front[f * r..(f + 1) * r];
-        for ((o, a), b) in s.ds.iter_mut().zip(sf).zip(&rep.s_front) {
-            *o = a - b;
+        let g = g_of(f);
+        let st = ctx.state(f);
+        let df = st.f - rep.f;
+        for (((o, sc), (rsc, w)), sh) in
+            s.ds.iter_mut()
+                .zip(sunlit_cos(st))
+                .zip(rep.sc.iter().zip(&sun32[g]))
+                .zip(&shape32[g])
+        {
+            *o = df * sh + (sc - rsc) * w;
         }
         if rep.has_back {
-            let slot = src.back_slot[f] as usize;
-            let sb = &src.back[slot * r..(slot + 1) * r];
-            for ((o, a), b) in s.db.iter_mut().zip(sb).zip(&rep.s_back) {
-                *o = a - b;
+            let dfb = st.f_back - rep.f_back;
+            for (o, sh) in s.db.iter_mut().zip(&back_shape32[g]) {
+                *o = dfb * sh;
             }
         }
     };
