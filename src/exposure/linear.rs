@@ -613,147 +613,143 @@ pub(super) fn solve(
         let last_pass = p + 1 == passes;
         let width = if last_pass { image_records.len() } else { r };
         let prev = prev4.as_deref();
-        let chunks: Vec<Vec<f32>> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map_init(
-                || Scratch::new(r),
-                |s, c| {
-                    let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-                    let mut out = vec![0.0f32; range.len() * width];
-                    for (i, f) in range.enumerate() {
-                        let o = &mut out[i * width..(i + 1) * width];
-                        if let FacetThermal::Fixed(t) = kinds[f] {
-                            o.iter_mut().for_each(|v| *v = t);
-                            continue;
+        // Written in place, chunk by chunk (no per-chunk copies).
+        let mut out = vec![0.0f32; n * width];
+        out.par_chunks_mut(CHUNK * width).enumerate().for_each_init(
+            || Scratch::new(r),
+            |s, (c, out)| {
+                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                for (i, f) in range.enumerate() {
+                    let o = &mut out[i * width..(i + 1) * width];
+                    if let FacetThermal::Fixed(t) = kinds[f] {
+                        o.iter_mut().for_each(|v| *v = t);
+                        continue;
+                    }
+                    let rep = &refs[ref_of[f] as usize];
+                    diff(f, rep, s);
+                    let mut bgc = None;
+                    if let Some(prev) = prev
+                        && ctx.background_excess(f, prev, &mut s.bg)
+                    {
+                        let (cf, cb) = thermal::background_coefficients(
+                            ctx.props_of(f),
+                            exposure.sky.shape_factor[f] as f64,
+                            exposure.sky.back_shape_factor(f).map(f64::from),
+                        );
+                        let (cf, cb) = (cf as f32, cb as f32);
+                        bgc = Some((cf, cb));
+                        for (d, e) in s.ds.iter_mut().zip(&s.bg) {
+                            *d += cf * e;
                         }
-                        let rep = &refs[ref_of[f] as usize];
-                        diff(f, rep, s);
-                        let mut bgc = None;
-                        if let Some(prev) = prev
-                            && ctx.background_excess(f, prev, &mut s.bg)
-                        {
-                            let (cf, cb) = thermal::background_coefficients(
-                                ctx.props_of(f),
-                                exposure.sky.shape_factor[f] as f64,
-                                exposure.sky.back_shape_factor(f).map(f64::from),
-                            );
-                            let (cf, cb) = (cf as f32, cb as f32);
-                            bgc = Some((cf, cb));
-                            for (d, e) in s.ds.iter_mut().zip(&s.bg) {
-                                *d += cf * e;
-                            }
-                            if rep.has_back {
-                                for (d, e) in s.db.iter_mut().zip(&s.bg) {
-                                    *d += cb * e;
-                                }
-                            }
-                        }
-                        let second = last_pass && lp.second_order;
-                        let full = second || (!last_pass && needed[f]);
-                        if full {
-                            // ΔS = ΔF·∂S/∂F + Δ(s cos θ)·αE_dn (+ the
-                            // background's): the F terms are one column
-                            // each, the sun's is zero at night.
-                            let st = ctx.state(f);
-                            let sun = &sun32[group_of(f).expect("solved")];
-                            for ((x, sc), (rsc, w)) in
-                                s.x.iter_mut()
-                                    .zip(sunlit_cos(st))
-                                    .zip(rep.sc.iter().zip(sun))
-                            {
-                                *x = (sc - rsc) * w;
-                            }
-                            let (df, dfb) = (st.f - rep.f, st.f_back - rep.f_back);
-                            let node = |gt_f: &[f32],
-                                        gt_b: &[f32],
-                                        g_shape: &[f32],
-                                        g_back_shape: &[f32],
-                                        y: &mut [f32],
-                                        x: &[f32],
-                                        tmp: &mut [f32]| {
-                                matvec(gt_f, x, y, false);
-                                for (v, g) in y.iter_mut().zip(g_shape) {
-                                    *v += df * g;
-                                }
-                                if rep.has_back {
-                                    for (v, g) in y.iter_mut().zip(g_back_shape) {
-                                        *v += dfb * g;
-                                    }
-                                }
-                                if let Some((cf, cb)) = bgc {
-                                    for (t, e) in tmp.iter_mut().zip(&s.bg) {
-                                        *t = cf * e;
-                                    }
-                                    matvec(gt_f, tmp, y, true);
-                                    if rep.has_back {
-                                        for (t, e) in tmp.iter_mut().zip(&s.bg) {
-                                            *t = cb * e;
-                                        }
-                                        matvec(gt_b, tmp, y, true);
-                                    }
-                                }
-                            };
-                            node(
-                                &rep.gt_ff,
-                                &rep.gt_fb,
-                                &rep.g_shape,
-                                &rep.g_back_shape,
-                                &mut s.d,
-                                &s.x,
-                                &mut s.tmp,
-                            );
-                            if second && rep.has_back {
-                                node(
-                                    &rep.gt_bf,
-                                    &rep.gt_bb,
-                                    &rep.gb_shape,
-                                    &rep.gb_back_shape,
-                                    &mut s.dback,
-                                    &s.x,
-                                    &mut s.tmp,
-                                );
-                            }
-                        }
-                        if second {
-                            // T = T_ref + G (ΔS + r(Δ)), Δ = G ΔS.
-                            if rep.has_back {
-                                for ((db, d), t) in s.db.iter_mut().zip(&s.dback).zip(&rep.t_back) {
-                                    *db += curvature(rep.r_back, *t, *d);
-                                }
-                            }
-                            for ((ds, d), t) in s.ds.iter_mut().zip(&s.d).zip(&rep.t_front) {
-                                *ds += curvature(rep.r_front, *t, *d);
-                            }
-                        }
-                        if last_pass {
-                            for (i, &t) in image_records.iter().enumerate() {
-                                let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
-                                if rep.has_back {
-                                    v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
-                                }
-                                o[i] = rep.t_front[t] + v;
-                            }
-                        } else if full {
-                            for ((o, d), t) in o.iter_mut().zip(&s.d).zip(&rep.t_front) {
-                                *o = t + d;
-                            }
-                        } else {
-                            // No facet sees this one: its history is not
-                            // needed, only the image records.
-                            for (i, &t) in image_records.iter().enumerate() {
-                                let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
-                                if rep.has_back {
-                                    v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
-                                }
-                                o[t] = rep.t_front[t] + v;
+                        if rep.has_back {
+                            for (d, e) in s.db.iter_mut().zip(&s.bg) {
+                                *d += cb * e;
                             }
                         }
                     }
-                    out
-                },
-            )
-            .collect();
-        let mut out: Vec<f32> = chunks.concat();
+                    let second = last_pass && lp.second_order;
+                    let full = second || (!last_pass && needed[f]);
+                    if full {
+                        // ΔS = ΔF·∂S/∂F + Δ(s cos θ)·αE_dn (+ the
+                        // background's): the F terms are one column
+                        // each, the sun's is zero at night.
+                        let st = ctx.state(f);
+                        let sun = &sun32[group_of(f).expect("solved")];
+                        for ((x, sc), (rsc, w)) in
+                            s.x.iter_mut()
+                                .zip(sunlit_cos(st))
+                                .zip(rep.sc.iter().zip(sun))
+                        {
+                            *x = (sc - rsc) * w;
+                        }
+                        let (df, dfb) = (st.f - rep.f, st.f_back - rep.f_back);
+                        let node = |gt_f: &[f32],
+                                    gt_b: &[f32],
+                                    g_shape: &[f32],
+                                    g_back_shape: &[f32],
+                                    y: &mut [f32],
+                                    x: &[f32],
+                                    tmp: &mut [f32]| {
+                            matvec(gt_f, x, y, false);
+                            for (v, g) in y.iter_mut().zip(g_shape) {
+                                *v += df * g;
+                            }
+                            if rep.has_back {
+                                for (v, g) in y.iter_mut().zip(g_back_shape) {
+                                    *v += dfb * g;
+                                }
+                            }
+                            if let Some((cf, cb)) = bgc {
+                                for (t, e) in tmp.iter_mut().zip(&s.bg) {
+                                    *t = cf * e;
+                                }
+                                matvec(gt_f, tmp, y, true);
+                                if rep.has_back {
+                                    for (t, e) in tmp.iter_mut().zip(&s.bg) {
+                                        *t = cb * e;
+                                    }
+                                    matvec(gt_b, tmp, y, true);
+                                }
+                            }
+                        };
+                        node(
+                            &rep.gt_ff,
+                            &rep.gt_fb,
+                            &rep.g_shape,
+                            &rep.g_back_shape,
+                            &mut s.d,
+                            &s.x,
+                            &mut s.tmp,
+                        );
+                        if second && rep.has_back {
+                            node(
+                                &rep.gt_bf,
+                                &rep.gt_bb,
+                                &rep.gb_shape,
+                                &rep.gb_back_shape,
+                                &mut s.dback,
+                                &s.x,
+                                &mut s.tmp,
+                            );
+                        }
+                    }
+                    if second {
+                        // T = T_ref + G (ΔS + r(Δ)), Δ = G ΔS.
+                        if rep.has_back {
+                            for ((db, d), t) in s.db.iter_mut().zip(&s.dback).zip(&rep.t_back) {
+                                *db += curvature(rep.r_back, *t, *d);
+                            }
+                        }
+                        for ((ds, d), t) in s.ds.iter_mut().zip(&s.d).zip(&rep.t_front) {
+                            *ds += curvature(rep.r_front, *t, *d);
+                        }
+                    }
+                    if last_pass {
+                        for (i, &t) in image_records.iter().enumerate() {
+                            let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                            if rep.has_back {
+                                v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                            }
+                            o[i] = rep.t_front[t] + v;
+                        }
+                    } else if full {
+                        for ((o, d), t) in o.iter_mut().zip(&s.d).zip(&rep.t_front) {
+                            *o = t + d;
+                        }
+                    } else {
+                        // No facet sees this one: its history is not
+                        // needed, only the image records.
+                        for (i, &t) in image_records.iter().enumerate() {
+                            let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                            if rep.has_back {
+                                v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                            }
+                            o[t] = rep.t_front[t] + v;
+                        }
+                    }
+                }
+            },
+        );
         // Image-time temperatures and, for a later pass, the T⁴ histories.
         image = (0..image_records.len())
             .map(|i| {
