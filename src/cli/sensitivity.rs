@@ -448,7 +448,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Study::Facet(_) => Vec::new(),
         },
     };
-    let mut bars = Vec::new();
+    let mut bars;
     match args.method {
         Method::Oat => {
             let oat = sensitivity::one_at_a_time(&factors, &outputs, &model)?;
@@ -458,22 +458,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .map(|o| o.iter().map(|e| e.per_unit).collect())
                 .collect();
             report.error_budget = sensitivity::error_budget(&factors, &outputs, &s);
-            for (o, name) in outputs
-                .iter()
-                .enumerate()
-                .filter(|(_, n)| n.ends_with(plotted))
-            {
-                let mat = name.trim_end_matches(plotted);
-                for (i, e) in oat.effects[o].iter().enumerate() {
-                    if e.swing() > 0.0 {
-                        bars.push(TornadoBar {
-                            name: format!("{mat}: {}", factors[i].name),
-                            at_low: e.at_low,
-                            at_high: e.at_high,
-                        });
-                    }
-                }
-            }
+            bars = tornado_bars(&outputs, plotted, &factors, &oat.effects, |e| {
+                (e.swing() > 0.0).then_some((e.at_low, e.at_high))
+            });
             report.oat = Some(oat);
         }
         Method::Morris => {
@@ -489,22 +476,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .map(|o| o.iter().map(|e| e.mu_star_per_unit).collect())
                 .collect();
             report.error_budget = sensitivity::error_budget(&factors, &outputs, &s);
-            for (o, name) in outputs
-                .iter()
-                .enumerate()
-                .filter(|(_, n)| n.ends_with(plotted))
-            {
-                let mat = name.trim_end_matches(plotted);
-                for (i, e) in m.effects[o].iter().enumerate() {
-                    if e.mu_star > 0.0 {
-                        bars.push(TornadoBar {
-                            name: format!("{mat}: {}", factors[i].name),
-                            at_low: e.mu,
-                            at_high: e.mu_star,
-                        });
-                    }
-                }
-            }
+            bars = tornado_bars(&outputs, plotted, &factors, &m.effects, |e| {
+                (e.mu_star > 0.0).then_some((e.mu, e.mu_star))
+            });
             report.morris = Some(m);
         }
     }
@@ -577,4 +551,33 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// One tornado bar per (plotted output, factor) whose effect `bar` keeps:
+/// `bar` gives the bar's two ends (low/high bound, or Morris μ/μ*).
+fn tornado_bars<E>(
+    outputs: &[String],
+    plotted: &str,
+    factors: &[sensitivity::Factor],
+    effects: &[Vec<E>],
+    bar: impl Fn(&E) -> Option<(f64, f64)>,
+) -> Vec<TornadoBar> {
+    let mut bars = Vec::new();
+    for (o, name) in outputs
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.ends_with(plotted))
+    {
+        let mat = name.trim_end_matches(plotted);
+        for (i, e) in effects[o].iter().enumerate() {
+            if let Some((at_low, at_high)) = bar(e) {
+                bars.push(TornadoBar {
+                    name: format!("{mat}: {}", factors[i].name),
+                    at_low,
+                    at_high,
+                });
+            }
+        }
+    }
+    bars
 }
