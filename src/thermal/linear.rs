@@ -522,6 +522,7 @@ impl Tangent {
         }
         let (nodes, cols) = (self.nodes, self.cols);
         let n = nodes - 1;
+        let act = self.active_columns(k);
         let c1 = 0.5 * GAMMA * dt;
         let a = 1.0 / (GAMMA * (2.0 - GAMMA));
         let b = (1.0 - GAMMA) * (1.0 - GAMMA) / (GAMMA * (2.0 - GAMMA));
@@ -539,15 +540,21 @@ impl Tangent {
             if i == n && !self.fixed_back {
                 diag += c1 * deriv[0].1;
             }
-            for j in 0..cols {
-                let mut v = diag * self.p[row + j];
-                if i > 0 {
-                    v += c1 * kl * self.p[row - cols + j];
+            let (wl, wr) = (
+                if i > 0 { c1 * kl } else { 0.0 },
+                if i < n { c1 * kr } else { 0.0 },
+            );
+            for &(lo, hi) in &act {
+                let out = &mut self.rhs[row + lo..row + hi];
+                let here = &self.p[row + lo..row + hi];
+                // Rows outside the slab have zero weight; clamp to any row.
+                let up = row.saturating_sub(cols);
+                let down = if i < n { row + cols } else { row };
+                let above = &self.p[up + lo..up + hi];
+                let below = &self.p[down + lo..down + hi];
+                for (((o, &h), &u), &d) in out.iter_mut().zip(here).zip(above).zip(below) {
+                    *o = diag * h + wl * u + wr * d;
                 }
-                if i < n {
-                    v += c1 * kr * self.p[row + cols + j];
-                }
-                self.rhs[row + j] = v;
             }
         }
         let w_k = c1 * ((1.0 - phi[0]) + (1.0 - phi[1]));
@@ -567,6 +574,7 @@ impl Tangent {
             &self.rhs,
             &mut self.star,
             cols,
+            &act,
         );
         // Stage 2: C (a P* − b P) + c2 σ(1).
         for i in 0..nodes {
@@ -577,8 +585,10 @@ impl Tangent {
                 &self.star[row..row + cols],
                 &self.p[row..row + cols],
             );
-            for j in 0..cols {
-                o[j] = cap * (a * st[j] - b * pp[j]);
+            for &(lo, hi) in &act {
+                for j in lo..hi {
+                    o[j] = cap * (a * st[j] - b * pp[j]);
+                }
             }
         }
         self.add_sources(k, c2 * (1.0 - phi[2]), c2 * phi[2]);
@@ -596,7 +606,20 @@ impl Tangent {
             &self.rhs,
             &mut self.p,
             cols,
+            &act,
         );
+    }
+
+    /// The column ranges of `P` that can be non-zero during the step over
+    /// record interval `k` of the real run: the sources of records
+    /// `0..=k + 1` (a source acts only from its record on: causality) and
+    /// the initial state; the other columns are zero and stay so.
+    fn active_columns(&self, k: usize) -> [(usize, usize); 3] {
+        let r = self.records;
+        let a = (k + 2).min(r);
+        let src = self.cols - self.nodes;
+        let back = if self.has_back { (r, r + a) } else { (0, 0) };
+        [(0, a), back, (src, self.cols)]
     }
 
     /// Add the unit source perturbations of records `k` and `k + 1` with
@@ -682,7 +705,8 @@ impl Tangent {
     }
 }
 
-/// Solve `(C − c A − c D) X = rhs` for `cols` right-hand sides (node-major),
+/// Solve `(C − c A − c D) X = rhs` for the `active` column ranges of
+/// `cols` right-hand sides (node-major; the other columns are untouched),
 /// `A` the conduction operator, `D = diag(d_front, 0, …, d_back)`; with a
 /// fixed back the last row is `X_n = rhs_n` (Thomas algorithm, Press et al.,
 /// *Numerical Recipes*, 3rd ed., §2.4).
@@ -697,6 +721,7 @@ fn solve_tridiagonal(
     rhs: &[f64],
     x: &mut [f64],
     cols: usize,
+    active: &[(usize, usize)],
 ) {
     let nodes = capacity.len();
     let n = nodes - 1;
@@ -721,14 +746,18 @@ fn solve_tridiagonal(
         prev_cp = cp[i];
         let row = i * cols;
         if i == 0 {
-            for j in 0..cols {
-                x[j] = rhs[j] * inv;
+            for &(lo, hi) in active {
+                for j in lo..hi {
+                    x[j] = rhs[j] * inv;
+                }
             }
         } else {
             let (done, cur) = x.split_at_mut(row);
             let prev = &done[row - cols..];
-            for j in 0..cols {
-                cur[j] = (rhs[row + j] - lower * prev[j]) * inv;
+            for &(lo, hi) in active {
+                for j in lo..hi {
+                    cur[j] = (rhs[row + j] - lower * prev[j]) * inv;
+                }
             }
         }
     }
@@ -737,8 +766,10 @@ fn solve_tridiagonal(
         let (cur, next) = x.split_at_mut(row + cols);
         let cur = &mut cur[row..];
         let f = cp[i];
-        for j in 0..cols {
-            cur[j] -= f * next[j];
+        for &(lo, hi) in active {
+            for j in lo..hi {
+                cur[j] -= f * next[j];
+            }
         }
     }
 }
