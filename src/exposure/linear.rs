@@ -26,11 +26,16 @@
 //!    what its blocked hemisphere rays hit — the rule of the per-class path
 //!    ([`super::solve_facet_temperatures`]). Only the sources change, so the
 //!    references and their matrices serve every pass. A pass before the last
-//!    computes full histories only for the facets some facet sees; the last
-//!    one only the image records (a row of `G` each).
+//!    computes full histories only for the facets some facet sees (stored
+//!    as `T⁴` for the next pass's backgrounds); the image records need only
+//!    a row of `G` each, and a later pass adds to pass 1's image records
+//!    just the background term `G·(c·σ(T_bg⁴ − T_air⁴))`.
 //!
 //! The sources of all facets of a property set come from one
-//! [`thermal::SourceModel`] (affine in `F`, `F_b`, `s·cos θ`).
+//! [`thermal::SourceModel`] (affine in `F`, `F_b`, `s·cos θ`), so the
+//! products with a reference's `G` split into precomputed products with
+//! the model's parts and, per facet, one product over its `s·max(cos θ, 0)`
+//! history (only its non-zero records for a full history).
 //!
 //! Work is per facet and per reference, in facet order; the result does
 //! not depend on the thread count.
@@ -50,7 +55,11 @@ const CHUNK: usize = 256;
 
 /// A reference facet's linearisation in the layout the per-facet products
 /// use: `f32`, column-major (`g[k·R + t] = ∂T(t)/∂S_k`), plus the rows of
-/// the image records row-major.
+/// the image records row-major, and the products of its Green's matrices
+/// with the parts of the affine source model
+/// ([`thermal::SourceModel`]: `S = base + F·∂S/∂F + s cos θ·αE_dn`), so
+/// that a facet's first-order change at a probed record is one dot product
+/// over its `s·max(cos θ, 0)` history plus a few scalars.
 struct Reference {
     has_back: bool,
     gt_ff: Vec<f32>,
@@ -60,9 +69,13 @@ struct Reference {
     /// Rows `[i][k]` of `∂T_front(rows[i])/∂S_k` and `/∂B_k`.
     rows_ff: Vec<f32>,
     rows_fb: Vec<f32>,
-    /// Column means `(1/R) Σ_t ∂T_front(t)/∂S_k` and `/∂B_k`.
-    mean_ff: Vec<f32>,
-    mean_fb: Vec<f32>,
+    /// Probes `j` (the rows, then the column means `(1/R) Σ_t G[t][k]`):
+    /// `P_j[k]·αE_dn[k]` (`[j][k]`), `P_j·∂S/∂F`, `P_fb,j·∂B/∂F_b`,
+    /// `P_j·(s cos θ_ref·αE_dn)` (K per unit and K).
+    probe_sun: Vec<f32>,
+    probe_shape: Vec<f32>,
+    probe_back: Vec<f32>,
+    probe_ref: Vec<f32>,
     t_front: Vec<f32>,
     t_back: Vec<f32>,
     r_front: f32,
@@ -72,11 +85,14 @@ struct Reference {
     f: f32,
     f_back: f32,
     sc: Vec<f32>,
-    /// `G·∂S/∂F`, `G·∂B/∂F_b` of the front (and back) node, K per unit.
+    /// `G·∂S/∂F`, `G·∂B/∂F_b`, `G·(s cos θ_ref·αE_dn)` of the front (and
+    /// back) node, K per unit and K.
     g_shape: Vec<f32>,
     g_back_shape: Vec<f32>,
+    g_ref: Vec<f32>,
     gb_shape: Vec<f32>,
     gb_back_shape: Vec<f32>,
+    gb_ref: Vec<f32>,
 }
 
 /// What a facet's sources are made of (see [`thermal::SourceModel`]).
@@ -96,6 +112,9 @@ impl Reference {
         st: FacetState,
     ) -> Reference {
         let r = lin.records;
+        let sc: Vec<f32> = sunlit_cos(st).collect();
+        let sun = model.front_per_sunlit_cos();
+        let ref_sun: Vec<f64> = sc.iter().zip(sun).map(|(&c, w)| c as f64 * w).collect();
         let times = |g: &[f64], v: &[f64]| -> Vec<f32> {
             if g.is_empty() || v.is_empty() {
                 return Vec::new();
@@ -112,12 +131,6 @@ impl Reference {
         };
         let shape = model.front_per_shape_factor();
         let back_shape = model.back_per_shape_factor();
-        let extra = (
-            times(&lin.front_from_front, shape),
-            times(&lin.front_from_back, back_shape),
-            times(&lin.back_from_front, shape),
-            times(&lin.back_from_back, back_shape),
-        );
         let transpose = |g: &[f64]| -> Vec<f32> {
             if g.is_empty() {
                 return Vec::new();
@@ -130,20 +143,28 @@ impl Reference {
             }
             out
         };
-        let pick = |g: &[f64]| -> Vec<f32> {
+        // Probe vectors (f64): the rows, then the column means.
+        let probes = |g: &[f64]| -> Vec<Vec<f64>> {
             if g.is_empty() {
                 return Vec::new();
             }
-            rows.iter()
-                .flat_map(|&t| g[t * r..(t + 1) * r].iter().map(|&v| v as f32))
-                .collect()
+            let mut p: Vec<Vec<f64>> = rows
+                .iter()
+                .map(|&t| g[t * r..(t + 1) * r].to_vec())
+                .collect();
+            p.push(
+                (0..r)
+                    .map(|k| (0..r).map(|t| g[t * r + k]).sum::<f64>() / r as f64)
+                    .collect(),
+            );
+            p
         };
-        let mean = |g: &[f64]| -> Vec<f32> {
-            if g.is_empty() {
-                return Vec::new();
-            }
-            (0..r)
-                .map(|k| ((0..r).map(|t| g[t * r + k]).sum::<f64>() / r as f64) as f32)
+        let (pf, pb) = (probes(&lin.front_from_front), probes(&lin.front_from_back));
+        let dot64 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let rows_of = |p: &[Vec<f64>]| -> Vec<f32> {
+            p.iter()
+                .take(rows.len())
+                .flat_map(|v| v.iter().map(|&x| x as f32))
                 .collect()
         };
         let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
@@ -153,10 +174,15 @@ impl Reference {
             gt_fb: transpose(&lin.front_from_back),
             gt_bf: transpose(&lin.back_from_front),
             gt_bb: transpose(&lin.back_from_back),
-            rows_ff: pick(&lin.front_from_front),
-            rows_fb: pick(&lin.front_from_back),
-            mean_ff: mean(&lin.front_from_front),
-            mean_fb: mean(&lin.front_from_back),
+            rows_ff: rows_of(&pf),
+            rows_fb: rows_of(&pb),
+            probe_sun: pf
+                .iter()
+                .flat_map(|p| p.iter().zip(sun).map(|(a, b)| (a * b) as f32))
+                .collect(),
+            probe_shape: pf.iter().map(|p| dot64(p, shape) as f32).collect(),
+            probe_back: pb.iter().map(|p| dot64(p, back_shape) as f32).collect(),
+            probe_ref: pf.iter().map(|p| dot64(p, &ref_sun) as f32).collect(),
             t_front: f32s(&lin.solution.surface_temperature_k),
             t_back: f32s(&lin.solution.back_temperature_k),
             r_front: lin.front_radiative_w_m2_k4 as f32,
@@ -164,12 +190,28 @@ impl Reference {
             spinup_change_k: lin.solution.spinup_change_k.unwrap_or(0.0),
             f: st.f,
             f_back: st.f_back,
-            sc: sunlit_cos(st).collect(),
-            g_shape: extra.0,
-            g_back_shape: extra.1,
-            gb_shape: extra.2,
-            gb_back_shape: extra.3,
+            sc,
+            g_shape: times(&lin.front_from_front, shape),
+            g_back_shape: times(&lin.front_from_back, back_shape),
+            g_ref: times(&lin.front_from_front, &ref_sun),
+            gb_shape: times(&lin.back_from_front, shape),
+            gb_back_shape: times(&lin.back_from_back, back_shape),
+            gb_ref: times(&lin.back_from_front, &ref_sun),
         }
+    }
+
+    /// First-order change of the front temperature at probe `j` (K) of a
+    /// facet with `s·max(cos θ, 0)` history `sc` and shape factors `df`,
+    /// `dfb` from the reference's, with the air as background.
+    #[inline]
+    fn probe(&self, j: usize, sc: &[f32], df: f32, dfb: f32) -> f32 {
+        let r = sc.len();
+        let mut v = dot(&self.probe_sun[j * r..(j + 1) * r], sc) - self.probe_ref[j]
+            + df * self.probe_shape[j];
+        if self.has_back {
+            v += dfb * self.probe_back[j];
+        }
+        v
     }
 }
 
@@ -181,22 +223,46 @@ fn sunlit_cos<'a>(st: FacetState<'a>) -> impl Iterator<Item = f32> + 'a {
         .map(|(s, c)| s.clamp(0.0, 1.0) * c.max(0.0))
 }
 
-/// `y (+)= G x` for a column-major `G` (`g[k·R + t]`).
+/// `y += Σ x_k G[:, k]` over the listed columns `(k, x_k)` of a
+/// column-major `G` (`g[k·R + t]`, `R = y.len()`), in blocks of `y` that
+/// stay in registers.
 #[inline]
-fn matvec(g: &[f32], x: &[f32], y: &mut [f32], add: bool) {
+fn matvec_cols(g: &[f32], cols: &[(u32, f32)], y: &mut [f32]) {
+    const B: usize = 32;
     let r = y.len();
-    if !add {
-        y.iter_mut().for_each(|v| *v = 0.0);
-    }
-    for (k, &xk) in x.iter().enumerate() {
-        if xk == 0.0 {
-            continue;
+    let mut blocks = y.chunks_exact_mut(B);
+    for (b, yb) in (&mut blocks).enumerate() {
+        let t0 = b * B;
+        let mut acc = [0.0f32; B];
+        acc.copy_from_slice(yb);
+        for &(k, x) in cols {
+            let col = &g[k as usize * r + t0..k as usize * r + t0 + B];
+            for i in 0..B {
+                acc[i] += x * col[i];
+            }
         }
-        let col = &g[k * r..(k + 1) * r];
-        for (yi, gi) in y.iter_mut().zip(col) {
-            *yi += xk * gi;
-        }
+        yb.copy_from_slice(&acc);
     }
+    let tail = blocks.into_remainder();
+    let t0 = r - tail.len();
+    for (i, v) in tail.iter_mut().enumerate() {
+        let t = t0 + i;
+        *v += cols
+            .iter()
+            .map(|&(k, x)| x * g[k as usize * r + t])
+            .sum::<f32>();
+    }
+}
+
+/// The non-zero entries `(k, c·v_k)` of `c·v` into `out`.
+#[inline]
+fn columns(v: impl Iterator<Item = f32>, c: f32, out: &mut Vec<(u32, f32)>) {
+    out.clear();
+    out.extend(
+        v.enumerate()
+            .filter(|&(_, x)| x != 0.0)
+            .map(|(k, x)| (k as u32, c * x)),
+    );
 }
 
 /// `a · b`, in eight lanes (vectorisable).
@@ -231,10 +297,16 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// `σ(T_bg⁴ − T_air⁴)` history of `facet` from the previous pass's
-    /// `T⁴` histories (`prev4[f·R + k]`) into `out` (W m⁻²); false when it
-    /// sees only sky. `T_bg⁴` is the radiative mean of the dedup path
-    /// ([`super::solve_facet_temperatures`]).
-    fn background_excess(&self, facet: usize, prev4: &[f32], out: &mut [f32]) -> bool {
+    /// `T⁴` histories (`prev4[slot[f]·R + k]`) into `out` (W m⁻²); false
+    /// when it sees only sky. `T_bg⁴` is the radiative mean of the dedup
+    /// path ([`super::solve_facet_temperatures`]).
+    fn background_excess(
+        &self,
+        facet: usize,
+        prev4: &[f32],
+        slot: &[u32],
+        out: &mut [f32],
+    ) -> bool {
         let r = self.air4.len();
         let sky = &self.exposure.sky;
         let g = sky.ground_weight[facet];
@@ -252,6 +324,7 @@ impl Ctx<'_> {
                     out.iter_mut().for_each(|o| *o += t4);
                 }
                 FacetThermal::Solve(_) => {
+                    let j = slot[j] as usize;
                     let s = &prev4[j * r..(j + 1) * r];
                     out.iter_mut()
                         .zip(s)
@@ -352,25 +425,27 @@ fn prop_key(p: &SlabProperties) -> Vec<u64> {
 
 /// Scratch buffers of one worker.
 struct Scratch {
+    sc: Vec<f32>,
     ds: Vec<f32>,
     db: Vec<f32>,
     d: Vec<f32>,
     dback: Vec<f32>,
     bg: Vec<f32>,
-    x: Vec<f32>,
-    tmp: Vec<f32>,
+    cols: Vec<(u32, f32)>,
+    cols_bg: Vec<(u32, f32)>,
 }
 
 impl Scratch {
     fn new(r: usize) -> Scratch {
         Scratch {
+            sc: vec![0.0; r],
             ds: vec![0.0; r],
             db: vec![0.0; r],
             d: vec![0.0; r],
             dback: vec![0.0; r],
             bg: vec![0.0; r],
-            x: vec![0.0; r],
-            tmp: vec![0.0; r],
+            cols: Vec::with_capacity(r),
+            cols_bg: Vec::with_capacity(r),
         }
     }
 }
@@ -502,29 +577,8 @@ pub(super) fn solve(
         })
         .collect::<Result<_>>()?;
 
-    // Source differences of facet `f` from `rep` into `s.ds`/`s.db`:
-    // `ΔF·∂S/∂F + Δ(s cos θ)·αE_dn` and `ΔF_b·∂B/∂F_b`.
-    let diff = |f: usize, rep: &Reference, s: &mut Scratch| {
-        let g = g_of(f);
-        let st = ctx.state(f);
-        let df = st.f - rep.f;
-        for (((o, sc), (rsc, w)), sh) in
-            s.ds.iter_mut()
-                .zip(sunlit_cos(st))
-                .zip(rep.sc.iter().zip(&sun32[g]))
-                .zip(&shape32[g])
-        {
-            *o = df * sh + (sc - rsc) * w;
-        }
-        if rep.has_back {
-            let dfb = st.f_back - rep.f_back;
-            for (o, sh) in s.db.iter_mut().zip(&back_shape32[g]) {
-                *o = dfb * sh;
-            }
-        }
-    };
-
     // 4. Bins of the first-order change from the group's centre.
+    let mean_probe = rows.len();
     let features: Vec<(usize, [f32; 3])> = (0..n)
         .into_par_iter()
         .filter_map(|f| group_of(f).map(|g| (f, g)))
@@ -532,19 +586,13 @@ pub(super) fn solve(
             || Scratch::new(r),
             |s, (f, g)| {
                 let rep = centre_refs[g].as_ref().expect("non-empty group");
-                diff(f, rep, s);
-                let row = |i: usize| {
-                    let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
-                    if rep.has_back {
-                        v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
-                    }
-                    v
-                };
-                let mut mean = dot(&rep.mean_ff, &s.ds);
-                if rep.has_back {
-                    mean += dot(&rep.mean_fb, &s.db);
-                }
-                (f, [row(row_first), row(row_last), mean])
+                let st = ctx.state(f);
+                s.sc.iter_mut()
+                    .zip(sunlit_cos(st))
+                    .for_each(|(o, v)| *o = v);
+                let (df, dfb) = (st.f - rep.f, st.f_back - rep.f_back);
+                let p = |j: usize| rep.probe(j, &s.sc, df, dfb);
+                (f, [p(row_first), p(row_last), p(mean_probe)])
             },
         )
         .collect();
@@ -589,106 +637,148 @@ pub(super) fn solve(
     drop(centre_refs);
     let setup = t_start.elapsed();
 
-    // 5. The passes. Pass 1 takes the stored sources; a later pass adds the
-    // background excess over the air, `c·σ(T_bg⁴ − T_air⁴)`. A pass that
-    // is not the last yields (first-order) histories of the facets others
-    // see, for the next one's backgrounds; the last one yields the image
-    // records (with the second-order correction, from its own first-order
-    // history).
-    // Facets some facet sees: the ones whose histories a later pass needs.
-    let mut needed = vec![false; n];
+    // 5. The passes. Pass 1 takes the air as background; a later pass adds
+    // the background excess over the air, `c·σ(T_bg⁴ − T_air⁴)`, to the
+    // sources. A pass that is not the last yields (first-order) `T⁴`
+    // histories of the facets others see, for the next one's backgrounds;
+    // every pass yields the image records. Pass 1's image records (first
+    // order, air background) are kept: a later pass adds to them the
+    // background term `G·(c·bg)` at the image rows alone, unless it needs
+    // the facet's full history.
+    // Facets some facet sees get a slot in the `T⁴` histories.
+    let sky = &exposure.sky;
+    let mut slot = vec![u32::MAX; n];
+    let mut slots = 0usize;
     if passes > 1 {
+        let mut needed = vec![false; n];
+        for e in &sky.entries {
+            needed[e.facet as usize] = true;
+        }
         for f in 0..n {
-            for e in exposure.sky.background(f) {
-                needed[e.facet as usize] = true;
+            if needed[f] && matches!(kinds[f], FacetThermal::Solve(_)) {
+                slot[f] = slots as u32;
+                slots += 1;
             }
         }
     }
+    let ni = image_records.len();
+    let chunks = n.div_ceil(CHUNK);
+    // First slot of each chunk of facets.
+    let mut chunk_slot = vec![0usize; chunks + 1];
+    for (c, ch) in slot.chunks(CHUNK).enumerate() {
+        chunk_slot[c + 1] = chunk_slot[c] + ch.iter().filter(|&&x| x != u32::MAX).count();
+    }
+    let wi = ni.max(1);
     let mut stats = Vec::new();
     let mut prev4: Option<Vec<f32>> = None;
+    let mut base: Option<Vec<f32>> = None;
     let mut prev_image: Option<Vec<Vec<f32>>> = None;
     let mut image = Vec::new();
     for p in 0..passes {
         let t0 = Instant::now();
         let last_pass = p + 1 == passes;
-        let width = if last_pass { image_records.len() } else { r };
+        let second = last_pass && lp.second_order;
         let prev = prev4.as_deref();
+        let base_img = base.as_deref();
         // Written in place, chunk by chunk (no per-chunk copies).
-        let mut out = vec![0.0f32; n * width];
-        out.par_chunks_mut(CHUNK * width).enumerate().for_each_init(
-            || Scratch::new(r),
-            |s, (c, out)| {
-                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-                for (i, f) in range.enumerate() {
-                    let o = &mut out[i * width..(i + 1) * width];
-                    if let FacetThermal::Fixed(t) = kinds[f] {
-                        o.iter_mut().for_each(|v| *v = t);
-                        continue;
-                    }
-                    let rep = &refs[ref_of[f] as usize];
-                    diff(f, rep, s);
-                    let mut bgc = None;
-                    if let Some(prev) = prev
-                        && ctx.background_excess(f, prev, &mut s.bg)
-                    {
-                        let (cf, cb) = thermal::background_coefficients(
-                            ctx.props_of(f),
-                            exposure.sky.shape_factor[f] as f64,
-                            exposure.sky.back_shape_factor(f).map(f64::from),
-                        );
-                        let (cf, cb) = (cf as f32, cb as f32);
-                        bgc = Some((cf, cb));
-                        for (d, e) in s.ds.iter_mut().zip(&s.bg) {
-                            *d += cf * e;
+        let store4 = !last_pass;
+        let mut img = vec![0.0f32; n * wi];
+        let mut next4 = vec![0.0f32; if store4 { slots * r } else { 0 }];
+        let mut parts: Vec<&mut [f32]> = Vec::with_capacity(chunks);
+        let mut rest: &mut [f32] = &mut next4;
+        for c in 0..chunks {
+            let len = if store4 {
+                (chunk_slot[c + 1] - chunk_slot[c]) * r
+            } else {
+                0
+            };
+            let (a, b) = std::mem::take(&mut rest).split_at_mut(len);
+            parts.push(a);
+            rest = b;
+        }
+        img.par_chunks_mut(CHUNK * wi)
+            .zip(parts.into_par_iter())
+            .enumerate()
+            .for_each_init(
+                || Scratch::new(r),
+                |s, (c, (img, out4))| {
+                    let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                    for (i, f) in range.enumerate() {
+                        let o = &mut img[i * wi..i * wi + ni];
+                        if let FacetThermal::Fixed(t) = kinds[f] {
+                            o.iter_mut().for_each(|v| *v = t);
+                            continue;
                         }
-                        if rep.has_back {
-                            for (d, e) in s.db.iter_mut().zip(&s.bg) {
-                                *d += cb * e;
+                        let rep = &refs[ref_of[f] as usize];
+                        let has_slot = slot[f] != u32::MAX;
+                        let full = second || (!last_pass && has_slot);
+                        let bgc = match prev {
+                            Some(prev) if ctx.background_excess(f, prev, &slot, &mut s.bg) => {
+                                let (cf, cb) = thermal::background_coefficients(
+                                    ctx.props_of(f),
+                                    exposure.sky.shape_factor[f] as f64,
+                                    exposure.sky.back_shape_factor(f).map(f64::from),
+                                );
+                                Some((cf as f32, cb as f32))
                             }
+                            _ => None,
+                        };
+                        if !full && let Some(base) = base_img {
+                            // Pass 1's image records plus the background
+                            // term at the image rows.
+                            o.copy_from_slice(&base[f * wi..f * wi + ni]);
+                            if let Some((cf, cb)) = bgc {
+                                for (i, v) in o.iter_mut().enumerate() {
+                                    *v += cf * dot(&rep.rows_ff[i * r..(i + 1) * r], &s.bg);
+                                    if rep.has_back {
+                                        *v += cb * dot(&rep.rows_fb[i * r..(i + 1) * r], &s.bg);
+                                    }
+                                }
+                            }
+                            continue;
                         }
-                    }
-                    let second = last_pass && lp.second_order;
-                    let full = second || (!last_pass && needed[f]);
-                    if full {
-                        // ΔS = ΔF·∂S/∂F + Δ(s cos θ)·αE_dn (+ the
-                        // background's): the F terms are one column
-                        // each, the sun's is zero at night.
                         let st = ctx.state(f);
-                        let sun = &sun32[group_of(f).expect("solved")];
-                        for ((x, sc), (rsc, w)) in
-                            s.x.iter_mut()
-                                .zip(sunlit_cos(st))
-                                .zip(rep.sc.iter().zip(sun))
-                        {
-                            *x = (sc - rsc) * w;
-                        }
                         let (df, dfb) = (st.f - rep.f, st.f_back - rep.f_back);
+                        s.sc.iter_mut()
+                            .zip(sunlit_cos(st))
+                            .for_each(|(o, v)| *o = v);
+                        if !full {
+                            // Pass 1, image records only.
+                            for (i, v) in o.iter_mut().enumerate() {
+                                *v = rep.t_front[image_records[i]] + rep.probe(i, &s.sc, df, dfb);
+                            }
+                            continue;
+                        }
+                        // The full first-order history of the front (and,
+                        // for the second order, back) node: ΔS = ΔF·∂S/∂F
+                        // + (s cos θ − s cos θ_ref)·αE_dn (+ c·bg), the F
+                        // terms and the reference's sun one column each.
+                        let sun = &sun32[g_of(f)];
+                        columns(s.sc.iter().zip(sun).map(|(a, b)| a * b), 1.0, &mut s.cols);
                         let node = |gt_f: &[f32],
                                     gt_b: &[f32],
                                     g_shape: &[f32],
                                     g_back_shape: &[f32],
-                                    y: &mut [f32],
-                                    x: &[f32],
-                                    tmp: &mut [f32]| {
-                            matvec(gt_f, x, y, false);
-                            for (v, g) in y.iter_mut().zip(g_shape) {
-                                *v += df * g;
+                                    g_ref: &[f32],
+                                    bg: &[f32],
+                                    cols: &[(u32, f32)],
+                                    cols_bg: &mut Vec<(u32, f32)>,
+                                    y: &mut [f32]| {
+                            for ((v, a), b) in y.iter_mut().zip(g_shape).zip(g_ref) {
+                                *v = df * a - b;
                             }
                             if rep.has_back {
                                 for (v, g) in y.iter_mut().zip(g_back_shape) {
                                     *v += dfb * g;
                                 }
                             }
+                            matvec_cols(gt_f, cols, y);
                             if let Some((cf, cb)) = bgc {
-                                for (t, e) in tmp.iter_mut().zip(&s.bg) {
-                                    *t = cf * e;
-                                }
-                                matvec(gt_f, tmp, y, true);
+                                columns(bg.iter().copied(), cf, cols_bg);
+                                matvec_cols(gt_f, cols_bg, y);
                                 if rep.has_back {
-                                    for (t, e) in tmp.iter_mut().zip(&s.bg) {
-                                        *t = cb * e;
-                                    }
-                                    matvec(gt_b, tmp, y, true);
+                                    columns(bg.iter().copied(), cb, cols_bg);
+                                    matvec_cols(gt_b, cols_bg, y);
                                 }
                             }
                         };
@@ -697,69 +787,79 @@ pub(super) fn solve(
                             &rep.gt_fb,
                             &rep.g_shape,
                             &rep.g_back_shape,
+                            &rep.g_ref,
+                            &s.bg,
+                            &s.cols,
+                            &mut s.cols_bg,
                             &mut s.d,
-                            &s.x,
-                            &mut s.tmp,
                         );
-                        if second && rep.has_back {
-                            node(
-                                &rep.gt_bf,
-                                &rep.gt_bb,
-                                &rep.gb_shape,
-                                &rep.gb_back_shape,
-                                &mut s.dback,
-                                &s.x,
-                                &mut s.tmp,
-                            );
-                        }
-                    }
-                    if second {
-                        // T = T_ref + G (ΔS + r(Δ)), Δ = G ΔS.
-                        if rep.has_back {
-                            for ((db, d), t) in s.db.iter_mut().zip(&s.dback).zip(&rep.t_back) {
-                                *db += curvature(rep.r_back, *t, *d);
-                            }
-                        }
-                        for ((ds, d), t) in s.ds.iter_mut().zip(&s.d).zip(&rep.t_front) {
-                            *ds += curvature(rep.r_front, *t, *d);
-                        }
-                    }
-                    if last_pass {
-                        for (i, &t) in image_records.iter().enumerate() {
-                            let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                        if second {
                             if rep.has_back {
-                                v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                                node(
+                                    &rep.gt_bf,
+                                    &rep.gt_bb,
+                                    &rep.gb_shape,
+                                    &rep.gb_back_shape,
+                                    &rep.gb_ref,
+                                    &s.bg,
+                                    &s.cols,
+                                    &mut s.cols_bg,
+                                    &mut s.dback,
+                                );
                             }
-                            o[i] = rep.t_front[t] + v;
-                        }
-                    } else if full {
-                        for ((o, d), t) in o.iter_mut().zip(&s.d).zip(&rep.t_front) {
-                            *o = t + d;
-                        }
-                    } else {
-                        // No facet sees this one: its history is not
-                        // needed, only the image records.
-                        for (i, &t) in image_records.iter().enumerate() {
-                            let mut v = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                            // T = T_ref + G (ΔS + r(Δ)), Δ = G ΔS.
+                            let g = g_of(f);
+                            for (((((o, sc), rsc), w), sh), (d, t)) in
+                                s.ds.iter_mut()
+                                    .zip(&s.sc)
+                                    .zip(&rep.sc)
+                                    .zip(sun)
+                                    .zip(&shape32[g])
+                                    .zip(s.d.iter().zip(&rep.t_front))
+                            {
+                                *o = df * sh + (sc - rsc) * w + curvature(rep.r_front, *t, *d);
+                            }
+                            if let Some((cf, _)) = bgc {
+                                s.ds.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cf * e);
+                            }
                             if rep.has_back {
-                                v += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                                for ((o, sh), (d, t)) in
+                                    s.db.iter_mut()
+                                        .zip(&back_shape32[g])
+                                        .zip(s.dback.iter().zip(&rep.t_back))
+                                {
+                                    *o = dfb * sh + curvature(rep.r_back, *t, *d);
+                                }
+                                if let Some((_, cb)) = bgc {
+                                    s.db.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cb * e);
+                                }
                             }
-                            o[t] = rep.t_front[t] + v;
+                            for (i, v) in o.iter_mut().enumerate() {
+                                let mut x = dot(&rep.rows_ff[i * r..(i + 1) * r], &s.ds);
+                                if rep.has_back {
+                                    x += dot(&rep.rows_fb[i * r..(i + 1) * r], &s.db);
+                                }
+                                *v = rep.t_front[image_records[i]] + x;
+                            }
+                            continue;
+                        }
+                        for (v, &t) in o.iter_mut().zip(image_records) {
+                            *v = rep.t_front[t] + s.d[t];
+                        }
+                        let k = (slot[f] as usize - chunk_slot[c]) * r;
+                        for ((o, d), t) in out4[k..k + r].iter_mut().zip(&s.d).zip(&rep.t_front) {
+                            *o = (t + d).powi(4);
                         }
                     }
-                }
-            },
-        );
-        // Image-time temperatures and, for a later pass, the T⁴ histories.
-        image = (0..image_records.len())
-            .map(|i| {
-                let col = if last_pass { i } else { image_records[i] };
-                (0..n).map(|f| out[f * width + col]).collect::<Vec<f32>>()
-            })
+                },
+            );
+        // Image-time temperatures.
+        image = (0..ni)
+            .map(|i| (0..n).map(|f| img[f * wi + i]).collect::<Vec<f32>>())
             .collect();
-        if !last_pass {
-            out.par_iter_mut().for_each(|t| *t = t.powi(4));
-            prev4 = Some(out);
+        prev4 = store4.then_some(next4);
+        if p == 0 {
+            base = Some(img);
         }
         let change = prev_image.as_ref().map(|pi: &Vec<Vec<f32>>| {
             pi.iter()
