@@ -562,8 +562,11 @@ pub(super) fn solve(
             if v.is_empty() {
                 return usize::MAX;
             }
-            v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            v[v.len() / 2].1
+            // The median of a total order (mean, then facet): the same
+            // facet as after a full sort.
+            let mid = v.len() / 2;
+            v.select_nth_unstable_by(mid, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            v[mid].1
         })
         .collect();
     drop(per_group);
@@ -597,18 +600,25 @@ pub(super) fn solve(
         )
         .collect();
     let w = lp.bin_k;
-    type Members = Vec<(usize, [f32; 3])>;
-    let mut bins: BTreeMap<(usize, [i32; 3]), Members> = BTreeMap::new();
-    for (f, x) in features {
-        let key = x.map(|v| (v / w).round() as i32);
-        bins.entry((group_of(f).expect("solved"), key))
-            .or_default()
-            .push((f, x));
-    }
+    // Facets sorted by (group, bin key, facet): the bins in key order.
+    type Keyed = ((usize, [i32; 3]), usize, [f32; 3]);
+    let mut keyed: Vec<Keyed> = features
+        .into_par_iter()
+        .map(|(f, x)| {
+            let key = x.map(|v| (v / w).round() as i32);
+            ((group_of(f).expect("solved"), key), f, x)
+        })
+        .collect();
+    keyed.par_sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
+    let bins: Vec<Vec<(usize, [f32; 3])>> = keyed
+        .chunk_by(|a, b| a.0 == b.0)
+        .map(|c| c.iter().map(|&(_, f, x)| (f, x)).collect())
+        .collect();
+    drop(keyed);
     // The reference of each bin: the member closest to its centroid.
     let mut bin_rep = Vec::with_capacity(bins.len());
     let mut ref_of = vec![u32::MAX; n];
-    for (b, members) in bins.values().enumerate() {
+    for (b, members) in bins.iter().enumerate() {
         let m = members.len() as f32;
         let c = members.iter().fold([0.0f32; 3], |a, (_, x)| {
             [a[0] + x[0] / m, a[1] + x[1] / m, a[2] + x[2] / m]
