@@ -254,6 +254,45 @@ fn matvec_cols(g: &[f32], cols: &[(u32, f32)], y: &mut [f32]) {
     }
 }
 
+/// `y[t] += Σ_j c_j·h_j[t]` over `items` `(j, c_j)` in order, `h_j` the
+/// `j`-th history of `hist` (`R = y.len()` records each), or `y[t] += c_j`
+/// where `j` is `u32::MAX`; in blocks of `y` that stay in registers.
+#[inline]
+fn accumulate_rows(hist: &[f32], items: &[(u32, f32)], y: &mut [f32]) {
+    const B: usize = 32;
+    let r = y.len();
+    let mut blocks = y.chunks_exact_mut(B);
+    for (b, yb) in (&mut blocks).enumerate() {
+        let t0 = b * B;
+        let mut acc = [0.0f32; B];
+        acc.copy_from_slice(yb);
+        for &(j, c) in items {
+            if j == u32::MAX {
+                acc.iter_mut().for_each(|a| *a += c);
+            } else {
+                let h = &hist[j as usize * r + t0..j as usize * r + t0 + B];
+                for i in 0..B {
+                    acc[i] += c * h[i];
+                }
+            }
+        }
+        yb.copy_from_slice(&acc);
+    }
+    let tail = blocks.into_remainder();
+    let t0 = r - tail.len();
+    for (i, v) in tail.iter_mut().enumerate() {
+        let mut a = *v;
+        for &(j, c) in items {
+            a += if j == u32::MAX {
+                c
+            } else {
+                c * hist[j as usize * r + t0 + i]
+            };
+        }
+        *v = a;
+    }
+}
+
 /// The non-zero entries `(k, c·v_k)` of `c·v` into `out`.
 #[inline]
 fn columns(v: impl Iterator<Item = f32>, c: f32, out: &mut Vec<(u32, f32)>) {
@@ -306,8 +345,8 @@ impl Ctx<'_> {
         prev4: &[f32],
         slot: &[u32],
         out: &mut [f32],
+        items: &mut Vec<(u32, f32)>,
     ) -> bool {
-        let r = self.air4.len();
         let sky = &self.exposure.sky;
         let g = sky.ground_weight[facet];
         let entries = sky.background(facet);
@@ -316,22 +355,17 @@ impl Ctx<'_> {
             return false;
         }
         out.iter_mut().zip(&self.air4).for_each(|(o, a)| *o = g * a);
-        for e in entries {
+        // (slot, weight) of the solved facets seen, (MAX, w·T⁴) of the
+        // fixed ones, in entry order.
+        items.clear();
+        items.extend(entries.iter().map(|e| {
             let j = e.facet as usize;
             match self.kinds[j] {
-                FacetThermal::Fixed(t) => {
-                    let t4 = e.weight * t.powi(4);
-                    out.iter_mut().for_each(|o| *o += t4);
-                }
-                FacetThermal::Solve(_) => {
-                    let j = slot[j] as usize;
-                    let s = &prev4[j * r..(j + 1) * r];
-                    out.iter_mut()
-                        .zip(s)
-                        .for_each(|(o, t4)| *o += e.weight * t4);
-                }
+                FacetThermal::Fixed(t) => (u32::MAX, e.weight * t.powi(4)),
+                FacetThermal::Solve(_) => (slot[j], e.weight),
             }
-        }
+        }));
+        accumulate_rows(prev4, items, out);
         let k = thermal::STEFAN_BOLTZMANN_W_M2_K4 as f32 / den;
         let sa = thermal::STEFAN_BOLTZMANN_W_M2_K4 as f32;
         out.iter_mut()
@@ -723,7 +757,15 @@ pub(super) fn solve(
                         let has_slot = slot[f] != u32::MAX;
                         let full = second || (!last_pass && has_slot);
                         let bgc = match prev {
-                            Some(prev) if ctx.background_excess(f, prev, &slot, &mut s.bg) => {
+                            Some(prev)
+                                if ctx.background_excess(
+                                    f,
+                                    prev,
+                                    &slot,
+                                    &mut s.bg,
+                                    &mut s.cols_bg,
+                                ) =>
+                            {
                                 let (cf, cb) = thermal::background_coefficients(
                                     ctx.props_of(f),
                                     exposure.sky.shape_factor[f] as f64,
