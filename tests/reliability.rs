@@ -584,7 +584,7 @@ fn render_random_scene(case: &RandomScene) -> Result<usize, TestCaseError> {
             .render_rows(s, cond, 0..h, &|_| {})
             .unwrap_or_else(|e| panic!("sensor {s}: {e}"));
         let out = session
-            .finish(s, &band, 11)
+            .finish(s, band, 11)
             .unwrap_or_else(|e| panic!("sensor {s}: {e}"));
         let stack = &out.stack;
         for layer in &stack.layers {

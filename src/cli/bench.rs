@@ -296,7 +296,7 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         let band = session
             .render_rows(s, cond, 0..height, &|_| {})
             .with_context(|| format!("rendering {}", a.scene.display()))?;
-        let f = session.finish(s, &band, seed)?;
+        let f = session.finish(s, band, seed)?;
         let d = timings_since(&session.timings, &before);
         let pipeline = (d.primary_trace + d.radiometry + d.sensor).as_secs_f64();
         if best.as_ref().is_none_or(|(p, _)| pipeline < *p) {

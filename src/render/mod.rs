@@ -34,7 +34,8 @@ use serde::Deserialize;
 
 pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
 pub use shade::{
-    Conditions, FastMiss, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState,
+    Conditions, FastMiss, FastScratch, SceneOptics, ShadeOptions, Shader, Sky, SunInput,
+    SurfaceState,
 };
 
 use crate::output::write_image_set;
@@ -198,10 +199,10 @@ pub fn output_paths(dir: &Path, stem: &str) -> [PathBuf; 4] {
 /// (quick-look of the apparent temperature), each atomically
 /// ([`crate::output::write_image_set`]).
 pub fn write_outputs(dir: &Path, stem: &str, f: &Finished, description: &str) -> Result<()> {
-    let names: Vec<&str> = f.radiance.layers.iter().map(|l| l.name.as_str()).collect();
-    let spectral: Vec<(&str, f64)> = names
+    let spectral: Vec<(&str, f64)> = f
+        .radiance_layers
         .iter()
-        .copied()
+        .map(String::as_str)
         .zip(f.wavelengths_um.iter().copied())
         .collect();
     write_image_set(dir, stem, &f.stack, &spectral, description)?;

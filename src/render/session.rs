@@ -417,6 +417,7 @@ impl Session {
             times.primary_trace(),
             times.shading(),
             times.secondary(),
+            times.reduction(),
         ];
         let sum: f64 = parts
             .iter()
@@ -429,7 +430,8 @@ impl Session {
         self.timings.primary_trace += share(parts[1]);
         self.timings.radiometry += share(parts[2]);
         self.timings.secondary += share(parts[3]);
-        self.timings.sensor += times.psf();
+        // The PSF: the box reduction in the row loop, other PSFs after it.
+        self.timings.sensor += share(parts[4]) + times.psf();
         let load = |c: &std::sync::atomic::AtomicU64| c.load(std::sync::atomic::Ordering::Relaxed);
         self.timings.primary_rays += load(&times.primary_rays);
         self.timings.secondary_hits += load(&times.secondary_hits);
@@ -437,7 +439,7 @@ impl Session {
     }
 
     /// Apply the image-wide effects to a full row band of sensor `s`.
-    pub fn finish(&mut self, s: usize, band: &RowBand, seed: u64) -> Result<Finished> {
+    pub fn finish(&mut self, s: usize, band: RowBand, seed: u64) -> Result<Finished> {
         let t0 = Instant::now();
         let f = finish(band, &self.sensors[s], &self.bands[s], seed)?;
         self.timings.sensor += t0.elapsed();
@@ -525,7 +527,7 @@ impl Session {
                     self.timings.output += t0.elapsed();
                 }
                 None => {
-                    let f = self.finish(s, &band, seed)?;
+                    let f = self.finish(s, band, seed)?;
                     let t0 = Instant::now();
                     let scene =
                         std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone());

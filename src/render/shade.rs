@@ -367,29 +367,112 @@ fn acos_unit(x: f64) -> f64 {
     (1.0 - x).max(0.0).sqrt() * p
 }
 
-/// [`Shader::facet_grey`] and [`Shader::facet_terms`] (no path).
-fn facet_terms(
+/// arccos x in degrees for 0 ≤ x ≤ 1, single precision: the polynomial of
+/// [`acos_unit`] (Abramowitz & Stegun eq. 4.4.46) in f32, written so a loop
+/// over many cosines vectorises. Error ≤ 2·10⁻⁵° (f32 rounding; tested),
+/// far inside the 1° emissivity rows.
+#[inline]
+fn acos_deg(x: f32) -> f32 {
+    const A: [f32; 8] = [
+        // 1.570 796 305 0: in f32, π/2.
+        std::f32::consts::FRAC_PI_2,
+        -0.214_598_8,
+        0.088_978_99,
+        -0.050_174_303,
+        0.030_891_88,
+        -0.017_088_126,
+        0.006_670_09,
+        -0.001_262_491_1,
+    ];
+    // Estrin's scheme: a shorter dependency chain than Horner's.
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let p01 = A[0] + A[1] * x;
+    let p23 = A[2] + A[3] * x;
+    let p45 = A[4] + A[5] * x;
+    let p67 = A[6] + A[7] * x;
+    let p = (p01 + p23 * x2) + (p45 + p67 * x2) * x4;
+    (1.0 - x).max(0.0).sqrt() * p * (180.0 / std::f32::consts::PI)
+}
+
+/// What a hit on a facet needs in [`Shader::shade_fast`]'s grey path (its
+/// material is grey in every band, so ε and r leave the band sums; it
+/// spawns no secondary ray; its temperatures lie on the Planck table) and
+/// the truth values of the pixel it is seen in: one cache line's half, the
+/// one random access of a hit.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(32))]
+struct GreyFacet {
+    /// Material index; `u32::MAX`: the facet is not on the grey path.
+    mi: u32,
+    /// Object id.
+    object: u32,
+    /// Planck table nodes of the surface and background temperatures.
+    kt: u16,
+    kg: u16,
+    /// Their fractions toward the next node.
+    ft: f32,
+    fg: f32,
+    /// Sky shape factor F.
+    big_f: f32,
+    /// Diffuse-reflected sun on the lit face: `(1 − s)·cos σ·f_sun/π`.
+    sd: f32,
+    /// Sunlit fraction f_sun.
+    sun_fraction: f32,
+}
+
+impl GreyFacet {
+    const NONE: GreyFacet = GreyFacet {
+        mi: u32::MAX,
+        object: 0,
+        kt: 0,
+        kg: 0,
+        ft: 0.0,
+        fg: 0.0,
+        big_f: 0.0,
+        sd: 0.0,
+        sun_fraction: 0.0,
+    };
+}
+
+/// The per-facet records of the grey path and, for renders without a
+/// sensor path, each grey facet's view-independent terms per band (built
+/// once per image, in parallel): `[Σw·B(T), env, sd·Σw·E_s, t·env]` with
+/// `env = F·Σw·L_sky + (1 − F)·Σw·B(T_bg)`, so that a hit needs only
+/// `ε(θ)·x + r·(env + lit·w) + z`.
+fn grey_facets(
     optics: &SceneOptics,
     conditions: &Conditions,
     options: &ShadeOptions,
     fast: &[FastBand],
     table: &PlanckTable,
-) -> (Vec<u32>, Vec<[f32; 4]>) {
+) -> (Vec<GreyFacet>, Vec<[f32; 4]>) {
     use rayon::prelude::*;
     let s = &conditions.surface;
     let nb = fast.len();
-    let facets = s.len();
-    let mut grey = vec![u32::MAX; facets];
-    let mut terms = vec![[0f32; 4]; facets * nb.max(1)];
+    // Per material: on the grey path at all.
+    let eligible: Vec<bool> = optics
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(mi, m)| {
+            let secondary =
+                options.max_bounces > 0 && (m.specular_fraction > 0.0 || m.transmissivity > 0.0);
+            nb > 0 && !secondary && fast.iter().all(|fb| fb.grey[mi].is_some())
+        })
+        .collect();
+    // Node indices are stored in 16 bits.
+    let nodes_fit = table.nodes <= u16::MAX as usize;
+    let mut grey = vec![GreyFacet::NONE; s.len()];
+    let mut terms = vec![[0f32; 4]; s.len() * nb];
     grey.par_iter_mut()
         .zip(terms.par_chunks_mut(nb.max(1)))
         .enumerate()
         .for_each(|(f, (g, terms))| {
             let mi = optics.facet_material[f] as usize;
-            let m = &optics.materials[mi];
-            let secondary =
-                options.max_bounces > 0 && (m.specular_fraction > 0.0 || m.transmissivity > 0.0);
-            if nb == 0 || secondary || fast.iter().any(|fb| fb.grey[mi].is_none()) {
+            // (A shape factor outside [0, 1] takes the general path, which
+            // clamps it, so the truth layer keeps the value as given.)
+            if !(eligible[mi] && nodes_fit && (0.0..=1.0).contains(&s.shape_factor[f])) {
                 return;
             }
             let (Some((kt, ft)), Some((kg, fg))) = (
@@ -398,11 +481,12 @@ fn facet_terms(
             ) else {
                 return;
             };
-            let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+            let m = &optics.materials[mi];
             let sun_front = (s.cos_sun[f] as f64).max(0.0)
                 * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
                 / std::f64::consts::PI;
             let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_front;
+            let big_f = s.shape_factor[f] as f64;
             let tr = m.transmissivity.clamp(0.0, 1.0);
             for (t, fb) in terms.iter_mut().zip(fast) {
                 let p = &fb.plain;
@@ -414,9 +498,165 @@ fn facet_terms(
                     (tr * env) as f32,
                 ];
             }
-            *g = mi as u32;
+            *g = GreyFacet {
+                mi: mi as u32,
+                object: optics.facet_object[f],
+                kt: kt as u16,
+                kg: kg as u16,
+                ft: ft as f32,
+                fg: fg as f32,
+                big_f: s.shape_factor[f],
+                sd: sd as f32,
+                sun_fraction: s.sun_fraction[f],
+            };
         });
     (grey, terms)
+}
+
+/// The band integrals of the grey path, single precision, flat: per band
+/// the Planck integrals `Σ q_i·B(T_k)` of every temperature node `k` and
+/// range node `i` (weights `q_i = w·τ₂(R_i)`; without a path two equal
+/// nodes of the plain weights `w`), per range node the sky, sun and path
+/// terms, and the grey emissivities of every material. Every table is
+/// band-interleaved (the bands of one entry are adjacent), so one hit reads
+/// each entry of all its bands from one place.
+#[derive(Debug, Clone, Default)]
+struct GreyTables {
+    /// Bands.
+    bands: usize,
+    /// Range nodes (at least 2).
+    nodes: usize,
+    /// Ranges of the nodes, m (empty without a path: every hit is at
+    /// node 1, fraction 0).
+    ranges: Vec<f32>,
+    /// `1 / (ranges[i] − ranges[i − 1])`.
+    inv_spacing: Vec<f32>,
+    /// First guess of the node of range `r`: `√r · sqrt_scale` (exact for
+    /// the quadratic spacing of [`PathTables`], refined for any spacing).
+    sqrt_scale: f32,
+    /// `Σ q_i·B(T_k)` of band `b` at `[(k · nodes + i) · bands + b]`.
+    planck: Vec<f32>,
+    /// Per range node `i`: `Σ q_i·L_sky`, `Σ q_i·E_s` and `Σ w·L_u` of band
+    /// `b` at `[(3·i + 0, 1, 2) · bands + b]`.
+    node: Vec<f32>,
+    /// Grey emissivity at `[(material · ANGLE_ROWS + angle row) · bands + b]`
+    /// (0 for materials not grey in every band: never read).
+    eps: Vec<f32>,
+    /// Per material: double-sided.
+    double_sided: Vec<bool>,
+    /// Per material: transmissivity t.
+    tr: Vec<f32>,
+}
+
+impl GreyTables {
+    /// Tables from each band's integrals and path radiance per range node
+    /// (`nodes[b][i]`), at `ranges` (empty: no path).
+    fn new(
+        fast: &[FastBand],
+        nodes: &[Vec<(&Integrals, f64)>],
+        ranges: &[f64],
+        materials: &[Material],
+    ) -> Self {
+        let nb = nodes.len();
+        let r = nodes.first().map_or(2, Vec::len);
+        let nt = nodes
+            .first()
+            .and_then(|b| b.first())
+            .map_or(0, |(i, _)| i.planck.len());
+        let mut planck = vec![0f32; nt * r * nb];
+        let mut node = vec![0f32; 3 * r * nb];
+        for (b, band) in nodes.iter().enumerate() {
+            for (i, (ig, lu)) in band.iter().enumerate() {
+                for (k, &x) in ig.planck.iter().enumerate() {
+                    planck[(k * r + i) * nb + b] = x as f32;
+                }
+                node[3 * i * nb + b] = ig.sky as f32;
+                node[(3 * i + 1) * nb + b] = ig.sun as f32;
+                node[(3 * i + 2) * nb + b] = *lu as f32;
+            }
+        }
+        let grey_everywhere = |mi: usize| fast.iter().all(|fb| fb.grey[mi].is_some());
+        let mut eps = vec![0f32; materials.len() * ANGLE_ROWS * nb];
+        for mi in (0..materials.len()).filter(|&mi| grey_everywhere(mi)) {
+            for (b, fb) in fast.iter().enumerate() {
+                let rows = fb.grey[mi].as_ref().expect("grey in every band");
+                for (a, &e) in rows.iter().enumerate() {
+                    eps[(mi * ANGLE_ROWS + a) * nb + b] = e as f32;
+                }
+            }
+        }
+        let ranges: Vec<f32> = ranges.iter().map(|&x| x as f32).collect();
+        let inv_spacing = (0..ranges.len())
+            .map(|i| {
+                if i == 0 {
+                    0.0
+                } else {
+                    1.0 / (ranges[i] - ranges[i - 1])
+                }
+            })
+            .collect();
+        let sqrt_scale = match ranges.last() {
+            Some(&last) if last > 0.0 => (ranges.len() - 1) as f32 / last.sqrt(),
+            _ => 0.0,
+        };
+        GreyTables {
+            bands: nb,
+            nodes: r,
+            ranges,
+            inv_spacing,
+            sqrt_scale,
+            planck,
+            node,
+            eps,
+            double_sided: materials.iter().map(|m| m.double_sided).collect(),
+            tr: materials
+                .iter()
+                .map(|m| m.transmissivity.clamp(0.0, 1.0) as f32)
+                .collect(),
+        }
+    }
+
+    /// The range nodes bracketing range `r` (m): `(i, x)` with `r` at
+    /// fraction `x` (clamped to [0, 1]) from node `i − 1` to node `i`, as
+    /// [`PathTables::locate`]; `(1, 0)` without a path.
+    #[inline(always)]
+    fn locate(&self, r: f32) -> (usize, f32) {
+        let x = &self.ranges;
+        if x.len() < 2 {
+            return (1, 0.0);
+        }
+        let last = x.len() - 1;
+        let mut i = ((r.max(0.0).sqrt() * self.sqrt_scale) as usize + 1).min(last);
+        while i < last && x[i] <= r {
+            i += 1;
+        }
+        while i > 1 && x[i - 1] > r {
+            i -= 1;
+        }
+        (i, ((r - x[i - 1]) * self.inv_spacing[i]).clamp(0.0, 1.0))
+    }
+}
+
+/// A hit on the grey path, as [`Shader::shade_fast`] gathers it.
+#[derive(Debug, Clone, Copy)]
+struct GreyHit {
+    /// Ray index in the batch.
+    ray: u32,
+    /// Facet.
+    facet: u32,
+    /// `d·n_g` (its sign: which face is seen).
+    dn: f32,
+    /// `|d|²·|n_g|²`, then (second pass) the view zenith θ, degrees.
+    theta: f32,
+    /// Slant range, m.
+    range: f32,
+}
+
+/// Working memory of [`Shader::shade_fast`], reused from call to call.
+#[derive(Debug, Default)]
+pub struct FastScratch {
+    grey: Vec<GreyHit>,
+    bands: Vec<f32>,
 }
 
 /// The radiance of rays: per ray, the spectral radiance on every band's
@@ -435,15 +675,14 @@ pub struct Shader<'a> {
     path: Option<PathTables>,
     fast: Vec<FastBand>,
     fast_path: Option<FastPath>,
-    /// Per facet (empty once a path is set): the material index where a
-    /// hit on the facet takes [`Shader::fast_primary`]'s per-facet terms
-    /// (a material grey in every band, no secondary rays, temperatures on
-    /// the table), `u32::MAX` elsewhere.
-    facet_grey: Vec<u32>,
-    /// Per facet, per band: the view-independent terms of the band
-    /// radiance `[Σw·B(T), env, (1 − s)·Σw·E_s·cos σ·f_sun/π, t·env]`
-    /// with `env = F·Σw·L_sky + (1 − F)·Σw·B(T_bg)`.
-    facet_terms: Vec<[f32; 4]>,
+    /// Per facet: its record for the grey path of [`Shader::shade_fast`].
+    grey: Vec<GreyFacet>,
+    /// The grey path's band integrals (of the path once one is set).
+    grey_tables: GreyTables,
+    /// Without a sensor path: per grey facet, per band, the
+    /// view-independent terms of [`grey_facets`] (empty once a path is
+    /// set).
+    grey_terms: Vec<[f32; 4]>,
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -605,10 +844,16 @@ impl<'a> Shader<'a> {
                 }
             })
             .collect();
-        let (facet_grey, facet_terms) = facet_terms(optics, conditions, &options, &fast, &table);
+        let (grey, grey_terms) = grey_facets(optics, conditions, &options, &fast, &table);
+        let plain: Vec<Vec<(&Integrals, f64)>> = fast
+            .iter()
+            .map(|fb| vec![(&fb.plain, 0.0), (&fb.plain, 0.0)])
+            .collect();
+        let grey_tables = GreyTables::new(&fast, &plain, &[], &optics.materials);
         Ok(Shader {
-            facet_grey,
-            facet_terms,
+            grey,
+            grey_tables,
+            grey_terms,
             tracer,
             offsets: geometry.facet_offsets(),
             optics,
@@ -629,11 +874,6 @@ impl<'a> Shader<'a> {
     /// hits ([`Shader::shade_primary`], [`Shader::fast_primary`]); `None`:
     /// no atmosphere.
     pub fn with_path(mut self, path: Option<PathTables>) -> Self {
-        if path.is_some() {
-            // The per-facet terms hold for the plain weights only.
-            self.facet_grey = Vec::new();
-            self.facet_terms = Vec::new();
-        }
         self.fast_path = path.as_ref().map(|p| FastPath {
             weighted_tau: self
                 .bands
@@ -689,6 +929,18 @@ impl<'a> Shader<'a> {
                 })
                 .collect(),
         });
+        if let (Some(p), Some(fp)) = (&path, &self.fast_path) {
+            let nodes: Vec<Vec<(&Integrals, f64)>> = fp
+                .integrals
+                .iter()
+                .zip(&fp.path_radiance)
+                .map(|(ig, lu)| ig.iter().zip(lu.iter().copied()).collect())
+                .collect();
+            self.grey_tables =
+                GreyTables::new(&self.fast, &nodes, &p.ranges_m, &self.optics.materials);
+            // The per-facet terms hold for the plain weights only.
+            self.grey_terms = Vec::new();
+        }
         self.path = path;
         self
     }
@@ -735,39 +987,211 @@ impl<'a> Shader<'a> {
     /// interpolation. Returns `Err` (and leaves `out` alone) for hits that
     /// need the reference: secondary rays, or temperatures off the table.
     pub fn fast_primary(&self, ray: &Ray, h: &Hit, out: &mut [f32]) -> Result<(), FastMiss> {
-        let f = self.facet_of(h);
-        if let Some(&mi) = self.facet_grey.get(f).filter(|&&m| m != u32::MAX) {
-            // Grey material, no path: the view-independent terms are
-            // precomputed per facet; only ε(θ) and r(θ) remain.
-            let mi = mi as usize;
-            let m = &self.optics.materials[mi];
-            // cos of the view zenith from the normal facing the ray,
-            // |d·n| / (|d|·|n|), with one square root.
-            let dn = ray.dir.dot(h.ng);
-            let norm = (ray.dir.length_squared() * h.ng.length_squared()).sqrt();
-            let cos_view = if norm > 0.0 {
-                dn.abs() / norm
-            } else {
-                let (_, nrm, d) = self.hit_frame(ray, h);
-                -d.dot(nrm)
-            };
-            let (a0, ta) = angle_row(cos_view);
-            let lit = dn < 0.0 || m.double_sided;
-            let tr = m.transmissivity.clamp(0.0, 1.0);
-            let nb = self.fast.len();
-            let terms = &self.facet_terms[f * nb..(f + 1) * nb];
-            for ((o, fb), t) in out.iter_mut().zip(&self.fast).zip(terms) {
-                let Some(g) = &fb.grey[mi] else {
-                    unreachable!("facet_grey only lists materials grey in every band")
-                };
-                let eps = g[a0] + ta * (g[a0 + 1] - g[a0]);
-                let r = (1.0 - eps - tr).max(0.0);
-                let [x, env, w, z] = t.map(|v| v as f64);
-                let v = eps * x + r * (env + if lit { w } else { 0.0 }) + z;
-                *o = v as f32;
-            }
-            return Ok(());
+        let mut slow = Vec::new();
+        let mut o = vec![0f32; self.fast.len()];
+        self.shade_fast(
+            std::slice::from_ref(ray),
+            &[Some(*h)],
+            &mut o,
+            &mut slow,
+            &mut FastScratch::default(),
+        );
+        if slow.is_empty() {
+            out.copy_from_slice(&o);
+            Ok(())
+        } else if self.spawns_secondary(self.facet_of(h)) {
+            Err(FastMiss::Secondary)
+        } else {
+            Err(FastMiss::OffTable)
         }
+    }
+
+    /// [`Shader::fast_primary`] and [`Shader::fast_miss`] for a batch of
+    /// primary rays (unit directions) and their hits: band radiances into
+    /// `out` band-major (`out[b · n + i]` for ray `i` of `n`), the indices
+    /// of the hits left to the spectral reference appended to `slow`
+    /// (their `out` values untouched).
+    ///
+    /// Hits on materials grey in every band (without secondary rays, on
+    /// the Planck table) take the grey path in three passes over the batch
+    /// — per hit the facet's record, `d·n_g` and the range; the view
+    /// zeniths of all of them at once (a loop that vectorises); then per
+    /// band `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
+    /// [`GreyTables`], with `q` the range-interpolated path weights — so
+    /// that no per-hit latency chain stalls the others. Other hits take
+    /// the per-hit fused spectral sums.
+    pub fn shade_fast(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        out: &mut [f32],
+        slow: &mut Vec<usize>,
+        sc: &mut FastScratch,
+    ) {
+        let n = rays.len();
+        let nb = self.fast.len();
+        debug_assert!(hits.len() == n && out.len() >= nb * n);
+        sc.grey.clear();
+        sc.bands.resize(nb, 0.0);
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let Some(h) = hit else {
+                let up = ray.dir.z >= 0.0;
+                for (b, fb) in self.fast.iter().enumerate() {
+                    out[b * n + i] = if up { fb.miss_sky } else { fb.miss_ground } as f32;
+                }
+                continue;
+            };
+            let f = self.facet_of(h);
+            let n2 = ray.dir.length_squared() * h.ng.length_squared();
+            if self.grey[f].mi != u32::MAX && n2 > 0.0 && n2.is_finite() {
+                sc.grey.push(GreyHit {
+                    ray: i as u32,
+                    facet: f as u32,
+                    dn: ray.dir.dot(h.ng),
+                    theta: n2,
+                    range: h.t * ray.dir.length(),
+                });
+                continue;
+            }
+            if self.fast_general(ray, h, &mut sc.bands).is_err() {
+                slow.push(i);
+                continue;
+            }
+            for (b, &v) in sc.bands.iter().enumerate() {
+                out[b * n + i] = v;
+            }
+        }
+        // View zeniths, degrees: cos θ = |d·n_g| / (|d|·|n_g|).
+        for g in &mut sc.grey {
+            g.theta = acos_deg((g.dn.abs() / g.theta.sqrt()).min(1.0));
+        }
+        if self.grey_terms.is_empty() {
+            self.grey_pass(sc, n, out);
+        } else {
+            self.grey_terms_pass(sc, n, out);
+        }
+    }
+
+    /// The grey path's last pass without a sensor path: per band
+    /// `ε(θ)·x + r·(env + lit·w) + z` from the facet's precomputed terms
+    /// ([`grey_facets`]), `r = max(1 − ε − t, 0)`.
+    fn grey_terms_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        let nb = gt.bands;
+        for hit in &sc.grey {
+            let i = hit.ray as usize;
+            let f = hit.facet as usize;
+            let mi = self.grey[f].mi as usize;
+            let th = hit.theta;
+            // θ ≥ 0: truncation is the floor.
+            let a0 = (th as usize).min(ANGLE_ROWS - 2);
+            let ta = th - a0 as f32;
+            let lit = hit.dn < 0.0 || gt.double_sided[mi];
+            let tr = gt.tr[mi];
+            let e = &gt.eps[(mi * ANGLE_ROWS + a0) * nb..][..2 * nb];
+            let terms = &self.grey_terms[f * nb..][..nb];
+            for (b, &[x, env, w, z]) in terms.iter().enumerate() {
+                let eps = e[b] + ta * (e[nb + b] - e[b]);
+                let r = (1.0 - eps - tr).max(0.0);
+                out[b * n + i] = eps * x + r * (env + if lit { w } else { 0.0 }) + z;
+            }
+        }
+    }
+
+    /// The grey path's last pass over every hit gathered in `sc` (see
+    /// [`Shader::shade_fast`]): per band
+    /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u`, with
+    /// `env = F·Σq·L_sky + (1 − F)·ΣqB(T_bg)`, `r = max(1 − ε − t, 0)`, the
+    /// integrals bilinear in temperature then range as in the reference.
+    /// The bands of one entry are adjacent in [`GreyTables`]: the offsets
+    /// are computed once per hit, then each band is a few loads.
+    fn grey_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        let (nb, nodes) = (gt.bands, gt.nodes);
+        let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
+        for hit in &sc.grey {
+            let i = hit.ray as usize;
+            let g = &self.grey[hit.facet as usize];
+            let mi = g.mi as usize;
+            let th = hit.theta;
+            // θ ≥ 0: truncation is the floor.
+            let a0 = (th as usize).min(ANGLE_ROWS - 2);
+            let ta = th - a0 as f32;
+            let (ri, rx) = gt.locate(hit.range);
+            let sd = if hit.dn < 0.0 || gt.double_sided[mi] {
+                g.sd
+            } else {
+                0.0
+            };
+            let tr = gt.tr[mi];
+            let (big_f, one_f) = (g.big_f, 1.0 - g.big_f);
+            let (ft, fg) = (g.ft, g.fg);
+            // Entry offsets: emissivity at angle rows a0, a0 + 1 (+nb);
+            // Planck rows k, k + 1 (+nodes·nb) at range nodes ri − 1, ri
+            // (+nb); sky, sun, path at node ri − 1 (+0, +nb, +2nb) and ri
+            // (+3nb).
+            let e = (mi * ANGLE_ROWS + a0) * nb;
+            let (kt, kg) = (g.kt as usize, g.kg as usize);
+            let t0 = (kt * nodes + ri - 1) * nb;
+            let g0 = (kg * nodes + ri - 1) * nb;
+            let up = nodes * nb;
+            let q = 3 * (ri - 1) * nb;
+            for b in 0..nb {
+                let eps = ep[e + b] + ta * (ep[e + nb + b] - ep[e + b]);
+                // Temperature first, then range, as the reference.
+                let bilerp = |o: usize, f: f32| {
+                    let v0 = pl[o + b] + f * (pl[o + up + b] - pl[o + b]);
+                    let v1 = pl[o + nb + b] + f * (pl[o + up + nb + b] - pl[o + nb + b]);
+                    v0 + rx * (v1 - v0)
+                };
+                let bt = bilerp(t0, ft);
+                let bg = bilerp(g0, fg);
+                let node = |o: usize| nd[q + o + b] + rx * (nd[q + o + 3 * nb + b] - nd[q + o + b]);
+                let (sky, sun, lu) = (node(0), node(nb), node(2 * nb));
+                let r = (1.0 - eps - tr).max(0.0);
+                let env = big_f * sky + one_f * bg;
+                out[b * n + i] = eps * bt + r * (env + sd * sun) + tr * env + lu;
+            }
+        }
+    }
+
+    /// The truth values ([`super::TRUTH_LAYERS`] order) of the pixel whose
+    /// centre ray `ray` hits `h`: surface temperature, material id, object
+    /// id, shape factor, sun fraction, depth (m). Read from the facet's
+    /// grey-path record where it has one (the temperature recovered from
+    /// its Planck table node and fraction: within 2·10⁻⁹ K in f64, so the
+    /// same f32), from the per-facet arrays otherwise.
+    pub fn truth_of(&self, ray: &Ray, h: &Hit) -> [f32; 6] {
+        let f = self.facet_of(h);
+        let d = h.t * ray.dir.length();
+        let depth = if d.is_finite() { d } else { 0.0 };
+        let g = &self.grey[f];
+        if g.mi != u32::MAX {
+            let t = self.table.t0 + (g.kt as f64 + g.ft as f64) * PLANCK_TABLE_STEP_K;
+            return [
+                t as f32,
+                self.optics.materials[g.mi as usize].id as f32,
+                g.object as f32,
+                g.big_f,
+                g.sun_fraction,
+                depth,
+            ];
+        }
+        let s = &self.conditions.surface;
+        [
+            s.temperature_k[f],
+            self.material_id_of(f),
+            self.optics.facet_object[f] as f32,
+            s.shape_factor[f],
+            s.sun_fraction[f],
+            depth,
+        ]
+    }
+
+    /// [`Shader::fast_primary`] of a hit off the grey path: per band the
+    /// grey integrals or the fused spectral sum.
+    fn fast_general(&self, ray: &Ray, h: &Hit, out: &mut [f32]) -> Result<(), FastMiss> {
+        let f = self.facet_of(h);
         if self.spawns_secondary(f) {
             return Err(FastMiss::Secondary);
         }
@@ -910,6 +1334,12 @@ impl<'a> Shader<'a> {
     /// Global facet index of a hit.
     pub fn facet_of(&self, hit: &Hit) -> usize {
         SceneGeometry::facet_id(&self.offsets, hit.instance, hit.prim)
+    }
+
+    /// The `material_id` truth value of facet `f`: its material's id.
+    #[inline]
+    pub fn material_id_of(&self, f: usize) -> f32 {
+        self.optics.materials[self.optics.facet_material[f] as usize].id as f32
     }
 
     /// The tracer.
@@ -1138,6 +1568,17 @@ fn band_sum(s: &BandStreams, frac: [f32; 4], big_f: f32, sd: f32, tr: f32) -> f3
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn acos_deg_is_within_its_stated_bound() {
+        for i in 0..=100_000 {
+            let x = i as f64 / 100_000.0;
+            // The cosine as the renderer has it: in f32.
+            let x = x as f32;
+            let err = (super::acos_deg(x) as f64 - (x as f64).acos().to_degrees()).abs();
+            assert!(err <= 2e-5, "acos({x}): error {err}°");
+        }
+    }
+
     #[test]
     fn acos_unit_is_within_its_published_bound() {
         for i in 0..=100_000 {

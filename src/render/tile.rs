@@ -397,7 +397,7 @@ pub fn merge_tiles(parts: &[PathBuf], out_dir: &Path) -> Result<Vec<String>> {
                 ),
             ));
         }
-        let finished = super::finish(&full, &sensor, &bands, info.seed)?;
+        let finished = super::finish(full, &sensor, &bands, info.seed)?;
         let desc = super::description(&info.scene, &info.backend, &info.sensor, &info.time);
         super::write_outputs(out_dir, &stem, &finished, &desc)?;
         done.push(stem);
