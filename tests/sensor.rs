@@ -599,6 +599,49 @@ fn line_scanner_ground_points_land_on_predicted_pixels_with_attitude() {
     assert!((mid.origin - centre.origin).length() < 1e-3);
 }
 
+/// A scan line's rays, made from the scanner's table of scan angles, are
+/// the rays `LineScanner::ray` gives at the same coordinates, bit for bit —
+/// with and without the mirror sweep, and after a public field changed.
+#[test]
+fn line_scanner_tabulated_line_equals_per_ray_geometry() {
+    for extra in [
+        r#", "heading_deg": 30, "roll_deg": 3, "pitch_deg": -2, "yaw_deg": 4, "oversample": 3"#,
+        r#", "heading_deg": 200, "mirror_sweep": true, "start_time": 4.5, "oversample": 2"#,
+    ] {
+        let s = scanner_json(extra);
+        let mut sc = scanner(&s).clone();
+        for change in [false, true] {
+            if change {
+                // A field the table depends on, changed after `new`.
+                sc.ifov_rad *= 1.5;
+                sc.samples_per_line = 37;
+            }
+            let n = sc.oversample;
+            let step = sc.sample_step_rad();
+            for line in [0usize, 13, 39] {
+                let mut rays = Vec::new();
+                sc.rays_for_line(line, &mut rays);
+                assert_eq!(rays.len(), sc.samples_per_line * n * n);
+                let mut k = 0;
+                for j in 0..n {
+                    let phi = ((j as f64 + 0.5) / n as f64 - 0.5) * sc.ifov_rad;
+                    for smp in 0..sc.samples_per_line {
+                        for i in 0..n {
+                            let ds = ((i as f64 + 0.5) / n as f64 - 0.5) * sc.ifov_rad / step;
+                            let want = sc.ray(line, smp as f64 + 0.5 + ds, phi);
+                            assert_eq!(
+                                rays[k], want,
+                                "line {line}, sub-line {j}, sample {smp}.{i}"
+                            );
+                            k += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Sensor effects
 // ---------------------------------------------------------------------------

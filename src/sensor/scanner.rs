@@ -62,6 +62,18 @@ pub struct LineScanner {
     pub mirror_sweep: bool,
     /// Sub-sample rays per side (`N×N` rays per sample).
     pub oversample: usize,
+    /// Scan angles of one line's sub-samples and their sines and cosines,
+    /// computed once (every line has the same).
+    scan: ScanTable,
+}
+
+/// The scan angle `θ` of each of a line's `samples·N` sub-samples, with
+/// `sin θ`, `cos θ`, and the fields they were computed from (a scanner whose
+/// public fields were changed after [`LineScanner::new`] recomputes them).
+#[derive(Debug, Clone, PartialEq, Default)]
+struct ScanTable {
+    key: [u64; 4],
+    theta_sin_cos: Vec<[f64; 3]>,
 }
 
 /// Parameters of [`LineScanner::new`] (angles in radians).
@@ -153,7 +165,7 @@ impl LineScanner {
             DVec3::new(ch, -sh, 0.0),
             DVec3::new(0.0, 0.0, -1.0),
         );
-        Ok(LineScanner {
+        let mut scanner = LineScanner {
             ifov_rad: p.ifov_rad,
             scan_angle_rad: p.scan_angle_rad,
             samples_per_line: p.samples_per_line,
@@ -167,7 +179,41 @@ impl LineScanner {
             start_time_s: p.start_time_s,
             mirror_sweep: p.mirror_sweep,
             oversample: p.oversample,
-        })
+            scan: ScanTable::default(),
+        };
+        scanner.scan = scanner.scan_table();
+        Ok(scanner)
+    }
+
+    /// The fields the scan-angle table depends on.
+    fn scan_key(&self) -> [u64; 4] {
+        [
+            self.ifov_rad.to_bits(),
+            self.scan_angle_rad.to_bits(),
+            self.samples_per_line as u64,
+            self.oversample as u64,
+        ]
+    }
+
+    /// Scan angles of one line's sub-samples (sample `s`, sub-column `i` at
+    /// `s·N + i`: `θ(s + ½ + ((i+½)/N − ½)·IFOV/step)`) with their sines and
+    /// cosines.
+    fn scan_table(&self) -> ScanTable {
+        let n = self.oversample;
+        let step = self.sample_step_rad();
+        let mut theta_sin_cos = Vec::with_capacity(self.samples_per_line * n);
+        for s in 0..self.samples_per_line {
+            for i in 0..n {
+                let ds = ((i as f64 + 0.5) / n as f64 - 0.5) * self.ifov_rad / step;
+                let theta = self.scan_angle(s as f64 + 0.5 + ds);
+                let (sin, cos) = theta.sin_cos();
+                theta_sin_cos.push([theta, sin, cos]);
+            }
+        }
+        ScanTable {
+            key: self.scan_key(),
+            theta_sin_cos,
+        }
     }
 
     /// Angular step between samples, `A / S`, rad.
@@ -230,17 +276,39 @@ impl LineScanner {
     /// [`super::effects::reduce_oversampled`] takes. The sub-rays cover the
     /// detector footprint; they form a regular grid in sample units exactly
     /// when `IFOV = A/S`.
+    ///
+    /// The same rays as [`LineScanner::ray`] at those coordinates, bit for
+    /// bit, from the table of scan angles made once in
+    /// [`LineScanner::new`]: no trigonometry per ray.
     pub fn rays_for_line(&self, line: usize, out: &mut Vec<Ray>) {
         let n = self.oversample;
-        let step = self.sample_step_rad();
-        out.reserve(self.samples_per_line * n * n);
+        let fresh;
+        let table = if self.scan.key == self.scan_key() {
+            &self.scan.theta_sin_cos
+        } else {
+            fresh = self.scan_table();
+            &fresh.theta_sin_cos
+        };
+        out.reserve(table.len() * n);
+        let line_t = self.line_time(line);
+        let track = self.track().truncate();
+        // `position(t)` with the track computed once.
+        let at = |t: f64| {
+            let g = self.start + self.ground_speed_m_s * (t - self.start_time_s) * track;
+            DVec3::new(g.x, g.y, self.altitude_m).as_vec3()
+        };
+        let fixed = (!self.mirror_sweep).then(|| at(line_t + 0.0));
         for j in 0..n {
             let phi = ((j as f64 + 0.5) / n as f64 - 0.5) * self.ifov_rad;
-            for s in 0..self.samples_per_line {
-                for i in 0..n {
-                    let ds = ((i as f64 + 0.5) / n as f64 - 0.5) * self.ifov_rad / step;
-                    out.push(self.ray(line, s as f64 + 0.5 + ds, phi));
-                }
+            let (sin_phi, cos_phi) = (phi.sin(), phi.cos());
+            for &[theta, sin_t, cos_t] in table {
+                let body = DVec3::new(sin_phi, cos_phi * sin_t, cos_phi * cos_t);
+                let dir = (self.world_from_body * body).normalize().as_vec3();
+                let origin = match fixed {
+                    Some(o) => o,
+                    None => at(line_t + self.sweep_delay(theta)),
+                };
+                out.push(Ray::new(origin, dir));
             }
         }
     }
