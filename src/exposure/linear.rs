@@ -7,7 +7,8 @@
 //! surface source history (front `S_k`, exposed back `B_k`;
 //! [`crate::thermal::linear`]). So:
 //! 1. Facets are grouped by property set (equal [`SlabProperties`]).
-//! 2. Per group, the facet with the median daily-mean source is solved with
+//! 2. Per group, the facet with the median daily-mean source (over at most
+//!    1024 members evenly spaced in facet order) is solved with
 //!    the nonlinear model and linearised ([`thermal::linearize`]: its
 //!    Green's matrices `G[t][k] = ∂T(t)/∂S_k`). Every facet's first-order
 //!    temperature change from it predicts where the facet lies.
@@ -52,6 +53,10 @@ use crate::{Error, Result};
 
 /// Facets per work item of the parallel loops.
 const CHUNK: usize = 256;
+
+/// Most members of a property set whose daily-mean sources choose its
+/// centre facet (their median).
+const MEDIAN_SAMPLE: usize = 1024;
 
 /// A reference facet's linearisation in the layout the per-facet products
 /// use: `f32`, column-major (`g[k·R + t] = ∂T(t)/∂S_k`), plus the rows of
@@ -569,38 +574,42 @@ pub(super) fn solve(
         .iter()
         .map(|m| m.front_per_shape_factor().iter().sum::<f64>() / r as f64)
         .collect();
-    let means: Vec<f64> = (0..n)
-        .into_par_iter()
-        .map(|f| {
-            let Some(g) = group_of(f) else {
-                return 0.0;
-            };
-            let sun: f64 = sunlit_cos(ctx.state(f))
-                .zip(&sun32[g])
-                .map(|(sc, w)| (sc * w) as f64)
-                .sum();
-            base_mean[g] + exposure.sky.shape_factor[f] as f64 * shape_mean[g] + sun / r as f64
-        })
-        .collect();
+    let mean_of = |f: usize, g: usize| -> f64 {
+        let sun: f64 = sunlit_cos(ctx.state(f))
+            .zip(&sun32[g])
+            .map(|(sc, w)| (sc * w) as f64)
+            .sum();
+        base_mean[g] + exposure.sky.shape_factor[f] as f64 * shape_mean[g] + sun / r as f64
+    };
 
     // 3. Per group, the facet with the median daily-mean source, linearised.
-    let mut per_group: Vec<Vec<(f64, usize)>> = vec![Vec::new(); groups];
-    for (f, &m) in means.iter().enumerate() {
+    // The median is taken over at most `MEDIAN_SAMPLE` members evenly spaced
+    // in facet order: it only centres the first-order predictions that bin
+    // the facets (step 4), and reading every facet's history for it cost as
+    // much as the binning itself.
+    let mut per_group: Vec<Vec<usize>> = vec![Vec::new(); groups];
+    for f in 0..n {
         if let Some(g) = group_of(f) {
-            per_group[g].push((m, f));
+            per_group[g].push(f);
         }
     }
     let centre: Vec<usize> = per_group
-        .iter_mut()
-        .map(|v| {
+        .par_iter()
+        .enumerate()
+        .map(|(g, v)| {
             if v.is_empty() {
                 return usize::MAX;
             }
-            // The median of a total order (mean, then facet): the same
-            // facet as after a full sort.
-            let mid = v.len() / 2;
-            v.select_nth_unstable_by(mid, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            v[mid].1
+            let stride = v.len().div_ceil(MEDIAN_SAMPLE);
+            let mut sample: Vec<(f64, usize)> = v
+                .iter()
+                .step_by(stride)
+                .map(|&f| (mean_of(f, g), f))
+                .collect();
+            // The median of a total order (mean, then facet).
+            let mid = sample.len() / 2;
+            sample.select_nth_unstable_by(mid, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            sample[mid].1
         })
         .collect();
     drop(per_group);
@@ -634,41 +643,43 @@ pub(super) fn solve(
         )
         .collect();
     let w = lp.bin_k;
-    // Facets sorted by (group, bin key, facet): the bins in key order.
-    type Keyed = ((usize, [i32; 3]), usize, [f32; 3]);
-    let mut keyed: Vec<Keyed> = features
-        .into_par_iter()
-        .map(|(f, x)| {
-            let key = x.map(|v| (v / w).round() as i32);
-            ((group_of(f).expect("solved"), key), f, x)
+    // Facets sorted by (group, bin key, facet): the bins in key order. The
+    // key packed in a u128 (group, then the three bin indices with their
+    // sign bit flipped, so unsigned order is signed order) beside the
+    // facet's index in `features` (which is in facet order).
+    let flip = |k: f32| ((k / w).round() as i32 as u32 ^ 0x8000_0000) as u128;
+    let mut keyed: Vec<(u128, u32)> = features
+        .par_iter()
+        .enumerate()
+        .map(|(i, &(f, x))| {
+            let g = group_of(f).expect("solved") as u128;
+            let key = (g << 96) | (flip(x[0]) << 64) | (flip(x[1]) << 32) | flip(x[2]);
+            (key, i as u32)
         })
         .collect();
-    keyed.par_sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
-    let bins: Vec<Vec<(usize, [f32; 3])>> = keyed
-        .chunk_by(|a, b| a.0 == b.0)
-        .map(|c| c.iter().map(|&(_, f, x)| (f, x)).collect())
-        .collect();
-    drop(keyed);
+    keyed.par_sort_unstable();
     // The reference of each bin: the member closest to its centroid.
-    let mut bin_rep = Vec::with_capacity(bins.len());
+    let mut bin_rep = Vec::new();
     let mut ref_of = vec![u32::MAX; n];
-    for (b, members) in bins.iter().enumerate() {
+    for (b, members) in keyed.chunk_by(|a, b| a.0 == b.0).enumerate() {
         let m = members.len() as f32;
-        let c = members.iter().fold([0.0f32; 3], |a, (_, x)| {
+        let c = members.iter().fold([0.0f32; 3], |a, &(_, i)| {
+            let x = features[i as usize].1;
             [a[0] + x[0] / m, a[1] + x[1] / m, a[2] + x[2] / m]
         });
         let dist = |x: &[f32; 3]| (0..3).map(|i| (x[i] - c[i]).powi(2)).sum::<f32>();
         let best = members
             .iter()
+            .map(|&(_, i)| features[i as usize])
             .min_by(|a, b| dist(&a.1).total_cmp(&dist(&b.1)).then(a.0.cmp(&b.0)))
             .expect("non-empty bin")
             .0;
         bin_rep.push(best);
-        for (f, _) in members {
-            ref_of[*f] = b as u32;
+        for &(_, i) in members {
+            ref_of[features[i as usize].0] = b as u32;
         }
     }
-    drop(bins);
+    drop(keyed);
     let refs: Vec<Reference> = bin_rep
         .par_iter()
         .map(|&f| ctx.linearize(f, lp, &rows, &models[g_of(f)]))
