@@ -863,7 +863,8 @@ fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
     let solve = num("thermal_solve_s");
     assert!(solve > 0.0 && solve <= num("rays_thermal_s"), "{r}");
     assert!(num("bare_trace_s") > 0.0 && num("facets") > 0.0, "{r}");
-    let pipeline = num("primary_trace_s") + num("radiometry_s") + num("sensor_s");
+    let pipeline =
+        num("ray_generation_s") + num("primary_trace_s") + num("radiometry_s") + num("sensor_s");
     let ratio = num("pipeline_over_bare");
     assert!((ratio - pipeline / num("bare_trace_s")).abs() <= 1e-9 * ratio.max(1.0));
     let with = (pipeline + num("secondary_s")) / num("bare_trace_s");
@@ -1052,14 +1053,33 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
         let nb = shader.band_count();
         let mut batch = vec![0f32; nb * rays.len()];
         let mut slow = Vec::new();
+        // Truth of every third ray from ray 1, written as the batch is read.
+        let cols = (rays.len() - 1).div_ceil(3);
+        let mut truth = vec![vec![f32::NAN; cols]; irsig::render::TRUTH_LAYERS.len()];
+        let mut layers: Vec<&mut [f32]> = truth.iter_mut().map(|v| v.as_mut_slice()).collect();
         shader.shade_fast(
             &rays,
             &hits,
             &mut batch,
             &mut slow,
             &mut irsig::render::FastScratch::default(),
+            Some(irsig::render::TruthOut {
+                first: 1,
+                stride: 3,
+                layers: &mut layers,
+            }),
         );
         assert_eq!(slow.len(), secondary);
+        for c in 0..cols {
+            let i = 1 + 3 * c;
+            let want = match &hits[i] {
+                None => irsig::render::MISS_TRUTH,
+                Some(h) => shader.truth_of(&rays[i], h),
+            };
+            for (l, w) in truth.iter().zip(want) {
+                assert_eq!(l[c].to_bits(), w.to_bits(), "truth of ray {i}");
+            }
+        }
         for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
             if slow.contains(&i) {
                 continue;

@@ -35,7 +35,7 @@ use serde::Deserialize;
 pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
 pub use shade::{
     Conditions, FastMiss, FastScratch, SceneOptics, ShadeOptions, Shader, Sky, SunInput,
-    SurfaceState,
+    SurfaceState, TruthOut,
 };
 
 use crate::output::write_image_set;

@@ -637,6 +637,39 @@ impl GreyTables {
     }
 }
 
+/// Where [`Shader::shade_fast`] writes the truth values
+/// ([`super::TRUTH_LAYERS`] order) of a batch's pixel-centre rays: rays
+/// `first`, `first + stride`, … (one per value of each layer slice).
+pub struct TruthOut<'a, 'b> {
+    /// Index of the first pixel-centre ray in the batch.
+    pub first: usize,
+    /// Rays from one pixel-centre ray to the next (≥ 1).
+    pub stride: usize,
+    /// One slice per truth layer, a value per pixel-centre ray.
+    pub layers: &'a mut [&'b mut [f32]],
+}
+
+impl TruthOut<'_, '_> {
+    #[inline]
+    fn put(&mut self, col: usize, v: [f32; 6]) {
+        for (layer, v) in self.layers.iter_mut().zip(v) {
+            layer[col] = v;
+        }
+    }
+
+    /// The ray index and column after column `col` (`usize::MAX` past
+    /// the last column).
+    #[inline]
+    fn advance(&self, col: usize) -> (usize, usize) {
+        let col = col + 1;
+        if col < self.layers[0].len() {
+            (self.first + col * self.stride.max(1), col)
+        } else {
+            (usize::MAX, col)
+        }
+    }
+}
+
 /// A hit on the grey path, as [`Shader::shade_fast`] gathers it.
 #[derive(Debug, Clone, Copy)]
 struct GreyHit {
@@ -995,6 +1028,7 @@ impl<'a> Shader<'a> {
             &mut o,
             &mut slow,
             &mut FastScratch::default(),
+            None,
         );
         if slow.is_empty() {
             out.copy_from_slice(&o);
@@ -1020,6 +1054,9 @@ impl<'a> Shader<'a> {
     /// [`GreyTables`], with `q` the range-interpolated path weights — so
     /// that no per-hit latency chain stalls the others. Other hits take
     /// the per-hit fused spectral sums.
+    ///
+    /// With `truth`, the truth values of the pixel-centre rays it names are
+    /// written as the batch is read ([`Shader::truth_of`]).
     pub fn shade_fast(
         &self,
         rays: &[Ray],
@@ -1027,21 +1064,37 @@ impl<'a> Shader<'a> {
         out: &mut [f32],
         slow: &mut Vec<usize>,
         sc: &mut FastScratch,
+        mut truth: Option<TruthOut<'_, '_>>,
     ) {
         let n = rays.len();
         let nb = self.fast.len();
         debug_assert!(hits.len() == n && out.len() >= nb * n);
         sc.grey.clear();
         sc.bands.resize(nb, 0.0);
+        // The next pixel-centre ray and its column.
+        let (mut next, mut col) = match &truth {
+            Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
+            _ => (usize::MAX, 0),
+        };
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let centre = i == next;
             let Some(h) = hit else {
                 let up = ray.dir.z >= 0.0;
                 for (b, fb) in self.fast.iter().enumerate() {
                     out[b * n + i] = if up { fb.miss_sky } else { fb.miss_ground } as f32;
                 }
+                if let (true, Some(t)) = (centre, &mut truth) {
+                    t.put(col, super::MISS_TRUTH);
+                    (next, col) = t.advance(col);
+                }
                 continue;
             };
             let f = self.facet_of(h);
+            let range = h.t * ray.dir.length();
+            if let (true, Some(t)) = (centre, &mut truth) {
+                t.put(col, self.truth_of_facet(f, range));
+                (next, col) = t.advance(col);
+            }
             let n2 = ray.dir.length_squared() * h.ng.length_squared();
             if self.grey[f].mi != u32::MAX && n2 > 0.0 && n2.is_finite() {
                 sc.grey.push(GreyHit {
@@ -1049,7 +1102,7 @@ impl<'a> Shader<'a> {
                     facet: f as u32,
                     dn: ray.dir.dot(h.ng),
                     theta: n2,
-                    range: h.t * ray.dir.length(),
+                    range,
                 });
                 continue;
             }
@@ -1162,8 +1215,12 @@ impl<'a> Shader<'a> {
     /// its Planck table node and fraction: within 2·10⁻⁹ K in f64, so the
     /// same f32), from the per-facet arrays otherwise.
     pub fn truth_of(&self, ray: &Ray, h: &Hit) -> [f32; 6] {
-        let f = self.facet_of(h);
-        let d = h.t * ray.dir.length();
+        self.truth_of_facet(self.facet_of(h), h.t * ray.dir.length())
+    }
+
+    /// [`Shader::truth_of`] of a hit on facet `f` at range `d` (m).
+    #[inline]
+    fn truth_of_facet(&self, f: usize, d: f32) -> [f32; 6] {
         let depth = if d.is_finite() { d } else { 0.0 };
         let g = &self.grey[f];
         if g.mi != u32::MAX {

@@ -92,7 +92,8 @@ pub enum Coherence {
 pub trait Tracer: Send + Sync {
     /// Short name for reports (`"embree_packet"`, `"obvhs"`, ...).
     fn name(&self) -> &str;
-    /// Closest hit of every ray; `out.len() == rays.len()`.
+    /// Closest hit of every ray; `out.len() == rays.len()`. Every element
+    /// of `out` is written (`None` for a miss): callers may reuse it.
     fn intersect(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]);
     /// For every ray, whether anything is hit within `[tnear, tfar]`.
     fn occluded(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]);
