@@ -410,6 +410,14 @@ fn camera_projection_inverts_ray_generation() {
     assert!((rays[128].dir - expect(0.25, 5.75)).length() < 1e-6);
     assert!((rays[255].dir - expect(63.75, 5.75)).length() < 1e-6);
     assert!(rays.iter().all(|r| (r.dir.length() - 1.0).abs() < 1e-6));
+    // Every ray of the row is `FrameCamera::ray` at its point, bit for bit.
+    for (i, r) in rays.iter().enumerate() {
+        let (j, k) = (i / 128, i % 128);
+        assert_eq!(
+            *r,
+            c.ray((k as f64 + 0.5) / 2.0, 5.0 + (j as f64 + 0.5) / 2.0)
+        );
+    }
 }
 
 #[test]

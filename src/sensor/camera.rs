@@ -135,15 +135,30 @@ impl FrameCamera {
     /// `v = row + (j+½)/N`), each of `width·N` rays (at `u = col + (i+½)/N`),
     /// so rows of results laid end to end form the `(width·N) × (height·N)`
     /// oversampled image that [`super::effects::reduce_oversampled`] takes.
+    ///
+    /// The same rays as [`FrameCamera::ray`] at those points, bit for bit,
+    /// with the per-column terms computed once per call rather than per
+    /// ray.
     pub fn rays_for_row(&self, row: usize, out: &mut Vec<Ray>) {
         let n = self.oversample;
-        out.reserve(self.width * n * n);
+        let ws = self.width * n;
+        out.reserve(ws * n);
+        let origin = self.position().as_vec3();
+        let (cx, cy) = (0.5 * self.width as f64, 0.5 * self.height as f64);
+        // `direction`'s x component of every sub-column.
+        let xs: Vec<f64> = (0..ws)
+            .map(|k| ((k as f64 + 0.5) / n as f64 - cx) / self.focal_px)
+            .collect();
         for j in 0..n {
             let v = row as f64 + (j as f64 + 0.5) / n as f64;
-            for k in 0..self.width * n {
-                let u = (k as f64 + 0.5) / n as f64;
-                out.push(self.ray(u, v));
-            }
+            let y = (v - cy) / self.focal_px;
+            out.extend(xs.iter().map(|&x| {
+                let d = self
+                    .world_from_camera
+                    .transform_vector3(DVec3::new(x, y, 1.0))
+                    .normalize();
+                Ray::new(origin, d.as_vec3())
+            }));
         }
     }
 
