@@ -867,6 +867,8 @@ fn cli_bench_render_reports_every_stage_and_the_bare_trace() {
         num("ray_generation_s") + num("primary_trace_s") + num("radiometry_s") + num("sensor_s");
     let ratio = num("pipeline_over_bare");
     assert!((ratio - pipeline / num("bare_trace_s")).abs() <= 1e-9 * ratio.max(1.0));
+    let given = (pipeline - num("ray_generation_s")) / num("bare_trace_s");
+    assert!((num("given_rays_over_bare") - given).abs() <= 1e-9 * given.max(1.0));
     let with = (pipeline + num("secondary_s")) / num("bare_trace_s");
     assert!((num("with_secondary_over_bare") - with).abs() <= 1e-9 * with.max(1.0));
     assert!(num("secondary_hits") <= num("primary_rays"), "{r}");
