@@ -497,3 +497,62 @@ fn bench_trace_cli_reads_an_obj_scene_and_reports_bad_input() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("expected WxH"));
 }
+
+/// A regular heightmap (shared vertices, 2 m cells) and rays that run in
+/// the vertical planes of its cell edges, as a scan line over the
+/// bundled town's terrain does when the aircraft is over an edge: the
+/// Embree scenes are robust (watertight), so none slips between the
+/// triangles (before the scenes were made robust, about 0.6 % of the town
+/// scanner's ground pixels did). obvhs is checked to be as watertight.
+#[test]
+fn rays_in_the_planes_of_shared_edges_do_not_slip_through_a_heightmap() {
+    let cells = 60usize;
+    let step = 2.0f32;
+    let half = 0.5 * cells as f32 * step;
+    let mut mesh = TriangleMesh {
+        name: "terrain".into(),
+        ..Default::default()
+    };
+    for j in 0..=cells {
+        for i in 0..=cells {
+            let (x, y) = (i as f32 * step - half, j as f32 * step - half);
+            let z = 0.4 * (0.05 * x).sin() * (0.07 * y).cos();
+            mesh.positions.push(Vec3::new(x, y, z));
+        }
+    }
+    let v = |i: usize, j: usize| (j * (cells + 1) + i) as u32;
+    for j in 0..cells {
+        for i in 0..cells {
+            mesh.indices.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            mesh.indices.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    let geom = SceneGeometry::single(mesh);
+    // Rays from 300 m up in the planes y = edge and x = edge, fanning out
+    // ±10° within the plane (300 m·tan 10° = 53 m: all inside the
+    // heightmap).
+    let mut rays = Vec::new();
+    for k in 1..cells {
+        let e = k as f32 * step - half;
+        for s in 0..256 {
+            let a = (-10.0f32 + 20.0 * (s as f32 + 0.5) / 256.0).to_radians();
+            let (sa, ca) = a.sin_cos();
+            rays.push(Ray::new(Vec3::new(0.0, e, 300.0), Vec3::new(sa, 0.0, -ca)));
+            rays.push(Ray::new(Vec3::new(e, 0.0, 300.0), Vec3::new(0.0, sa, -ca)));
+        }
+    }
+    for backend in Backend::ALL {
+        let tracer = trace::build(&geom, backend).unwrap();
+        for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+            let hits = trace::intersect_all(tracer.as_ref(), &rays, coherence);
+            let misses = hits.iter().filter(|h| h.is_none()).count();
+            assert_eq!(
+                misses,
+                0,
+                "{}: {misses} of {} rays slipped through",
+                backend.as_str(),
+                rays.len()
+            );
+        }
+    }
+}

@@ -234,6 +234,16 @@ impl Scene {
         if s.is_null() {
             return Err(Error::Embree("cannot create a scene".into()));
         }
+        // Robust (watertight) triangle tests: without them rays that run
+        // in the plane of shared edges (a scan line over a regular
+        // heightmap) slip between the triangles.
+        // SAFETY: valid, uncommitted scene; a defined flag.
+        unsafe { raw::rtcSetSceneFlags(s, raw::RTC_SCENE_FLAG_ROBUST) };
+        if let Err(e) = device.check() {
+            // SAFETY: we own the only reference to `s`.
+            unsafe { raw::rtcReleaseScene(s) };
+            return Err(e);
+        }
         Ok(Scene {
             raw: s,
             device: device.clone(),
