@@ -424,36 +424,41 @@ const INVERSION_STEP_K: f64 = 1.0;
 /// the exact inversion in `tests/render.rs`). Non-positive or non-finite
 /// radiances give 0 (as [`apparent_temperature`]).
 pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
+    // Extremes of the positive finite radiances, branch-free on the bits:
+    // a positive finite f32 is a bit pattern in (0, 0x7f80_0000) read as
+    // i32, and those order as the values do (vectorises).
     let (lo, hi) = radiance
         .par_chunks(1 << 14)
         .map(|c| {
-            // Branch-free, in eight lanes (vectorises): values that are not
-            // positive and finite leave the extremes alone.
-            let mut lo = [f32::INFINITY; 8];
-            let mut hi = [f32::NEG_INFINITY; 8];
+            let mut lo = [i32::MAX; 8];
+            let mut hi = [0i32; 8];
             let mut lanes = c.chunks_exact(8);
             for x in &mut lanes {
                 for k in 0..8 {
-                    let ok = x[k].is_finite() && x[k] > 0.0;
-                    lo[k] = lo[k].min(if ok { x[k] } else { f32::INFINITY });
-                    hi[k] = hi[k].max(if ok { x[k] } else { f32::NEG_INFINITY });
+                    let b = x[k].to_bits() as i32;
+                    let ok = (b > 0) & (b < 0x7f80_0000);
+                    lo[k] = lo[k].min(if ok { b } else { i32::MAX });
+                    hi[k] = hi[k].max(if ok { b } else { 0 });
                 }
             }
-            let tail = lanes
-                .remainder()
-                .iter()
-                .filter(|v| v.is_finite() && **v > 0.0)
-                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
-            let a = lo.iter().fold(tail.0, |a, &v| a.min(v));
-            let b = hi.iter().fold(tail.1, |b, &v| b.max(v));
-            (a, b)
+            for v in lanes.remainder() {
+                let b = v.to_bits() as i32;
+                if b > 0 && b < 0x7f80_0000 {
+                    lo[0] = lo[0].min(b);
+                    hi[0] = hi[0].max(b);
+                }
+            }
+            (
+                lo.iter().fold(i32::MAX, |a, &v| a.min(v)),
+                hi.iter().fold(0, |a, &v| a.max(v)),
+            )
         })
-        .reduce(
-            || (f32::INFINITY, f32::NEG_INFINITY),
-            |(a, b), (c, d)| (a.min(c), b.max(d)),
-        );
+        .reduce(|| (i32::MAX, 0), |(a, b), (c, d)| (a.min(c), b.max(d)));
+    let (lo, hi) = if lo == i32::MAX {
+        (f32::INFINITY, f32::NEG_INFINITY)
+    } else {
+        (f32::from_bits(lo as u32), f32::from_bits(hi as u32))
+    };
     if !lo.is_finite() {
         return vec![0.0; radiance.len()];
     }
