@@ -70,10 +70,17 @@ pub struct LineScanner {
 /// The scan angle `θ` of each of a line's `samples·N` sub-samples, with
 /// `sin θ`, `cos θ`, and the fields they were computed from (a scanner whose
 /// public fields were changed after [`LineScanner::new`] recomputes them).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Clone, PartialEq, Default)]
 struct ScanTable {
     key: [u64; 4],
     theta_sin_cos: Vec<[f64; 3]>,
+}
+
+impl std::fmt::Debug for ScanTable {
+    /// A summary: the table is derived from the scanner's other fields.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ScanTable({} scan angles)", self.theta_sin_cos.len())
+    }
 }
 
 /// Parameters of [`LineScanner::new`] (angles in radians).
