@@ -433,20 +433,19 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
             let mut lo = [i32::MAX; 8];
             let mut hi = [0i32; 8];
             let mut lanes = c.chunks_exact(8);
+            let mut take = |k: usize, v: f32| {
+                let b = v.to_bits() as i32;
+                let ok = (b > 0) & (b < 0x7f80_0000);
+                lo[k] = lo[k].min(if ok { b } else { i32::MAX });
+                hi[k] = hi[k].max(if ok { b } else { 0 });
+            };
             for x in &mut lanes {
-                for k in 0..8 {
-                    let b = x[k].to_bits() as i32;
-                    let ok = (b > 0) & (b < 0x7f80_0000);
-                    lo[k] = lo[k].min(if ok { b } else { i32::MAX });
-                    hi[k] = hi[k].max(if ok { b } else { 0 });
+                for (k, &v) in x.iter().enumerate() {
+                    take(k, v);
                 }
             }
-            for v in lanes.remainder() {
-                let b = v.to_bits() as i32;
-                if b > 0 && b < 0x7f80_0000 {
-                    lo[0] = lo[0].min(b);
-                    hi[0] = hi[0].max(b);
-                }
+            for (k, &v) in lanes.remainder().iter().enumerate() {
+                take(k, v);
             }
             (
                 lo.iter().fold(i32::MAX, |a, &v| a.min(v)),

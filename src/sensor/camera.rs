@@ -117,12 +117,26 @@ impl FrameCamera {
     /// Unit world direction of the ray through continuous image point
     /// `(u, v)` (pixel centres at `+½`).
     pub fn direction(&self, u: f64, v: f64) -> DVec3 {
-        let d = DVec3::new(
+        let (x, y) = self.focal_plane(u, v);
+        self.direction_through(x, y)
+    }
+
+    /// Camera-frame focal-plane coordinates `(x, y)` (units of the focal
+    /// length) of image point `(u, v)`.
+    #[inline]
+    fn focal_plane(&self, u: f64, v: f64) -> (f64, f64) {
+        (
             (u - 0.5 * self.width as f64) / self.focal_px,
             (v - 0.5 * self.height as f64) / self.focal_px,
-            1.0,
-        );
-        self.world_from_camera.transform_vector3(d).normalize()
+        )
+    }
+
+    /// Unit world direction through focal-plane point `(x, y)`.
+    #[inline]
+    fn direction_through(&self, x: f64, y: f64) -> DVec3 {
+        self.world_from_camera
+            .transform_vector3(DVec3::new(x, y, 1.0))
+            .normalize()
     }
 
     /// The primary ray through continuous image point `(u, v)`; `t` is the
@@ -144,21 +158,17 @@ impl FrameCamera {
         let ws = self.width * n;
         out.reserve(ws * n);
         let origin = self.position().as_vec3();
-        let (cx, cy) = (0.5 * self.width as f64, 0.5 * self.height as f64);
-        // `direction`'s x component of every sub-column.
+        // The focal-plane x of every sub-column, once per row.
         let xs: Vec<f64> = (0..ws)
-            .map(|k| ((k as f64 + 0.5) / n as f64 - cx) / self.focal_px)
+            .map(|k| self.focal_plane((k as f64 + 0.5) / n as f64, 0.0).0)
             .collect();
         for j in 0..n {
             let v = row as f64 + (j as f64 + 0.5) / n as f64;
-            let y = (v - cy) / self.focal_px;
-            out.extend(xs.iter().map(|&x| {
-                let d = self
-                    .world_from_camera
-                    .transform_vector3(DVec3::new(x, y, 1.0))
-                    .normalize();
-                Ray::new(origin, d.as_vec3())
-            }));
+            let y = self.focal_plane(0.0, v).1;
+            out.extend(
+                xs.iter()
+                    .map(|&x| Ray::new(origin, self.direction_through(x, y).as_vec3())),
+            );
         }
     }
 

@@ -254,15 +254,27 @@ impl LineScanner {
 
     /// Aircraft (sensor) position at time `t`, world metres.
     pub fn position(&self, t: f64) -> DVec3 {
-        let g =
-            self.start + self.ground_speed_m_s * (t - self.start_time_s) * self.track().truncate();
+        self.position_on(self.track().truncate(), t)
+    }
+
+    /// [`LineScanner::position`] with the unit ground track (east, north)
+    /// given.
+    #[inline]
+    fn position_on(&self, track: DVec2, t: f64) -> DVec3 {
+        let g = self.start + self.ground_speed_m_s * (t - self.start_time_s) * track;
         DVec3::new(g.x, g.y, self.altitude_m)
     }
 
     /// Unit world look direction at scan angle `theta` and along-track
     /// angle `phi` (rad, + forward).
     pub fn direction(&self, theta: f64, phi: f64) -> DVec3 {
-        let body = DVec3::new(phi.sin(), phi.cos() * theta.sin(), phi.cos() * theta.cos());
+        self.direction_of(theta.sin_cos(), phi.sin_cos())
+    }
+
+    /// [`LineScanner::direction`] from `(sin θ, cos θ)` and `(sin φ, cos φ)`.
+    #[inline]
+    fn direction_of(&self, (sin_t, cos_t): (f64, f64), (sin_p, cos_p): (f64, f64)) -> DVec3 {
+        let body = DVec3::new(sin_p, cos_p * sin_t, cos_p * cos_t);
         (self.world_from_body * body).normalize()
     }
 
@@ -299,24 +311,17 @@ impl LineScanner {
         out.reserve(table.len() * n);
         let line_t = self.line_time(line);
         let track = self.track().truncate();
-        // `position(t)` with the track computed once.
-        let at = |t: f64| {
-            let g = self.start + self.ground_speed_m_s * (t - self.start_time_s) * track;
-            DVec3::new(g.x, g.y, self.altitude_m).as_vec3()
-        };
-        let fixed = (!self.mirror_sweep).then(|| at(line_t + 0.0));
+        let origin_at = |theta: f64| self.position_on(track, line_t + self.sweep_delay(theta));
+        // Without the mirror sweep the whole line is taken from one position.
+        let fixed = (!self.mirror_sweep).then(|| origin_at(0.0));
         for j in 0..n {
             let phi = ((j as f64 + 0.5) / n as f64 - 0.5) * self.ifov_rad;
-            let (sin_phi, cos_phi) = (phi.sin(), phi.cos());
-            for &[theta, sin_t, cos_t] in table {
-                let body = DVec3::new(sin_phi, cos_phi * sin_t, cos_phi * cos_t);
-                let dir = (self.world_from_body * body).normalize().as_vec3();
-                let origin = match fixed {
-                    Some(o) => o,
-                    None => at(line_t + self.sweep_delay(theta)),
-                };
-                out.push(Ray::new(origin, dir));
-            }
+            let sc_phi = phi.sin_cos();
+            out.extend(table.iter().map(|&[theta, sin_t, cos_t]| {
+                let origin = fixed.unwrap_or_else(|| origin_at(theta));
+                let dir = self.direction_of((sin_t, cos_t), sc_phi);
+                Ray::new(origin.as_vec3(), dir.as_vec3())
+            }));
         }
     }
 
