@@ -1007,7 +1007,7 @@ fn scene_study_reproduces_the_render_and_responds_like_physics() {
         .unwrap();
     for (p, v) in study.points.iter().zip(&nominal) {
         let k = p.y as usize * 24 + p.x as usize;
-        let rendered = band.radiance[0][k] as f64;
+        let rendered = band.radiance()[0][k] as f64;
         assert_close!(v.band_radiance_w_m2_sr, rendered, 1e-5 * rendered);
         assert!(v.apparent_temperature_k > 280.0 && v.apparent_temperature_k < 340.0);
     }
@@ -1371,7 +1371,7 @@ fn scene_model_matches_a_full_render_of_the_perturbed_scene() {
     };
     for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
         let k = p.y as usize * 24 + p.x as usize;
-        let full = bt(band.radiance[0][k] as f64);
+        let full = bt(band.radiance()[0][k] as f64);
         let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
         eprintln!(
             "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
@@ -1441,7 +1441,7 @@ fn scene_model_of_humidity_and_cloud_matches_a_render_with_that_weather() {
     };
     for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
         let k = p.y as usize * 24 + p.x as usize;
-        let full = bt(band.radiance[0][k] as f64);
+        let full = bt(band.radiance()[0][k] as f64);
         let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
         eprintln!(
             "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",

@@ -324,7 +324,7 @@ fn specular_plate_shows_the_hot_block_scaled_by_one_minus_epsilon() {
     )
     .unwrap();
     let rows = render_rows(&shader, &s, 0..16, &StageTimes::default(), &|_| {}).unwrap();
-    for (i, &l) in rows.radiance[0].iter().enumerate() {
+    for (i, &l) in rows.radiance()[0].iter().enumerate() {
         let e = eps(i);
         let expected = e * b(300.0) + (1.0 - e) * b(240.0); // F = 1: all sky
         assert!(((l as f64 - expected) / expected).abs() < 1e-4);
@@ -1142,14 +1142,50 @@ fn tabulated_apparent_temperatures_match_the_exact_inversion() {
 }
 
 #[test]
-fn finish_refuses_a_non_finite_value_and_names_the_layer() {
-    use irsig::render::RowBand;
+fn row_bands_refuse_a_non_finite_value_and_name_the_layer_row_and_column() {
+    use irsig::render::{RowBand, TRUTH_LAYERS};
     let s = sensor(nadir_camera(8, 6, 20.0, 1));
     let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
-    let mut rows = RowBand::empty(8, 6, 0..6, bands.len());
-    rows.radiance[0].fill(9.0);
-    assert!(finish(rows.clone(), &s, &bands, 1).is_ok());
-    rows.truth[5][47] = f32::INFINITY;
-    let e = finish(rows, &s, &bands, 1).unwrap_err().to_string();
-    assert!(e.contains("depth") && e.contains("inf"), "{e}");
+    let radiance = vec![vec![9.0f32; 8 * 4]; bands.len()];
+    let mut truth = vec![vec![0.0f32; 8 * 4]; TRUTH_LAYERS.len()];
+    let make = |r: &Vec<Vec<f32>>, t: &Vec<Vec<f32>>| {
+        RowBand::new("tile.exr", 8, 6, 2..6, r.clone(), t.clone())
+    };
+    let ok = make(&radiance, &truth).unwrap();
+    assert_eq!((ok.width(), ok.height(), ok.rows()), (8, 6, 2..6));
+    // Rows 2..6: index 3·8 + 7 is image row 5, column 7.
+    truth[5][3 * 8 + 7] = f32::INFINITY;
+    let e = make(&radiance, &truth).unwrap_err().to_string();
+    assert!(
+        e.contains("tile.exr") && e.contains("`depth`") && e.contains("inf"),
+        "{e}"
+    );
+    assert!(e.contains("row 5") && e.contains("column 7"), "{e}");
+    truth[5][3 * 8 + 7] = 0.0;
+    let mut bad = radiance.clone();
+    bad[0][9] = f32::NAN;
+    let e = make(&bad, &truth).unwrap_err().to_string();
+    assert!(
+        e.contains("radiance") && e.contains("NaN") && e.contains("row 3"),
+        "{e}"
+    );
+    // Wrong sizes are refused too.
+    bad[0] = vec![9.0; 31];
+    let e = make(&bad, &truth).unwrap_err().to_string();
+    assert!(e.contains("31 values") && e.contains("expected 32"), "{e}");
+    assert!(RowBand::new("t", 8, 6, 2..6, radiance, truth[..5].to_vec()).is_err());
+    // A finished image of a finite band is finite in every layer.
+    let full = RowBand::new(
+        "t",
+        8,
+        6,
+        0..6,
+        vec![vec![9.0; 48]; bands.len()],
+        vec![vec![0.0; 48]; TRUTH_LAYERS.len()],
+    )
+    .unwrap();
+    let f = finish(full, &s, &bands, 1).unwrap();
+    for l in &f.stack.layers {
+        assert!(l.data.iter().all(|v| v.is_finite()), "{}", l.name);
+    }
 }

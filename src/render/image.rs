@@ -40,22 +40,130 @@ pub const TRUTH_LAYERS: [&str; 6] = [
 pub const MISS_TRUTH: [f32; 6] = [0.0, -1.0, -1.0, 0.0, 0.0, 0.0];
 
 /// Rows of an image before the image-wide sensor effects.
+///
+/// Every value is finite: the constructors check it ([`RowBand::new`]
+/// names the layer, row and column of the first that is not;
+/// [`render_rows`] checks each row as it is shaded), and the fields are
+/// read-only outside this module, so [`finish`] need not scan the layers
+/// again.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RowBand {
     /// Image width, pixels.
-    pub width: usize,
+    width: usize,
     /// Full image height, pixels.
-    pub height: usize,
+    height: usize,
     /// The rows held.
-    pub rows: Range<usize>,
+    rows: Range<usize>,
     /// Per band: radiance after the PSF reduction, W·m⁻²·sr⁻¹,
     /// `rows.len() × width`.
-    pub radiance: Vec<Vec<f32>>,
+    radiance: Vec<Vec<f32>>,
     /// Truth layers ([`TRUTH_LAYERS`] order) of each pixel's centre ray.
-    pub truth: Vec<Vec<f32>>,
+    truth: Vec<Vec<f32>>,
+}
+
+/// The first non-finite value of `data` (rows of `width`, the first being
+/// image row `row0`) as (row, column, value); a branch-free scan first.
+fn first_non_finite(data: &[f32], width: usize, row0: usize) -> Option<(usize, usize, f32)> {
+    if !data.iter().fold(false, |acc, v| acc | !v.is_finite()) {
+        return None;
+    }
+    let i = data.iter().position(|v| !v.is_finite())?;
+    let w = width.max(1);
+    Some((row0 + i / w, i % w, data[i]))
+}
+
+/// The error for a non-finite value of layer `layer` at (`row`, `col`).
+fn non_finite_error(what: &str, layer: &str, (row, col, v): (usize, usize, f32)) -> Error {
+    Error::Other(format!(
+        "{what}: layer `{layer}` has a non-finite value ({v}) at row {row}, column {col}"
+    ))
 }
 
 impl RowBand {
+    /// Rows `rows` of a `width × height` image from their layers: per band
+    /// the radiance (W·m⁻²·sr⁻¹) and the [`TRUTH_LAYERS`], each
+    /// `rows.len() × width` values. `what` names the source in errors (a
+    /// file, say). Errors on a wrong layer count or size and on any
+    /// non-finite value (naming the layer, row and column).
+    pub fn new(
+        what: &str,
+        width: usize,
+        height: usize,
+        rows: Range<usize>,
+        radiance: Vec<Vec<f32>>,
+        truth: Vec<Vec<f32>>,
+    ) -> Result<Self> {
+        if rows.start > rows.end || rows.end > height {
+            return Err(Error::invalid(
+                what,
+                format!("rows {rows:?}: expected a range within 0..{height}"),
+            ));
+        }
+        if truth.len() != TRUTH_LAYERS.len() {
+            return Err(Error::invalid(
+                what,
+                format!(
+                    "{} truth layers: expected {} ({})",
+                    truth.len(),
+                    TRUTH_LAYERS.len(),
+                    TRUTH_LAYERS.join(", ")
+                ),
+            ));
+        }
+        let n = rows.len() * width;
+        let names = (0..radiance.len())
+            .map(|b| format!("band {b} radiance"))
+            .chain(TRUTH_LAYERS.iter().map(|s| s.to_string()));
+        for (name, l) in names.zip(radiance.iter().chain(&truth)) {
+            if l.len() != n {
+                return Err(Error::invalid(
+                    what,
+                    format!(
+                        "layer `{name}` has {} values: expected {n} ({} rows of {width})",
+                        l.len(),
+                        rows.len()
+                    ),
+                ));
+            }
+            if let Some(bad) = first_non_finite(l, width, rows.start) {
+                return Err(non_finite_error(what, &name, bad));
+            }
+        }
+        Ok(RowBand {
+            width,
+            height,
+            rows,
+            radiance,
+            truth,
+        })
+    }
+
+    /// Image width, pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Full image height, pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// The image rows held.
+    pub fn rows(&self) -> Range<usize> {
+        self.rows.clone()
+    }
+
+    /// Per band: radiance after the PSF reduction, W·m⁻²·sr⁻¹,
+    /// `rows().len() × width()` values.
+    pub fn radiance(&self) -> &[Vec<f32>] {
+        &self.radiance
+    }
+
+    /// Truth layers ([`TRUTH_LAYERS`] order) of each pixel's centre ray.
+    pub fn truth(&self) -> &[Vec<f32>] {
+        &self.truth
+    }
+
     /// An empty band of rows, to be filled.
     pub fn empty(width: usize, height: usize, rows: Range<usize>, bands: usize) -> Self {
         let n = rows.len() * width;
@@ -282,6 +390,33 @@ fn box_reduce_row(src: &[f32], n: usize, out: &mut [f32]) {
     }
 }
 
+/// Check that the row just shaded is finite: per band the radiance
+/// (`width` values per sub-row), and the truth values of its pixels; the
+/// error names the sensor, layer, row and column. The values are in cache:
+/// this is what lets [`finish`] skip a scan of the whole image.
+fn check_row<'a>(
+    sensor: &Sensor,
+    row: usize,
+    width: usize,
+    radiance: impl Iterator<Item = &'a [f32]>,
+    truth: &[&mut [f32]],
+) -> Result<()> {
+    for (b, l) in radiance.enumerate() {
+        if let Some((_, col, v)) = first_non_finite(l, width, 0) {
+            let name = format!("{}_radiance", sensor.bands[b].name);
+            let what = format!("sensor `{}`", sensor.name);
+            return Err(non_finite_error(&what, &name, (row, col, v)));
+        }
+    }
+    for (name, l) in TRUTH_LAYERS.iter().zip(truth) {
+        if let Some((_, col, v)) = first_non_finite(l, l.len(), 0) {
+            let what = format!("sensor `{}`", sensor.name);
+            return Err(non_finite_error(&what, name, (row, col, v)));
+        }
+    }
+    Ok(())
+}
+
 /// Split each layer of `layers` into rows of `width` and regroup them per
 /// row: element `r` holds row `r` of every layer, in layer order.
 fn rows_of(layers: &mut [Vec<f32>], width: usize) -> Vec<Vec<&mut [f32]>> {
@@ -343,15 +478,18 @@ pub fn render_rows(
             .into_par_iter()
             .zip(truth_rows)
             .enumerate()
-            .for_each_init(Scratch::default, |sc, (i, (mut out, mut truth))| {
-                trace_row(shader, sensor, rows.start + i, times, sc, &mut truth);
+            .try_for_each_init(Scratch::default, |sc, (i, (mut out, mut truth))| {
+                let row = rows.start + i;
+                trace_row(shader, sensor, row, times, sc, &mut truth);
                 let t0 = Instant::now();
                 for (b, o) in out.iter_mut().enumerate() {
                     box_reduce_row(&sc.radiance[b * per_row..(b + 1) * per_row], n, o);
                 }
+                let checked = check_row(sensor, row, w, out.iter().map(|o| &**o), &truth);
                 StageTimes::add(&times.reduction, t0.elapsed());
                 progress(1);
-            });
+                checked
+            })?;
         return Ok(band);
     }
     let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
@@ -360,11 +498,15 @@ pub fn render_rows(
     over.par_chunks_mut(nb * per_row)
         .zip(rows_of(&mut truth, w))
         .enumerate()
-        .for_each_init(Scratch::default, |sc, (i, (radiance, mut truth))| {
-            trace_row(shader, sensor, traced.start + i, times, sc, &mut truth);
+        .try_for_each_init(Scratch::default, |sc, (i, (radiance, mut truth))| {
+            let row = traced.start + i;
+            trace_row(shader, sensor, row, times, sc, &mut truth);
             radiance.copy_from_slice(&sc.radiance);
             progress(1);
-        });
+            // The oversampled radiance (n sub-rows of w·n per band): the
+            // PSF's weighted sums of finite values are finite.
+            check_row(sensor, row, w * n, radiance.chunks_exact(per_row), &truth)
+        })?;
     let t0 = Instant::now();
     let mut band = RowBand::empty(w, h, rows.clone(), nb);
     let skip = (rows.start - traced.start) * w;
@@ -563,7 +705,10 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
 
 /// Apply the image-wide sensor effects to a complete [`RowBand`] (MTF, then
 /// NEdT noise with `seed`, then quantisation) and build the output layers.
-/// The band's buffers become the layers (no copies).
+/// The band's buffers become the layers (no copies). Every output value is
+/// finite: the band's are ([`RowBand`]), the apparent temperatures and
+/// counts are by construction, and the radiance after MTF or noise is
+/// checked (an error names the layer, row and column).
 pub fn finish(full: RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Result<Finished> {
     let (w, h) = (full.width, full.height);
     if full.rows != (0..h) || bands.len() != full.radiance.len() {
@@ -593,6 +738,21 @@ pub fn finish(full: RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Resu
         if fx.nedt_k.is_some() {
             effects::add_noise(&mut l, w, 0, fx.noise_sigma(band), seed, b as u64);
         }
+        if fx.mtf.is_some() || fx.nedt_k.is_some() {
+            // The effects' sums of finite values are finite; checked (at
+            // a fraction of their cost) rather than assumed.
+            let bad = l
+                .par_chunks(1 << 16)
+                .any(|c| c.iter().fold(false, |acc, v| acc | !v.is_finite()));
+            if let Some(at) = bad.then(|| first_non_finite(&l, w, 0)).flatten() {
+                let what = format!("sensor `{}` after MTF and noise", sensor.name);
+                return Err(non_finite_error(
+                    &what,
+                    &format!("{}_radiance", cfg.name),
+                    at,
+                ));
+            }
+        }
         let t = apparent_temperatures(band, &l);
         let counts = fx
             .bits
@@ -615,20 +775,6 @@ pub fn finish(full: RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Resu
     }
     for (name, v) in TRUTH_LAYERS.iter().zip(full.truth) {
         stack.push(*name, v)?;
-    }
-    for l in &stack.layers {
-        // A branch-free scan in parallel; the value is looked up only when
-        // there is one.
-        let bad = l
-            .data
-            .par_chunks(1 << 16)
-            .any(|c| c.iter().fold(false, |acc, v| acc | !v.is_finite()));
-        if let Some(v) = l.data.iter().find(|v| bad && !v.is_finite()) {
-            return Err(Error::Other(format!(
-                "layer `{}` of sensor `{}` has a non-finite value ({v}): refusing to write it",
-                l.name, sensor.name
-            )));
-        }
     }
     Ok(Finished {
         stack,

@@ -115,13 +115,13 @@ fn ascii_json<T: Serialize>(v: &T) -> Result<String> {
 
 /// Write a tile file atomically.
 pub fn write_tile(path: &Path, info: &TileInfo, band: &RowBand) -> Result<()> {
-    if band.rows != (info.row_start..info.row_end) || band.radiance.len() != info.bands.len() {
+    if band.rows() != (info.row_start..info.row_end) || band.radiance().len() != info.bands.len() {
         return Err(Error::invalid(
             "tile",
             format!(
                 "rows {:?} with {} bands do not match the tile metadata",
-                band.rows,
-                band.radiance.len()
+                band.rows(),
+                band.radiance().len()
             ),
         ));
     }
@@ -131,14 +131,14 @@ pub fn write_tile(path: &Path, info: &TileInfo, band: &RowBand) -> Result<()> {
         .map(|b| format!("{b}_radiance"))
         .chain(TRUTH_LAYERS.iter().map(|s| s.to_string()))
         .collect();
-    let data: Vec<&Vec<f32>> = band.radiance.iter().chain(&band.truth).collect();
+    let data: Vec<&Vec<f32>> = band.radiance().iter().chain(band.truth()).collect();
     let mut attributes = x::LayerAttributes::named("irsig-tile");
     attributes.other.insert(
         x::Text::from(TILE_ATTRIBUTE),
         x::AttributeValue::Text(x::Text::from(ascii_json(info)?.as_str())),
     );
     let layer = flat_exr_layer(
-        (band.width, band.rows.len()),
+        (band.width(), band.rows().len()),
         attributes,
         names.iter().map(String::as_str).zip(data),
     );
@@ -194,13 +194,14 @@ pub fn read_tile(path: &Path) -> Result<(TileInfo, RowBand)> {
         .iter()
         .map(|n| get(n))
         .collect::<Result<Vec<_>>>()?;
-    let band = RowBand {
-        width: w,
-        height: info.height,
-        rows: info.row_start..info.row_end,
+    let band = RowBand::new(
+        &path.display().to_string(),
+        w,
+        info.height,
+        info.row_start..info.row_end,
         radiance,
         truth,
-    };
+    )?;
     Ok((info, band))
 }
 
