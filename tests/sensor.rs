@@ -609,7 +609,8 @@ fn line_scanner_ground_points_land_on_predicted_pixels_with_attitude() {
 
 /// A scan line's rays, made from the scanner's table of scan angles, are
 /// the rays `LineScanner::ray` gives at the same coordinates, bit for bit —
-/// with and without the mirror sweep, and after a public field changed.
+/// with and without the mirror sweep, and after public fields changed (scan
+/// angles; attitude, scan rate and sweep).
 #[test]
 fn line_scanner_tabulated_line_equals_per_ray_geometry() {
     for extra in [
@@ -618,11 +619,17 @@ fn line_scanner_tabulated_line_equals_per_ray_geometry() {
     ] {
         let s = scanner_json(extra);
         let mut sc = scanner(&s).clone();
-        for change in [false, true] {
-            if change {
-                // A field the table depends on, changed after `new`.
+        for change in 0..3 {
+            if change == 1 {
+                // Fields the scan angles depend on, changed after `new`.
                 sc.ifov_rad *= 1.5;
                 sc.samples_per_line = 37;
+            }
+            if change == 2 {
+                // Fields the directions and sweep delays depend on.
+                sc.world_from_body = glam::DMat3::from_rotation_z(0.1) * sc.world_from_body;
+                sc.scan_rate_hz *= 1.3;
+                sc.mirror_sweep = !sc.mirror_sweep;
             }
             let n = sc.oversample;
             let step = sc.sample_step_rad();

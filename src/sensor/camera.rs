@@ -9,7 +9,7 @@
 //! at `u = W/2 + (f/p)·x/z`, `v = H/2 + (f/p)·y/z` (the pinhole projection,
 //! e.g. Hartley & Zisserman, *Multiple View Geometry*, 2nd ed., eq. 6.1).
 
-use glam::{DAffine3, DMat3, DVec2, DVec3};
+use glam::{DAffine3, DMat3, DVec2, DVec3, Vec3};
 
 use crate::trace::Ray;
 use crate::{Error, Result};
@@ -131,12 +131,36 @@ impl FrameCamera {
         )
     }
 
-    /// Unit world direction through focal-plane point `(x, y)`.
+    /// Unit world direction through focal-plane point `(x, y)`: the
+    /// camera-to-world rotation of `(x, y, 1)`, normalised.
     #[inline]
     fn direction_through(&self, x: f64, y: f64) -> DVec3 {
-        self.world_from_camera
-            .transform_vector3(DVec3::new(x, y, 1.0))
-            .normalize()
+        Self::direction_of_terms(self.x_term(x), self.y_term(y), self.z_term())
+    }
+
+    /// The rotation's column terms of `(x, y, 1)`: `x·c₀`, `y·c₁`, `c₂`.
+    #[inline]
+    fn x_term(&self, x: f64) -> DVec3 {
+        self.world_from_camera.matrix3.x_axis * x
+    }
+
+    /// See [`FrameCamera::x_term`].
+    #[inline]
+    fn y_term(&self, y: f64) -> DVec3 {
+        self.world_from_camera.matrix3.y_axis * y
+    }
+
+    /// See [`FrameCamera::x_term`].
+    #[inline]
+    fn z_term(&self) -> DVec3 {
+        self.world_from_camera.matrix3.z_axis
+    }
+
+    /// `(x·c₀ + y·c₁ + c₂)` normalised, summed in that order (as
+    /// `DAffine3::transform_vector3`).
+    #[inline]
+    fn direction_of_terms(xt: DVec3, yt: DVec3, zt: DVec3) -> DVec3 {
+        (xt + yt + zt).normalize()
     }
 
     /// The primary ray through continuous image point `(u, v)`; `t` is the
@@ -151,24 +175,42 @@ impl FrameCamera {
     /// oversampled image that [`super::effects::reduce_oversampled`] takes.
     ///
     /// The same rays as [`FrameCamera::ray`] at those points, bit for bit,
-    /// with the per-column terms computed once per call rather than per
-    /// ray.
+    /// with the per-column and per-sub-row terms of the rotation computed
+    /// once (per ray two additions and the normalisation).
     pub fn rays_for_row(&self, row: usize, out: &mut Vec<Ray>) {
         let n = self.oversample;
         let ws = self.width * n;
         out.reserve(ws * n);
         let origin = self.position().as_vec3();
-        // The focal-plane x of every sub-column, once per row.
-        let xs: Vec<f64> = (0..ws)
-            .map(|k| self.focal_plane((k as f64 + 0.5) / n as f64, 0.0).0)
+        // The x term of every sub-column, once per row.
+        let xts: Vec<DVec3> = (0..ws)
+            .map(|k| self.x_term(self.focal_plane((k as f64 + 0.5) / n as f64, 0.0).0))
             .collect();
+        let zt = self.z_term();
         for j in 0..n {
             let v = row as f64 + (j as f64 + 0.5) / n as f64;
-            let y = self.focal_plane(0.0, v).1;
-            out.extend(
-                xs.iter()
-                    .map(|&x| Ray::new(origin, self.direction_through(x, y).as_vec3())),
-            );
+            let yt = self.y_term(self.focal_plane(0.0, v).1);
+            // Eight rays at a time with the components in separate arrays,
+            // so the square roots and divisions vectorise (the operations
+            // of `direction_of_terms`, in its order: the same values).
+            let start = out.len();
+            out.resize(start + ws, Ray::new(origin, Vec3::ZERO));
+            let mut dst = out[start..].chunks_exact_mut(8);
+            let mut src = xts.chunks_exact(8);
+            for (o, c) in (&mut dst).zip(&mut src) {
+                let (mut x, mut y, mut z) = ([0.0f64; 8], [0.0f64; 8], [0.0f64; 8]);
+                for k in 0..8 {
+                    let w = c[k] + yt + zt;
+                    (x[k], y[k], z[k]) = (w.x, w.y, w.z);
+                }
+                for k in 0..8 {
+                    let r = 1.0 / (x[k] * x[k] + y[k] * y[k] + z[k] * z[k]).sqrt();
+                    o[k].dir = Vec3::new((x[k] * r) as f32, (y[k] * r) as f32, (z[k] * r) as f32);
+                }
+            }
+            for (o, &xt) in dst.into_remainder().iter_mut().zip(src.remainder()) {
+                o.dir = Self::direction_of_terms(xt, yt, zt).as_vec3();
+            }
         }
     }
 

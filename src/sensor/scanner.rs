@@ -28,7 +28,7 @@
 //! Continuous image coordinates follow the frame camera's: line `l`, sample
 //! `s` covers `[l, l+1) × [s, s+1)`, its centre at `(l + ½, s + ½)`.
 
-use glam::{DMat3, DVec2, DVec3};
+use glam::{DMat3, DVec2, DVec3, Vec3};
 
 use crate::trace::Ray;
 use crate::{Error, Result};
@@ -72,14 +72,28 @@ pub struct LineScanner {
 /// public fields were changed after [`LineScanner::new`] recomputes them).
 #[derive(Clone, PartialEq, Default)]
 struct ScanTable {
-    key: [u64; 4],
+    key: [u64; SCAN_KEY_LEN],
     theta_sin_cos: Vec<[f64; 3]>,
+    /// Per sub-line `j` (`N` of them), the world direction of each
+    /// sub-sample ([`LineScanner::direction_of`]): the attitude is fixed,
+    /// so every line has the same.
+    dirs: Vec<Vec3>,
+    /// Sweep delay ([`LineScanner::sweep_delay`]) of each sub-sample, s.
+    delays: Vec<f64>,
 }
+
+/// Length of [`LineScanner::scan_key`].
+const SCAN_KEY_LEN: usize = 15;
 
 impl std::fmt::Debug for ScanTable {
     /// A summary: the table is derived from the scanner's other fields.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "ScanTable({} scan angles)", self.theta_sin_cos.len())
+        write!(
+            f,
+            "ScanTable({} scan angles, {} directions)",
+            self.theta_sin_cos.len(),
+            self.dirs.len()
+        )
     }
 }
 
@@ -192,19 +206,31 @@ impl LineScanner {
         Ok(scanner)
     }
 
-    /// The fields the scan-angle table depends on.
-    fn scan_key(&self) -> [u64; 4] {
+    /// The fields the scan table depends on.
+    fn scan_key(&self) -> [u64; SCAN_KEY_LEN] {
+        let m = self.world_from_body.to_cols_array();
         [
             self.ifov_rad.to_bits(),
             self.scan_angle_rad.to_bits(),
             self.samples_per_line as u64,
             self.oversample as u64,
+            self.scan_rate_hz.to_bits(),
+            self.mirror_sweep as u64,
+            m[0].to_bits(),
+            m[1].to_bits(),
+            m[2].to_bits(),
+            m[3].to_bits(),
+            m[4].to_bits(),
+            m[5].to_bits(),
+            m[6].to_bits(),
+            m[7].to_bits(),
+            m[8].to_bits(),
         ]
     }
 
     /// Scan angles of one line's sub-samples (sample `s`, sub-column `i` at
     /// `s·N + i`: `θ(s + ½ + ((i+½)/N − ½)·IFOV/step)`) with their sines and
-    /// cosines.
+    /// cosines, sweep delays, and per sub-line the world directions.
     fn scan_table(&self) -> ScanTable {
         let n = self.oversample;
         let step = self.sample_step_rad();
@@ -217,10 +243,30 @@ impl LineScanner {
                 theta_sin_cos.push([theta, sin, cos]);
             }
         }
+        let mut dirs = Vec::with_capacity(theta_sin_cos.len() * n);
+        for j in 0..n {
+            let sc_phi = self.sub_line_phi(j).sin_cos();
+            dirs.extend(
+                theta_sin_cos
+                    .iter()
+                    .map(|&[_, sin_t, cos_t]| self.direction_of((sin_t, cos_t), sc_phi).as_vec3()),
+            );
+        }
+        let delays = theta_sin_cos
+            .iter()
+            .map(|&[theta, ..]| self.sweep_delay(theta))
+            .collect();
         ScanTable {
             key: self.scan_key(),
             theta_sin_cos,
+            dirs,
+            delays,
         }
+    }
+
+    /// Along-track offset of sub-line `j` of `N` within the IFOV, rad.
+    fn sub_line_phi(&self, j: usize) -> f64 {
+        ((j as f64 + 0.5) / self.oversample as f64 - 0.5) * self.ifov_rad
     }
 
     /// Angular step between samples, `A / S`, rad.
@@ -297,31 +343,34 @@ impl LineScanner {
     /// when `IFOV = A/S`.
     ///
     /// The same rays as [`LineScanner::ray`] at those coordinates, bit for
-    /// bit, from the table of scan angles made once in
-    /// [`LineScanner::new`]: no trigonometry per ray.
+    /// bit, from the table made once in [`LineScanner::new`] (the attitude
+    /// is fixed, so every line has the same directions and sweep delays):
+    /// per ray only the aircraft position, and that once per line without
+    /// the mirror sweep.
     pub fn rays_for_line(&self, line: usize, out: &mut Vec<Ray>) {
-        let n = self.oversample;
         let fresh;
         let table = if self.scan.key == self.scan_key() {
-            &self.scan.theta_sin_cos
+            &self.scan
         } else {
             fresh = self.scan_table();
-            &fresh.theta_sin_cos
+            &fresh
         };
-        out.reserve(table.len() * n);
+        let per_sub_line = table.delays.len();
+        out.reserve(table.dirs.len());
         let line_t = self.line_time(line);
         let track = self.track().truncate();
-        let origin_at = |theta: f64| self.position_on(track, line_t + self.sweep_delay(theta));
-        // Without the mirror sweep the whole line is taken from one position.
-        let fixed = (!self.mirror_sweep).then(|| origin_at(0.0));
-        for j in 0..n {
-            let phi = ((j as f64 + 0.5) / n as f64 - 0.5) * self.ifov_rad;
-            let sc_phi = phi.sin_cos();
-            out.extend(table.iter().map(|&[theta, sin_t, cos_t]| {
-                let origin = fixed.unwrap_or_else(|| origin_at(theta));
-                let dir = self.direction_of((sin_t, cos_t), sc_phi);
-                Ray::new(origin.as_vec3(), dir.as_vec3())
-            }));
+        if self.mirror_sweep {
+            // Each sample from the aircraft's position at its sweep time.
+            for dirs in table.dirs.chunks_exact(per_sub_line) {
+                out.extend(table.delays.iter().zip(dirs).map(|(&d, &dir)| {
+                    Ray::new(self.position_on(track, line_t + d).as_vec3(), dir)
+                }));
+            }
+        } else {
+            // The whole line from one position.
+            let origin = self.position_on(track, line_t + self.sweep_delay(0.0));
+            let origin = origin.as_vec3();
+            out.extend(table.dirs.iter().map(|&dir| Ray::new(origin, dir)));
         }
     }
 
