@@ -64,7 +64,7 @@ pub struct LineScanner {
     pub oversample: usize,
     /// Scan angles of one line's sub-samples and their sines and cosines,
     /// computed once (every line has the same).
-    scan: ScanTable,
+    scan: Box<ScanTable>,
 }
 
 /// The scan angle `θ` of each of a line's `samples·N` sub-samples, with
@@ -200,9 +200,9 @@ impl LineScanner {
             start_time_s: p.start_time_s,
             mirror_sweep: p.mirror_sweep,
             oversample: p.oversample,
-            scan: ScanTable::default(),
+            scan: Box::default(),
         };
-        scanner.scan = scanner.scan_table();
+        scanner.scan = Box::new(scanner.scan_table());
         Ok(scanner)
     }
 
