@@ -683,24 +683,30 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
             .all(|j| (hermite(l0 + (j as f64 + 0.5) * dl) - 0.5 * (t[j] + t[j + 1])).abs() < 1e-5);
         flat.then_some((m, inv_dl, t))
     });
-    radiance
-        .par_iter()
-        .map(|&v| {
-            if !(v.is_finite() && v > 0.0) {
-                return 0.0;
-            }
-            let v = v as f64;
-            match &uniform {
-                Some((m, inv_dl, t)) => {
-                    let x = ((v - l0) * inv_dl).max(0.0);
+    // Chunks with the choice of interpolation made once per chunk, so the
+    // inner loops are plain (no per-value dispatch or collection).
+    let mut out = vec![0.0f32; radiance.len()];
+    out.par_chunks_mut(1 << 14)
+        .zip(radiance.par_chunks(1 << 14))
+        .for_each(|(o, r)| match &uniform {
+            Some((m, inv_dl, t)) => {
+                for (o, &v) in o.iter_mut().zip(r) {
+                    let x = ((v as f64 - l0) * inv_dl).max(0.0);
                     let j = (x as usize).min(m - 1);
                     let f = x - j as f64;
-                    (t[j] + f * (t[j + 1] - t[j])) as f32
+                    let tv = (t[j] + f * (t[j + 1] - t[j])) as f32;
+                    *o = if v.is_finite() && v > 0.0 { tv } else { 0.0 };
                 }
-                None => hermite(v) as f32,
             }
-        })
-        .collect()
+            None => {
+                for (o, &v) in o.iter_mut().zip(r) {
+                    if v.is_finite() && v > 0.0 {
+                        *o = hermite(v as f64) as f32;
+                    }
+                }
+            }
+        });
+    out
 }
 
 /// Apply the image-wide sensor effects to a complete [`RowBand`] (MTF, then
