@@ -163,10 +163,20 @@ impl FrameCamera {
         (xt + yt + zt).normalize()
     }
 
+    /// A ray's single-precision unit direction from the terms: the sum in
+    /// f64, rounded to f32, normalised in f32 (`|d| − 1` within 10⁻⁷, as
+    /// the rounding of a unit f64 vector would leave it).
+    #[inline]
+    fn ray_direction_of_terms(xt: DVec3, yt: DVec3, zt: DVec3) -> Vec3 {
+        (xt + yt + zt).as_vec3().normalize()
+    }
+
     /// The primary ray through continuous image point `(u, v)`; `t` is the
     /// distance in metres.
     pub fn ray(&self, u: f64, v: f64) -> Ray {
-        Ray::new(self.position().as_vec3(), self.direction(u, v).as_vec3())
+        let (x, y) = self.focal_plane(u, v);
+        let dir = Self::ray_direction_of_terms(self.x_term(x), self.y_term(y), self.z_term());
+        Ray::new(self.position().as_vec3(), dir)
     }
 
     /// Primary rays of pixel row `row`, appended to `out`: `N` sub-rows (at
@@ -192,24 +202,27 @@ impl FrameCamera {
             let yt = self.y_term(self.focal_plane(0.0, v).1);
             // Eight rays at a time with the components in separate arrays,
             // so the square roots and divisions vectorise (the operations
-            // of `direction_of_terms`, in its order: the same values).
+            // of `ray_direction_of_terms`, in its order: the same values).
             let start = out.len();
             out.resize(start + ws, Ray::new(origin, Vec3::ZERO));
             let mut dst = out[start..].chunks_exact_mut(8);
             let mut src = xts.chunks_exact(8);
             for (o, c) in (&mut dst).zip(&mut src) {
-                let (mut x, mut y, mut z) = ([0.0f64; 8], [0.0f64; 8], [0.0f64; 8]);
+                let (mut x, mut y, mut z) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
                 for k in 0..8 {
-                    let w = c[k] + yt + zt;
+                    let w = (c[k] + yt + zt).as_vec3();
                     (x[k], y[k], z[k]) = (w.x, w.y, w.z);
                 }
+                let mut r = [0.0f32; 8];
                 for k in 0..8 {
-                    let r = 1.0 / (x[k] * x[k] + y[k] * y[k] + z[k] * z[k]).sqrt();
-                    o[k].dir = Vec3::new((x[k] * r) as f32, (y[k] * r) as f32, (z[k] * r) as f32);
+                    r[k] = 1.0 / (x[k] * x[k] + y[k] * y[k] + z[k] * z[k]).sqrt();
+                }
+                for k in 0..8 {
+                    o[k].dir = Vec3::new(x[k] * r[k], y[k] * r[k], z[k] * r[k]);
                 }
             }
             for (o, &xt) in dst.into_remainder().iter_mut().zip(src.remainder()) {
-                o.dir = Self::direction_of_terms(xt, yt, zt).as_vec3();
+                o.dir = Self::ray_direction_of_terms(xt, yt, zt);
             }
         }
     }
