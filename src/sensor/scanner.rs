@@ -62,18 +62,17 @@ pub struct LineScanner {
     pub mirror_sweep: bool,
     /// Sub-sample rays per side (`N×N` rays per sample).
     pub oversample: usize,
-    /// Scan angles of one line's sub-samples and their sines and cosines,
+    /// World directions and sweep delays of one line's sub-samples,
     /// computed once (every line has the same).
     scan: Box<ScanTable>,
 }
 
-/// The scan angle `θ` of each of a line's `samples·N` sub-samples, with
-/// `sin θ`, `cos θ`, and the fields they were computed from (a scanner whose
-/// public fields were changed after [`LineScanner::new`] recomputes them).
+/// The world direction and sweep delay of each of a line's sub-samples,
+/// and the fields they were computed from (a scanner whose public fields
+/// were changed after [`LineScanner::new`] recomputes them).
 #[derive(Clone, PartialEq, Default)]
 struct ScanTable {
     key: [u64; SCAN_KEY_LEN],
-    theta_sin_cos: Vec<[f64; 3]>,
     /// Per sub-line `j` (`N` of them), the world direction of each
     /// sub-sample ([`LineScanner::direction_of`]): the attitude is fixed,
     /// so every line has the same.
@@ -90,8 +89,8 @@ impl std::fmt::Debug for ScanTable {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "ScanTable({} scan angles, {} directions)",
-            self.theta_sin_cos.len(),
+            "ScanTable({} sweep delays, {} directions)",
+            self.delays.len(),
             self.dirs.len()
         )
     }
@@ -228,9 +227,10 @@ impl LineScanner {
         ]
     }
 
-    /// Scan angles of one line's sub-samples (sample `s`, sub-column `i` at
-    /// `s·N + i`: `θ(s + ½ + ((i+½)/N − ½)·IFOV/step)`) with their sines and
-    /// cosines, sweep delays, and per sub-line the world directions.
+    /// The scan table: from the scan angles of one line's sub-samples
+    /// (sample `s`, sub-column `i` at `s·N + i`:
+    /// `θ(s + ½ + ((i+½)/N − ½)·IFOV/step)`), their sweep delays and, per
+    /// sub-line, their world directions.
     fn scan_table(&self) -> ScanTable {
         let n = self.oversample;
         let step = self.sample_step_rad();
@@ -258,7 +258,6 @@ impl LineScanner {
             .collect();
         ScanTable {
             key: self.scan_key(),
-            theta_sin_cos,
             dirs,
             delays,
         }
