@@ -167,12 +167,15 @@ impl RowBand {
     /// An empty band of rows, to be filled.
     pub fn empty(width: usize, height: usize, rows: Range<usize>, bands: usize) -> Self {
         let n = rows.len() * width;
+        // One zeroed allocation per layer (`vec![vec![0.0; n]; k]` would
+        // clone the first layer, copying its zeros k − 1 times).
+        let layers = |k: usize| (0..k).map(|_| vec![0.0; n]).collect();
         RowBand {
             width,
             height,
             rows,
-            radiance: vec![vec![0.0; n]; bands],
-            truth: vec![vec![0.0; n]; TRUTH_LAYERS.len()],
+            radiance: layers(bands),
+            truth: layers(TRUTH_LAYERS.len()),
         }
     }
 
@@ -494,7 +497,9 @@ pub fn render_rows(
     }
     let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
     let mut over = vec![0.0f32; traced.len() * nb * per_row];
-    let mut truth = vec![vec![0.0f32; traced.len() * w]; TRUTH_LAYERS.len()];
+    let mut truth: Vec<Vec<f32>> = (0..TRUTH_LAYERS.len())
+        .map(|_| vec![0.0f32; traced.len() * w])
+        .collect();
     over.par_chunks_mut(nb * per_row)
         .zip(rows_of(&mut truth, w))
         .enumerate()
