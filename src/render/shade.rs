@@ -1127,8 +1127,52 @@ impl<'a> Shader<'a> {
 
     /// The grey path's last pass without a sensor path: per band
     /// `ε(θ)·x + r·(env + lit·w) + z` from the facet's precomputed terms
-    /// ([`grey_facets`]), `r = max(1 − ε − t, 0)`.
+    /// ([`grey_facets`]), `r = max(1 − ε − t, 0)`. One and two bands (the
+    /// common cases) have their own loops with the band count known.
     fn grey_terms_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        match self.grey_tables.bands {
+            1 => self.grey_terms_pass_n::<1>(sc, n, out),
+            2 => self.grey_terms_pass_n::<2>(sc, n, out),
+            _ => self.grey_terms_pass_any(sc, n, out),
+        }
+    }
+
+    /// [`Shader::grey_terms_pass`] with `NB` bands.
+    fn grey_terms_pass_n<const NB: usize>(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        debug_assert_eq!(gt.bands, NB);
+        let (out, _) = out.split_at_mut(NB * n);
+        for hit in &sc.grey {
+            let i = hit.ray as usize;
+            let f = hit.facet as usize;
+            let mi = self.grey[f].mi as usize;
+            let th = hit.theta;
+            // θ ≥ 0: truncation is the floor.
+            let a0 = (th as usize).min(ANGLE_ROWS - 2);
+            let ta = th - a0 as f32;
+            let lit = hit.dn < 0.0 || gt.double_sided[mi];
+            let tr = gt.tr[mi];
+            // Angle rows a0 and a0 + 1, and the terms: one bounds check
+            // each (the lengths are constants).
+            let row = (mi * ANGLE_ROWS + a0) * NB;
+            let e0: &[f32; NB] = (&gt.eps[row..][..NB]).try_into().expect("angle row");
+            let e1: &[f32; NB] = (&gt.eps[row + NB..][..NB])
+                .try_into()
+                .expect("next angle row");
+            let t: &[[f32; 4]; NB] = (&self.grey_terms[f * NB..][..NB])
+                .try_into()
+                .expect("one facet's terms");
+            for b in 0..NB {
+                let [x, env, w, z] = t[b];
+                let eps = e0[b] + ta * (e1[b] - e0[b]);
+                let r = (1.0 - eps - tr).max(0.0);
+                out[b * n + i] = eps * x + r * (env + if lit { w } else { 0.0 }) + z;
+            }
+        }
+    }
+
+    /// [`Shader::grey_terms_pass`] with any number of bands.
+    fn grey_terms_pass_any(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
         let gt = &self.grey_tables;
         let nb = gt.bands;
         for hit in &sc.grey {
