@@ -677,6 +677,8 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
     // is largest mid-step; the steps are refined until the Hermite value
     // there differs from the linear one by < 10⁻⁵ K, else (radiances over
     // decades) the Hermite interpolation is used for every pixel.
+    // Each step is stored as its first value and its rise, so a pixel
+    // reads one entry.
     let uniform = [1usize << 12, 1 << 14, 1 << 16].into_iter().find_map(|m| {
         let (dl, inv_dl) = steps(m);
         let t: Vec<f64> = (0..=m)
@@ -686,7 +688,8 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
         let flat = (0..m)
             .into_par_iter()
             .all(|j| (hermite(l0 + (j as f64 + 0.5) * dl) - 0.5 * (t[j] + t[j + 1])).abs() < 1e-5);
-        flat.then_some((m, inv_dl, t))
+        let steps: Vec<[f64; 2]> = t.windows(2).map(|w| [w[0], w[1] - w[0]]).collect();
+        flat.then_some((inv_dl, steps))
     });
     // Chunks with the choice of interpolation made once per chunk, so the
     // inner loops are plain (no per-value dispatch or collection).
@@ -694,12 +697,14 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
     out.par_chunks_mut(1 << 14)
         .zip(radiance.par_chunks(1 << 14))
         .for_each(|(o, r)| match &uniform {
-            Some((m, inv_dl, t)) => {
+            Some((inv_dl, steps)) => {
+                let last = (steps.len() - 1) as f64;
                 for (o, &v) in o.iter_mut().zip(r) {
+                    // In [0, last] (NaN: 0): the index is in bounds.
                     let x = ((v as f64 - l0) * inv_dl).max(0.0);
-                    let j = (x as usize).min(m - 1);
-                    let f = x - j as f64;
-                    let tv = (t[j] + f * (t[j + 1] - t[j])) as f32;
+                    let j = x.min(last) as usize;
+                    let [t0, dt] = steps[j];
+                    let tv = (t0 + (x - j as f64) * dt) as f32;
                     *o = if v.is_finite() && v > 0.0 { tv } else { 0.0 };
                 }
             }
