@@ -650,13 +650,6 @@ pub struct TruthOut<'a, 'b> {
 }
 
 impl TruthOut<'_, '_> {
-    #[inline]
-    fn put(&mut self, col: usize, v: [f32; 6]) {
-        for (layer, v) in self.layers.iter_mut().zip(v) {
-            layer[col] = v;
-        }
-    }
-
     /// The ray index and column after column `col` (`usize::MAX` past
     /// the last column).
     #[inline]
@@ -667,6 +660,59 @@ impl TruthOut<'_, '_> {
         } else {
             (usize::MAX, col)
         }
+    }
+}
+
+/// The truth values of up to [`TruthBlock::LEN`] consecutive pixels, per
+/// layer, on their way to a [`TruthOut`]: written to the layers a block at
+/// a time (one bounds check and one copy per layer and block instead of
+/// one per value).
+struct TruthBlock {
+    /// Per layer, the block's values.
+    values: [[f32; TruthBlock::LEN]; 6],
+    /// Values held.
+    len: usize,
+    /// Column of the first value held.
+    start: usize,
+}
+
+impl TruthBlock {
+    const LEN: usize = 8;
+
+    fn new() -> Self {
+        TruthBlock {
+            values: [[0.0; Self::LEN]; 6],
+            len: 0,
+            start: 0,
+        }
+    }
+
+    /// Hold the next column's values; a full block goes to `t`.
+    #[inline]
+    fn push(&mut self, t: &mut TruthOut<'_, '_>, v: [f32; 6]) {
+        let j = self.len % Self::LEN;
+        for (layer, v) in self.values.iter_mut().zip(v) {
+            layer[j] = v;
+        }
+        self.len = j + 1;
+        if self.len == Self::LEN {
+            let s = self.start;
+            for (layer, v) in t.layers.iter_mut().zip(&self.values) {
+                layer[s..s + Self::LEN].copy_from_slice(v);
+            }
+            self.start += Self::LEN;
+            self.len = 0;
+        }
+    }
+
+    /// Write the values held to `t`.
+    fn flush(&mut self, t: &mut TruthOut<'_, '_>) {
+        let (s, n) = (self.start, self.len);
+        for (layer, v) in t.layers.iter_mut().zip(&self.values) {
+            layer[s..s + n].copy_from_slice(&v[..n]);
+        }
+        self.start += n;
+        self.len = 0;
     }
 }
 
@@ -1076,6 +1122,8 @@ impl<'a> Shader<'a> {
             Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
             _ => (usize::MAX, 0),
         };
+        // Columns are written in order, from 0.
+        let mut block = TruthBlock::new();
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
             let centre = i == next;
             let Some(h) = hit else {
@@ -1084,7 +1132,7 @@ impl<'a> Shader<'a> {
                     out[b * n + i] = if up { fb.miss_sky } else { fb.miss_ground } as f32;
                 }
                 if let (true, Some(t)) = (centre, &mut truth) {
-                    t.put(col, super::MISS_TRUTH);
+                    block.push(t, super::MISS_TRUTH);
                     (next, col) = t.advance(col);
                 }
                 continue;
@@ -1092,7 +1140,7 @@ impl<'a> Shader<'a> {
             let f = self.facet_of(h);
             let range = h.t * ray.dir.length();
             if let (true, Some(t)) = (centre, &mut truth) {
-                t.put(col, self.truth_of_facet(f, range));
+                block.push(t, self.truth_of_facet(f, range));
                 (next, col) = t.advance(col);
             }
             let n2 = ray.dir.length_squared() * h.ng.length_squared();
@@ -1113,6 +1161,9 @@ impl<'a> Shader<'a> {
             for (b, &v) in sc.bands.iter().enumerate() {
                 out[b * n + i] = v;
             }
+        }
+        if let Some(t) = &mut truth {
+            block.flush(t);
         }
         // View zeniths, degrees: cos θ = |d·n_g| / (|d|·|n_g|).
         for g in &mut sc.grey {
