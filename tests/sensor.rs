@@ -420,6 +420,41 @@ fn camera_projection_inverts_ray_generation() {
     }
 }
 
+/// A row's rays, made from the camera's table of per-column terms, are the
+/// rays `FrameCamera::ray` gives at the same points, bit for bit — also
+/// after the public fields the table depends on changed.
+#[test]
+fn camera_tabulated_row_equals_per_ray_geometry() {
+    let s = frame(r#", "fov_deg": 55, "oversample": 3"#);
+    let mut c = camera(&s).clone();
+    for change in 0..4 {
+        match change {
+            1 => c.width = 37,
+            2 => c.focal_px *= 1.7,
+            3 => {
+                c.oversample = 2;
+                c.world_from_camera.matrix3 =
+                    glam::DMat3::from_rotation_z(0.3) * c.world_from_camera.matrix3;
+            }
+            _ => {}
+        }
+        let n = c.oversample;
+        for row in [0usize, 7, 23] {
+            let mut rays = Vec::new();
+            c.rays_for_row(row, &mut rays);
+            assert_eq!(rays.len(), c.width * n * n, "change {change}");
+            for (i, r) in rays.iter().enumerate() {
+                let (j, k) = (i / (c.width * n), i % (c.width * n));
+                let want = c.ray(
+                    (k as f64 + 0.5) / n as f64,
+                    row as f64 + (j as f64 + 0.5) / n as f64,
+                );
+                assert_eq!(*r, want, "change {change}, row {row}, ray {i}");
+            }
+        }
+    }
+}
+
 #[test]
 fn sensor_config_errors_name_the_field() {
     let e = sensor_from_json(

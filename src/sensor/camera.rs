@@ -28,6 +28,29 @@ pub struct FrameCamera {
     pub world_from_camera: DAffine3,
     /// Sub-pixel rays per pixel side (`N` → `N×N` rays per pixel).
     pub oversample: usize,
+    /// The x terms of one row's sub-columns, computed once (every row has
+    /// the same).
+    columns: Box<ColumnTerms>,
+}
+
+/// The rotation's x term ([`FrameCamera::x_term`]) of each sub-column of a
+/// row, and the fields it was computed from (a camera whose public fields
+/// were changed after [`FrameCamera::new`] recomputes them).
+#[derive(Clone, PartialEq, Default)]
+struct ColumnTerms {
+    key: [u64; COLUMN_KEY_LEN],
+    /// Sub-column `k` (at `u = (k + ½)/N`) of every row.
+    terms: Vec<DVec3>,
+}
+
+/// Length of [`FrameCamera::column_key`].
+const COLUMN_KEY_LEN: usize = 6;
+
+impl std::fmt::Debug for ColumnTerms {
+    /// A summary: the terms are derived from the camera's other fields.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ColumnTerms({} sub-columns)", self.terms.len())
+    }
 }
 
 /// Orthonormal right/down/forward axes for a camera at `position` looking at
@@ -95,13 +118,40 @@ impl FrameCamera {
         if oversample == 0 {
             return Err(Error::invalid("oversample", "0: expected at least 1"));
         }
-        Ok(FrameCamera {
+        let mut camera = FrameCamera {
             width,
             height,
             focal_px,
             world_from_camera: DAffine3::from_mat3_translation(axes, position),
             oversample,
-        })
+            columns: Box::default(),
+        };
+        camera.columns = Box::new(camera.column_terms());
+        Ok(camera)
+    }
+
+    /// The fields the column terms depend on.
+    fn column_key(&self) -> [u64; COLUMN_KEY_LEN] {
+        let c = self.world_from_camera.matrix3.x_axis;
+        [
+            self.width as u64,
+            self.oversample as u64,
+            self.focal_px.to_bits(),
+            c.x.to_bits(),
+            c.y.to_bits(),
+            c.z.to_bits(),
+        ]
+    }
+
+    /// The x term of every sub-column of a row.
+    fn column_terms(&self) -> ColumnTerms {
+        let n = self.oversample;
+        ColumnTerms {
+            key: self.column_key(),
+            terms: (0..self.width * n)
+                .map(|k| self.x_term(self.focal_plane((k as f64 + 0.5) / n as f64, 0.0).0))
+                .collect(),
+        }
     }
 
     /// The camera position, world metres.
@@ -185,17 +235,23 @@ impl FrameCamera {
     /// oversampled image that [`super::effects::reduce_oversampled`] takes.
     ///
     /// The same rays as [`FrameCamera::ray`] at those points, bit for bit,
-    /// with the per-column and per-sub-row terms of the rotation computed
-    /// once (per ray two additions and the normalisation).
+    /// with the rotation's per-sub-column terms made once per camera
+    /// ([`FrameCamera::new`]) and its per-sub-row term once per sub-row (per
+    /// ray two additions and the normalisation).
     pub fn rays_for_row(&self, row: usize, out: &mut Vec<Ray>) {
         let n = self.oversample;
         let ws = self.width * n;
         out.reserve(ws * n);
         let origin = self.position().as_vec3();
-        // The x term of every sub-column, once per row.
-        let xts: Vec<DVec3> = (0..ws)
-            .map(|k| self.x_term(self.focal_plane((k as f64 + 0.5) / n as f64, 0.0).0))
-            .collect();
+        // The x term of every sub-column, from the table made once in
+        // `new` (or afresh if the camera was changed since).
+        let fresh;
+        let xts = if self.columns.key == self.column_key() {
+            &self.columns.terms
+        } else {
+            fresh = self.column_terms();
+            &fresh.terms
+        };
         let zt = self.z_term();
         for j in 0..n {
             let v = row as f64 + (j as f64 + 0.5) / n as f64;
