@@ -167,9 +167,7 @@ impl RowBand {
     /// An empty band of rows, to be filled.
     pub fn empty(width: usize, height: usize, rows: Range<usize>, bands: usize) -> Self {
         let n = rows.len() * width;
-        // One zeroed allocation per layer (`vec![vec![0.0; n]; k]` would
-        // clone the first layer, copying its zeros k − 1 times).
-        let layers = |k: usize| (0..k).map(|_| vec![0.0; n]).collect();
+        let layers = |k: usize| (0..k).map(|_| zeros(n)).collect();
         RowBand {
             width,
             height,
@@ -393,6 +391,15 @@ fn box_reduce_row(src: &[f32], n: usize, out: &mut [f32]) {
     }
 }
 
+/// `n` zeros, written by every thread: filled on one thread, an image's
+/// layers (tens of MB) would hold up the row loop that follows them
+/// (about 1 ms for 1 M pixels).
+fn zeros(n: usize) -> Vec<f32> {
+    let mut v = Vec::with_capacity(n);
+    v.par_extend(rayon::iter::repeat_n(0.0f32, n));
+    v
+}
+
 /// Check that the row just shaded is finite: per band the radiance
 /// (`width` values per sub-row), and the truth values of its pixels; the
 /// error names the sensor, layer, row and column. The values are in cache:
@@ -496,9 +503,9 @@ pub fn render_rows(
         return Ok(band);
     }
     let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
-    let mut over = vec![0.0f32; traced.len() * nb * per_row];
+    let mut over = zeros(traced.len() * nb * per_row);
     let mut truth: Vec<Vec<f32>> = (0..TRUTH_LAYERS.len())
-        .map(|_| vec![0.0f32; traced.len() * w])
+        .map(|_| zeros(traced.len() * w))
         .collect();
     over.par_chunks_mut(nb * per_row)
         .zip(rows_of(&mut truth, w))
@@ -693,7 +700,7 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
     });
     // Chunks with the choice of interpolation made once per chunk, so the
     // inner loops are plain (no per-value dispatch or collection).
-    let mut out = vec![0.0f32; radiance.len()];
+    let mut out = zeros(radiance.len());
     out.par_chunks_mut(1 << 14)
         .zip(radiance.par_chunks(1 << 14))
         .for_each(|(o, r)| match &uniform {
