@@ -695,8 +695,10 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
         let flat = (0..m)
             .into_par_iter()
             .all(|j| (hermite(l0 + (j as f64 + 0.5) * dl) - 0.5 * (t[j] + t[j + 1])).abs() < 1e-5);
-        let steps: Vec<[f64; 2]> = t.windows(2).map(|w| [w[0], w[1] - w[0]]).collect();
-        flat.then_some((inv_dl, steps))
+        flat.then(|| {
+            let segs: Vec<[f64; 2]> = t.windows(2).map(|w| [w[0], w[1] - w[0]]).collect();
+            (inv_dl, segs)
+        })
     });
     // Chunks with the choice of interpolation made once per chunk, so the
     // inner loops are plain (no per-value dispatch or collection).
@@ -704,13 +706,13 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
     out.par_chunks_mut(1 << 14)
         .zip(radiance.par_chunks(1 << 14))
         .for_each(|(o, r)| match &uniform {
-            Some((inv_dl, steps)) => {
-                let last = (steps.len() - 1) as f64;
+            Some((inv_dl, segs)) => {
+                let last = (segs.len() - 1) as f64;
                 for (o, &v) in o.iter_mut().zip(r) {
                     // In [0, last] (NaN: 0): the index is in bounds.
                     let x = ((v as f64 - l0) * inv_dl).max(0.0);
                     let j = x.min(last) as usize;
-                    let [t0, dt] = steps[j];
+                    let [t0, dt] = segs[j];
                     let tv = (t0 + (x - j as f64) * dt) as f32;
                     *o = if v.is_finite() && v > 0.0 { tv } else { 0.0 };
                 }

@@ -666,14 +666,11 @@ impl TruthOut<'_, '_> {
 /// The truth values of up to [`TruthBlock::LEN`] consecutive pixels, per
 /// layer, on their way to a [`TruthOut`]: written to the layers a block at
 /// a time (one bounds check and one copy per layer and block instead of
-/// one per value).
+/// one per value). Columns come in order from 0; column `c` is held at
+/// `c % LEN`.
 struct TruthBlock {
     /// Per layer, the block's values.
     values: [[f32; TruthBlock::LEN]; 6],
-    /// Values held.
-    len: usize,
-    /// Column of the first value held.
-    start: usize,
 }
 
 impl TruthBlock {
@@ -682,38 +679,44 @@ impl TruthBlock {
     fn new() -> Self {
         TruthBlock {
             values: [[0.0; Self::LEN]; 6],
-            len: 0,
-            start: 0,
         }
     }
 
-    /// Hold the next column's values; a full block goes to `t`.
+    /// Hold column `col`'s values; a full block goes to `t`.
     #[inline]
-    fn push(&mut self, t: &mut TruthOut<'_, '_>, v: [f32; 6]) {
-        let j = self.len % Self::LEN;
+    fn push(&mut self, t: &mut TruthOut<'_, '_>, col: usize, v: [f32; 6]) {
+        let j = col % Self::LEN;
         for (layer, v) in self.values.iter_mut().zip(v) {
             layer[j] = v;
         }
-        self.len = j + 1;
-        if self.len == Self::LEN {
-            let s = self.start;
+        if j == Self::LEN - 1 {
+            let s = col + 1 - Self::LEN;
             for (layer, v) in t.layers.iter_mut().zip(&self.values) {
                 layer[s..s + Self::LEN].copy_from_slice(v);
             }
-            self.start += Self::LEN;
-            self.len = 0;
         }
     }
 
-    /// Write the values held to `t`.
-    fn flush(&mut self, t: &mut TruthOut<'_, '_>) {
-        let (s, n) = (self.start, self.len);
+    /// Write the values of a partial last block to `t`, `cols` columns
+    /// having been pushed.
+    fn flush(&self, t: &mut TruthOut<'_, '_>, cols: usize) {
+        let n = cols % Self::LEN;
+        let s = cols - n;
         for (layer, v) in t.layers.iter_mut().zip(&self.values) {
             layer[s..s + n].copy_from_slice(&v[..n]);
         }
-        self.start += n;
-        self.len = 0;
     }
+}
+
+/// One band of [`Shader::grey_terms_pass`]: with `ε` interpolated between
+/// the angle rows' `e0` and `e1` at fraction `ta`, and `r = max(1 − ε − t,
+/// 0)`, the radiance `ε·x + r·(env + lit·w) + z` from the facet's terms
+/// `[x, env, w, z]` ([`grey_facets`]).
+#[inline(always)]
+fn grey_terms_band(e0: f32, e1: f32, ta: f32, tr: f32, lit: bool, [x, env, w, z]: [f32; 4]) -> f32 {
+    let eps = e0 + ta * (e1 - e0);
+    let r = (1.0 - eps - tr).max(0.0);
+    eps * x + r * (env + if lit { w } else { 0.0 }) + z
 }
 
 /// A hit on the grey path, as [`Shader::shade_fast`] gathers it.
@@ -1122,7 +1125,6 @@ impl<'a> Shader<'a> {
             Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
             _ => (usize::MAX, 0),
         };
-        // Columns are written in order, from 0.
         let mut block = TruthBlock::new();
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
             let centre = i == next;
@@ -1132,7 +1134,7 @@ impl<'a> Shader<'a> {
                     out[b * n + i] = if up { fb.miss_sky } else { fb.miss_ground } as f32;
                 }
                 if let (true, Some(t)) = (centre, &mut truth) {
-                    block.push(t, super::MISS_TRUTH);
+                    block.push(t, col, super::MISS_TRUTH);
                     (next, col) = t.advance(col);
                 }
                 continue;
@@ -1140,7 +1142,7 @@ impl<'a> Shader<'a> {
             let f = self.facet_of(h);
             let range = h.t * ray.dir.length();
             if let (true, Some(t)) = (centre, &mut truth) {
-                block.push(t, self.truth_of_facet(f, range));
+                block.push(t, col, self.truth_of_facet(f, range));
                 (next, col) = t.advance(col);
             }
             let n2 = ray.dir.length_squared() * h.ng.length_squared();
@@ -1163,7 +1165,8 @@ impl<'a> Shader<'a> {
             }
         }
         if let Some(t) = &mut truth {
-            block.flush(t);
+            // `col`: the columns written.
+            block.flush(t, col);
         }
         // View zeniths, degrees: cos θ = |d·n_g| / (|d|·|n_g|).
         for g in &mut sc.grey {
@@ -1188,20 +1191,27 @@ impl<'a> Shader<'a> {
         }
     }
 
+    /// A gathered hit's place in the grey tables: its facet's material
+    /// `mi`, the emissivity angle row `a0` and the fraction `ta` toward
+    /// `a0 + 1`, and whether its sunlit face is seen.
+    #[inline(always)]
+    fn grey_hit_rows(&self, hit: &GreyHit) -> (usize, usize, f32, bool) {
+        let mi = self.grey[hit.facet as usize].mi as usize;
+        let th = hit.theta;
+        // θ ≥ 0: truncation is the floor.
+        let a0 = (th as usize).min(ANGLE_ROWS - 2);
+        let lit = hit.dn < 0.0 || self.grey_tables.double_sided[mi];
+        (mi, a0, th - a0 as f32, lit)
+    }
+
     /// [`Shader::grey_terms_pass`] with `NB` bands.
     fn grey_terms_pass_n<const NB: usize>(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
         let gt = &self.grey_tables;
         debug_assert_eq!(gt.bands, NB);
         let (out, _) = out.split_at_mut(NB * n);
         for hit in &sc.grey {
-            let i = hit.ray as usize;
-            let f = hit.facet as usize;
-            let mi = self.grey[f].mi as usize;
-            let th = hit.theta;
-            // θ ≥ 0: truncation is the floor.
-            let a0 = (th as usize).min(ANGLE_ROWS - 2);
-            let ta = th - a0 as f32;
-            let lit = hit.dn < 0.0 || gt.double_sided[mi];
+            let (i, f) = (hit.ray as usize, hit.facet as usize);
+            let (mi, a0, ta, lit) = self.grey_hit_rows(hit);
             let tr = gt.tr[mi];
             // Angle rows a0 and a0 + 1, and the terms: one bounds check
             // each (the lengths are constants).
@@ -1214,10 +1224,7 @@ impl<'a> Shader<'a> {
                 .try_into()
                 .expect("one facet's terms");
             for b in 0..NB {
-                let [x, env, w, z] = t[b];
-                let eps = e0[b] + ta * (e1[b] - e0[b]);
-                let r = (1.0 - eps - tr).max(0.0);
-                out[b * n + i] = eps * x + r * (env + if lit { w } else { 0.0 }) + z;
+                out[b * n + i] = grey_terms_band(e0[b], e1[b], ta, tr, lit, t[b]);
             }
         }
     }
@@ -1227,21 +1234,13 @@ impl<'a> Shader<'a> {
         let gt = &self.grey_tables;
         let nb = gt.bands;
         for hit in &sc.grey {
-            let i = hit.ray as usize;
-            let f = hit.facet as usize;
-            let mi = self.grey[f].mi as usize;
-            let th = hit.theta;
-            // θ ≥ 0: truncation is the floor.
-            let a0 = (th as usize).min(ANGLE_ROWS - 2);
-            let ta = th - a0 as f32;
-            let lit = hit.dn < 0.0 || gt.double_sided[mi];
+            let (i, f) = (hit.ray as usize, hit.facet as usize);
+            let (mi, a0, ta, lit) = self.grey_hit_rows(hit);
             let tr = gt.tr[mi];
             let e = &gt.eps[(mi * ANGLE_ROWS + a0) * nb..][..2 * nb];
             let terms = &self.grey_terms[f * nb..][..nb];
-            for (b, &[x, env, w, z]) in terms.iter().enumerate() {
-                let eps = e[b] + ta * (e[nb + b] - e[b]);
-                let r = (1.0 - eps - tr).max(0.0);
-                out[b * n + i] = eps * x + r * (env + if lit { w } else { 0.0 }) + z;
+            for (b, &t) in terms.iter().enumerate() {
+                out[b * n + i] = grey_terms_band(e[b], e[nb + b], ta, tr, lit, t);
             }
         }
     }
