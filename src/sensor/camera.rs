@@ -11,6 +11,7 @@
 
 use glam::{DAffine3, DMat3, DVec2, DVec3, Vec3};
 
+use super::Derived;
 use crate::trace::Ray;
 use crate::{Error, Result};
 
@@ -28,20 +29,15 @@ pub struct FrameCamera {
     pub world_from_camera: DAffine3,
     /// Sub-pixel rays per pixel side (`N` → `N×N` rays per pixel).
     pub oversample: usize,
-    /// The x terms of one row's sub-columns, computed once (every row has
-    /// the same).
-    columns: Box<ColumnTerms>,
+    /// The rotation's x term ([`FrameCamera::x_term`]) of each sub-column
+    /// of a row (sub-column `k` at `u = (k + ½)/N`), computed once (every
+    /// row has the same), with the key of the fields it depends on.
+    columns: Box<Derived<[u64; COLUMN_KEY_LEN], ColumnTerms>>,
 }
 
-/// The rotation's x term ([`FrameCamera::x_term`]) of each sub-column of a
-/// row, and the fields it was computed from (a camera whose public fields
-/// were changed after [`FrameCamera::new`] recomputes them).
+/// See [`FrameCamera::columns`].
 #[derive(Clone, PartialEq, Default)]
-struct ColumnTerms {
-    key: [u64; COLUMN_KEY_LEN],
-    /// Sub-column `k` (at `u = (k + ½)/N`) of every row.
-    terms: Vec<DVec3>,
-}
+struct ColumnTerms(Vec<DVec3>);
 
 /// Length of [`FrameCamera::column_key`].
 const COLUMN_KEY_LEN: usize = 6;
@@ -49,7 +45,7 @@ const COLUMN_KEY_LEN: usize = 6;
 impl std::fmt::Debug for ColumnTerms {
     /// A summary: the terms are derived from the camera's other fields.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "ColumnTerms({} sub-columns)", self.terms.len())
+        write!(f, "ColumnTerms({} sub-columns)", self.0.len())
     }
 }
 
@@ -126,7 +122,7 @@ impl FrameCamera {
             oversample,
             columns: Box::default(),
         };
-        camera.columns = Box::new(camera.column_terms());
+        camera.columns = Box::new(Derived::new(camera.column_key(), camera.column_terms()));
         Ok(camera)
     }
 
@@ -146,12 +142,11 @@ impl FrameCamera {
     /// The x term of every sub-column of a row.
     fn column_terms(&self) -> ColumnTerms {
         let n = self.oversample;
-        ColumnTerms {
-            key: self.column_key(),
-            terms: (0..self.width * n)
+        ColumnTerms(
+            (0..self.width * n)
                 .map(|k| self.x_term(self.focal_plane((k as f64 + 0.5) / n as f64, 0.0).0))
                 .collect(),
-        }
+        )
     }
 
     /// The camera position, world metres.
@@ -245,13 +240,8 @@ impl FrameCamera {
         let origin = self.position().as_vec3();
         // The x term of every sub-column, from the table made once in
         // `new` (or afresh if the camera was changed since).
-        let fresh;
-        let xts = if self.columns.key == self.column_key() {
-            &self.columns.terms
-        } else {
-            fresh = self.column_terms();
-            &fresh.terms
-        };
+        let columns = self.columns.get(self.column_key(), || self.column_terms());
+        let xts = &columns.0;
         let zt = self.z_term();
         for j in 0..n {
             let v = row as f64 + (j as f64 + 0.5) / n as f64;

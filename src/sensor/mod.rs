@@ -34,6 +34,41 @@ use crate::radiometry::{Band, read_response_csv};
 use crate::trace::Ray;
 use crate::{Error, Location, Result};
 
+/// A table derived from some of a sensor's public fields, kept with the key
+/// of the fields it was made from: a sensor whose fields were changed after
+/// it was built makes the table afresh instead of reading a stale one.
+#[derive(Clone, PartialEq, Default)]
+pub(crate) struct Derived<K, T> {
+    key: K,
+    table: T,
+}
+
+impl<K: PartialEq, T> Derived<K, T> {
+    /// `table`, made from the fields whose key is `key`.
+    pub(crate) fn new(key: K, table: T) -> Self {
+        Derived { key, table }
+    }
+
+    /// The table for the fields whose key is `key`: this one if it was made
+    /// from them, else `make()`'s.
+    pub(crate) fn get(&self, key: K, make: impl FnOnce() -> T) -> std::borrow::Cow<'_, T>
+    where
+        T: Clone,
+    {
+        if self.key == key {
+            std::borrow::Cow::Borrowed(&self.table)
+        } else {
+            std::borrow::Cow::Owned(make())
+        }
+    }
+}
+
+impl<K, T: std::fmt::Debug> std::fmt::Debug for Derived<K, T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.table.fmt(f)
+    }
+}
+
 /// A spectral band as given in the scene file. The response is resolved by
 /// the radiometry module (CSV reader, band integration).
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -30,6 +30,7 @@
 
 use glam::{DMat3, DVec2, DVec3, Vec3};
 
+use super::Derived;
 use crate::trace::Ray;
 use crate::{Error, Result};
 
@@ -63,16 +64,14 @@ pub struct LineScanner {
     /// Sub-sample rays per side (`N×N` rays per sample).
     pub oversample: usize,
     /// World directions and sweep delays of one line's sub-samples,
-    /// computed once (every line has the same).
-    scan: Box<ScanTable>,
+    /// computed once (every line has the same), with the key of the fields
+    /// they depend on.
+    scan: Box<Derived<[u64; SCAN_KEY_LEN], ScanTable>>,
 }
 
-/// The world direction and sweep delay of each of a line's sub-samples,
-/// and the fields they were computed from (a scanner whose public fields
-/// were changed after [`LineScanner::new`] recomputes them).
+/// The world direction and sweep delay of each of a line's sub-samples.
 #[derive(Clone, PartialEq, Default)]
 struct ScanTable {
-    key: [u64; SCAN_KEY_LEN],
     /// Per sub-line `j` (`N` of them), the world direction of each
     /// sub-sample ([`LineScanner::direction_of`]): the attitude is fixed,
     /// so every line has the same.
@@ -201,7 +200,7 @@ impl LineScanner {
             oversample: p.oversample,
             scan: Box::default(),
         };
-        scanner.scan = Box::new(scanner.scan_table());
+        scanner.scan = Box::new(Derived::new(scanner.scan_key(), scanner.scan_table()));
         Ok(scanner)
     }
 
@@ -256,11 +255,7 @@ impl LineScanner {
             .iter()
             .map(|&[theta, ..]| self.sweep_delay(theta))
             .collect();
-        ScanTable {
-            key: self.scan_key(),
-            dirs,
-            delays,
-        }
+        ScanTable { dirs, delays }
     }
 
     /// Along-track offset of sub-line `j` of `N` within the IFOV, rad.
@@ -347,13 +342,7 @@ impl LineScanner {
     /// per ray only the aircraft position, and that once per line without
     /// the mirror sweep.
     pub fn rays_for_line(&self, line: usize, out: &mut Vec<Ray>) {
-        let fresh;
-        let table = if self.scan.key == self.scan_key() {
-            &self.scan
-        } else {
-            fresh = self.scan_table();
-            &fresh
-        };
+        let table = self.scan.get(self.scan_key(), || self.scan_table());
         let per_sub_line = table.delays.len();
         out.reserve(table.dirs.len());
         let line_t = self.line_time(line);
