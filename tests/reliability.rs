@@ -48,7 +48,7 @@ fn r8_embree_device_error_becomes_error_embree() {
     let vb = VertexBuffer::new([glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y].into_iter());
     let g1 = Geometry::triangles(&device, &vb, &[[0, 1, 2]]).unwrap();
     let g2 = Geometry::triangles(&device, &vb, &[[0, 2, 1]]).unwrap();
-    let mut scene = Scene::new(&device).unwrap();
+    let mut scene = Scene::new(&device, irsig::trace::Watertight::Yes).unwrap();
     scene.attach(&g1, 7).unwrap();
     let err = scene.attach(&g2, 7).unwrap_err();
     match &err {

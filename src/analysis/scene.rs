@@ -396,8 +396,12 @@ impl SceneStudy {
             .ok_or_else(|| Error::Other("image time not on the history grid".into()))?;
         let dirs = sun_directions(&scene.site, &times)?;
         let setup = FacetThermalSetup::from_scene(scene)?;
+        // The same kind of scene as the render's exposure.
+        let own = session.exposure_tracer()?;
+        let tracer = own.as_deref().unwrap_or(session.tracer.as_ref());
+        let scene = &session.scene;
         let mut exposure = compute_exposure(
-            session.tracer.as_ref(),
+            tracer,
             &scene.geometry,
             &setup.double_sided,
             &dirs,
@@ -412,7 +416,7 @@ impl SceneStudy {
             }
         }
         let ground = if SceneThermalParams::default().ground {
-            setup.ground_facets(session.tracer.as_ref(), &exposure.facets)
+            setup.ground_facets(tracer, &exposure.facets)
         } else {
             vec![false; exposure.facets.len()]
         };

@@ -33,7 +33,7 @@ use std::sync::{Arc, Mutex};
 use embree_sys as raw;
 use glam::{Affine3A, Mat3A, Vec3};
 
-use super::{Coherence, Hit, Ray, Tracer};
+use super::{Coherence, Hit, Ray, Tracer, Watertight};
 use crate::error::{Error, Result};
 use crate::geometry::SceneGeometry;
 
@@ -226,19 +226,21 @@ impl Drop for Scene {
 }
 
 impl Scene {
-    /// A new empty scene on `device`.
-    pub fn new(device: &Device) -> Result<Self> {
+    /// A new empty scene on `device`; `watertight` selects Embree's robust
+    /// triangle and box tests (`RTC_SCENE_FLAG_ROBUST`).
+    pub fn new(device: &Device, watertight: Watertight) -> Result<Self> {
         // SAFETY: valid device.
         let s = unsafe { raw::rtcNewScene(device.as_raw()) };
         device.check()?;
         if s.is_null() {
             return Err(Error::Embree("cannot create a scene".into()));
         }
-        // Robust (watertight) triangle tests: without them rays that run
-        // in the plane of shared edges (a scan line over a regular
-        // heightmap) slip between the triangles.
+        let flags = match watertight {
+            Watertight::Yes => raw::RTC_SCENE_FLAG_ROBUST,
+            Watertight::No => raw::RTC_SCENE_FLAG_NONE,
+        };
         // SAFETY: valid, uncommitted scene; a defined flag.
-        unsafe { raw::rtcSetSceneFlags(s, raw::RTC_SCENE_FLAG_ROBUST) };
+        unsafe { raw::rtcSetSceneFlags(s, flags) };
         if let Err(e) = device.check() {
             // SAFETY: we own the only reference to `s`.
             unsafe { raw::rtcReleaseScene(s) };
@@ -455,25 +457,40 @@ fn cofactor(m: Mat3A) -> Mat3A {
 }
 
 impl EmbreeTracer {
-    /// Builds the scene; `packets` selects the packet API at the native
-    /// width ([`Device::native_packet_width`]) rather than single rays.
+    /// Builds a watertight scene; `packets` selects the packet API at the
+    /// native width ([`Device::native_packet_width`]) rather than single
+    /// rays.
     pub fn new(geom: &SceneGeometry, packets: bool) -> Result<Self> {
+        Self::with_options(geom, packets, Watertight::Yes)
+    }
+
+    /// [`EmbreeTracer::new`] with the triangle tests chosen by `watertight`.
+    pub fn with_options(
+        geom: &SceneGeometry,
+        packets: bool,
+        watertight: Watertight,
+    ) -> Result<Self> {
         let device = Device::new()?;
         let mode = if packets {
             RayMode::Packet(device.native_packet_width())
         } else {
             RayMode::Single
         };
-        Self::with_device(device, geom, mode)
+        Self::with_device(device, geom, mode, watertight)
     }
 
-    /// Builds the scene with an explicit ray mode; a packet width the library
-    /// does not support natively is an error.
+    /// Builds a watertight scene with an explicit ray mode; a packet width
+    /// the library does not support natively is an error.
     pub fn with_mode(geom: &SceneGeometry, mode: RayMode) -> Result<Self> {
-        Self::with_device(Device::new()?, geom, mode)
+        Self::with_device(Device::new()?, geom, mode, Watertight::Yes)
     }
 
-    fn with_device(device: Device, geom: &SceneGeometry, mode: RayMode) -> Result<Self> {
+    fn with_device(
+        device: Device,
+        geom: &SceneGeometry,
+        mode: RayMode,
+        watertight: Watertight,
+    ) -> Result<Self> {
         if let RayMode::Packet(w) = mode {
             if !device.supports_packet_width(w) {
                 return Err(Error::invalid(
@@ -499,7 +516,7 @@ impl EmbreeTracer {
             }
             uses[inst.mesh] += 1;
         }
-        let mut top = Scene::new(&device)?;
+        let mut top = Scene::new(&device, watertight)?;
         let mut vertices = Vec::new();
         let mut mesh_scenes: Vec<Option<Scene>> = (0..geom.meshes.len()).map(|_| None).collect();
         let mut normal_from_object = Vec::with_capacity(geom.instances.len());
@@ -526,7 +543,7 @@ impl EmbreeTracer {
                 if mesh_scenes[inst.mesh].is_none() {
                     let vb = VertexBuffer::new(mesh.positions.iter().copied());
                     let g = Geometry::triangles(&device, &vb, &mesh.indices)?;
-                    let mut s = Scene::new(&device)?;
+                    let mut s = Scene::new(&device, watertight)?;
                     s.attach(&g, 0)?;
                     s.commit()?;
                     vertices.push(vb);

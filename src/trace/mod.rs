@@ -146,13 +146,39 @@ impl FromStr for Backend {
     }
 }
 
-/// Builds a tracer over `geom` with `backend`. Returned boxed so callers can
-/// pick the backend at run time; the concrete types are
+/// Whether a tracer's ray–triangle tests must be watertight.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Watertight {
+    /// No ray slips between two triangles sharing an edge, even one running
+    /// in the edge's plane, as sensor rays over a regular heightmap do
+    /// (Embree: `RTC_SCENE_FLAG_ROBUST`). The default.
+    #[default]
+    Yes,
+    /// Embree's faster default tests, which can miss a ray meeting a shared
+    /// edge exactly. Rays from interior sample points in generic directions
+    /// — the exposure's shadow and sky rays — meet an edge only on a set of
+    /// measure zero, so they lose nothing. obvhs is the same either way.
+    No,
+}
+
+/// Builds a watertight tracer over `geom` with `backend`. Returned boxed so
+/// callers can pick the backend at run time; the concrete types are
 /// [`embree::EmbreeTracer`] and [`bvh::ObvhsTracer`].
 pub fn build(geom: &SceneGeometry, backend: Backend) -> Result<Box<dyn Tracer>> {
+    build_with(geom, backend, Watertight::Yes)
+}
+
+/// [`build`] with the triangle tests chosen by `watertight`.
+pub fn build_with(
+    geom: &SceneGeometry,
+    backend: Backend,
+    watertight: Watertight,
+) -> Result<Box<dyn Tracer>> {
     Ok(match backend {
-        Backend::Embree => Box::new(embree::EmbreeTracer::new(geom, true)?),
-        Backend::EmbreeSingle => Box::new(embree::EmbreeTracer::new(geom, false)?),
+        Backend::Embree => Box::new(embree::EmbreeTracer::with_options(geom, true, watertight)?),
+        Backend::EmbreeSingle => {
+            Box::new(embree::EmbreeTracer::with_options(geom, false, watertight)?)
+        }
         Backend::Obvhs => Box::new(bvh::ObvhsTracer::new(geom)?),
     })
 }
