@@ -8,6 +8,9 @@
 //! (defaults scenes/town/scene.json, embree, dirsig; SKY = dirsig |
 //! grid:DZxDA | stratified:N).
 //!
+//! The rays are traced as a render traces them: with Embree on a
+//! non-watertight scene ([`Watertight::No`], `Session::exposure_tracer`).
+//!
 //! The facets on the ground get the deep-ground back boundary
 //! ([`SceneThermalParams::ground`], the default); `IRSIG_BENCH_GROUND=0`
 //! solves them with their materials' insulated backs instead.
@@ -35,7 +38,7 @@ use irsig::exposure::{
 use irsig::geometry::procedural::{TerrainParams, generate};
 use irsig::scene::Scene;
 use irsig::thermal::{BackBoundary, Forcing, SlabProperties};
-use irsig::trace::{self, Backend};
+use irsig::trace::{self, Backend, Watertight};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -61,14 +64,14 @@ fn main() -> anyhow::Result<()> {
         let scene = Scene::load(Path::new(what))?;
         let load = t0.elapsed();
         let t1 = Instant::now();
-        let tracer = trace::build(&scene.geometry, backend)?;
+        let tracer = trace::build_with(&scene.geometry, backend, Watertight::No)?;
         let build = t1.elapsed();
         println!("scene {what} loaded in {:.2} s", load.as_secs_f64());
         let r = solve_scene(&*tracer, &scene, &[], &params)?;
         (scene.geometry, r, tracer.name().to_string(), build)
     } else {
         let geo = generate(&TerrainParams::with_triangles(what.parse()?, 7));
-        let tracer = trace::build(&geo, backend)?;
+        let tracer = trace::build_with(&geo, backend, Watertight::No)?;
         let build = t0.elapsed();
         let (weather, _) = irsig::weather::synth::town_history()?;
         let site = *weather.site().expect("town weather has a site");
