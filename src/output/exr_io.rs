@@ -86,14 +86,52 @@ pub fn flat_exr_layer<'a>(
 
 /// Write one flat EXR part to `path`, atomically; `what` names the file kind
 /// in errors ("OpenEXR", "tile").
+///
+/// The blocks (16 scan lines each) are ZIP-compressed in parallel on a pool
+/// of as many threads as the caller's rayon pool has (`--threads`; exr's
+/// own parallel writer would take every core), and written in increasing
+/// line order, so the file is the same for any thread count.
 pub fn write_flat_exr(path: &Path, layer: FlatExrLayer, what: &str) -> Result<()> {
+    use exr::block::writer::{ChunksWriter, ParallelBlocksCompressor};
+    use exr::image::write::layers::{LayersWriter, WritableLayers};
     let image = x::Image::from_layer(layer);
+    let err = |e: x::Error| Error::Other(format!("{}: writing {what}: {e}", path.display()));
+    let threads = rayon::current_num_threads();
     write_atomic(path, |w| {
-        image
-            .write()
-            .non_parallel()
-            .to_buffered(w)
-            .map_err(|e| Error::Other(format!("{}: writing {what}: {e}", path.display())))
+        let headers = image.layer_data.infer_headers(&image.attributes);
+        let layers = image.layer_data.create_writer(&headers);
+        exr::block::write(w, headers, true, |meta, chunks| {
+            let blocks = meta.collect_ordered_block_data(|block| {
+                layers.extract_uncompressed_block(&meta.headers, block)
+            });
+            let pool = || {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .thread_name(|i| format!("irsig-exr-{i}"))
+                    .build()
+            };
+            let parallel = if threads > 1 {
+                ParallelBlocksCompressor::new_with_thread_pool(&meta, chunks, pool)
+            } else {
+                None
+            };
+            match parallel {
+                Some(mut p) => {
+                    for (index, block) in blocks {
+                        p.add_block_to_compression_queue(index, block)?;
+                    }
+                    Ok(())
+                }
+                None => {
+                    let mut s = chunks.sequential_blocks_compressor(&meta);
+                    for (index, block) in blocks {
+                        s.compress_block(index, block)?;
+                    }
+                    Ok(())
+                }
+            }
+        })
+        .map_err(err)
     })
 }
 

@@ -263,6 +263,7 @@ pub fn write_quicklook_png(
         let mut enc = png::Encoder::new(w, img.width as u32, img.height as u32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
         let mut writer = enc.write_header().map_err(png_err)?;
         writer.write_image_data(&img.pixels).map_err(png_err)?;
         writer.finish().map_err(png_err)
