@@ -396,7 +396,8 @@ impl SceneStudy {
             .ok_or_else(|| Error::Other("image time not on the history grid".into()))?;
         let dirs = sun_directions(&scene.site, &times)?;
         let setup = FacetThermalSetup::from_scene(scene)?;
-        // The same kind of scene as the render's exposure.
+        // The same kind of scene as the render's exposure (and, as there,
+        // the watertight one for the ground test).
         let own = session.exposure_tracer()?;
         let tracer = own.as_deref().unwrap_or(session.tracer.as_ref());
         let scene = &session.scene;
@@ -416,7 +417,7 @@ impl SceneStudy {
             }
         }
         let ground = if SceneThermalParams::default().ground {
-            setup.ground_facets(tracer, &exposure.facets)
+            setup.ground_facets(session.tracer.as_ref(), &exposure.facets)
         } else {
             vec![false; exposure.facets.len()]
         };

@@ -56,8 +56,8 @@ use glam::Vec3;
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_times, sun_directions};
 pub use pipeline::{
-    FacetThermalSetup, SceneThermal, SceneThermalParams, SceneThermalTimings, solve_scene,
-    solve_scene_temperatures,
+    FacetThermalSetup, FacetTracers, SceneThermal, SceneThermalParams, SceneThermalTimings,
+    solve_scene, solve_scene_temperatures,
 };
 pub use sky::{BackgroundEntry, SkySampling, SkyView, sky_view};
 pub use solar::{SolarHistory, solar_history};

@@ -262,6 +262,39 @@ impl SceneThermal {
     }
 }
 
+/// The tracers of the per-facet pipeline. A single tracer converts into
+/// both (`solve_scene(&tracer, …)`).
+#[derive(Clone, Copy)]
+pub struct FacetTracers<'a> {
+    /// The shadow and sky-view rays: from interior sample points in generic
+    /// directions, so a non-watertight scene serves
+    /// ([`crate::trace::Watertight::No`]).
+    pub exposure: &'a dyn Tracer,
+    /// The ground test's vertical rays through facet centres, which on a
+    /// gridded scene (a roof's centre above a terrain grid line) can run
+    /// exactly through a shared edge: a watertight scene, since one lost ray
+    /// flips a facet's back boundary.
+    pub exact: &'a dyn Tracer,
+}
+
+impl<'a, T: Tracer> From<&'a T> for FacetTracers<'a> {
+    fn from(t: &'a T) -> Self {
+        FacetTracers {
+            exposure: t,
+            exact: t,
+        }
+    }
+}
+
+impl<'a> From<&'a dyn Tracer> for FacetTracers<'a> {
+    fn from(t: &'a dyn Tracer) -> Self {
+        FacetTracers {
+            exposure: t,
+            exact: t,
+        }
+    }
+}
+
 /// Every facet's surface temperature at `image_times`: builds the history
 /// window, traces the sun at every record and the sky of every facet, and
 /// runs the thermal passes. This is what a render calls.
@@ -269,8 +302,8 @@ impl SceneThermal {
 /// # Errors
 /// Bad window, weather not covering it, bad site, mismatched setup lengths,
 /// and the thermal solver's errors (naming the facet).
-pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
-    tracer: &T,
+pub fn solve_scene_temperatures<'a>(
+    tracers: impl Into<FacetTracers<'a>>,
     geometry: &SceneGeometry,
     setup: &FacetThermalSetup,
     weather: &WeatherHistory,
@@ -278,6 +311,7 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
     image_times: &[DateTime<FixedOffset>],
     params: &SceneThermalParams,
 ) -> Result<SceneThermal> {
+    let tracers = tracers.into();
     let t0 = Instant::now();
     let times = history_times(weather, image_times, &params.window)?;
     let records = times
@@ -297,7 +331,7 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
         .collect();
     let t1 = Instant::now();
     let mut exposure = compute_exposure(
-        tracer,
+        tracers.exposure,
         geometry,
         &setup.double_sided,
         &dirs,
@@ -321,7 +355,7 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
         }
     }
     let (setup, ground_facets) = if params.ground {
-        let ground = setup.ground_facets(tracer, &exposure.facets);
+        let ground = setup.ground_facets(tracers.exact, &exposure.facets);
         let count = ground.iter().filter(|&&g| g).count();
         (setup.with_ground(&ground), count)
     } else {
@@ -359,8 +393,8 @@ pub fn solve_scene_temperatures<T: Tracer + ?Sized>(
 /// # Errors
 /// A scene without a weather history (naming the scene file), and as
 /// [`solve_scene_temperatures`].
-pub fn solve_scene<T: Tracer + ?Sized>(
-    tracer: &T,
+pub fn solve_scene<'a>(
+    tracers: impl Into<FacetTracers<'a>>,
     scene: &Scene,
     image_times: &[DateTime<FixedOffset>],
     params: &SceneThermalParams,
@@ -378,7 +412,7 @@ pub fn solve_scene<T: Tracer + ?Sized>(
         image_times.to_vec()
     };
     solve_scene_temperatures(
-        tracer,
+        tracers,
         &scene.geometry,
         &setup,
         &weather.history,

@@ -20,6 +20,7 @@ use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput,
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
+use crate::exposure::FacetTracers;
 use crate::radiometry::Band;
 use crate::scene::Scene;
 use crate::sensor::{Sensor, SensorConfig};
@@ -318,16 +319,20 @@ impl Session {
     pub fn thermal(&mut self, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
         let own = self.exposure_tracer()?;
         let t0 = Instant::now();
-        let tracer = own.as_deref().unwrap_or(self.tracer.as_ref());
-        let states = scene_thermal(self, tracer, times)?;
+        let tracers = FacetTracers {
+            exposure: own.as_deref().unwrap_or(self.tracer.as_ref()),
+            exact: self.tracer.as_ref(),
+        };
+        let states = scene_thermal(self, tracers, times)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += states.timings.thermal;
         Ok(states)
     }
 
-    /// The tracer for the exposure's rays (solar history, sky view, ground
-    /// test): rays from interior sample points in generic directions, which
-    /// need no watertight tests ([`Watertight::No`]). A second Embree scene
+    /// The tracer for the exposure's rays (solar history, sky view): rays
+    /// from interior sample points in generic directions, which need no
+    /// watertight tests ([`Watertight::No`]; the ground test stays on
+    /// [`Session::tracer`], see [`FacetTracers`]). A second Embree scene
     /// over the same geometry (built in about the time of the first, and
     /// dropped by the caller), whose shadow rays are ≈ 1.4× faster; `None`
     /// with obvhs, whose tests are the same either way. Its build time
@@ -659,14 +664,14 @@ fn parse_duration(s: &str) -> Result<TimeDelta> {
 /// sun's incidence, the background temperatures, the sky and the sun.
 fn scene_thermal(
     session: &Session,
-    tracer: &dyn Tracer,
+    tracers: FacetTracers<'_>,
     times: &[DateTime<FixedOffset>],
 ) -> Result<ThermalStates> {
     use crate::exposure::{SceneThermalParams, solve_scene};
     let scene = &session.scene;
     let mut params = SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;
-    let solved = solve_scene(tracer, scene, times, &params)?;
+    let solved = solve_scene(tracers, scene, times, &params)?;
     let n = scene.geometry.facet_count();
     let shape = solved.shape_factor().to_vec();
     let mut conditions = Vec::new();
