@@ -97,7 +97,9 @@ pub fn solar_history<T: Tracer + ?Sized>(
                 }
             }
             let mut occ = vec![false; rays.len()];
-            tracer.occluded(&rays, Coherence::Incoherent, &mut occ);
+            // One step's rays are parallel and start on neighbouring facets:
+            // coherent (Embree's hint; the answers are the same).
+            tracer.occluded(&rays, Coherence::Coherent, &mut occ);
             let mut k = 0usize;
             for &(slot, m) in &slots {
                 let lit = occ[k..k + m as usize].iter().filter(|&&o| !o).count();
