@@ -47,8 +47,8 @@ struct RenderArgs {
     /// Ray-tracing backend: embree, embree-single or obvhs.
     #[arg(long, default_value = "embree", value_name = "NAME")]
     backend: Backend,
-    /// Timed rounds of the row loop (after one thermal solve) and of the
-    /// bare trace; the best of each counts.
+    /// Timed rounds, each the row loop (after one thermal solve) then the
+    /// bare trace of the same rays; the best of each counts.
     #[arg(long, value_name = "N", default_value_t = 3)]
     rounds: usize,
     /// Print one JSON object instead of a table.
@@ -290,7 +290,19 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
     let cond = &states.conditions[0];
     let height = session.sensors[s].height();
     let seed = session.sensors[s].effects.seed;
-    // The row loop and the image-wide sensor effects, best of the rounds.
+    // The same primary rays, for the bare trace: row by row in parallel as
+    // the pipeline traces them, into buffers allocated once.
+    let sensor = &session.sensors[s];
+    let per_row = sensor.rays_per_row();
+    let mut rays = Vec::with_capacity(per_row * height);
+    for row in 0..height {
+        sensor.rays_for_row(row, &mut rays);
+    }
+    let mut hits = vec![None; rays.len()];
+    let mut bare = f64::INFINITY;
+    // The row loop with the image-wide sensor effects, then the bare trace,
+    // round after round (so both see the same machine load); the best
+    // round of each counts.
     let base = session.timings;
     let mut best: Option<(f64, irsig::render::session::Timings)> = None;
     let mut finished = None;
@@ -306,7 +318,15 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
             best = Some((pipeline, d));
         }
         finished = Some(f);
+        let tracer = session.tracer.as_ref();
+        let t0 = std::time::Instant::now();
+        rays.par_chunks(per_row)
+            .zip(hits.par_chunks_mut(per_row))
+            .for_each(|(r, o)| tracer.intersect(r, Coherence::Coherent, o));
+        bare = bare.min(t0.elapsed().as_secs_f64());
+        std::hint::black_box(&hits);
     }
+    let sensor = &session.sensors[s];
     let (_, round) = best.expect("at least one round");
     let finished = finished.expect("at least one round");
     let t0 = std::time::Instant::now();
@@ -332,26 +352,6 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         secondary_hits: round.secondary_hits,
         ..t
     };
-
-    // The same primary rays, traced bare: row by row in parallel as the
-    // pipeline traces them, into buffers allocated once; best of the rounds.
-    let sensor = &session.sensors[s];
-    let per_row = sensor.rays_per_row();
-    let mut rays = Vec::with_capacity(per_row * height);
-    for row in 0..height {
-        sensor.rays_for_row(row, &mut rays);
-    }
-    let tracer = session.tracer.as_ref();
-    let mut hits = vec![None; rays.len()];
-    let mut bare = f64::INFINITY;
-    for _ in 0..a.rounds {
-        let t0 = std::time::Instant::now();
-        rays.par_chunks(per_row)
-            .zip(hits.par_chunks_mut(per_row))
-            .for_each(|(r, o)| tracer.intersect(r, Coherence::Coherent, o));
-        bare = bare.min(t0.elapsed().as_secs_f64());
-        std::hint::black_box(&hits);
-    }
 
     let secs = |d: std::time::Duration| d.as_secs_f64();
     let pipeline =
