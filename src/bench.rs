@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::geometry::SceneGeometry;
-use crate::trace::{self, Backend, Coherence, Hit, Ray, Tracer};
+use crate::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
 
 /// Pixel-tile shape of the primary rays: consecutive rays cover one tile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,6 +77,8 @@ pub struct TraceBenchOptions {
     pub seed: u64,
     /// Pixel tile of the primary rays.
     pub tile: TileShape,
+    /// Triangle tests of the Embree scenes (obvhs is the same either way).
+    pub watertight: Watertight,
 }
 
 impl Default for TraceBenchOptions {
@@ -86,6 +88,7 @@ impl Default for TraceBenchOptions {
             rounds: 3,
             seed: 1,
             tile: TileShape::T4X2,
+            watertight: Watertight::Yes,
         }
     }
 }
@@ -269,7 +272,7 @@ pub fn trace_bench(
     let mut tracers: Vec<(Box<dyn Tracer>, BackendResult)> = Vec::new();
     for b in Backend::ALL {
         let t0 = Instant::now();
-        let t = trace::build(geom, b)?;
+        let t = trace::build_with(geom, b, opts.watertight)?;
         let res = BackendResult {
             build_s: t0.elapsed().as_secs_f64(),
             ..Default::default()

@@ -463,6 +463,44 @@ fn bench_trace_cli_prints_the_documented_json() {
     assert!(bad * 1000 <= rays, "{bad} of {rays} rays disagree");
 }
 
+/// `--watertight no` builds the Embree scenes without the robust flag (as
+/// a render's exposure scene): the header says so and the backends still
+/// agree on random rays; a value other than yes/no is refused by name.
+#[test]
+fn bench_trace_cli_without_watertight_tests() {
+    let run = |extra: &[&str]| {
+        std::process::Command::new(crate::util::irsig_bin())
+            .args(["bench", "trace", "--triangles", "10000", "--rays", "4000"])
+            .args(["--rounds", "1", "--threads", "2"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--watertight", "no"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("not watertight"), "{text}");
+    let out = run(&["--watertight", "no", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rays = v["agreement"]["rays"].as_u64().unwrap();
+    let bad = v["agreement"]["mismatched_rays"].as_u64().unwrap();
+    assert!(
+        rays > 0 && bad * 1000 <= rays,
+        "{bad} of {rays} rays disagree"
+    );
+    let out = run(&["--watertight", "maybe"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("maybe") && err.contains("expected yes or no"),
+        "{err}"
+    );
+}
+
 #[test]
 fn bench_trace_cli_reads_an_obj_scene_and_reports_bad_input() {
     let dir = tempfile::tempdir().unwrap();

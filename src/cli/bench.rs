@@ -11,7 +11,7 @@ use irsig::bench::{TileShape, TraceBenchOptions, trace_bench};
 use irsig::geometry::SceneGeometry;
 use irsig::geometry::procedural::{self, TerrainParams};
 use irsig::render::session::Session;
-use irsig::trace::{Backend, Coherence};
+use irsig::trace::{Backend, Coherence, Watertight};
 use rayon::prelude::*;
 
 /// Arguments of `irsig bench`.
@@ -78,6 +78,12 @@ struct TraceArgs {
     /// Pixel tile of the primary rays (consecutive rays, one packet).
     #[arg(long, value_name = "WxH", default_value = "4x2")]
     tile: TileShape,
+    /// Embree's triangle tests: `yes` watertight (`RTC_SCENE_FLAG_ROBUST`,
+    /// what a render's sensor rays use), `no` Embree's faster default (what
+    /// a render's per-facet shadow and sky rays use). obvhs is the same
+    /// either way.
+    #[arg(long, value_name = "yes|no", default_value = "yes")]
+    watertight: Watertight,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
@@ -129,6 +135,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
         rounds: a.rounds,
         seed: a.seed,
         tile: a.tile,
+        watertight: a.watertight,
     };
     let (report, info) = trace_bench(&geom, &opts).context("trace benchmark")?;
     let mut out = std::io::stdout().lock();
@@ -140,12 +147,16 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     let b = &report.backends;
     writeln!(
         out,
-        "irsig bench trace: {} triangles ({} stored), Embree {} ({}-wide packets, {} tiles), {} threads, best of {} rounds",
+        "irsig bench trace: {} triangles ({} stored), Embree {} ({}-wide packets, {} tiles, {}), {} threads, best of {} rounds",
         report.triangles,
         geom.stored_triangle_count(),
         info.embree_version,
         info.packet_width,
         format_args!("{}x{}", a.tile.width, a.tile.height),
+        match a.watertight {
+            Watertight::Yes => "watertight",
+            Watertight::No => "not watertight",
+        },
         info.threads,
         a.rounds
     )?;

@@ -161,6 +161,36 @@ pub enum Watertight {
     No,
 }
 
+impl Watertight {
+    /// The command-line name (`yes`, `no`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Watertight::Yes => "yes",
+            Watertight::No => "no",
+        }
+    }
+}
+
+impl fmt::Display for Watertight {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for Watertight {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "yes" => Ok(Watertight::Yes),
+            "no" => Ok(Watertight::No),
+            _ => Err(Error::invalid(
+                "watertight",
+                format!("`{s}`: expected yes or no"),
+            )),
+        }
+    }
+}
+
 /// Builds a watertight tracer over `geom` with `backend`. Returned boxed so
 /// callers can pick the backend at run time; the concrete types are
 /// [`embree::EmbreeTracer`] and [`bvh::ObvhsTracer`].
