@@ -277,8 +277,8 @@ pub struct FacetTracers<'a> {
     pub exact: &'a dyn Tracer,
 }
 
-impl<'a, T: Tracer> From<&'a T> for FacetTracers<'a> {
-    fn from(t: &'a T) -> Self {
+impl<'a> From<&'a dyn Tracer> for FacetTracers<'a> {
+    fn from(t: &'a dyn Tracer) -> Self {
         FacetTracers {
             exposure: t,
             exact: t,
@@ -286,12 +286,9 @@ impl<'a, T: Tracer> From<&'a T> for FacetTracers<'a> {
     }
 }
 
-impl<'a> From<&'a dyn Tracer> for FacetTracers<'a> {
-    fn from(t: &'a dyn Tracer) -> Self {
-        FacetTracers {
-            exposure: t,
-            exact: t,
-        }
+impl<'a, T: Tracer> From<&'a T> for FacetTracers<'a> {
+    fn from(t: &'a T) -> Self {
+        (t as &dyn Tracer).into()
     }
 }
 

@@ -104,6 +104,7 @@ pub fn write_flat_exr(path: &Path, layer: FlatExrLayer, what: &str) -> Result<()
             let blocks = meta.collect_ordered_block_data(|block| {
                 layers.extract_uncompressed_block(&meta.headers, block)
             });
+            let mut chunks = chunks.on_progress(|_| ());
             let pool = || {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
@@ -111,7 +112,7 @@ pub fn write_flat_exr(path: &Path, layer: FlatExrLayer, what: &str) -> Result<()
                     .build()
             };
             let parallel = if threads > 1 {
-                ParallelBlocksCompressor::new_with_thread_pool(&meta, chunks, pool)
+                ParallelBlocksCompressor::new_with_thread_pool(&meta, &mut chunks, pool)
             } else {
                 None
             };
@@ -122,13 +123,7 @@ pub fn write_flat_exr(path: &Path, layer: FlatExrLayer, what: &str) -> Result<()
                     }
                     Ok(())
                 }
-                None => {
-                    let mut s = chunks.sequential_blocks_compressor(&meta);
-                    for (index, block) in blocks {
-                        s.compress_block(index, block)?;
-                    }
-                    Ok(())
-                }
+                None => chunks.compress_all_blocks_sequential(&meta, blocks),
             }
         })
         .map_err(err)

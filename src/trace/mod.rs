@@ -161,22 +161,6 @@ pub enum Watertight {
     No,
 }
 
-impl Watertight {
-    /// The command-line name (`yes`, `no`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Watertight::Yes => "yes",
-            Watertight::No => "no",
-        }
-    }
-}
-
-impl fmt::Display for Watertight {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
 impl FromStr for Watertight {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
