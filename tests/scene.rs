@@ -358,27 +358,9 @@ fn scene_errors_collected_with_lines() {
     assert!(e.contains("line 9") && e.contains("`x`"), "{e}");
 }
 
-/// The bundled town; where `weather.csv` has not been written yet, a copy
-/// without the weather reference is checked (notice printed).
-fn town_path() -> (Option<tempfile::TempDir>, std::path::PathBuf) {
-    let p = repo_path("scenes/town/scene.json");
-    if repo_path("scenes/town/weather.csv").exists() {
-        return (None, p);
-    }
-    eprintln!("notice: scenes/town/weather.csv absent; checking the town without weather");
-    let d = tempfile::tempdir().unwrap();
-    let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
-    v.as_object_mut().unwrap().remove("weather");
-    v["materials"] = serde_json::json!([repo_path("scenes/materials.json")]);
-    let q = d.path().join("scene.json");
-    std::fs::write(&q, serde_json::to_string(&v).unwrap()).unwrap();
-    (Some(d), q)
-}
-
 #[test]
 fn town_loads_with_expected_content() {
-    let (_keep, p) = town_path();
+    let p = repo_path("scenes/town/scene.json");
     let s = Scene::load(&p).unwrap();
     let sum = s.summary();
     assert_eq!(sum.time, "2025-06-21T14:00:00-04:00");
@@ -513,10 +495,6 @@ fn cli_scene_check() {
 fn scene_weather_is_loaded_and_must_cover_the_image_time() {
     let d = tempfile::tempdir().unwrap();
     let town_weather = repo_path("scenes/town/weather.csv");
-    if !town_weather.exists() {
-        eprintln!("notice: scenes/town/weather.csv absent; skipping");
-        return;
-    }
     let p = small_scene(d.path(), SMALL);
     std::fs::copy(&town_weather, p.parent().unwrap().join("w.csv")).unwrap();
     let with = SMALL.replace(
@@ -536,11 +514,15 @@ fn scene_weather_is_loaded_and_must_cover_the_image_time() {
         e.contains("line 4: field `weather.file`") && e.contains("not the image time"),
         "{e}"
     );
+}
 
-    // A DIRSIG .wth carries no date: the scene gives its start.
-    let Some(dir) = crate::util::shared_data("dirsig") else {
-        return;
-    };
+/// A DIRSIG .wth carries no date: the scene gives its start.
+#[test]
+#[ignore = "needs ../shared/data"]
+fn scene_dirsig_wth_weather_starts_at_the_scene_start() {
+    let dir = crate::util::shared_data("dirsig");
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
     std::fs::copy(dir.join("saw.wth"), p.parent().unwrap().join("saw.wth")).unwrap();
     let wth = SMALL.replace(
         "\"materials\": [",

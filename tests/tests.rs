@@ -1,5 +1,6 @@
 //! irsig's integration tests: one binary, one module per concern.
-//! Tests that read `../shared/data` skip with a notice where it is absent.
+//! Tests that read `../shared/data` are `#[ignore = "needs ../shared/data"]`;
+//! `scripts/test` runs them too where that folder exists (CI has it).
 
 mod util;
 
