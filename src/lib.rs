@@ -30,6 +30,7 @@ pub mod render;
 pub mod scene;
 pub mod sensor;
 pub mod sun;
+pub(crate) mod textio;
 pub mod thermal;
 pub mod trace;
 pub mod weather;

@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+use crate::textio::{self, Comments};
 use crate::{Error, Location, Result};
 
 /// A relative spectral response curve (dimensionless, any scale).
@@ -100,19 +101,10 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
     let mut wl = Vec::new();
     let mut resp = Vec::new();
     let mut seen_data_or_header = false;
-    for (i, raw) in text.lines().enumerate() {
-        let lineno = i + 1;
+    for row in textio::rows(text, Comments::Trailing) {
+        let (lineno, line) = (row.line, row.text);
         let loc = || Location::file(path).at_line(lineno);
-        let line = raw.split('#').next().unwrap_or("").trim();
-        let line = line.trim_start_matches('\u{feff}');
-        if line.is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line
-            .split([',', ';', '\t', ' '])
-            .map(str::trim)
-            .filter(|s| !s.is_empty())
-            .collect();
+        let fields = textio::tokens(&row.fields);
         if !seen_data_or_header {
             seen_data_or_header = true;
             if fields.first().is_some_and(|f| f.parse::<f64>().is_err()) {

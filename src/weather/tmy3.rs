@@ -14,9 +14,10 @@ use chrono::{FixedOffset, NaiveDate, TimeDelta, TimeZone};
 
 use super::LoadOptions;
 use super::fill::{Parsed, RawRecord};
-use super::text::{number, split_csv};
+use super::text::number;
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
+use crate::textio;
 
 /// Values at or below this are TMY3's "missing" code (−9900).
 const MISSING: f64 = -9900.0;
@@ -39,12 +40,12 @@ const COLUMNS: [(&str, bool); 11] = [
 ];
 
 pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Parsed> {
-    let mut lines = text.lines().enumerate();
+    let mut lines = textio::lines(text);
     let (_, meta) = lines
         .next()
         .ok_or_else(|| Error::parse(Location::file(path), "empty TMY3 file"))?;
     let mloc = Location::file(path).at_line(1);
-    let m = split_csv(meta.trim_start_matches('\u{feff}'));
+    let m = textio::split(meta);
     if m.len() < 7 {
         return Err(Error::parse(
             mloc,
@@ -83,11 +84,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     let (hi, header) = lines
         .next()
         .ok_or_else(|| Error::parse(Location::file(path).at_line(2), "missing column-name line"))?;
-    let hloc = Location::file(path).at_line(hi + 1);
-    let names: Vec<String> = split_csv(header)
-        .iter()
-        .map(|s| s.trim().to_string())
-        .collect();
+    let hloc = Location::file(path).at_line(hi);
+    let names = textio::split(header);
     let find = |name: &str| names.iter().position(|n| n == name);
     let date_i = find(DATE).ok_or_else(|| {
         Error::parse(hloc.clone().with_field(DATE), format!("no `{DATE}` column"))
@@ -111,8 +109,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         if line.trim().is_empty() {
             continue;
         }
-        let loc = Location::file(path).at_line(i + 1);
-        let f = split_csv(line);
+        let loc = Location::file(path).at_line(i);
+        let f = textio::split(line);
         if f.len() < names.len() {
             return Err(Error::parse(
                 loc.with_field(names[f.len()].clone()),
