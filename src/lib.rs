@@ -24,6 +24,7 @@ pub mod error;
 pub mod exposure;
 pub mod geometry;
 pub mod material;
+pub mod math;
 pub mod output;
 pub mod radiometry;
 pub mod render;

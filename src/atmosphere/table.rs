@@ -11,6 +11,7 @@
 //! so ~50 ranges (a ×1.2 step) keep the interpolation error below 1 %.
 
 use super::{Atmosphere, PathGeometry, PathSpectra};
+use crate::math::bracket;
 use crate::radiometry::SpectralGrid;
 use crate::{Error, Result};
 
@@ -23,18 +24,6 @@ pub struct PathTable {
     /// [zenith][range] spectra.
     spectra: Vec<Vec<PathSpectra>>,
     n: usize,
-}
-
-fn bracket(xs: &[f64], x: f64) -> (usize, usize, f64) {
-    let n = xs.len();
-    if n == 1 || x <= xs[0] {
-        return (0, 0, 0.0);
-    }
-    if x >= xs[n - 1] {
-        return (n - 1, n - 1, 0.0);
-    }
-    let j = xs.partition_point(|&v| v <= x).clamp(1, n - 1);
-    (j - 1, j, (x - xs[j - 1]) / (xs[j] - xs[j - 1]))
 }
 
 impl PathTable {

@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+use crate::math::interp1d;
 use crate::textio::{self, Comments};
 use crate::{Error, Location, Result};
 
@@ -76,15 +77,7 @@ impl SpectralResponse {
         if wavelength_um < w[0] || wavelength_um > w[w.len() - 1] {
             return 0.0;
         }
-        let i = w.partition_point(|&x| x <= wavelength_um);
-        if i == 0 {
-            return self.response[0];
-        }
-        if i >= w.len() {
-            return self.response[w.len() - 1];
-        }
-        let t = (wavelength_um - w[i - 1]) / (w[i] - w[i - 1]);
-        self.response[i - 1] + t * (self.response[i] - self.response[i - 1])
+        interp1d(w, &self.response, wavelength_um)
     }
 }
 

@@ -22,6 +22,7 @@ use std::path::Path;
 use chrono::{DateTime, FixedOffset, TimeDelta, TimeZone};
 use serde::{Deserialize, Serialize};
 
+use crate::math::lerp;
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
 
@@ -259,10 +260,6 @@ impl WeatherHistory {
         let w = (t - a.time).num_microseconds().unwrap_or(0) as f64 / span;
         Ok(interpolate(a, b, w, t))
     }
-}
-
-fn lerp(a: f64, b: f64, w: f64) -> f64 {
-    a + (b - a) * w
 }
 
 fn interpolate(
