@@ -134,7 +134,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let truth: Vec<f64> = series.iter().map(|s| s.1).collect();
         let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
             let ts = study.temperature_series(x, 0)?;
-            Ok(at.iter()
+            Ok(at
+                .iter()
                 .map(|&t| irsig::math::interp1d(&times, &ts, t))
                 .collect())
         };

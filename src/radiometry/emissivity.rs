@@ -16,8 +16,8 @@
 //! Cuenca 1999, Appl. Opt. 38, 3931). ε₀ = 1 stays 1 at every angle (n = 1).
 //! [`AngularFalloff::None`] switches this off (ε independent of θ).
 
-use crate::math::{bracket, interp1d, lerp};
 use crate::material::{EmissivityCurve, Material};
+use crate::math::{bracket, interp1d, lerp};
 use crate::{Error, Result};
 
 /// What to do with view angle when the material has no angular data.

@@ -22,8 +22,8 @@ use std::path::Path;
 use chrono::{DateTime, FixedOffset, TimeDelta, TimeZone};
 use serde::{Deserialize, Serialize};
 
-use crate::math::lerp;
 use crate::error::{Error, Location, Result};
+use crate::math::lerp;
 use crate::sun::Site;
 
 mod epw;
