@@ -57,7 +57,7 @@ const FIELDS: [&str; 24] = [
 
 /// Parse the LOCATION line: site and UTC offset.
 fn location(line: &str, loc: &Location) -> Result<(Site, FixedOffset)> {
-    let f = textio::split(line);
+    let f = textio::Splitter::new().split(line);
     if f.len() < 10 || f[0].trim() != "LOCATION" {
         return Err(Error::parse(
             loc.clone(),
@@ -101,7 +101,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     let (site, offset) = location(lines[0], &Location::file(path).at_line(1))?;
     // DATA PERIODS,<n periods>,<records per hour>,…
     let mut per_hour = 1.0;
-    let dp = textio::split(lines[7]);
+    let mut csv = textio::Splitter::new();
+    let dp = csv.split(lines[7]);
     if dp.first().map(|s| s.trim()) == Some("DATA PERIODS") && dp.len() > 2 {
         per_hour = number(
             &dp[2],
@@ -127,7 +128,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
             continue;
         }
         let loc = Location::file(path).at_line(i + 1);
-        let f = textio::split(line);
+        let f = csv.split(line);
         if f.len() < FIELDS.len() {
             return Err(Error::parse(
                 loc.with_field(FIELDS[f.len()]),

@@ -94,6 +94,7 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
     let mut site = None;
     let mut header: Option<Vec<String>> = None;
     let mut records = Vec::new();
+    let mut csv = textio::Splitter::new();
     for (lineno, line) in textio::lines(text) {
         let loc = Location::file(path).at_line(lineno);
         let line = line.trim_start_matches('\u{feff}').trim_end();
@@ -106,7 +107,7 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
             }
             continue;
         }
-        let cells = textio::split(line);
+        let cells = csv.split(line);
         let Some(cols) = &header else {
             let cols = cells;
             for (j, c) in cols.iter().enumerate() {

@@ -45,7 +45,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         .next()
         .ok_or_else(|| Error::parse(Location::file(path), "empty TMY3 file"))?;
     let mloc = Location::file(path).at_line(1);
-    let m = textio::split(meta);
+    let mut csv = textio::Splitter::new();
+    let m = csv.split(meta);
     if m.len() < 7 {
         return Err(Error::parse(
             mloc,
@@ -85,7 +86,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         .next()
         .ok_or_else(|| Error::parse(Location::file(path).at_line(2), "missing column-name line"))?;
     let hloc = Location::file(path).at_line(hi);
-    let names = textio::split(header);
+    let names = csv.split(header);
     let find = |name: &str| names.iter().position(|n| n == name);
     let date_i = find(DATE).ok_or_else(|| {
         Error::parse(hloc.clone().with_field(DATE), format!("no `{DATE}` column"))
@@ -110,7 +111,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
             continue;
         }
         let loc = Location::file(path).at_line(i);
-        let f = textio::split(line);
+        let f = csv.split(line);
         if f.len() < names.len() {
             return Err(Error::parse(
                 loc.with_field(names[f.len()].clone()),
