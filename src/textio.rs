@@ -1,12 +1,13 @@
 //! Line-oriented delimited text: the one CSV reader behind irsig's input
 //! tables (analysis points and series, spectral responses, emissivity
-//! curves, irsig/EPW/TMY3 weather).
+//! curves, terrain height grids, irsig/EPW/TMY3 weather).
 //!
 //! Owns: numbering lines (1-based, as editors do), stripping a UTF-8 byte
 //! order mark, skipping blank and comment lines where a format allows
 //! comments, and splitting one line into fields with the `csv` crate's
 //! parser (`csv-core`; RFC 4180 quoting: `"a,b"` is one field, `""` inside
-//! quotes is a quote). Fields come back trimmed of surrounding whitespace.
+//! quotes is a quote). Fields come back trimmed of surrounding whitespace;
+//! [`tokens`] splits them further for the loose numeric-column dialect.
 //!
 //! Takes text already read by the caller (who owns I/O errors and the path
 //! for messages); gives [`Row`]s, or numbered lines and a [`Splitter`] for

@@ -18,6 +18,11 @@
 //!   an optional `id`.
 //! * Time series — columns `time,surface_temperature_k`, `time` in RFC 3339
 //!   (`2024-06-21T14:00:00-04:00`).
+//!
+//! Owns these three file formats. Takes a path; gives typed rows that keep
+//! their line numbers, so later checks can still name the line. Must not know
+//! images, georeferencing or how points are compared ([`super::compare`],
+//! [`super::geo`]).
 
 use std::path::Path;
 

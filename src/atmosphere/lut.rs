@@ -24,6 +24,10 @@
 //! are interpolated linearly in zenith (clamped). Every spectrum is resampled
 //! onto the caller's grid conservatively; a grid outside a run's spectral
 //! coverage is an error naming the file.
+//!
+//! Owns the index format and the interpolation between runs (brackets and
+//! lerps by [`crate::math`]). Takes an index path and a spectral grid; gives
+//! [`PathSpectra`]. Must not know rays, pixels or the renderer.
 
 use std::path::{Path, PathBuf};
 

@@ -9,6 +9,10 @@
 //! bilinearly in (cos θ, R), clamped to the table. Linear interpolation keeps
 //! the monotonicity in range of the underlying model; L_u is concave in R,
 //! so ~50 ranges (a ×1.2 step) keep the interpolation error below 1 %.
+//!
+//! Owns the table and its lookups (brackets by [`crate::math`]). Takes an
+//! [`Atmosphere`] and the sensor altitude; gives [`PathSpectra`] by target
+//! altitude and range. Must not know rays, pixels or where the sensor points.
 
 use super::{Atmosphere, PathGeometry, PathSpectra};
 use crate::math::bracket;

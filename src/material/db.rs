@@ -22,6 +22,11 @@
 //! `emissivity` one list or one list per angle) or `emissivity_file` (a
 //! DIRSIG `.ems`, or a CSV read by [`read_emissivity_csv`]), relative to the
 //! database file. Unknown keys are errors (they are usually typos).
+//!
+//! Owns the JSON database format and the emissivity CSV format. Takes a
+//! path; gives a [`MaterialDb`] (every problem collected, each naming file,
+//! line and JSON path) or an [`EmissivityCurve`]. Must not know the thermal
+//! model or the radiometry that use the values.
 
 use std::path::Path;
 

@@ -39,6 +39,10 @@
 //! `wavelength_µm emissivity` pairs. An angle-independent file becomes a
 //! single-row [`EmissivityCurve`] (`angles_deg` empty); otherwise 91 rows at
 //! 0..=90°, every curve resampled on the union of their wavelengths.
+//!
+//! Takes DIRSIG files; gives [`Material`]s in SI units and
+//! [`EmissivityCurve`]s (curves resampled by [`crate::math::interp1d`]).
+//! Must not know irsig's JSON database format ([`super::db`]).
 
 use std::path::Path;
 

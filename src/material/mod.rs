@@ -27,6 +27,11 @@
 //! undocumented, so irsig **keeps the value as read** (import is lossless)
 //! and the thermal model uses its magnitude, `|exposed_area|`
 //! ([`Material::exposed_fraction`]). Values must lie in −1..=1.
+//!
+//! Owns [`Material`], [`MaterialDb`] and [`EmissivityCurve`] (its lookups
+//! by [`crate::math`]). Takes files through [`db`] and [`dirsig`]; gives
+//! materials by name in SI units. Must not know the thermal solver or the
+//! radiometry that consume them.
 
 pub mod db;
 pub mod dirsig;

@@ -15,6 +15,10 @@
 //! model calls "band radiance". [`Band::mean`] gives the response-weighted
 //! mean spectral radiance ∫RL dλ / ∫R dλ (W·m⁻²·sr⁻¹·µm⁻¹) where that is
 //! wanted instead.
+//!
+//! Owns grids, bands and band integrals. Takes wavelengths and a response
+//! ([`super::response`]); gives quadrature weights, band radiances and their
+//! inverse. Must not know sensors or scenes.
 
 use super::planck::Planck;
 use super::response::SpectralResponse;

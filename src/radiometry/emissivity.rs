@@ -15,6 +15,10 @@
 //! 313) and for asphalt, soils and paints (Labed & Stoll 1991; Sobrino &
 //! Cuenca 1999, Appl. Opt. 38, 3931). ε₀ = 1 stays 1 at every angle (n = 1).
 //! [`AngularFalloff::None`] switches this off (ε independent of θ).
+//!
+//! Owns the evaluation of ε(λ, θ) (table lookups by [`crate::math`]). Takes
+//! a [`Material`] or an [`EmissivityCurve`]; gives an [`Emissivity`]
+//! evaluator. Must not know file formats ([`crate::material`]) or bands.
 
 use crate::material::{EmissivityCurve, Material};
 use crate::math::{bracket, interp1d, lerp};

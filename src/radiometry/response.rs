@@ -7,6 +7,11 @@
 //! finite and ≥ 0, not all zero. Any further columns are an error (they would
 //! be silently misread otherwise). Between points the response is linear;
 //! outside the first/last point it is zero.
+//!
+//! Owns [`SpectralResponse`] and its file format (fields split by the crate's
+//! one CSV reader, quoted cells allowed). Takes a path or text; gives a
+//! validated curve evaluated by [`SpectralResponse::at`]. Must not know
+//! spectral grids or band integration ([`super::band`]) or sensors.
 
 use std::path::Path;
 

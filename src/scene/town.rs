@@ -11,6 +11,10 @@
 //! running engines: `self_power_w_m2` on the engine part) and an armoured
 //! vehicle. Everything is built from primitives and instancing, so the file
 //! stays small; the output is deterministic.
+//!
+//! Owns the town's layout and its random placements. Takes nothing; gives
+//! the scene JSON ([`town_scene`]), the same document a user would write.
+//! Must not know how scenes are loaded or rendered.
 
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::SplitMix64;

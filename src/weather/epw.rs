@@ -16,6 +16,10 @@
 //! 12 horizontal infrared Wh/m² (≥ 9999), 13 GHI, 14 DNI, 15 DHI Wh/m² (≥ 9999),
 //! 20 wind direction ° (≥ 999), 21 wind speed m/s (≥ 999), 22 total and 23 opaque sky
 //! cover tenths (≥ 99).
+//!
+//! Takes text, the path (for messages) and [`LoadOptions`]; gives records
+//! whose fields may be missing, the site, and the half-interval by which
+//! irradiance lags the stamps. Must not fill gaps ([`super::fill`]).
 
 use std::path::Path;
 

@@ -8,6 +8,10 @@
 //! JSON: `{"site": {"latitude_deg":…, "longitude_deg":…, "altitude_m":…} | null,
 //! "records": [{"time": "RFC 3339", "air_temperature_k": …, …}]}` with the same field
 //! names; absent or `null` fields are missing values.
+//!
+//! Owns both formats, reading and writing. Takes text and the path (for
+//! messages); gives records whose fields may be missing. Must not know gap
+//! filling or interpolation in time ([`super::fill`], [`super::WeatherHistory`]).
 
 use std::io::Write;
 use std::path::Path;

@@ -16,6 +16,11 @@
 //!
 //! Air temperature, humidity (dew point or RH), wind speed and solar irradiance are never
 //! invented: a record without them is an error naming the file and line.
+//!
+//! Owns [`WeatherHistory`] (records and their interpolation in time, each
+//! field by [`crate::math::lerp`], wind direction the short way round),
+//! format detection and loading. Takes a path or text; gives a filled
+//! history. Must not know the thermal model that consumes it.
 
 use std::path::Path;
 

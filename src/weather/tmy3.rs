@@ -7,6 +7,10 @@
 //! hour's totals (Wh/m² = mean W/m²), so an irradiance split uses the Sun at the hour's
 //! midpoint. Missing values are written −9900 (manual §4) or left empty. Columns are
 //! found by name; the units are those in the names (°C, %, mbar, m/s, tenths).
+//!
+//! Takes text, the path (for messages) and [`LoadOptions`]; gives records
+//! whose fields may be missing, the site, and the half-hour by which
+//! irradiance lags the stamps. Must not fill gaps ([`super::fill`]).
 
 use std::path::Path;
 
