@@ -4,6 +4,7 @@
 //! `# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170` declares the site.
 //! The header names the columns (any order, any subset of [`CSV_HEADER`] that includes
 //! `time`); an empty cell is a missing value, filled as documented in [`crate::weather`].
+//! Cells may be quoted (RFC 4180, as spreadsheets write them).
 //!
 //! JSON: `{"site": {"latitude_deg":…, "longitude_deg":…, "altitude_m":…} | null,
 //! "records": [{"time": "RFC 3339", "air_temperature_k": …, …}]}` with the same field
