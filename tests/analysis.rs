@@ -197,6 +197,29 @@ fn points_csv_comparison_and_errors() {
     assert!(e.contains("colour"), "{e}");
 }
 
+/// Quoted cells (RFC 4180) may hold commas and quotes; counts and line
+/// numbers are unchanged around them.
+#[test]
+fn points_csv_quoted_cells_keep_commas() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("pts.csv");
+    std::fs::write(
+        &p,
+        "id,x,y,value,material\r\n\"P1, north\",0.5,0.5,299,\"grass, \"\"wet\"\"\"\r\n  \"P2\" , 1 , 0 , 300.5 , asphalt\r\n",
+    )
+    .unwrap();
+    let pts = csv::read_truth_points(&p).unwrap();
+    assert_eq!(pts.len(), 2);
+    assert_eq!(pts[0].id, "P1, north");
+    assert_eq!(pts[0].material.as_deref(), Some("grass, \"wet\""));
+    assert_eq!((pts[1].id.as_str(), pts[1].line), ("P2", 3));
+    assert_eq!(pts[1].value, Some(300.5));
+    // An unquoted comma is still a separator, and the error names the line.
+    std::fs::write(&p, "id,x,y,value\n\"a,b\",0,0,300\nc,d,0,0,300\n").unwrap();
+    let e = csv::read_truth_points(&p).unwrap_err().to_string();
+    assert!(e.contains("pts.csv:line 3") && e.contains("found 5"), "{e}");
+}
+
 #[test]
 fn geometric_accuracy_pixels_and_metres() {
     let dir = tempfile::tempdir().unwrap();

@@ -182,6 +182,25 @@ mod response {
         assert!(rel(bc.blackbody_radiance(300.0), band.blackbody_radiance(300.0)) < 1e-14);
     }
 
+    /// A quoted header with a comma and quoted numbers read as the plain file.
+    #[test]
+    fn quoted_cells_are_unquoted() {
+        let a = parse_response_csv("8,0\n9,1\n13,1\n14,0\n", "a.csv").unwrap();
+        let q = parse_response_csv(
+            "\"wavelength, um\",\"response\"\r\n\"8\",0\r\n9, \"1\"\r\n13,1\r\n14,0\r\n",
+            "q.csv",
+        )
+        .unwrap();
+        assert_eq!(a, q);
+        let e = parse_response_csv("8,0\n\"9,1\",2\n", "q.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("q.csv:line 2") && e.contains("wavelength_um"),
+            "{e}"
+        );
+    }
+
     #[test]
     fn errors_name_file_and_line() {
         let cases = [

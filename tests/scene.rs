@@ -185,6 +185,38 @@ fn small_scene(dir: &Path, text: &str) -> std::path::PathBuf {
     write(&sd, "scene.json", text)
 }
 
+/// `heights_csv` gives the same terrain as inline `heights`: comments,
+/// blank lines, whitespace or comma separators, quoted cells; a bad cell
+/// names the file and line.
+#[test]
+fn heightmap_heights_csv_matches_inline_heights() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let inline = Scene::load(&p).unwrap();
+    write(
+        &d.path().join("s"),
+        "h.csv",
+        "# north row first\r\n0, 1, \"2\"  # peak at NE\r\n\r\n0 0\t0\r\n",
+    );
+    let csv_scene = SMALL.replace(
+        r#""heights": [[0, 1, 2], [0, 0, 0]],"#,
+        r#""heights_csv": "h.csv","#,
+    );
+    assert_ne!(csv_scene, SMALL);
+    write(&d.path().join("s"), "scene.json", &csv_scene);
+    let from_csv = Scene::load(&p).unwrap();
+    assert_eq!(
+        from_csv.geometry.meshes[0].positions,
+        inline.geometry.meshes[0].positions
+    );
+    write(&d.path().join("s"), "h.csv", "0,1,2\n# c\n0,x,0\n");
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("h.csv:line 3") && e.contains("heights_csv"),
+        "{e}"
+    );
+}
+
 #[test]
 fn small_scene_instancing_parts_and_bounds() {
     let d = tempfile::tempdir().unwrap();

@@ -265,6 +265,52 @@ fn epw_bad_rows_name_file_line_and_field() {
     );
 }
 
+/// Quoted fields (RFC 4180, blanks before the opening quote allowed) may hold
+/// commas: an EPW city "Rochester, NY" and a TMY3 station name read as the
+/// fixtures do, with CRLF line ends.
+#[test]
+fn epw_and_tmy3_quoted_fields_with_commas() {
+    let dir = tempfile::tempdir().unwrap();
+    let epw = std::fs::read_to_string(util::repo_path("tests/data/weather/rochester_sample.epw"))
+        .unwrap();
+    let quoted = epw
+        .replacen(
+            "LOCATION,Rochester Greater Rochester Intl AP,NY,",
+            "LOCATION, \"Rochester, Greater Rochester Intl AP\",\"NY\",",
+            1,
+        )
+        .replace('\n', "\r\n");
+    assert_ne!(quoted, epw);
+    let p = write_tmp(&dir, "q.epw", &quoted);
+    let (a, b) = (
+        weather::load(&util::repo_path("tests/data/weather/rochester_sample.epw")).unwrap(),
+        weather::load(&p).unwrap(),
+    );
+    assert_eq!(a.site(), b.site());
+    assert_eq!(a.records(), b.records());
+
+    let tmy = std::fs::read_to_string(util::repo_path(
+        "tests/data/weather/rochester_sample_tmy3.csv",
+    ))
+    .unwrap();
+    let quoted = tmy.replacen(
+        "\"ROCHESTER GREATER ROCHESTER INT\"",
+        "\"ROCHESTER, GREATER \"\"INT\"\"\"",
+        1,
+    );
+    assert_ne!(quoted, tmy);
+    let p = write_tmp(&dir, "q_tmy3.csv", &quoted);
+    let (a, b) = (
+        weather::load(&util::repo_path(
+            "tests/data/weather/rochester_sample_tmy3.csv",
+        ))
+        .unwrap(),
+        weather::load(&p).unwrap(),
+    );
+    assert_eq!(a.site(), b.site());
+    assert_eq!(a.records(), b.records());
+}
+
 // ---------------------------------------------------------------- TMY3
 
 #[test]
@@ -394,6 +440,35 @@ fn irsig_csv_round_trip_and_json() {
     .unwrap();
     let e = weather::load(&pj).unwrap_err().to_string();
     assert!(e.contains("w.json") && e.contains("air_temp"), "{e}");
+}
+
+/// irsig CSV cells may be quoted (as spreadsheets write them); a bad
+/// quoted cell still names its line and column.
+#[test]
+fn irsig_csv_quoted_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = "time,air_temperature_k,relative_humidity,wind_speed_m_s,global_horizontal_w_m2,opaque_sky_cover\n\
+                 2025-06-21T12:00:00-04:00,300,0.5,2,700,0.2\n\
+                 2025-06-21T13:00:00-04:00,301,0.4,3,710,0.2\n";
+    let quoted = "# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170\r\n\
+                  \"time\", \"air_temperature_k\",relative_humidity,wind_speed_m_s,global_horizontal_w_m2,opaque_sky_cover\r\n\
+                  \"2025-06-21T12:00:00-04:00\", \"300\" ,0.5,2,\"700\",0.2\r\n\
+                  2025-06-21T13:00:00-04:00,\"301\",\"0.4\",\"3\",710,0.2\r\n";
+    let opts = LoadOptions {
+        site: Some(ROCHESTER),
+        ..LoadOptions::default()
+    };
+    let a = weather::load_with(&write_tmp(&dir, "a.csv", plain), &opts).unwrap();
+    let b = weather::load_with(&write_tmp(&dir, "b.csv", quoted), &opts).unwrap();
+    assert_eq!(a.records(), b.records());
+    let bad = quoted.replace("\"301\"", "\"301,5\"");
+    let e = weather::load_with(&write_tmp(&dir, "c.csv", &bad), &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("c.csv:line 4") && e.contains("air_temperature_k") && e.contains("301,5"),
+        "{e}"
+    );
 }
 
 #[test]

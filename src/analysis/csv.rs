@@ -3,8 +3,9 @@
 //!
 //! The dialect: comma-separated, one header row naming the columns
 //! (case-insensitive, surrounding spaces ignored), blank lines and lines
-//! starting with `#` skipped, no quoting. Every error names the file, the
-//! 1-based line and the column.
+//! starting with `#` skipped, RFC 4180 quoting (`"Smith, J."` is one cell;
+//! read by `crate::textio`). Every error names the file, the 1-based line
+//! and the column.
 //!
 //! * Truth points — columns `x,y,value` (pixel coordinates: `x` the column,
 //!   `y` the row, the top-left pixel covering `[0,1)×[0,1)`) or
@@ -17,11 +18,17 @@
 //!   an optional `id`.
 //! * Time series — columns `time,surface_temperature_k`, `time` in RFC 3339
 //!   (`2024-06-21T14:00:00-04:00`).
+//!
+//! Owns these three file formats. Takes a path; gives typed rows that keep
+//! their line numbers, so later checks can still name the line. Must not know
+//! images, georeferencing or how points are compared ([`super::compare`],
+//! [`super::geo`]).
 
 use std::path::Path;
 
 use chrono::{DateTime, FixedOffset};
 
+use crate::textio::{self, Comments};
 use crate::{Error, Location, Result};
 
 /// A parsed CSV table: header names (lower-case) and rows with line numbers.
@@ -34,18 +41,14 @@ fn read_table(path: &Path) -> Result<Table> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let mut header: Option<Vec<String>> = None;
     let mut rows = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        let cells: Vec<String> = t.split(',').map(|c| c.trim().to_string()).collect();
+    for row in textio::rows(&text, Comments::WholeLine) {
+        let cells = row.fields;
         match &header {
             None => header = Some(cells.iter().map(|c| c.to_ascii_lowercase()).collect()),
             Some(h) => {
                 if cells.len() != h.len() {
                     return Err(Error::parse(
-                        Location::file(path).at_line(i + 1),
+                        Location::file(path).at_line(row.line),
                         format!(
                             "expected {} comma-separated values (columns {}), found {}",
                             h.len(),
@@ -54,7 +57,7 @@ fn read_table(path: &Path) -> Result<Table> {
                         ),
                     ));
                 }
-                rows.push((i + 1, cells));
+                rows.push((row.line, cells));
             }
         }
     }

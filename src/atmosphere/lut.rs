@@ -24,6 +24,10 @@
 //! are interpolated linearly in zenith (clamped). Every spectrum is resampled
 //! onto the caller's grid conservatively; a grid outside a run's spectral
 //! coverage is an error naming the file.
+//!
+//! Owns the index format and the interpolation between runs (brackets and
+//! lerps by [`crate::math`]). Takes an index path and a spectral grid; gives
+//! [`PathSpectra`]. Must not know rays, pixels or the renderer.
 
 use std::path::{Path, PathBuf};
 
@@ -31,6 +35,7 @@ use serde::Deserialize;
 
 use super::PathSpectra;
 use super::tape7::{Tape7, Tape7Mode};
+use crate::math::{bracket, lerp};
 use crate::radiometry::SpectralGrid;
 use crate::{Error, Location, Result};
 
@@ -106,24 +111,11 @@ fn resample(run: &Tape7Run, grid: &SpectralGrid) -> Result<PathSpectra> {
 }
 
 fn lerp_spectra(a: &PathSpectra, b: &PathSpectra, t: f64) -> PathSpectra {
-    let mix = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p + t * (q - p)).collect();
+    let mix = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(&p, &q)| lerp(p, q, t)).collect();
     PathSpectra {
         transmittance: mix(&a.transmittance, &b.transmittance),
         path_radiance: mix(&a.path_radiance, &b.path_radiance),
     }
-}
-
-/// Bracket `x` in sorted `xs`: (i, j, t) with value = v[i] + t (v[j] − v[i]).
-fn bracket(xs: &[f64], x: f64) -> (usize, usize, f64) {
-    let n = xs.len();
-    if n == 1 || x <= xs[0] {
-        return (0, 0, 0.0);
-    }
-    if x >= xs[n - 1] {
-        return (n - 1, n - 1, 0.0);
-    }
-    let j = xs.partition_point(|&v| v <= x).clamp(1, n - 1);
-    (j - 1, j, (x - xs[j - 1]) / (xs[j] - xs[j - 1]))
 }
 
 impl Tape7Lut {

@@ -9,8 +9,13 @@
 //! bilinearly in (cos θ, R), clamped to the table. Linear interpolation keeps
 //! the monotonicity in range of the underlying model; L_u is concave in R,
 //! so ~50 ranges (a ×1.2 step) keep the interpolation error below 1 %.
+//!
+//! Owns the table and its lookups (brackets by [`crate::math`]). Takes an
+//! [`Atmosphere`] and the sensor altitude; gives [`PathSpectra`] by target
+//! altitude and range. Must not know rays, pixels or where the sensor points.
 
 use super::{Atmosphere, PathGeometry, PathSpectra};
+use crate::math::bracket;
 use crate::radiometry::SpectralGrid;
 use crate::{Error, Result};
 
@@ -23,18 +28,6 @@ pub struct PathTable {
     /// [zenith][range] spectra.
     spectra: Vec<Vec<PathSpectra>>,
     n: usize,
-}
-
-fn bracket(xs: &[f64], x: f64) -> (usize, usize, f64) {
-    let n = xs.len();
-    if n == 1 || x <= xs[0] {
-        return (0, 0, 0.0);
-    }
-    if x >= xs[n - 1] {
-        return (n - 1, n - 1, 0.0);
-    }
-    let j = xs.partition_point(|&v| v <= x).clamp(1, n - 1);
-    (j - 1, j, (x - xs[j - 1]) / (xs[j] - xs[j - 1]))
 }
 
 impl PathTable {

@@ -134,7 +134,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let truth: Vec<f64> = series.iter().map(|s| s.1).collect();
         let model = |x: &[f64]| -> irsig::Result<Vec<f64>> {
             let ts = study.temperature_series(x, 0)?;
-            Ok(at.iter().map(|&t| interpolate(&times, &ts, t)).collect())
+            Ok(at
+                .iter()
+                .map(|&t| irsig::math::interp1d(&times, &ts, t))
+                .collect())
         };
         let c = calibrate::calibrate(&study.params.factors(), &truth, &model, opts)?;
         let x: Vec<f64> = c.params.iter().map(|p| p.fitted).collect();
@@ -197,19 +200,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         print_result(&result);
     }
     Ok(())
-}
-
-/// Linear interpolation of `(xs, ys)` at `x` (clamped at the ends).
-fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let i = xs.partition_point(|&v| v <= x);
-    if i == 0 {
-        return ys[0];
-    }
-    if i >= xs.len() {
-        return ys[xs.len() - 1];
-    }
-    let f = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
-    ys[i - 1] + f * (ys[i] - ys[i - 1])
 }
 
 fn print_result(c: &Calibration) {

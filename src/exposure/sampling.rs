@@ -1,7 +1,14 @@
 //! Deterministic sample patterns: points on a facet, directions over its
-//! hemisphere, and the per-facet pseudo-random numbers that jitter them.
+//! hemisphere, and the per-facet pseudo-random stream that jitters them.
+//!
+//! Owns the patterns (in a facet's local frame, `z` along the normal) and
+//! their weights. Takes sample counts, grid steps and a jitter source; gives
+//! barycentric points and [`HemiSample`]s. Must not know the scene, the
+//! tracer or what the directions are used for (that is `exposure::sky`).
 
 use glam::Vec3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 
 /// Barycentric coordinates `(b1, b2)` (weights of vertices 1 and 2) of the
 /// `n²` stratified sample points of a triangle: the centroids of the `n²`
@@ -119,28 +126,43 @@ pub fn stratified_cosine(samples: u32, mut rng: impl FnMut() -> f32) -> Vec<Hemi
     out
 }
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny counter-based generator, so
-/// every facet's jitter depends only on (seed, facet), never on threads.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
+/// The jitter stream of one facet face for [`stratified_cosine`]: ChaCha8
+/// (the generator of every seeded draw in irsig) with the 32-byte key holding
+/// `seed` little-endian followed by zeros, on stream `key` (the facet face).
+/// Each face's jitter depends only on `(seed, key)`, never on threads or on
+/// the order faces are visited.
+pub fn jitter_rng(seed: u64, key: u64) -> ChaCha8Rng {
+    let mut k = [0u8; 32];
+    k[..8].copy_from_slice(&seed.to_le_bytes());
+    let mut rng = ChaCha8Rng::from_seed(k);
+    rng.set_stream(key);
+    rng
+}
 
-impl SplitMix64 {
-    /// Stream for `(seed, key)`.
-    pub fn new(seed: u64, key: u64) -> Self {
-        let mut s = SplitMix64(seed ^ key.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        s.next_u64();
-        s
-    }
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)` with 24 bits.
-    pub fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+#[cfg(test)]
+mod tests {
+    use rand::Rng;
+
+    use super::*;
+
+    #[test]
+    fn jitter_depends_only_on_seed_and_key() {
+        let draw = |seed, key| {
+            let mut r = jitter_rng(seed, key);
+            (0..8).map(|_| r.random::<f32>()).collect::<Vec<_>>()
+        };
+        assert_eq!(draw(7, 3), draw(7, 3));
+        assert_ne!(draw(7, 3), draw(7, 4));
+        assert_ne!(draw(7, 3), draw(8, 3));
+        assert!(draw(1, 2).iter().all(|u| (0.0..1.0).contains(u)));
+        // Stratified directions stay unit, upward and equally weighted.
+        let mut r = jitter_rng(1, 2);
+        let p = stratified_cosine(16, || r.random::<f32>());
+        assert_eq!(p.len(), 16);
+        assert!(
+            p.iter()
+                .all(|s| (s.dir.length() - 1.0).abs() < 1e-5 && s.dir.z >= 0.0)
+        );
+        assert!((p.iter().map(|s| s.weight).sum::<f32>() - 1.0).abs() < 1e-6);
     }
 }

@@ -1,10 +1,17 @@
 //! Shape factor (sky view factor) and background of every facet, from
 //! hemisphere rays.
+//!
+//! Owns the hemisphere sampling choice ([`SkySampling`]) and the ray casting
+//! of it. Takes the facets' sample points and a [`Tracer`]; gives a
+//! [`SkyView`] (each facet face's shape factor and the facets its rays
+//! hit, with weights) and the ray count. Must not know temperatures or the
+//! thermal solve that consumes them.
 
+use rand::Rng;
 use rayon::prelude::*;
 
 use super::FacetSamples;
-use super::sampling::{HemiSample, SplitMix64, dirsig_grid, stratified_cosine};
+use super::sampling::{HemiSample, dirsig_grid, jitter_rng, stratified_cosine};
 use crate::geometry::SceneGeometry;
 use crate::trace::{Coherence, Hit, Ray, Tracer};
 
@@ -199,8 +206,8 @@ fn pattern(sampling: SkySampling, grid: &[HemiSample], seed: u64, key: u64) -> V
     match sampling {
         SkySampling::Grid { .. } => grid.to_vec(),
         SkySampling::Stratified { samples } => {
-            let mut rng = SplitMix64::new(seed, key);
-            stratified_cosine(samples, || rng.next_f32())
+            let mut rng = jitter_rng(seed, key);
+            stratified_cosine(samples, || rng.random::<f32>())
         }
     }
 }

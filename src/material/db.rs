@@ -22,6 +22,11 @@
 //! `emissivity` one list or one list per angle) or `emissivity_file` (a
 //! DIRSIG `.ems`, or a CSV read by [`read_emissivity_csv`]), relative to the
 //! database file. Unknown keys are errors (they are usually typos).
+//!
+//! Owns the JSON database format and the emissivity CSV format. Takes a
+//! path; gives a [`MaterialDb`] (every problem collected, each naming file,
+//! line and JSON path) or an [`EmissivityCurve`]. Must not know the thermal
+//! model or the radiometry that use the values.
 
 use std::path::Path;
 
@@ -31,6 +36,7 @@ use serde::{Deserialize, Serialize};
 use super::{EmissivityCurve, Material, MaterialDb, MaterialSource, dirsig};
 use crate::error::{Error, Location, Result};
 use crate::scene::jsonloc::JsonLines;
+use crate::textio::{self, Comments};
 
 /// The top level of a JSON material database file.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
@@ -229,31 +235,23 @@ pub fn read_emissivity_file(path: &Path) -> Result<EmissivityCurve> {
     }
 }
 
-/// Read a CSV emissivity curve: comma (or whitespace) separated columns,
-/// `#` comments. Two columns: wavelength (µm), emissivity. More columns: a
+/// Read a CSV emissivity curve: comma (or whitespace or `;`) separated
+/// columns, quoted cells allowed, `#` comments (read by `crate::textio`). Two columns: wavelength (µm), emissivity. More columns: a
 /// header line is required, `wavelength_um,<angle>,<angle>,…` with view
 /// zenith angles in degrees, one emissivity column per angle. A header
 /// line (non-numeric first field) is optional with two columns.
 pub fn read_emissivity_csv(path: &Path) -> Result<EmissivityCurve> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let split = |l: &str| -> Vec<String> {
-        l.split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|s| !s.is_empty())
-            .map(str::to_string)
-            .collect()
-    };
     let mut angles: Option<Vec<f64>> = None;
     let mut wl = Vec::new();
     let mut cols: Vec<Vec<f64>> = Vec::new();
     let mut ncols = 0;
-    for (n, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        let f = split(line);
-        let loc = || Location::file(path).at_line(n + 1);
-        if wl.is_empty() && angles.is_none() && f[0].parse::<f64>().is_err() {
+    for row in textio::rows(&text, Comments::Trailing) {
+        let line = row.text;
+        let f = textio::tokens(&row.fields);
+        let loc = || Location::file(path).at_line(row.line);
+        if wl.is_empty() && angles.is_none() && f.first().is_some_and(|s| s.parse::<f64>().is_err())
+        {
             // Header.
             let a: std::result::Result<Vec<f64>, _> =
                 f[1..].iter().map(|s| s.parse::<f64>()).collect();

@@ -39,11 +39,16 @@
 //! `wavelength_µm emissivity` pairs. An angle-independent file becomes a
 //! single-row [`EmissivityCurve`] (`angles_deg` empty); otherwise 91 rows at
 //! 0..=90°, every curve resampled on the union of their wavelengths.
+//!
+//! Takes DIRSIG files; gives [`Material`]s in SI units and
+//! [`EmissivityCurve`]s (curves resampled by [`crate::math::interp1d`]).
+//! Must not know irsig's JSON database format ([`super::db`]).
 
 use std::path::Path;
 
-use super::{EmissivityCurve, Material, MaterialDb, interp};
+use super::{EmissivityCurve, Material, MaterialDb};
 use crate::error::{Error, Location, Result};
+use crate::math::interp1d;
 
 /// cal/(cm·h·°C) → W/(m·K): 4.1868 J / (0.01 m · 3600 s).
 pub const THERM_CONDUCTIVITY_TO_SI: f64 = 4.1868 / 36.0;
@@ -426,7 +431,7 @@ pub fn read_ems(path: &Path) -> Result<EmissivityCurve> {
     wl.dedup();
     let resampled: Vec<Vec<f64>> = curves
         .iter()
-        .map(|(x, y)| wl.iter().map(|&w| interp(x, y, w)).collect())
+        .map(|(x, y)| wl.iter().map(|&w| interp1d(x, y, w)).collect())
         .collect();
     let row_for = |c: f64| -> Vec<f64> {
         let lo = (c.floor() as usize).clamp(1, count) - 1;

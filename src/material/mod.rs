@@ -27,6 +27,11 @@
 //! undocumented, so irsig **keeps the value as read** (import is lossless)
 //! and the thermal model uses its magnitude, `|exposed_area|`
 //! ([`Material::exposed_fraction`]). Values must lie in −1..=1.
+//!
+//! Owns [`Material`], [`MaterialDb`] and [`EmissivityCurve`] (its lookups
+//! by [`crate::math`]). Takes files through [`db`] and [`dirsig`]; gives
+//! materials by name in SI units. Must not know the thermal solver or the
+//! radiometry that consume them.
 
 pub mod db;
 pub mod dirsig;
@@ -38,6 +43,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Location, Result};
+use crate::math::{bracket, interp1d, lerp};
 
 /// A spectral emissivity curve, optionally angle-dependent.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, JsonSchema)]
@@ -111,15 +117,14 @@ impl EmissivityCurve {
     /// Emissivity at `wavelength_um` and view zenith `angle_deg`, linearly
     /// interpolated in both, clamped to the ends of the tables.
     pub fn at(&self, wavelength_um: f64, angle_deg: f64) -> f64 {
-        let row_at = |row: &[f64]| interp(&self.wavelengths_um, row, wavelength_um);
+        let row_at = |row: &[f64]| interp1d(&self.wavelengths_um, row, wavelength_um);
         if self.angles_deg.len() < 2 {
             return row_at(&self.emissivity[0]);
         }
-        let a = &self.angles_deg;
-        let x = angle_deg.clamp(a[0], a[a.len() - 1]);
-        let i = a.partition_point(|v| *v <= x).clamp(1, a.len() - 1);
-        let t = (x - a[i - 1]) / (a[i] - a[i - 1]);
-        (1.0 - t) * row_at(&self.emissivity[i - 1]) + t * row_at(&self.emissivity[i])
+        match bracket(&self.angles_deg, angle_deg) {
+            (i, j, _) if i == j => row_at(&self.emissivity[i]),
+            (i, j, t) => lerp(row_at(&self.emissivity[i]), row_at(&self.emissivity[j]), t),
+        }
     }
 
     /// Band-average emissivity at normal view over `[lo_um, hi_um]`
@@ -135,25 +140,6 @@ impl EmissivityCurve {
             s += self.at(lo_um + k as f64 * h, 0.0);
         }
         s / n as f64
-    }
-}
-
-/// Linear interpolation of `(xs, ys)` at `x`, clamped at the ends.
-pub(crate) fn interp(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    match xs.len() {
-        0 => f64::NAN,
-        1 => ys[0],
-        n => {
-            if x <= xs[0] {
-                return ys[0];
-            }
-            if x >= xs[n - 1] {
-                return ys[n - 1];
-            }
-            let i = xs.partition_point(|v| *v <= x).clamp(1, n - 1);
-            let t = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
-            (1.0 - t) * ys[i - 1] + t * ys[i]
-        }
     }
 }
 

@@ -15,9 +15,14 @@
 //! model calls "band radiance". [`Band::mean`] gives the response-weighted
 //! mean spectral radiance ∫RL dλ / ∫R dλ (W·m⁻²·sr⁻¹·µm⁻¹) where that is
 //! wanted instead.
+//!
+//! Owns grids, bands and band integrals. Takes wavelengths and a response
+//! ([`super::response`]); gives quadrature weights, band radiances and their
+//! inverse. Must not know sensors or scenes.
 
 use super::planck::Planck;
 use super::response::SpectralResponse;
+use crate::math::interp1d;
 use crate::{Error, Result};
 
 /// Default spectral step for band grids, µm. Planck curves are smooth on this
@@ -155,17 +160,7 @@ impl SpectralGrid {
         for j in 1..n {
             cum[j] = cum[j - 1] + 0.5 * (src[j] + src[j - 1]) * (src_wl_um[j] - src_wl_um[j - 1]);
         }
-        let value = |x: f64| -> f64 {
-            if x <= src_wl_um[0] {
-                return src[0];
-            }
-            if x >= src_wl_um[n - 1] {
-                return src[n - 1];
-            }
-            let j = src_wl_um.partition_point(|&w| w <= x).clamp(1, n - 1);
-            let t = (x - src_wl_um[j - 1]) / (src_wl_um[j] - src_wl_um[j - 1]);
-            src[j - 1] + t * (src[j] - src[j - 1])
-        };
+        let value = |x: f64| interp1d(src_wl_um, src, x);
         // ∫ from src_wl_um[0] to x (constant extension outside).
         let cumulative = |x: f64| -> f64 {
             if x <= src_wl_um[0] {

@@ -15,8 +15,13 @@
 //! 313) and for asphalt, soils and paints (Labed & Stoll 1991; Sobrino &
 //! Cuenca 1999, Appl. Opt. 38, 3931). ε₀ = 1 stays 1 at every angle (n = 1).
 //! [`AngularFalloff::None`] switches this off (ε independent of θ).
+//!
+//! Owns the evaluation of ε(λ, θ) (table lookups by [`crate::math`]). Takes
+//! a [`Material`] or an [`EmissivityCurve`]; gives an [`Emissivity`]
+//! evaluator. Must not know file formats ([`crate::material`]) or bands.
 
 use crate::material::{EmissivityCurve, Material};
+use crate::math::{bracket, interp1d, lerp};
 use crate::{Error, Result};
 
 /// What to do with view angle when the material has no angular data.
@@ -69,19 +74,6 @@ pub struct Emissivity {
     /// Angles of the rows, degrees; empty or one = no angular data.
     angles_deg: Vec<f64>,
     falloff: AngularFalloff,
-}
-
-fn interp(x: &[f64], y: &[f64], at: f64) -> f64 {
-    let n = x.len();
-    if n == 1 || at <= x[0] {
-        return y[0];
-    }
-    if at >= x[n - 1] {
-        return y[n - 1];
-    }
-    let i = x.partition_point(|&v| v <= at).clamp(1, n - 1);
-    let t = (at - x[i - 1]) / (x[i] - x[i - 1]);
-    y[i - 1] + t * (y[i] - y[i - 1])
 }
 
 impl Emissivity {
@@ -185,25 +177,17 @@ impl Emissivity {
 
     /// ε(λ) at normal view (or the first tabulated angle).
     pub fn normal(&self, wavelength_um: f64) -> f64 {
-        interp(&self.wavelengths_um, &self.rows[0], wavelength_um)
+        interp1d(&self.wavelengths_um, &self.rows[0], wavelength_um)
     }
 
     /// ε(λ, θ) for λ in µm and view zenith θ in degrees from the normal.
     pub fn eval(&self, wavelength_um: f64, view_zenith_deg: f64) -> f64 {
         let theta = view_zenith_deg.abs().min(90.0);
         if self.has_angular_data() {
-            let a = &self.angles_deg;
-            let (i0, i1, t) = if theta <= a[0] {
-                (0, 0, 0.0)
-            } else if theta >= a[a.len() - 1] {
-                (a.len() - 1, a.len() - 1, 0.0)
-            } else {
-                let i = a.partition_point(|&v| v <= theta).clamp(1, a.len() - 1);
-                (i - 1, i, (theta - a[i - 1]) / (a[i] - a[i - 1]))
-            };
-            let e0 = interp(&self.wavelengths_um, &self.rows[i0], wavelength_um);
-            let e1 = interp(&self.wavelengths_um, &self.rows[i1], wavelength_um);
-            return e0 + t * (e1 - e0);
+            let (i0, i1, t) = bracket(&self.angles_deg, theta);
+            let e0 = interp1d(&self.wavelengths_um, &self.rows[i0], wavelength_um);
+            let e1 = interp1d(&self.wavelengths_um, &self.rows[i1], wavelength_um);
+            return lerp(e0, e1, t);
         }
         let e0 = self.normal(wavelength_um);
         match self.falloff {

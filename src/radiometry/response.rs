@@ -7,9 +7,16 @@
 //! finite and ≥ 0, not all zero. Any further columns are an error (they would
 //! be silently misread otherwise). Between points the response is linear;
 //! outside the first/last point it is zero.
+//!
+//! Owns [`SpectralResponse`] and its file format (fields split by the crate's
+//! one CSV reader, quoted cells allowed). Takes a path or text; gives a
+//! validated curve evaluated by [`SpectralResponse::at`]. Must not know
+//! spectral grids or band integration ([`super::band`]) or sensors.
 
 use std::path::Path;
 
+use crate::math::interp1d;
+use crate::textio::{self, Comments};
 use crate::{Error, Location, Result};
 
 /// A relative spectral response curve (dimensionless, any scale).
@@ -75,15 +82,7 @@ impl SpectralResponse {
         if wavelength_um < w[0] || wavelength_um > w[w.len() - 1] {
             return 0.0;
         }
-        let i = w.partition_point(|&x| x <= wavelength_um);
-        if i == 0 {
-            return self.response[0];
-        }
-        if i >= w.len() {
-            return self.response[w.len() - 1];
-        }
-        let t = (wavelength_um - w[i - 1]) / (w[i] - w[i - 1]);
-        self.response[i - 1] + t * (self.response[i] - self.response[i - 1])
+        interp1d(w, &self.response, wavelength_um)
     }
 }
 
@@ -100,19 +99,10 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
     let mut wl = Vec::new();
     let mut resp = Vec::new();
     let mut seen_data_or_header = false;
-    for (i, raw) in text.lines().enumerate() {
-        let lineno = i + 1;
+    for row in textio::rows(text, Comments::Trailing) {
+        let (lineno, line) = (row.line, row.text);
         let loc = || Location::file(path).at_line(lineno);
-        let line = raw.split('#').next().unwrap_or("").trim();
-        let line = line.trim_start_matches('\u{feff}');
-        if line.is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line
-            .split([',', ';', '\t', ' '])
-            .map(str::trim)
-            .filter(|s| !s.is_empty())
-            .collect();
+        let fields = textio::tokens(&row.fields);
         if !seen_data_or_header {
             seen_data_or_header = true;
             if fields.first().is_some_and(|f| f.parse::<f64>().is_err()) {

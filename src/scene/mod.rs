@@ -37,6 +37,7 @@ use crate::error::{Error, Location, Result};
 use crate::geometry::{Instance, SceneGeometry, TriangleMesh};
 use crate::material::{Material, MaterialDb};
 use crate::sun::Site;
+use crate::textio::{self, Comments};
 use crate::weather::{LoadOptions, WeatherHistory};
 
 pub use file::SceneFile;
@@ -1086,23 +1087,19 @@ pub fn height_function(f: &file::HeightFunction, x: f64, y: f64) -> f64 {
     z
 }
 
-/// Read a CSV grid of numbers (comma or whitespace separated, `#` comments).
+/// Read a CSV grid of numbers (comma, whitespace or `;` separated, quoted
+/// cells allowed, `#` comments), through `crate::textio`.
 fn read_grid_csv(path: &Path) -> Result<Vec<Vec<f64>>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let mut rows = Vec::new();
-    for (n, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        let row: std::result::Result<Vec<f64>, _> = line
-            .split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|s| !s.is_empty())
+    for row in textio::rows(&text, Comments::Trailing) {
+        let values: std::result::Result<Vec<f64>, _> = textio::tokens(&row.fields)
+            .into_iter()
             .map(str::parse::<f64>)
             .collect();
-        rows.push(row.map_err(|_| {
+        rows.push(values.map_err(|_| {
             Error::parse(
-                Location::file(path).at_line(n + 1),
+                Location::file(path).at_line(row.line),
                 "expected numbers separated by commas",
             )
         })?);

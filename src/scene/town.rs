@@ -11,7 +11,13 @@
 //! running engines: `self_power_w_m2` on the engine part) and an armoured
 //! vehicle. Everything is built from primitives and instancing, so the file
 //! stays small; the output is deterministic.
+//!
+//! Owns the town's layout and its random placements. Takes nothing; gives
+//! the scene JSON ([`town_scene`]), the same document a user would write.
+//! Must not know how scenes are loaded or rendered.
 
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::SplitMix64;
 use serde_json::{Value, json};
 
 use super::file::{Bowl, Flat, HeightFunction, Wave};
@@ -146,16 +152,17 @@ fn tf(x: f64, y: f64, z: f64, rot_z: f64) -> Value {
     }
 }
 
-/// Deterministic pseudo-random numbers in [0, 1) (SplitMix64).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
+/// The generator of the town's random placements (tree sizes and turns,
+/// empty parking spaces, park positions).
+///
+/// Not ChaCha8 like irsig's other seeded draws: the committed
+/// `scenes/town/scene.json`, and with it the default render, are fixed by
+/// this generator's sequence — SplitMix64 (Steele, Lea & Flood 2014) from
+/// state `0x1A5E_5EED`, each draw `(next_u64 >> 11) · 2⁻⁵³` in [0, 1)
+/// (`rand`'s standard `f64`), taken from `rand_xoshiro`. Changing it
+/// changes the bundled scene.
+fn town_rng() -> SplitMix64 {
+    SplitMix64::seed_from_u64(0x1A5E_5EED)
 }
 
 fn car_shapes() -> Value {
@@ -321,12 +328,12 @@ pub fn town_scene() -> Value {
         }));
     }
     // Trees: along streets, in yards and a park north-west.
-    let mut rng = Rng(0x1A5E_5EED);
+    let mut rng = town_rng();
     let mut decid = Vec::new();
     let mut conif = Vec::new();
-    let mut place = |x: f64, y: f64, rng: &mut Rng, conifer: bool| {
-        let s = 0.8 + 0.4 * rng.next();
-        let rot = (360.0 * rng.next()).round();
+    let mut place = |x: f64, y: f64, rng: &mut SplitMix64, conifer: bool| {
+        let s = 0.8 + 0.4 * rng.random::<f64>();
+        let rot = (360.0 * rng.random::<f64>()).round();
         let mut t = tf(x, y, h(x, y) - 0.1, rot);
         t["scale"] = json!((s * 100.0_f64).round() / 100.0);
         if conifer {
@@ -345,14 +352,14 @@ pub fn town_scene() -> Value {
     }
     for (x, y, _) in &sites {
         let side = if *x < -201.0 { -1.0 } else { 1.0 };
-        let (dy, conifer) = (8.0 * rng.next(), rng.next() < 0.3);
+        let (dy, conifer) = (8.0 * rng.random::<f64>(), rng.random::<f64>() < 0.3);
         place(x + side * 12.0, y + dy, &mut rng, conifer);
     }
     for _ in 0..70 {
         // Park north-west of the plant (lawn), avoiding the service road.
-        let x = -290.0 + 170.0 * rng.next();
-        let y = 150.0 + 140.0 * rng.next();
-        let conifer = rng.next() < 0.5;
+        let x = -290.0 + 170.0 * rng.random::<f64>();
+        let y = 150.0 + 140.0 * rng.random::<f64>();
+        let conifer = rng.random::<f64>() < 0.5;
         place(x, y, &mut rng, conifer);
     }
     for k in 0..18 {
@@ -402,9 +409,9 @@ pub fn town_scene() -> Value {
     let mut parked = Vec::new();
     let mut running = Vec::new();
     let mut k = 0usize;
-    let mut car = |x: f64, y: f64, rot: f64, rng: &mut Rng| {
+    let mut car = |x: f64, y: f64, rot: f64, rng: &mut SplitMix64| {
         k += 1;
-        if rng.next() < 0.25 {
+        if rng.random::<f64>() < 0.25 {
             return; // empty space
         }
         let t = tf(x, y, h(x, y), rot);

@@ -16,6 +16,10 @@
 //! 12 horizontal infrared Wh/m² (≥ 9999), 13 GHI, 14 DNI, 15 DHI Wh/m² (≥ 9999),
 //! 20 wind direction ° (≥ 999), 21 wind speed m/s (≥ 999), 22 total and 23 opaque sky
 //! cover tenths (≥ 99).
+//!
+//! Takes text, the path (for messages) and [`LoadOptions`]; gives records
+//! whose fields may be missing, the site, and the half-interval by which
+//! irradiance lags the stamps. Must not fill gaps ([`super::fill`]).
 
 use std::path::Path;
 
@@ -23,9 +27,10 @@ use chrono::{FixedOffset, NaiveDate, TimeDelta, TimeZone};
 
 use super::LoadOptions;
 use super::fill::{Parsed, RawRecord};
-use super::text::{number, split_csv};
+use super::text::number;
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
+use crate::textio;
 
 const FIELDS: [&str; 24] = [
     "year",
@@ -56,7 +61,7 @@ const FIELDS: [&str; 24] = [
 
 /// Parse the LOCATION line: site and UTC offset.
 fn location(line: &str, loc: &Location) -> Result<(Site, FixedOffset)> {
-    let f = split_csv(line);
+    let f = textio::Splitter::new().split(line);
     if f.len() < 10 || f[0].trim() != "LOCATION" {
         return Err(Error::parse(
             loc.clone(),
@@ -87,7 +92,7 @@ fn location(line: &str, loc: &Location) -> Result<(Site, FixedOffset)> {
 }
 
 pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Parsed> {
-    let lines: Vec<&str> = text.lines().collect();
+    let lines: Vec<&str> = textio::lines(text).map(|(_, l)| l).collect();
     if lines.len() < 9 {
         return Err(Error::parse(
             Location::file(path),
@@ -97,13 +102,11 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
             ),
         ));
     }
-    let (site, offset) = location(
-        lines[0].trim_start_matches('\u{feff}'),
-        &Location::file(path).at_line(1),
-    )?;
+    let (site, offset) = location(lines[0], &Location::file(path).at_line(1))?;
     // DATA PERIODS,<n periods>,<records per hour>,…
     let mut per_hour = 1.0;
-    let dp = split_csv(lines[7]);
+    let mut csv = textio::Splitter::new();
+    let dp = csv.split(lines[7]);
     if dp.first().map(|s| s.trim()) == Some("DATA PERIODS") && dp.len() > 2 {
         per_hour = number(
             &dp[2],
@@ -129,7 +132,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
             continue;
         }
         let loc = Location::file(path).at_line(i + 1);
-        let f = split_csv(line);
+        let f = csv.split(line);
         if f.len() < FIELDS.len() {
             return Err(Error::parse(
                 loc.with_field(FIELDS[f.len()]),

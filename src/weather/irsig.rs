@@ -4,10 +4,15 @@
 //! `# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170` declares the site.
 //! The header names the columns (any order, any subset of [`CSV_HEADER`] that includes
 //! `time`); an empty cell is a missing value, filled as documented in [`crate::weather`].
+//! Cells may be quoted (RFC 4180, as spreadsheets write them).
 //!
 //! JSON: `{"site": {"latitude_deg":…, "longitude_deg":…, "altitude_m":…} | null,
 //! "records": [{"time": "RFC 3339", "air_temperature_k": …, …}]}` with the same field
 //! names; absent or `null` fields are missing values.
+//!
+//! Owns both formats, reading and writing. Takes text and the path (for
+//! messages); gives records whose fields may be missing. Must not know gap
+//! filling or interpolation in time ([`super::fill`], [`super::WeatherHistory`]).
 
 use std::io::Write;
 use std::path::Path;
@@ -16,10 +21,11 @@ use chrono::{DateTime, FixedOffset};
 use serde::Deserialize;
 
 use super::fill::{Parsed, RawRecord};
-use super::text::{opt_number, split_csv};
+use super::text::opt_number;
 use super::{WeatherHistory, WeatherRecord};
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
+use crate::textio;
 
 /// The full header of an irsig weather CSV (also the column order [`write_csv`] uses).
 pub const CSV_HEADER: &str = "time,air_temperature_k,dew_point_k,relative_humidity,pressure_pa,wind_speed_m_s,wind_direction_deg,direct_normal_w_m2,diffuse_horizontal_w_m2,global_horizontal_w_m2,sky_longwave_w_m2,total_sky_cover,opaque_sky_cover";
@@ -93,8 +99,9 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
     let mut site = None;
     let mut header: Option<Vec<String>> = None;
     let mut records = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let loc = Location::file(path).at_line(i + 1);
+    let mut csv = textio::Splitter::new();
+    for (lineno, line) in textio::lines(text) {
+        let loc = Location::file(path).at_line(lineno);
         let line = line.trim_start_matches('\u{feff}').trim_end();
         if line.trim().is_empty() {
             continue;
@@ -105,9 +112,9 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
             }
             continue;
         }
-        let cells = split_csv(line);
+        let cells = csv.split(line);
         let Some(cols) = &header else {
-            let cols: Vec<String> = cells.iter().map(|c| c.trim().to_string()).collect();
+            let cols = cells;
             for (j, c) in cols.iter().enumerate() {
                 if !known.contains(&c.as_str()) {
                     return Err(Error::parse(
@@ -245,27 +252,27 @@ pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
     })
 }
 
-fn csv_row(r: &WeatherRecord) -> String {
-    format!(
-        "{},{:.3},{:.3},{:.4},{:.1},{:.2},{:.1},{:.2},{:.2},{:.2},{:.2},{:.3},{:.3}",
+fn csv_row(r: &WeatherRecord) -> [String; 13] {
+    [
         r.time.to_rfc3339(),
-        r.air_temperature_k,
-        r.dew_point_k,
-        r.relative_humidity,
-        r.pressure_pa,
-        r.wind_speed_m_s,
-        r.wind_direction_deg,
-        r.direct_normal_w_m2,
-        r.diffuse_horizontal_w_m2,
-        r.global_horizontal_w_m2,
-        r.sky_longwave_w_m2,
-        r.total_sky_cover,
-        r.opaque_sky_cover
-    )
+        format!("{:.3}", r.air_temperature_k),
+        format!("{:.3}", r.dew_point_k),
+        format!("{:.4}", r.relative_humidity),
+        format!("{:.1}", r.pressure_pa),
+        format!("{:.2}", r.wind_speed_m_s),
+        format!("{:.1}", r.wind_direction_deg),
+        format!("{:.2}", r.direct_normal_w_m2),
+        format!("{:.2}", r.diffuse_horizontal_w_m2),
+        format!("{:.2}", r.global_horizontal_w_m2),
+        format!("{:.2}", r.sky_longwave_w_m2),
+        format!("{:.3}", r.total_sky_cover),
+        format!("{:.3}", r.opaque_sky_cover),
+    ]
 }
 
 /// Write a history as irsig CSV (site comment when known, then [`CSV_HEADER`], then
 /// one row per record; `comments` are written first, each prefixed with `# `).
+/// Rows go through the `csv` crate's writer (quoting only where a cell needs it).
 ///
 /// # Errors
 /// I/O errors of `w`.
@@ -284,9 +291,10 @@ pub fn write_csv(
             s.latitude_deg, s.longitude_deg, s.altitude_m
         )?;
     }
-    writeln!(w, "{CSV_HEADER}")?;
+    let mut out = csv::Writer::from_writer(w);
+    out.write_record(CSV_HEADER.split(','))?;
     for r in history.records() {
-        writeln!(w, "{}", csv_row(r))?;
+        out.write_record(csv_row(r))?;
     }
-    Ok(())
+    out.flush()
 }

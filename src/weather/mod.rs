@@ -16,6 +16,11 @@
 //!
 //! Air temperature, humidity (dew point or RH), wind speed and solar irradiance are never
 //! invented: a record without them is an error naming the file and line.
+//!
+//! Owns [`WeatherHistory`] (records and their interpolation in time, each
+//! field by [`crate::math::lerp`], wind direction the short way round),
+//! format detection and loading. Takes a path or text; gives a filled
+//! history. Must not know the thermal model that consumes it.
 
 use std::path::Path;
 
@@ -23,6 +28,7 @@ use chrono::{DateTime, FixedOffset, TimeDelta, TimeZone};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Location, Result};
+use crate::math::lerp;
 use crate::sun::Site;
 
 mod epw;
@@ -259,10 +265,6 @@ impl WeatherHistory {
         let w = (t - a.time).num_microseconds().unwrap_or(0) as f64 / span;
         Ok(interpolate(a, b, w, t))
     }
-}
-
-fn lerp(a: f64, b: f64, w: f64) -> f64 {
-    a + (b - a) * w
 }
 
 fn interpolate(

@@ -1,27 +1,7 @@
-//! Small text helpers shared by the weather readers.
+//! Number parsing shared by the weather readers, with messages naming the
+//! field and its unit. Field splitting is `crate::textio`'s.
 
 use crate::error::{Error, Location, Result};
-
-/// Split one CSV line into fields, honouring double quotes (`"a,b"` and `""`).
-pub(crate) fn split_csv(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' if quoted && chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            '"' => quoted = !quoted,
-            ',' if !quoted => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    out.push(cur);
-    out
-}
 
 /// Parse a finite number; `what` names the field and its unit in messages.
 pub(crate) fn number(s: &str, loc: &Location, what: &str) -> Result<f64> {

@@ -7,6 +7,10 @@
 //! hour's totals (Wh/m² = mean W/m²), so an irradiance split uses the Sun at the hour's
 //! midpoint. Missing values are written −9900 (manual §4) or left empty. Columns are
 //! found by name; the units are those in the names (°C, %, mbar, m/s, tenths).
+//!
+//! Takes text, the path (for messages) and [`LoadOptions`]; gives records
+//! whose fields may be missing, the site, and the half-hour by which
+//! irradiance lags the stamps. Must not fill gaps ([`super::fill`]).
 
 use std::path::Path;
 
@@ -14,9 +18,10 @@ use chrono::{FixedOffset, NaiveDate, TimeDelta, TimeZone};
 
 use super::LoadOptions;
 use super::fill::{Parsed, RawRecord};
-use super::text::{number, split_csv};
+use super::text::number;
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
+use crate::textio;
 
 /// Values at or below this are TMY3's "missing" code (−9900).
 const MISSING: f64 = -9900.0;
@@ -39,12 +44,13 @@ const COLUMNS: [(&str, bool); 11] = [
 ];
 
 pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Parsed> {
-    let mut lines = text.lines().enumerate();
+    let mut lines = textio::lines(text);
     let (_, meta) = lines
         .next()
         .ok_or_else(|| Error::parse(Location::file(path), "empty TMY3 file"))?;
     let mloc = Location::file(path).at_line(1);
-    let m = split_csv(meta.trim_start_matches('\u{feff}'));
+    let mut csv = textio::Splitter::new();
+    let m = csv.split(meta);
     if m.len() < 7 {
         return Err(Error::parse(
             mloc,
@@ -83,11 +89,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     let (hi, header) = lines
         .next()
         .ok_or_else(|| Error::parse(Location::file(path).at_line(2), "missing column-name line"))?;
-    let hloc = Location::file(path).at_line(hi + 1);
-    let names: Vec<String> = split_csv(header)
-        .iter()
-        .map(|s| s.trim().to_string())
-        .collect();
+    let hloc = Location::file(path).at_line(hi);
+    let names = csv.split(header);
     let find = |name: &str| names.iter().position(|n| n == name);
     let date_i = find(DATE).ok_or_else(|| {
         Error::parse(hloc.clone().with_field(DATE), format!("no `{DATE}` column"))
@@ -111,8 +114,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         if line.trim().is_empty() {
             continue;
         }
-        let loc = Location::file(path).at_line(i + 1);
-        let f = split_csv(line);
+        let loc = Location::file(path).at_line(i);
+        let f = csv.split(line);
         if f.len() < names.len() {
             return Err(Error::parse(
                 loc.with_field(names[f.len()].clone()),
