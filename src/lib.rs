@@ -19,12 +19,12 @@
 
 pub mod analysis;
 pub mod atmosphere;
-pub mod bench;
 pub mod error;
 pub mod exposure;
 pub mod geometry;
 pub mod material;
 pub mod output;
+pub mod progress;
 pub mod radiometry;
 pub mod render;
 pub mod scene;

@@ -100,13 +100,13 @@ impl OneFacet {
     ) -> Result<Self> {
         if !(facet.tilt_deg.is_finite() && (0.0..=180.0).contains(&facet.tilt_deg)) {
             return Err(Error::invalid(
-                "--tilt",
+                "tilt_deg",
                 format!("{} is not a tilt in 0..=180 degrees", facet.tilt_deg),
             ));
         }
         if !facet.azimuth_deg.is_finite() {
             return Err(Error::invalid(
-                "--azimuth",
+                "azimuth_deg",
                 "not a finite direction in degrees",
             ));
         }
@@ -114,7 +114,7 @@ impl OneFacet {
         let shape_factor = facet.shape_factor.unwrap_or((1.0 + tilt.cos()) / 2.0);
         if !(0.0..=1.0).contains(&shape_factor) {
             return Err(Error::invalid(
-                "--shape-factor",
+                "shape_factor",
                 format!("{shape_factor} is not a fraction in 0..=1"),
             ));
         }
@@ -206,8 +206,7 @@ impl OneFacet {
 }
 
 /// A material by name in the database `db`, or from a material file
-/// (`FILE` holding one material, or `FILE#NAME`) — as `irsig thermal
-/// --material` takes it.
+/// (`FILE` holding one material, or `FILE#NAME`).
 pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
     let (file, name) = match spec.split_once('#') {
         Some((f, n)) => (std::path::PathBuf::from(f), Some(n)),
@@ -218,7 +217,7 @@ pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
     match name {
         Some(n) => mdb.get(n).cloned().ok_or_else(|| {
             Error::invalid(
-                "--material",
+                "material",
                 format!(
                     "{}: no material named `{n}`; it has: {}",
                     file.display(),
@@ -233,7 +232,7 @@ pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
         None => match mdb.materials() {
             [m] => Ok(m.clone()),
             ms => Err(Error::invalid(
-                "--material",
+                "material",
                 format!(
                     "{} holds {} materials; choose one with FILE#NAME",
                     file.display(),

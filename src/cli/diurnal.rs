@@ -13,7 +13,8 @@ use irsig::analysis::plot;
 use irsig::analysis::scene::{self as scene_study, PixelPoint};
 use irsig::render::session::Session;
 
-use super::sensitivity::{SceneArgs, parse_time};
+use super::args::parse_time;
+use super::sensitivity::SceneArgs;
 
 /// Arguments of `irsig diurnal`.
 #[derive(Debug, clap::Args)]

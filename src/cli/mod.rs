@@ -3,12 +3,14 @@
 
 use clap::{Parser, Subcommand};
 
+mod args;
 mod bench;
 mod calibrate;
 mod compare;
 mod diurnal;
 mod info;
 mod merge;
+mod progress;
 mod radiance;
 mod render;
 mod scene;

@@ -8,11 +8,13 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use chrono::{DateTime, FixedOffset};
 use irsig::material::{Material, MaterialDb};
-use irsig::sun::{self, Site};
+use irsig::sun;
 use irsig::thermal::{
     self, BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions, Spinup,
 };
 use irsig::weather::{self, LoadOptions, WeatherRecord};
+
+use super::args::{parse_site, parse_time};
 
 /// Arguments of `irsig thermal`.
 #[derive(Debug, clap::Args)]
@@ -187,41 +189,6 @@ struct JsonOutput {
 struct JsonRecord {
     time: String,
     surface_temperature_k: f64,
-}
-
-fn parse_time(flag: &str, s: &str) -> anyhow::Result<DateTime<FixedOffset>> {
-    DateTime::<FixedOffset>::parse_from_rfc3339(s).map_err(|e| {
-        anyhow::anyhow!(
-            "{flag}: `{s}` is not an RFC 3339 time with offset (e.g. 2025-06-21T14:00:00-04:00): {e}"
-        )
-    })
-}
-
-/// `LAT,LON,ALT` (ALT optional, default 0 m).
-fn parse_site(s: &str) -> anyhow::Result<Site> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let num = |i: usize, what: &str| -> anyhow::Result<f64> {
-        parts[i].parse::<f64>().map_err(|_| {
-            anyhow::anyhow!(
-                "--site: `{}` is not a number ({what}); expected LAT,LON,ALT",
-                parts[i]
-            )
-        })
-    };
-    anyhow::ensure!(
-        parts.len() == 2 || parts.len() == 3,
-        "--site: `{s}`: expected LAT,LON,ALT (degrees north, degrees east, metres)"
-    );
-    let alt = if parts.len() == 3 {
-        num(2, "altitude, m")?
-    } else {
-        0.0
-    };
-    Ok(Site::new(
-        num(0, "latitude, °")?,
-        num(1, "longitude, °")?,
-        alt,
-    )?)
 }
 
 fn parse_back(kind: &str) -> anyhow::Result<BackBoundary> {

@@ -9,9 +9,10 @@
 //! writing the files.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use chrono::{DateTime, FixedOffset, TimeDelta};
+use chrono::{DateTime, FixedOffset};
 use serde::Deserialize;
 
 use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
@@ -21,6 +22,7 @@ use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
 use crate::exposure::FacetTracers;
+use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
 use crate::scene::Scene;
 use crate::sensor::{Sensor, SensorConfig};
@@ -50,8 +52,8 @@ pub enum AtmosphereConfig {
     },
 }
 
-/// Options of a render run (the command line).
-#[derive(Debug, Clone, PartialEq)]
+/// Options of a render run.
+#[derive(Clone)]
 pub struct RunOptions {
     /// Tracing backend.
     pub backend: Backend,
@@ -61,10 +63,24 @@ pub struct RunOptions {
     pub tile: Option<(usize, usize)>,
     /// Noise seed overriding the sensors' own.
     pub seed: Option<u64>,
-    /// Show a progress bar (stderr).
-    pub progress: bool,
+    /// Told how the run progresses ([`Stage::Thermal`], then
+    /// [`Stage::Rows`]); `None`: nobody is told.
+    pub progress: Option<Arc<dyn Progress>>,
     /// Only these sensors (by name); empty: all.
     pub sensors: Vec<String>,
+}
+
+impl std::fmt::Debug for RunOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RunOptions")
+            .field("backend", &self.backend)
+            .field("times", &self.times)
+            .field("tile", &self.tile)
+            .field("seed", &self.seed)
+            .field("progress", &self.progress.is_some())
+            .field("sensors", &self.sensors)
+            .finish()
+    }
 }
 
 impl Default for RunOptions {
@@ -74,7 +90,7 @@ impl Default for RunOptions {
             times: Vec::new(),
             tile: None,
             seed: None,
-            progress: false,
+            progress: None,
             sensors: Vec::new(),
         }
     }
@@ -479,7 +495,7 @@ impl Session {
         for name in &options.sensors {
             if !self.sensors.iter().any(|s| &s.name == name) {
                 return Err(Error::invalid(
-                    "--sensor",
+                    "sensor",
                     format!(
                         "`{name}`: no such sensor (the scene has {})",
                         self.sensors
@@ -524,7 +540,12 @@ impl Session {
         if jobs.is_empty() {
             return Ok(done);
         }
+        let progress: &dyn Progress = options.progress.as_deref().unwrap_or(&NoProgress);
+        let facets = self.scene.geometry.facet_count() as u64;
+        progress.start(Stage::Thermal, facets);
         let states = self.thermal(&times)?;
+        progress.advance(facets);
+        progress.finish();
         let total_rows: u64 = jobs
             .iter()
             .map(|(_, s, _, _)| match options.tile {
@@ -532,17 +553,17 @@ impl Session {
                 None => self.sensors[*s].height() as u64,
             })
             .sum();
-        let bar = progress_bar(total_rows, options.progress);
+        progress.start(Stage::Rows, total_rows);
         for (ti, s, stem, seed) in jobs {
             let time = times[ti];
-            bar.set_message(stem.clone());
+            progress.item(&stem);
             let height = self.sensors[s].height();
             let rows = match options.tile {
                 Some((k, n)) => tile_rows(k, n, height),
                 None => 0..height,
             };
             let cond = &states.conditions[ti];
-            let band = self.render_rows(s, cond, rows, &|n| bar.inc(n))?;
+            let band = self.render_rows(s, cond, rows, &|n| progress.advance(n))?;
             match options.tile {
                 Some(tile) => {
                     let info = self.tile_info(s, &stem, &time, tile, seed);
@@ -567,94 +588,9 @@ impl Session {
             }
             done.push(stem);
         }
-        bar.finish_and_clear();
+        progress.finish();
         Ok(done)
     }
-}
-
-fn progress_bar(total: u64, show: bool) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !show || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} {msg:20} [{bar:40}] {pos}/{len} rows ({eta})",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar
-}
-
-/// Parse `--times`: a comma-separated list of RFC 3339 times, or
-/// `START/END/STEP` with STEP like `30s`, `15min`, `1h`.
-pub fn parse_times(s: &str) -> Result<Vec<DateTime<FixedOffset>>> {
-    let time = |t: &str| {
-        DateTime::parse_from_rfc3339(t.trim()).map_err(|e| {
-            Error::invalid(
-                "--times",
-                format!("`{t}`: {e}: expected an RFC 3339 time like 2025-06-21T14:00:00-04:00"),
-            )
-        })
-    };
-    let parts: Vec<&str> = s.split('/').collect();
-    match parts.as_slice() {
-        [start, end, step] => {
-            let (a, b) = (time(start)?, time(end)?);
-            let step = parse_duration(step)?;
-            if b < a {
-                return Err(Error::invalid(
-                    "--times",
-                    format!("`{s}`: the end is before the start"),
-                ));
-            }
-            let mut out = Vec::new();
-            let mut t = a;
-            while t <= b {
-                out.push(t);
-                if out.len() > 10_000 {
-                    return Err(Error::invalid(
-                        "--times",
-                        format!("`{s}`: more than 10000 times"),
-                    ));
-                }
-                t += step;
-            }
-            Ok(out)
-        }
-        [_] => s.split(',').map(time).collect(),
-        _ => Err(Error::invalid(
-            "--times",
-            format!("`{s}`: expected T1,T2,… or START/END/STEP"),
-        )),
-    }
-}
-
-fn parse_duration(s: &str) -> Result<TimeDelta> {
-    let bad = || {
-        Error::invalid(
-            "--times",
-            format!("step `{s}`: expected a positive duration like 30s, 15min or 1h"),
-        )
-    };
-    let s = s.trim();
-    let split = s
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .ok_or_else(bad)?;
-    let (num, unit) = s.split_at(split);
-    let v: f64 = num.parse().map_err(|_| bad())?;
-    let secs = match unit {
-        "s" => v,
-        "m" | "min" => v * 60.0,
-        "h" => v * 3600.0,
-        _ => return Err(bad()),
-    };
-    if !(secs.is_finite() && secs >= 1.0) {
-        return Err(bad());
-    }
-    Ok(TimeDelta::milliseconds((secs * 1000.0).round() as i64))
 }
 
 /// The thermal state at each image time from the scene-wide solve

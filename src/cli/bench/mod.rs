@@ -1,5 +1,5 @@
 //! `irsig bench`: benchmarks. `irsig bench trace` compares the ray-tracing
-//! backends (see [`irsig::bench`]); `irsig bench render` times a whole
+//! backends (see [`trace`]); `irsig bench render` times a whole
 //! render of a scene file by stage and compares the primary-ray pipeline with
 //! bare packet tracing of the same rays.
 
@@ -7,12 +7,15 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use irsig::bench::{TileShape, TraceBenchOptions, trace_bench};
 use irsig::geometry::SceneGeometry;
 use irsig::geometry::procedural::{self, TerrainParams};
 use irsig::render::session::Session;
 use irsig::trace::{Backend, Coherence, Watertight};
 use rayon::prelude::*;
+
+use trace::{TileShape, TraceBenchOptions, trace_bench};
+
+mod trace;
 
 /// Arguments of `irsig bench`.
 #[derive(Debug, clap::Args)]

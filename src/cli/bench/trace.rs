@@ -22,9 +22,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use crate::error::{Error, Result};
-use crate::geometry::SceneGeometry;
-use crate::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
+use irsig::geometry::SceneGeometry;
+use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
+use irsig::{Error, Result};
 
 /// Pixel-tile shape of the primary rays: consecutive rays cover one tile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,11 +40,6 @@ impl TileShape {
     pub const T4X2: TileShape = TileShape {
         width: 4,
         height: 2,
-    };
-    /// 8×1 pixels: one 8-wide packet per scanline segment.
-    pub const T8X1: TileShape = TileShape {
-        width: 8,
-        height: 1,
     };
 }
 
