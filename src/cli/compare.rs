@@ -244,7 +244,7 @@ fn georeference(
     };
     let sa = super::sensitivity::SceneArgs {
         sensor: args.sensor.clone(),
-        backend: irsig::trace::Backend::Embree,
+        backend: irsig::Backend::Embree,
     };
     let (session, s) = sa.open(scene)?;
     Ok(geo::points_to_pixels(&session, s, &pts, file)?)

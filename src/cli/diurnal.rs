@@ -11,7 +11,7 @@ use serde::Serialize;
 use irsig::analysis::diurnal::{self, ContrastSeries};
 use irsig::analysis::plot;
 use irsig::analysis::scene::{self as scene_study, PixelPoint};
-use irsig::render::session::Session;
+use irsig::Session;
 
 use super::args::parse_time;
 use super::sensitivity::SceneArgs;

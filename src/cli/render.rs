@@ -3,8 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use irsig::render::session::{RunOptions, Session};
-use irsig::trace::Backend;
+use irsig::{Backend, RunOptions, Session};
 
 use super::args::{FlagContext, parse_tile, parse_times};
 use super::progress::Bar;

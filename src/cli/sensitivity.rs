@@ -21,9 +21,9 @@ use irsig::analysis::scene::{self as scene_study, PixelPoint, SceneStudy};
 use irsig::analysis::sensitivity::{self, ErrorBudget, Morris, MorrisOptions, Oat};
 use irsig::analysis::study::MaterialStudy;
 use irsig::material::Material;
-use irsig::render::session::Session;
+use irsig::Session;
 use irsig::thermal::SolveOptions;
-use irsig::trace::Backend;
+use irsig::Backend;
 use irsig::weather::{self, LoadOptions};
 
 use super::args::{FlagContext, parse_site, parse_time};
@@ -166,21 +166,9 @@ impl SceneArgs {
         let s = match &self.sensor {
             None => 0,
             Some(n) => session
-                .sensors
-                .iter()
-                .position(|s| &s.name == n)
-                .with_context(|| {
-                    format!(
-                        "--sensor `{n}`: no such sensor in {} (it has {})",
-                        scene.display(),
-                        session
-                            .sensors
-                            .iter()
-                            .map(|s| s.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                })?,
+                .sensor_index(n)
+                .for_flags(&[("sensor", "--sensor")])
+                .with_context(|| format!("in {}", scene.display()))?,
         };
         Ok((session, s))
     }

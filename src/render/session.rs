@@ -486,15 +486,16 @@ impl Session {
         Ok(f)
     }
 
-    /// Render every (selected) sensor at every time into `out_dir`: whole
-    /// images (`STEM.exr`, `.img`/`.hdr`, `.png`), or with `options.tile`
-    /// one tile file each (skipped when already complete). Returns the
-    /// stems written or skipped.
-    pub fn run(&mut self, out_dir: &Path, options: &RunOptions) -> Result<Vec<String>> {
-        std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
-        for name in &options.sensors {
-            if !self.sensors.iter().any(|s| &s.name == name) {
-                return Err(Error::invalid(
+    /// The index of the sensor called `name`.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for field `sensor`, listing the scene's sensors.
+    pub fn sensor_index(&self, name: &str) -> Result<usize> {
+        self.sensors
+            .iter()
+            .position(|s| s.name == name)
+            .ok_or_else(|| {
+                Error::invalid(
                     "sensor",
                     format!(
                         "`{name}`: no such sensor (the scene has {})",
@@ -504,8 +505,43 @@ impl Session {
                             .collect::<Vec<_>>()
                             .join(", ")
                     ),
-                ));
-            }
+                )
+            })
+    }
+
+    /// Write the finished image of sensor `s` at `time` into `out_dir` as
+    /// `STEM.exr`, `STEM.img` + `STEM.hdr` (ENVI) and `STEM.png`, described
+    /// by the scene file's absolute path, the backend, sensor and time.
+    /// Counts as output time.
+    pub fn write_image(
+        &mut self,
+        out_dir: &Path,
+        stem: &str,
+        s: usize,
+        time: &DateTime<FixedOffset>,
+        image: &Finished,
+    ) -> Result<()> {
+        let t0 = Instant::now();
+        let scene = std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone());
+        let desc = super::description(
+            &scene,
+            self.backend.as_str(),
+            &self.sensors[s].name,
+            &time.to_rfc3339(),
+        );
+        write_outputs(out_dir, stem, image, &desc)?;
+        self.timings.output += t0.elapsed();
+        Ok(())
+    }
+
+    /// Render every (selected) sensor at every time into `out_dir`: whole
+    /// images (`STEM.exr`, `.img`/`.hdr`, `.png`), or with `options.tile`
+    /// one tile file each (skipped when already complete). Returns the
+    /// stems written or skipped.
+    pub fn run(&mut self, out_dir: &Path, options: &RunOptions) -> Result<Vec<String>> {
+        std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+        for name in &options.sensors {
+            self.sensor_index(name)?;
         }
         let times = if options.times.is_empty() {
             vec![self.scene.time]
@@ -573,17 +609,7 @@ impl Session {
                 }
                 None => {
                     let f = self.finish(s, band, seed)?;
-                    let t0 = Instant::now();
-                    let scene =
-                        std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone());
-                    let desc = super::description(
-                        &scene,
-                        self.backend.as_str(),
-                        &self.sensors[s].name,
-                        &time.to_rfc3339(),
-                    );
-                    write_outputs(out_dir, &stem, &f, &desc)?;
-                    self.timings.output += t0.elapsed();
+                    self.write_image(out_dir, &stem, s, &time, &f)?;
                 }
             }
             done.push(stem);
