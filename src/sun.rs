@@ -156,9 +156,7 @@ fn site_from_keys(s: &str) -> Result<Site> {
             _ => {
                 return Err(Error::invalid(
                     "site",
-                    format!(
-                        "unknown key `{k}`; expected latitude_deg, longitude_deg, altitude_m"
-                    ),
+                    format!("unknown key `{k}`; expected latitude_deg, longitude_deg, altitude_m"),
                 ));
             }
         };
@@ -166,9 +164,10 @@ fn site_from_keys(s: &str) -> Result<Site> {
         *slot = if v.is_empty() {
             None
         } else {
-            Some(v.parse::<f64>().map_err(|_| {
-                Error::invalid(k, format!("`{v}` is not a number"))
-            })?)
+            Some(
+                v.parse::<f64>()
+                    .map_err(|_| Error::invalid(k, format!("`{v}` is not a number")))?,
+            )
         };
     }
     match (lat, lon) {

@@ -805,7 +805,8 @@ impl Progress for Calls {
         self.log.lock().unwrap().push(format!("item {name}"));
     }
     fn advance(&self, n: u64) {
-        self.advanced.fetch_add(n, std::sync::atomic::Ordering::SeqCst);
+        self.advanced
+            .fetch_add(n, std::sync::atomic::Ordering::SeqCst);
     }
     fn finish(&self) {
         let n = self.advanced.load(std::sync::atomic::Ordering::SeqCst);

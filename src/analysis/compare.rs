@@ -2,6 +2,10 @@
 //! grid, or truth point measurements; per-material statistics through the
 //! synthetic image's `material_id` layer; and geometric accuracy from
 //! control points located in both images.
+//!
+//! Takes image stacks and point tables, gives statistics ([`Agreement`]s)
+//! to report; knows nothing of how they are printed, plotted or asked for
+//! (errors name the options' fields, `layer`, `truth_layer`, `gsd_m`).
 
 use std::collections::BTreeMap;
 

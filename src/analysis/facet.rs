@@ -148,8 +148,7 @@ pub fn solve_free_facet(
     facet: &FacetSpec,
     options: &SolveOptions,
 ) -> Result<(thermal::ThermalSolution, f64)> {
-    let (sun_fraction, cos_incidence, shape_factor) =
-        free_facet_geometry(records, site, facet)?;
+    let (sun_fraction, cos_incidence, shape_factor) = free_facet_geometry(records, site, facet)?;
     let forcing = Forcing::from_records(records)?;
     let inputs = FacetInputs::new(&sun_fraction, &cos_incidence, shape_factor);
     Ok((

@@ -151,7 +151,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--points samples a truth image; with a CSV truth the points are in TRUTH itself"
         );
         let pts = georeference(&args, csv::read_truth_points(&args.truth)?, &args.truth)?;
-        report.points = Some(compare::compare_points(&synth, &pts, &args.truth, &opts).for_flags(LAYER_FLAGS)?);
+        report.points =
+            Some(compare::compare_points(&synth, &pts, &args.truth, &opts).for_flags(LAYER_FLAGS)?);
     } else {
         let mut truth = read_image(&args.truth)?;
         Calibration {
@@ -163,12 +164,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             compare::compare_images(&synth, &truth, &opts)
                 .for_flags(LAYER_FLAGS)
                 .with_context(|| {
-                format!(
-                    "comparing {} with {}",
-                    args.synth.display(),
-                    args.truth.display()
-                )
-            })?,
+                    format!(
+                        "comparing {} with {}",
+                        args.synth.display(),
+                        args.truth.display()
+                    )
+                })?,
         );
         if let Some(pp) = &args.points {
             let pts = georeference(&args, csv::read_truth_points(pp)?, pp)?;
@@ -182,12 +183,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 pp,
             )
             .for_flags(LAYER_FLAGS)?;
-            report.points = Some(compare::compare_points(&synth, &pts, pp, &opts).for_flags(LAYER_FLAGS)?);
+            report.points =
+                Some(compare::compare_points(&synth, &pts, pp, &opts).for_flags(LAYER_FLAGS)?);
         }
     }
     if let Some(cp) = &args.control {
         let pts = csv::read_control_points(cp)?;
-        report.geometry = Some(compare::geometric_accuracy(&pts, args.gsd).for_flags(&[("gsd_m", "--gsd")])?);
+        report.geometry =
+            Some(compare::geometric_accuracy(&pts, args.gsd).for_flags(&[("gsd_m", "--gsd")])?);
     } else {
         anyhow::ensure!(args.gsd.is_none(), "--gsd needs --control");
     }

@@ -12,6 +12,8 @@ use serde::Serialize;
 
 use std::path::Path;
 
+use irsig::Backend;
+use irsig::Session;
 use irsig::analysis::csv::{self, PointPosition, TruthPoint};
 use irsig::analysis::facet::{self, FacetSpec, OneFacet};
 use irsig::analysis::geo;
@@ -21,9 +23,7 @@ use irsig::analysis::scene::{self as scene_study, PixelPoint, SceneStudy};
 use irsig::analysis::sensitivity::{self, ErrorBudget, Morris, MorrisOptions, Oat};
 use irsig::analysis::study::MaterialStudy;
 use irsig::material::Material;
-use irsig::Session;
 use irsig::thermal::SolveOptions;
-use irsig::Backend;
 use irsig::weather::{self, LoadOptions};
 
 use super::args::{FlagContext, parse_site, parse_time};

@@ -1,12 +1,20 @@
-//! The whole chain for a scene file: what `irsig render` runs.
+//! The whole chain for a scene file: the library's front, re-exported at
+//! the crate root.
 //!
 //! [`Session::open`] loads the scene (geometry, materials, weather), types
 //! its `sensors`, `atmosphere` and `render` sections, and builds the tracer
 //! once. [`Session::thermal`] computes every facet's thermal state at the
 //! image times in one go (one spin-up for the whole series).
-//! [`Session::render_image`] renders one sensor at one time — whole, or one
-//! tile of row bands — and [`Session::run`] loops over times and sensors,
-//! writing the files.
+//! [`Session::render_rows`] renders rows of one sensor under one time's
+//! conditions, [`Session::finish`] applies the image-wide sensor effects
+//! and [`Session::write_image`] writes the files; [`Session::run`] loops
+//! over times and sensors (whole images, or one tile of row bands each),
+//! reporting to a [`Progress`] observer.
+//!
+//! Owns the session state and its [`Timings`]; takes a scene file and
+//! [`RunOptions`], gives image files (or row bands and thermal states to a
+//! caller that goes step by step). Knows nothing of the command line: no
+//! argument parsing, no terminal output; errors name fields.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

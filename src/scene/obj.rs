@@ -1,5 +1,7 @@
 //! Wavefront OBJ loading (through `tobj`), triangulated, one [`ObjGroup`]
-//! per object/group and material.
+//! per object/group and material, or as bare geometry
+//! ([`load_obj_geometry`]). Knows nothing of materials' properties or of
+//! the scene file around the OBJ.
 //!
 //! The `usemtl` names are kept even when the `.mtl` file is absent (irsig
 //! maps them to its own material database, not to the MTL's colours): the

@@ -238,10 +238,7 @@ struct RenderReport {
 }
 
 /// `a − b`, per stage.
-fn timings_since(
-    a: &Timings,
-    b: &Timings,
-) -> Timings {
+fn timings_since(a: &Timings, b: &Timings) -> Timings {
     Timings {
         load: a.load - b.load,
         bvh_build: a.bvh_build - b.bvh_build,

@@ -1,4 +1,5 @@
-//! Benchmarks of the tracing backends (`irsig bench trace`).
+//! What `irsig bench trace` measures: the tracing backends on the same rays.
+//! Returns a report; the printing is in the parent module.
 //!
 //! [`trace_bench`] builds every [`Backend`] over the same triangles, traces
 //! the same three ray sets through each and reports build time and
