@@ -117,8 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.samples,
         &times,
     )
-    .for_flags(&[("target", "--target"), ("background", "--background")])
-    .with_context(|| format!("{}: contrast over the period", args.scene.display()))?;
+    .for_flags(&[("target", "--target"), ("background", "--background")])?;
     let diurnal::SceneContrast {
         target_pixels: tp,
         background_pixels: bp,
