@@ -40,16 +40,22 @@ impl Progress for Bar {
             return;
         }
         let bar = ProgressBar::new(total);
-        bar.set_style(
-            ProgressStyle::with_template(&format!(
+        let template = match stage {
+            // Done in one step at the end: a turning spinner and the clock.
+            Stage::Thermal => {
+                "{spinner} {msg:20} {len} facets: rays and thermal solve ({elapsed})".to_string()
+            }
+            _ => format!(
                 "{{spinner}} {{msg:20}} [{{bar:40}}] {{pos}}/{{len}} {} ({{eta}})",
                 stage.unit()
-            ))
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
+            ),
+        };
+        bar.set_style(
+            ProgressStyle::with_template(&template)
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
         );
         if stage == Stage::Thermal {
-            // One step at the end: keep the spinner turning meanwhile.
             bar.set_message("thermal");
             bar.enable_steady_tick(Duration::from_millis(100));
         }
