@@ -1,4 +1,10 @@
-//! Solar position (NREL SPA) and the observer's site.
+//! Solar position (NREL SPA), the observer's site, and the time format.
+//!
+//! Owns [`Site`] (validated; parsed from `LAT,LON[,ALT]` by its
+//! [`FromStr`](std::str::FromStr)), [`SunPosition`] and the one RFC 3339
+//! time parser, [`parse_time`], that every reader and the command line use.
+//! Takes a site and a time, gives the Sun's position. Knows nothing of
+//! scenes, weather files or the command line.
 //!
 //! Positions come from NREL's Solar Position Algorithm, Reda, I. & Andreas, A.
 //! (2004), *Solar Position Algorithm for Solar Radiation Applications*, NREL/TP-560-34302
@@ -12,7 +18,7 @@
 //! zenith in degrees from the local vertical; time in UTC (UT1 ≈ UTC); ΔT = TT − UT1
 //! in seconds.
 
-use chrono::{DateTime, TimeZone, Utc};
+use chrono::{DateTime, FixedOffset, TimeZone, Utc};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use solar_positioning::{Location, RefractionCorrection, SolarPositions};
@@ -92,6 +98,113 @@ impl Site {
     pub fn standard_pressure_pa(&self) -> f64 {
         standard_pressure_pa(self.altitude_m)
     }
+}
+
+impl std::str::FromStr for Site {
+    type Err = Error;
+
+    /// A site written `LAT,LON[,ALT]` (degrees north, degrees east, metres;
+    /// ALT default 0), or as keys `latitude_deg=LAT longitude_deg=LON
+    /// [altitude_m=ALT]` (the form of an irsig weather CSV's site comment).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for field `site` when the text has neither form or
+    /// a value is not a number; the errors of [`Site::new`] when a value is
+    /// out of range.
+    fn from_str(s: &str) -> Result<Site> {
+        if s.contains('=') {
+            return site_from_keys(s);
+        }
+        let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+        if !(parts.len() == 2 || parts.len() == 3) {
+            return Err(Error::invalid(
+                "site",
+                format!("`{s}`: expected LAT,LON[,ALT] (degrees north, degrees east, metres)"),
+            ));
+        }
+        let num = |i: usize, what: &str| -> Result<f64> {
+            parts[i].parse::<f64>().map_err(|_| {
+                Error::invalid(
+                    "site",
+                    format!(
+                        "`{}` is not a number ({what}); expected LAT,LON[,ALT]",
+                        parts[i]
+                    ),
+                )
+            })
+        };
+        let alt = match parts.len() {
+            3 => num(2, "altitude, m")?,
+            _ => 0.0,
+        };
+        Site::new(num(0, "latitude, °")?, num(1, "longitude, °")?, alt)
+    }
+}
+
+/// `latitude_deg=LAT longitude_deg=LON [altitude_m=ALT]` (an empty value
+/// counts as absent).
+fn site_from_keys(s: &str) -> Result<Site> {
+    let (mut lat, mut lon, mut alt) = (None, None, None);
+    for kv in s.split_whitespace() {
+        let (k, v) = kv
+            .split_once('=')
+            .ok_or_else(|| Error::invalid("site", format!("expected key=value, found `{kv}`")))?;
+        let slot = match k {
+            "latitude_deg" => &mut lat,
+            "longitude_deg" => &mut lon,
+            "altitude_m" => &mut alt,
+            _ => {
+                return Err(Error::invalid(
+                    "site",
+                    format!("unknown key `{k}`; expected latitude_deg, longitude_deg, altitude_m"),
+                ));
+            }
+        };
+        let v = v.trim();
+        *slot = if v.is_empty() {
+            None
+        } else {
+            Some(
+                v.parse::<f64>()
+                    .map_err(|_| Error::invalid(k, format!("`{v}` is not a number")))?,
+            )
+        };
+    }
+    match (lat, lon) {
+        (Some(la), Some(lo)) => Site::new(la, lo, alt.unwrap_or(0.0)),
+        _ => Err(Error::invalid(
+            "site",
+            "needs latitude_deg= and longitude_deg=",
+        )),
+    }
+}
+
+/// A time that is not RFC 3339 with a UTC offset (see [`parse_time`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+// chrono's message is part of this one, not a `#[source]`: `{:#}` chains
+// would otherwise print it twice.
+#[error(
+    "`{text}` is not an RFC 3339 time with a UTC offset (e.g. 2025-06-21T14:00:00-04:00): {reason}"
+)]
+pub struct TimeParseError {
+    /// The text, trimmed.
+    pub text: String,
+    /// Why chrono refused it.
+    pub reason: chrono::ParseError,
+}
+
+/// Parse an RFC 3339 time with a UTC offset (`2025-06-21T14:00:00-04:00`,
+/// `2025-06-21T18:00:00Z`), ignoring surrounding whitespace: the one time
+/// format of irsig's files and command line.
+///
+/// # Errors
+/// [`TimeParseError`] naming the text.
+pub fn parse_time(s: &str) -> Result<DateTime<FixedOffset>, TimeParseError> {
+    let text = s.trim();
+    DateTime::parse_from_rfc3339(text).map_err(|reason| TimeParseError {
+        text: text.to_string(),
+        reason,
+    })
 }
 
 /// ICAO standard-atmosphere pressure at altitude `altitude_m`, Pa (see

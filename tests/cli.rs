@@ -368,6 +368,27 @@ const CASES: &[Case] = &[
         ],
         expect: &["--back", "floating", "insulated"],
     },
+    // The library names the field (tilt_deg, shape_factor); the CLI the flag.
+    Case {
+        name: "thermal: tilt 200",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00", "--tilt",
+            "200",
+        ],
+        expect: &["--tilt", "tilt_deg", "200", "0..=180"],
+    },
+    Case {
+        name: "thermal: shape factor 2",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00",
+            "--shape-factor", "2",
+        ],
+        expect: &["--shape-factor", "shape_factor", "0..=1"],
+    },
     Case {
         name: "thermal: missing weather file",
         files: &[("mats.json", MATS)],

@@ -7,9 +7,11 @@ use irsig::Location;
 use irsig::atmosphere::Atmosphere;
 use irsig::geometry::{Instance, SceneGeometry, TriangleMesh};
 use irsig::material::Material;
+use irsig::progress::{Progress, Stage};
 use irsig::radiometry::Band;
 use irsig::radiometry::Emissivity;
 use irsig::render::image::{StageTimes, finish, render_rows};
+use irsig::render::session::{RunOptions, Session};
 use irsig::render::tile::{TileInfo, assemble, read_tile, tile_rows, write_tile};
 use irsig::render::{
     Conditions, Finished, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState,
@@ -552,6 +554,7 @@ fn embree_and_obvhs_render_the_same_image() {
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Arc;
 
 use crate::util::{irsig_bin, repo_path};
 
@@ -781,6 +784,74 @@ fn cli_render_errors_name_the_problem() {
         assert!(err.contains(needle), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+}
+
+/// Records every call of the [`Progress`] observer.
+#[derive(Default)]
+struct Calls {
+    log: std::sync::Mutex<Vec<String>>,
+    advanced: std::sync::atomic::AtomicU64,
+}
+
+impl Progress for Calls {
+    fn start(&self, stage: Stage, total: u64) {
+        self.advanced.store(0, std::sync::atomic::Ordering::SeqCst);
+        self.log
+            .lock()
+            .unwrap()
+            .push(format!("start {stage:?} {total}"));
+    }
+    fn item(&self, name: &str) {
+        self.log.lock().unwrap().push(format!("item {name}"));
+    }
+    fn advance(&self, n: u64) {
+        self.advanced
+            .fetch_add(n, std::sync::atomic::Ordering::SeqCst);
+    }
+    fn finish(&self) {
+        let n = self.advanced.load(std::sync::atomic::Ordering::SeqCst);
+        self.log.lock().unwrap().push(format!("finish after {n}"));
+    }
+}
+
+#[test]
+fn session_run_reports_the_facets_and_every_row_to_its_observer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 8, 6, 1);
+    let mut session = Session::open(&scene, Backend::Embree).unwrap();
+    let facets = session.scene.geometry.facet_count();
+    let calls = Arc::new(Calls::default());
+    let times = ["2025-06-21T14:00:00-04:00", "2025-06-21T15:00:00-04:00"]
+        .map(|t| irsig::sun::parse_time(t).unwrap());
+    let options = RunOptions {
+        times: times.to_vec(),
+        progress: Some(calls.clone()),
+        ..RunOptions::default()
+    };
+    let stems = session.run(&dir.path().join("out"), &options).unwrap();
+    assert_eq!(stems, ["cam_20250621T140000", "cam_20250621T150000"]);
+    let log = calls.log.lock().unwrap().clone();
+    assert_eq!(
+        log,
+        [
+            format!("start Thermal {facets}"),
+            format!("finish after {facets}"),
+            "start Rows 12".to_string(),
+            "item cam_20250621T140000".to_string(),
+            "item cam_20250621T150000".to_string(),
+            "finish after 12".to_string(),
+        ]
+    );
+    // An unknown sensor is named by the library's field, not a flag.
+    let options = RunOptions {
+        sensors: vec!["nope".into()],
+        ..RunOptions::default()
+    };
+    let e = session.run(&dir.path().join("out"), &options).unwrap_err();
+    assert!(
+        matches!(&e, irsig::Error::Invalid { field, .. } if field == "sensor"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -2,6 +2,10 @@
 //! grid, or truth point measurements; per-material statistics through the
 //! synthetic image's `material_id` layer; and geometric accuracy from
 //! control points located in both images.
+//!
+//! Takes image stacks and point tables, gives statistics ([`Agreement`]s)
+//! to report; knows nothing of how they are printed, plotted or asked for
+//! (errors name the options' fields, `layer`, `truth_layer`, `gsd_m`).
 
 use std::collections::BTreeMap;
 
@@ -17,7 +21,7 @@ pub const MATERIAL_ID_LAYER: &str = "material_id";
 
 /// What a layer holds, judged from its name: temperatures are compared in
 /// kelvin, everything else in the layer's own (radiance) unit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Quantity {
     /// A temperature, K.
@@ -158,13 +162,13 @@ pub fn compare_images(
             ),
         ));
     }
-    let sl = pick_layer(synth, opts.layer.as_deref(), "--layer")?;
+    let sl = pick_layer(synth, opts.layer.as_deref(), "layer")?;
     let tl = match &opts.truth_layer {
-        Some(n) => pick_layer(truth, Some(n), "--truth-layer")?,
+        Some(n) => pick_layer(truth, Some(n), "truth_layer")?,
         None => match truth.layer(&sl.name) {
             Some(l) => l,
             None if truth.layers.len() == 1 => &truth.layers[0],
-            None => pick_layer(truth, None, "--truth-layer")?,
+            None => pick_layer(truth, None, "truth_layer")?,
         },
     };
     let p: Vec<f64> = sl.data.iter().map(|&v| v as f64).collect();
@@ -238,7 +242,7 @@ pub fn compare_points(
     points_file: &std::path::Path,
     opts: &CompareOptions,
 ) -> Result<PointComparison> {
-    let sl = pick_layer(synth, opts.layer.as_deref(), "--layer")?;
+    let sl = pick_layer(synth, opts.layer.as_deref(), "layer")?;
     let ids = material_ids(synth);
     let mut out = Vec::with_capacity(points.len());
     for pt in points {
@@ -249,7 +253,7 @@ pub fn compare_points(
                     Location::file(points_file)
                         .at_line(pt.line)
                         .with_field("lat"),
-                    "lat/lon points must be georeferenced first: give the scene whose sensor made the image (`irsig compare --scene SCENE.json`), or pixel x,y columns",
+                    "lat/lon points must be georeferenced first (with the scene whose sensor made the image: `analysis::geo`), or given as pixel x,y columns",
                 ));
             }
         };
@@ -314,14 +318,14 @@ pub fn sample_points(
     points: &[TruthPoint],
     points_file: &std::path::Path,
 ) -> Result<Vec<TruthPoint>> {
-    let tl = pick_layer(truth, layer, "--truth-layer")?;
+    let tl = pick_layer(truth, layer, "truth_layer")?;
     points
         .iter()
         .map(|pt| {
             let PointPosition::Pixel { x, y } = pt.position else {
                 return Err(Error::parse(
                     Location::file(points_file).at_line(pt.line).with_field("lat"),
-                    "lat/lon points must be georeferenced first: give the scene whose sensor made the image (`irsig compare --scene SCENE.json`), or pixel x,y columns",
+                    "lat/lon points must be georeferenced first (with the scene whose sensor made the image: `analysis::geo`), or given as pixel x,y columns",
                 ));
             };
             if x < 0.0 || y < 0.0 || x >= truth.width as f64 || y >= truth.height as f64 {
@@ -375,7 +379,7 @@ pub fn geometric_accuracy(
     if let Some(g) = gsd_m {
         if !(g.is_finite() && g > 0.0) {
             return Err(Error::invalid(
-                "--gsd",
+                "gsd_m",
                 format!("expected a positive ground sample distance in metres, got {g}"),
             ));
         }

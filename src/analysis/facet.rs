@@ -1,9 +1,12 @@
-//! The one-facet thermal path used by sensitivity, calibration and diurnal
-//! studies: a free-standing facet (tilt, azimuth, sky shape factor, the sun
-//! unshadowed) solved with [`crate::thermal::solve`], as `irsig thermal`
-//! does. The facet geometry — sunlit fraction and solar incidence per
-//! record — is computed once and held fixed while materials and weather
-//! are perturbed.
+//! The one-facet thermal path: a free-standing facet (tilt, azimuth, sky
+//! shape factor, the sun unshadowed) solved with [`crate::thermal::solve`].
+//! [`solve_free_facet`] solves it once; [`OneFacet`] serves sensitivity,
+//! calibration and diurnal studies, computing the facet geometry — sunlit
+//! fraction and solar incidence per record — once and holding it fixed
+//! while materials and weather are perturbed. Takes materials (by name or
+//! file, [`find_material`]), weather records and a site; gives surface
+//! temperatures and band radiances. Knows nothing of scenes, ray tracing or
+//! the command line.
 //!
 //! Surface-leaving band radiance (no atmospheric path, a sensor at the
 //! surface), per wavelength of the band grid:
@@ -89,6 +92,71 @@ pub fn records_until(
     Ok(out)
 }
 
+/// Sunlit fraction and cosine of the solar incidence per record of a
+/// free-standing facet (the sun unshadowed), and its sky shape factor;
+/// the facet's tilt, azimuth and shape factor checked.
+fn free_facet_geometry(
+    records: &[WeatherRecord],
+    site: &Site,
+    facet: &FacetSpec,
+) -> Result<(Vec<f32>, Vec<f32>, f64)> {
+    if !(facet.tilt_deg.is_finite() && (0.0..=180.0).contains(&facet.tilt_deg)) {
+        return Err(Error::invalid(
+            "tilt_deg",
+            format!("{} is not a tilt in 0..=180 degrees", facet.tilt_deg),
+        ));
+    }
+    if !facet.azimuth_deg.is_finite() {
+        return Err(Error::invalid(
+            "azimuth_deg",
+            format!("{} is not a finite direction in degrees", facet.azimuth_deg),
+        ));
+    }
+    let tilt = facet.tilt_deg.to_radians();
+    let shape_factor = facet.shape_factor.unwrap_or((1.0 + tilt.cos()) / 2.0);
+    if !(0.0..=1.0).contains(&shape_factor) {
+        return Err(Error::invalid(
+            "shape_factor",
+            format!("{shape_factor} is not a fraction in 0..=1"),
+        ));
+    }
+    if records.is_empty() {
+        return Err(Error::invalid("weather", "no weather records"));
+    }
+    let az = facet.azimuth_deg.to_radians();
+    let normal = glam::DVec3::new(tilt.sin() * az.sin(), tilt.sin() * az.cos(), tilt.cos());
+    let mut sun_fraction = Vec::with_capacity(records.len());
+    let mut cos_incidence = Vec::with_capacity(records.len());
+    for r in records {
+        let p = sun::position_standard(site, r.time)?;
+        let cos = normal.dot(p.direction_enu()).clamp(-1.0, 1.0);
+        sun_fraction.push(if p.is_up() && cos > 0.0 { 1.0f32 } else { 0.0 });
+        cos_incidence.push(cos as f32);
+    }
+    Ok((sun_fraction, cos_incidence, shape_factor))
+}
+
+/// A free-standing facet of slab `props` at `site` solved over `records`
+/// (the thermal model alone: no ray tracing, the sun unshadowed, the sky
+/// shape factor of `facet`, the background at air temperature), with the
+/// solver `options` as given. Returns the solution and the shape factor
+/// used.
+pub fn solve_free_facet(
+    props: &SlabProperties,
+    records: &[WeatherRecord],
+    site: &Site,
+    facet: &FacetSpec,
+    options: &SolveOptions,
+) -> Result<(thermal::ThermalSolution, f64)> {
+    let (sun_fraction, cos_incidence, shape_factor) = free_facet_geometry(records, site, facet)?;
+    let forcing = Forcing::from_records(records)?;
+    let inputs = FacetInputs::new(&sun_fraction, &cos_incidence, shape_factor);
+    Ok((
+        thermal::solve(props, &forcing, &inputs, options)?,
+        shape_factor,
+    ))
+}
+
 impl OneFacet {
     /// Geometry of `facet` at `site` for every record.
     pub fn new(
@@ -98,39 +166,8 @@ impl OneFacet {
         options: SolveOptions,
         band: Band,
     ) -> Result<Self> {
-        if !(facet.tilt_deg.is_finite() && (0.0..=180.0).contains(&facet.tilt_deg)) {
-            return Err(Error::invalid(
-                "--tilt",
-                format!("{} is not a tilt in 0..=180 degrees", facet.tilt_deg),
-            ));
-        }
-        if !facet.azimuth_deg.is_finite() {
-            return Err(Error::invalid(
-                "--azimuth",
-                "not a finite direction in degrees",
-            ));
-        }
-        let tilt = facet.tilt_deg.to_radians();
-        let shape_factor = facet.shape_factor.unwrap_or((1.0 + tilt.cos()) / 2.0);
-        if !(0.0..=1.0).contains(&shape_factor) {
-            return Err(Error::invalid(
-                "--shape-factor",
-                format!("{shape_factor} is not a fraction in 0..=1"),
-            ));
-        }
-        if records.is_empty() {
-            return Err(Error::invalid("weather", "no weather records"));
-        }
-        let az = facet.azimuth_deg.to_radians();
-        let normal = glam::DVec3::new(tilt.sin() * az.sin(), tilt.sin() * az.cos(), tilt.cos());
-        let mut sun_fraction = Vec::with_capacity(records.len());
-        let mut cos_incidence = Vec::with_capacity(records.len());
-        for r in &records {
-            let p = sun::position_standard(site, r.time)?;
-            let cos = normal.dot(p.direction_enu()).clamp(-1.0, 1.0);
-            sun_fraction.push(if p.is_up() && cos > 0.0 { 1.0f32 } else { 0.0 });
-            cos_incidence.push(cos as f32);
-        }
+        let (sun_fraction, cos_incidence, shape_factor) =
+            free_facet_geometry(&records, site, facet)?;
         // Studies difference outputs across parameter values, so the outputs
         // must be smooth in them: a spin-up that stops on a tolerance (a
         // whole day more or less) or a loose Newton tolerance would add
@@ -206,8 +243,7 @@ impl OneFacet {
 }
 
 /// A material by name in the database `db`, or from a material file
-/// (`FILE` holding one material, or `FILE#NAME`) — as `irsig thermal
-/// --material` takes it.
+/// (`FILE` holding one material, or `FILE#NAME`).
 pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
     let (file, name) = match spec.split_once('#') {
         Some((f, n)) => (std::path::PathBuf::from(f), Some(n)),
@@ -218,7 +254,7 @@ pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
     match name {
         Some(n) => mdb.get(n).cloned().ok_or_else(|| {
             Error::invalid(
-                "--material",
+                "material",
                 format!(
                     "{}: no material named `{n}`; it has: {}",
                     file.display(),
@@ -233,11 +269,16 @@ pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
         None => match mdb.materials() {
             [m] => Ok(m.clone()),
             ms => Err(Error::invalid(
-                "--material",
+                "material",
                 format!(
-                    "{} holds {} materials; choose one with FILE#NAME",
+                    "{} holds {} materials; choose one with {}#NAME (names: {})",
                     file.display(),
-                    ms.len()
+                    ms.len(),
+                    file.display(),
+                    ms.iter()
+                        .map(|m| m.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             )),
         },

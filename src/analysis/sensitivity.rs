@@ -300,13 +300,13 @@ where
     check_factors(factors)?;
     if opts.levels < 2 || opts.levels % 2 != 0 {
         return Err(Error::invalid(
-            "--levels",
+            "levels",
             format!("expected an even number ≥ 2, got {}", opts.levels),
         ));
     }
     if opts.trajectories < 2 {
         return Err(Error::invalid(
-            "--trajectories",
+            "trajectories",
             format!("expected at least 2, got {}", opts.trajectories),
         ));
     }

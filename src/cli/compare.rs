@@ -13,6 +13,29 @@ use irsig::analysis::image::{Calibration, read_image};
 use irsig::analysis::stats::Agreement;
 use irsig::analysis::{csv, geo, plot};
 
+use super::args::FlagContext;
+
+/// The layers' names and flags, for errors about them.
+const LAYER_FLAGS: &[(&str, &str)] = &[("layer", "--layer"), ("truth_layer", "--truth-layer")];
+
+/// What the values are (`--quantity`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum QuantityArg {
+    /// A temperature, K.
+    Temperature,
+    /// A radiance (or another quantity), in the layer's unit.
+    Radiance,
+}
+
+impl From<QuantityArg> for compare::Quantity {
+    fn from(q: QuantityArg) -> Self {
+        match q {
+            QuantityArg::Temperature => compare::Quantity::Temperature,
+            QuantityArg::Radiance => compare::Quantity::Radiance,
+        }
+    }
+}
+
 /// Arguments of `irsig compare`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = "\
@@ -65,7 +88,7 @@ pub struct Args {
     /// What the values are (default: temperature when the layer name says
     /// so, else radiance).
     #[arg(long, value_enum)]
-    pub quantity: Option<compare::Quantity>,
+    pub quantity: Option<QuantityArg>,
     /// Histogram bins.
     #[arg(long, default_value_t = 64, value_name = "N")]
     pub bins: usize,
@@ -109,7 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         layer: args.layer.clone(),
         truth_layer: args.truth_layer.clone(),
         bins: Some(args.bins),
-        quantity: args.quantity,
+        quantity: args.quantity.map(Into::into),
     };
     let truth_is_csv = args
         .truth
@@ -128,7 +151,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--points samples a truth image; with a CSV truth the points are in TRUTH itself"
         );
         let pts = georeference(&args, csv::read_truth_points(&args.truth)?, &args.truth)?;
-        report.points = Some(compare::compare_points(&synth, &pts, &args.truth, &opts)?);
+        report.points =
+            Some(compare::compare_points(&synth, &pts, &args.truth, &opts).for_flags(LAYER_FLAGS)?);
     } else {
         let mut truth = read_image(&args.truth)?;
         Calibration {
@@ -137,13 +161,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         .apply(&mut truth);
         report.image = Some(
-            compare::compare_images(&synth, &truth, &opts).with_context(|| {
-                format!(
-                    "comparing {} with {}",
-                    args.synth.display(),
-                    args.truth.display()
-                )
-            })?,
+            compare::compare_images(&synth, &truth, &opts)
+                .for_flags(LAYER_FLAGS)
+                .with_context(|| {
+                    format!(
+                        "comparing {} with {}",
+                        args.synth.display(),
+                        args.truth.display()
+                    )
+                })?,
         );
         if let Some(pp) = &args.points {
             let pts = georeference(&args, csv::read_truth_points(pp)?, pp)?;
@@ -155,13 +181,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     .filter(|n| truth.layer(n).is_some()),
                 &pts,
                 pp,
-            )?;
-            report.points = Some(compare::compare_points(&synth, &pts, pp, &opts)?);
+            )
+            .for_flags(LAYER_FLAGS)?;
+            report.points =
+                Some(compare::compare_points(&synth, &pts, pp, &opts).for_flags(LAYER_FLAGS)?);
         }
     }
     if let Some(cp) = &args.control {
         let pts = csv::read_control_points(cp)?;
-        report.geometry = Some(compare::geometric_accuracy(&pts, args.gsd)?);
+        report.geometry =
+            Some(compare::geometric_accuracy(&pts, args.gsd).for_flags(&[("gsd_m", "--gsd")])?);
     } else {
         anyhow::ensure!(args.gsd.is_none(), "--gsd needs --control");
     }
@@ -218,7 +247,7 @@ fn georeference(
     };
     let sa = super::sensitivity::SceneArgs {
         sensor: args.sensor.clone(),
-        backend: irsig::trace::Backend::Embree,
+        backend: irsig::Backend::Embree,
     };
     let (session, s) = sa.open(scene)?;
     Ok(geo::points_to_pixels(&session, s, &pts, file)?)

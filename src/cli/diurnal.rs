@@ -10,10 +10,9 @@ use serde::Serialize;
 
 use irsig::analysis::diurnal::{self, ContrastSeries};
 use irsig::analysis::plot;
-use irsig::analysis::scene::{self as scene_study, PixelPoint};
-use irsig::render::session::Session;
 
-use super::sensitivity::{SceneArgs, parse_time};
+use super::args::{FlagContext, parse_time};
+use super::sensitivity::SceneArgs;
 
 /// Arguments of `irsig diurnal`.
 #[derive(Debug, clap::Args)]
@@ -72,56 +71,6 @@ struct Report {
     band_radiance: ContrastSeries,
 }
 
-/// Pixels of sensor `s` seeing object or material `name` (not object
-/// `exclude`).
-fn pixels_of(
-    session: &Session,
-    s: usize,
-    name: &str,
-    max: usize,
-    exclude: Option<usize>,
-) -> anyhow::Result<(Vec<PixelPoint>, Option<usize>)> {
-    let scene = &session.scene;
-    let object = scene.objects.iter().position(|o| o.name == name);
-    let material = scene
-        .materials
-        .materials()
-        .iter()
-        .position(|m| m.name == name);
-    anyhow::ensure!(
-        object.is_some() || material.is_some(),
-        "{}: `{name}` is neither an object ({}, …) nor a material of the scene",
-        scene.path.display(),
-        scene
-            .objects
-            .iter()
-            .take(8)
-            .map(|o| o.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    let parts = scene.facet_parts();
-    let fobj = &session.optics.facet_object;
-    let select = |f: usize| {
-        let o = fobj[f] as usize;
-        if Some(o) == exclude {
-            return false;
-        }
-        match object {
-            Some(want) => o == want,
-            None => Some(scene.parts[parts[f] as usize].material) == material,
-        }
-    };
-    let px = scene_study::pixels_seeing(session, s, name, max, &select);
-    anyhow::ensure!(
-        !px.is_empty(),
-        "`{name}` is not seen by sensor `{}` of {}: choose another object or --sensor",
-        session.sensors[s].name,
-        scene.path.display()
-    );
-    Ok((px, object))
-}
-
 /// Run `irsig diurnal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.step > 0, "--step must be a positive number of minutes");
@@ -160,26 +109,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         times.len()
     );
     anyhow::ensure!(args.samples > 0, "--samples must be at least 1");
-    let (tp, tobj) = pixels_of(&session, s, &args.target, args.samples, None)?;
-    let (bp, _) = pixels_of(&session, s, &args.background, args.samples, tobj)?;
-    let states = session
-        .thermal(&times)
-        .with_context(|| format!("{}: thermal state over the period", args.scene.display()))?;
-    let mut cols: [Vec<f64>; 6] = Default::default();
-    for (k, px) in [&tp, &bp].into_iter().enumerate() {
-        let series = scene_study::pixel_series(&session, s, px, &states.conditions)?;
-        for vals in series {
-            let n = vals.len() as f64;
-            cols[k].push(vals.iter().map(|v| v.surface_temperature_k).sum::<f64>() / n);
-            cols[2 + k].push(vals.iter().map(|v| v.band_radiance_w_m2_sr).sum::<f64>() / n);
-            cols[4 + k].push(vals.iter().map(|v| v.apparent_temperature_k).sum::<f64>() / n);
-        }
-    }
-    let surface = diurnal::contrast_series("surface_temperature", "K", &times, &cols[0], &cols[1])?;
-    let radiance =
-        diurnal::contrast_series("band_radiance", "W/m2/sr", &times, &cols[2], &cols[3])?;
-    let apparent =
-        diurnal::contrast_series("apparent_temperature", "K", &times, &cols[4], &cols[5])?;
+    let contrast = diurnal::scene_contrast(
+        &mut session,
+        s,
+        &args.target,
+        &args.background,
+        args.samples,
+        &times,
+    )
+    .for_flags(&[("target", "--target"), ("background", "--background")])?;
+    let diurnal::SceneContrast {
+        target_pixels: tp,
+        background_pixels: bp,
+        surface_temperature: surface,
+        band_radiance: radiance,
+        apparent_temperature: apparent,
+    } = contrast;
     if let Some(p) = &args.plot {
         let hours: Vec<f64> = times
             .iter()
@@ -209,8 +154,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "K",
             &hours,
             &[
-                (args.target.as_str(), &cols[4]),
-                (args.background.as_str(), &cols[5]),
+                (args.target.as_str(), &apparent.target),
+                (args.background.as_str(), &apparent.background),
             ],
             &marks,
         )?;

@@ -1,14 +1,24 @@
 //! Command-line interface: clap definitions and dispatch. Each subcommand
 //! lives in its own file and turns its arguments into library calls.
+//!
+//! Owns everything about the command line the library must not know:
+//! argument parsing (clap), the progress bar (indicatif, [`progress`]),
+//! time lists, durations and tiles ([`args`]), the flag names in error
+//! messages ([`args::FlagContext`]), and what is printed, benchmark tables
+//! included. Goes through the library's front (`irsig::Session`,
+//! `irsig::analysis`); commands that view one module (`sun`, `weather`,
+//! `radiance`, `info`, `scene`) call that module.
 
 use clap::{Parser, Subcommand};
 
+mod args;
 mod bench;
 mod calibrate;
 mod compare;
 mod diurnal;
 mod info;
 mod merge;
+mod progress;
 mod radiance;
 mod render;
 mod scene;

@@ -3,9 +3,10 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use irsig::render::session::{RunOptions, Session, parse_times};
-use irsig::render::tile::parse_tile;
-use irsig::trace::Backend;
+use irsig::{Backend, RunOptions, Session};
+
+use super::args::{FlagContext, parse_tile, parse_times};
+use super::progress::Bar;
 
 /// Arguments of `irsig render`.
 #[derive(Debug, clap::Args)]
@@ -54,11 +55,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         times,
         tile,
         seed: args.seed,
-        progress: !args.quiet,
+        progress: (!args.quiet).then(|| Bar::on_terminal() as _),
         sensors: args.sensors.clone(),
     };
     let stems = session
         .run(&args.out, &options)
+        .for_flags(&[("sensor", "--sensor")])
         .with_context(|| format!("rendering {}", args.scene.display()))?;
     if !args.quiet {
         let t = &session.timings;

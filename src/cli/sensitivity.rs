@@ -12,6 +12,8 @@ use serde::Serialize;
 
 use std::path::Path;
 
+use irsig::Backend;
+use irsig::Session;
 use irsig::analysis::csv::{self, PointPosition, TruthPoint};
 use irsig::analysis::facet::{self, FacetSpec, OneFacet};
 use irsig::analysis::geo;
@@ -21,11 +23,18 @@ use irsig::analysis::scene::{self as scene_study, PixelPoint, SceneStudy};
 use irsig::analysis::sensitivity::{self, ErrorBudget, Morris, MorrisOptions, Oat};
 use irsig::analysis::study::MaterialStudy;
 use irsig::material::Material;
-use irsig::render::session::Session;
-use irsig::sun::Site;
 use irsig::thermal::SolveOptions;
-use irsig::trace::Backend;
 use irsig::weather::{self, LoadOptions};
+
+use super::args::{FlagContext, parse_site, parse_time};
+
+/// The one-facet fields and their flags, for errors about them.
+pub(crate) const FACET_FLAGS: &[(&str, &str)] = &[
+    ("tilt_deg", "--tilt"),
+    ("azimuth_deg", "--azimuth"),
+    ("shape_factor", "--shape-factor"),
+    ("material", "--material"),
+];
 
 /// The one-facet description shared by `sensitivity`, `calibrate` and
 /// `diurnal` (as in `irsig thermal`).
@@ -90,27 +99,6 @@ pub struct ThermalArgs {
     pub site: Option<String>,
 }
 
-pub(crate) fn parse_time(flag: &str, s: &str) -> anyhow::Result<DateTime<FixedOffset>> {
-    DateTime::parse_from_rfc3339(s).with_context(|| {
-        format!(
-            "{flag}: `{s}` is not an RFC 3339 time with offset (e.g. 2024-06-21T14:00:00-04:00)"
-        )
-    })
-}
-
-pub(crate) fn parse_site(s: &str) -> anyhow::Result<Site> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("--site: `{s}`: expected LAT,LON[,ALT] numbers"))?;
-    anyhow::ensure!(
-        v.len() == 2 || v.len() == 3,
-        "--site: `{s}`: expected LAT,LON[,ALT]"
-    );
-    Ok(Site::new(v[0], v[1], v.get(2).copied().unwrap_or(0.0))?)
-}
-
 /// Materials, weather records up to `until`, and site: from a scene or
 /// from --thermal inputs.
 pub(crate) struct Setup {
@@ -132,7 +120,7 @@ pub(crate) fn setup_thermal(
         .weather
         .as_ref()
         .context("--thermal needs --weather FILE")?;
-    let material = facet::find_material(spec, &t.materials)?;
+    let material = facet::find_material(spec, &t.materials).for_flags(FACET_FLAGS)?;
     let site = t.site.as_deref().map(parse_site).transpose()?;
     let mut opts = LoadOptions::default();
     if let Some(s) = site {
@@ -150,7 +138,8 @@ pub(crate) fn setup_thermal(
     })?;
     let records =
         facet::records_until(&history, until).with_context(|| format!("{}", wpath.display()))?;
-    let facet = OneFacet::new(records, &site, &f.spec(), f.options(), facet::lwir_band()?)?;
+    let facet = OneFacet::new(records, &site, &f.spec(), f.options(), facet::lwir_band()?)
+        .for_flags(FACET_FLAGS)?;
     Ok(Setup {
         materials: vec![material],
         facet,
@@ -177,21 +166,9 @@ impl SceneArgs {
         let s = match &self.sensor {
             None => 0,
             Some(n) => session
-                .sensors
-                .iter()
-                .position(|s| &s.name == n)
-                .with_context(|| {
-                    format!(
-                        "--sensor `{n}`: no such sensor in {} (it has {})",
-                        scene.display(),
-                        session
-                            .sensors
-                            .iter()
-                            .map(|s| s.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                })?,
+                .sensor_index(n)
+                .for_flags(&[("sensor", "--sensor")])
+                .with_context(|| format!("in {}", scene.display()))?,
         };
         Ok((session, s))
     }
@@ -469,7 +446,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 levels: args.levels,
                 seed: args.seed,
             };
-            let m = sensitivity::morris(&factors, &outputs, &model, opts)?;
+            let m = sensitivity::morris(&factors, &outputs, &model, opts)
+                .for_flags(&[("levels", "--levels"), ("trajectories", "--trajectories")])?;
             let s: Vec<Vec<f64>> = m
                 .effects
                 .iter()

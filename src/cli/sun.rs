@@ -2,7 +2,6 @@
 
 use std::io::Write;
 
-use chrono::{DateTime, FixedOffset};
 use irsig::sun::{self, Site};
 
 /// Arguments of `irsig sun`.
@@ -41,12 +40,7 @@ pub struct Args {
 
 /// Run `irsig sun`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let time = DateTime::<FixedOffset>::parse_from_rfc3339(&args.time).map_err(|e| {
-        anyhow::anyhow!(
-            "--time: `{}` is not an RFC 3339 time with offset (e.g. 2025-06-21T14:00:00-04:00): {e}",
-            args.time
-        )
-    })?;
+    let time = super::args::parse_time("--time", &args.time)?;
     let site = Site::new(args.lat, args.lon, args.alt)?;
     let delta_t = match args.delta_t {
         Some(d) => d,

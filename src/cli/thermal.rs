@@ -3,16 +3,15 @@
 //! of an unobstructed tilted plane, the background at air temperature.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
-use chrono::{DateTime, FixedOffset};
-use irsig::material::{Material, MaterialDb};
-use irsig::sun::{self, Site};
-use irsig::thermal::{
-    self, BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions, Spinup,
-};
-use irsig::weather::{self, LoadOptions, WeatherRecord};
+use irsig::analysis::facet::{self, FacetSpec};
+use irsig::thermal::{BackBoundary, SlabProperties, SolveOptions, Spinup};
+use irsig::weather::{self, LoadOptions};
+
+use super::args::{FlagContext, parse_site, parse_time};
+use super::sensitivity::FACET_FLAGS as FLAGS;
 
 /// Arguments of `irsig thermal`.
 #[derive(Debug, clap::Args)]
@@ -73,27 +72,16 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let time = parse_time("--time", &args.time)?;
     let site = args.site.as_deref().map(parse_site).transpose()?;
-    let material = find_material(&args.material, &args.materials)?;
+    let material = facet::find_material(&args.material, &args.materials).for_flags(FLAGS)?;
     let mut props = SlabProperties::from_material(&material)?;
     if let Some(kind) = &args.back {
         props = props.with_back(parse_back(kind)?);
     }
-    anyhow::ensure!(
-        args.tilt.is_finite() && (0.0..=180.0).contains(&args.tilt),
-        "--tilt: {} is not a tilt in 0..=180 degrees",
-        args.tilt
-    );
-    anyhow::ensure!(
-        args.azimuth.is_finite(),
-        "--azimuth: {} is not a direction in degrees",
-        args.azimuth
-    );
-    let tilt = args.tilt.to_radians();
-    let shape_factor = args.shape_factor.unwrap_or((1.0 + tilt.cos()) / 2.0);
-    anyhow::ensure!(
-        (0.0..=1.0).contains(&shape_factor),
-        "--shape-factor: {shape_factor} is not a fraction in 0..=1"
-    );
+    let spec = FacetSpec {
+        tilt_deg: args.tilt,
+        azimuth_deg: args.azimuth,
+        shape_factor: args.shape_factor,
+    };
 
     let mut opts = LoadOptions::default();
     if let Some(s) = site {
@@ -109,23 +97,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.weather.display()
         )
     })?;
-    let records = records_until(history.records(), time, |t| history.at(t))
+    let records = facet::records_until(&history, time)
         .with_context(|| format!("{}: --time", args.weather.display()))?;
-
-    // One free plane: facet normal (ENU) from tilt and azimuth.
-    let az = args.azimuth.to_radians();
-    let normal = glam::DVec3::new(tilt.sin() * az.sin(), tilt.sin() * az.cos(), tilt.cos());
-    let mut sun_fraction = Vec::with_capacity(records.len());
-    let mut cos_incidence = Vec::with_capacity(records.len());
-    for r in &records {
-        let p = sun::position_standard(&site, r.time)?;
-        let cos = normal.dot(p.direction_enu()).clamp(-1.0, 1.0);
-        let lit = p.is_up() && cos > 0.0;
-        sun_fraction.push(if lit { 1.0f32 } else { 0.0 });
-        cos_incidence.push(cos as f32);
-    }
-    let forcing = Forcing::from_records(&records)?;
-    let inputs = FacetInputs::new(&sun_fraction, &cos_incidence, shape_factor);
     let options = SolveOptions {
         spinup: Spinup {
             max_cycles: args.spinup_days,
@@ -133,7 +106,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         ..SolveOptions::default()
     };
-    let sol = thermal::solve(&props, &forcing, &inputs, &options)?;
+    let (sol, shape_factor) =
+        facet::solve_free_facet(&props, &records, &site, &spec, &options).for_flags(FLAGS)?;
 
     let mut out = std::io::stdout().lock();
     let times = records.iter().map(|r| r.time);
@@ -189,41 +163,6 @@ struct JsonRecord {
     surface_temperature_k: f64,
 }
 
-fn parse_time(flag: &str, s: &str) -> anyhow::Result<DateTime<FixedOffset>> {
-    DateTime::<FixedOffset>::parse_from_rfc3339(s).map_err(|e| {
-        anyhow::anyhow!(
-            "{flag}: `{s}` is not an RFC 3339 time with offset (e.g. 2025-06-21T14:00:00-04:00): {e}"
-        )
-    })
-}
-
-/// `LAT,LON,ALT` (ALT optional, default 0 m).
-fn parse_site(s: &str) -> anyhow::Result<Site> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let num = |i: usize, what: &str| -> anyhow::Result<f64> {
-        parts[i].parse::<f64>().map_err(|_| {
-            anyhow::anyhow!(
-                "--site: `{}` is not a number ({what}); expected LAT,LON,ALT",
-                parts[i]
-            )
-        })
-    };
-    anyhow::ensure!(
-        parts.len() == 2 || parts.len() == 3,
-        "--site: `{s}`: expected LAT,LON,ALT (degrees north, degrees east, metres)"
-    );
-    let alt = if parts.len() == 3 {
-        num(2, "altitude, m")?
-    } else {
-        0.0
-    };
-    Ok(Site::new(
-        num(0, "latitude, °")?,
-        num(1, "longitude, °")?,
-        alt,
-    )?)
-}
-
 fn parse_back(kind: &str) -> anyhow::Result<BackBoundary> {
     Ok(match kind {
         "insulated" => BackBoundary::Insulated,
@@ -232,54 +171,4 @@ fn parse_back(kind: &str) -> anyhow::Result<BackBoundary> {
         "building" => BackBoundary::BUILDING,
         _ => anyhow::bail!("--back: `{kind}` is not one of insulated, exposed, ground, building"),
     })
-}
-
-/// A material by name in `db_path`, or from a file (`FILE` with one
-/// material, or `FILE#NAME`).
-fn find_material(spec: &str, db_path: &Path) -> anyhow::Result<Material> {
-    let (file, name) = match spec.split_once('#') {
-        Some((f, n)) => (Some(PathBuf::from(f)), Some(n)),
-        None if Path::new(spec).is_file() => (Some(PathBuf::from(spec)), None),
-        None => (None, Some(spec)),
-    };
-    let path = file.unwrap_or_else(|| db_path.to_path_buf());
-    let db = MaterialDb::load(&path)?;
-    match name {
-        Some(n) => db.get(n).cloned().ok_or_else(|| {
-            let names: Vec<&str> = db.materials().iter().map(|m| m.name.as_str()).collect();
-            anyhow::anyhow!(
-                "{}: no material named `{n}`; it has: {}",
-                path.display(),
-                names.join(", ")
-            )
-        }),
-        None => match db.materials() {
-            [m] => Ok(m.clone()),
-            ms => anyhow::bail!(
-                "{}: holds {} materials; choose one with {}#NAME (names: {})",
-                path.display(),
-                ms.len(),
-                path.display(),
-                ms.iter()
-                    .map(|m| m.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        },
-    }
-}
-
-/// The records up to `time`; when `time` falls between records, the weather
-/// interpolated at `time` ends the list.
-fn records_until(
-    all: &[WeatherRecord],
-    time: DateTime<FixedOffset>,
-    at: impl Fn(DateTime<FixedOffset>) -> irsig::Result<WeatherRecord>,
-) -> anyhow::Result<Vec<WeatherRecord>> {
-    let mut out: Vec<WeatherRecord> = all.iter().take_while(|r| r.time <= time).copied().collect();
-    if out.last().is_none_or(|r| r.time < time) {
-        // Outside the history, `at` says so with the span.
-        out.push(at(time)?);
-    }
-    Ok(out)
 }

@@ -4,8 +4,6 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::Context;
-use chrono::{DateTime, FixedOffset};
 use irsig::sun::Site;
 use irsig::weather::{self, LoadOptions, WeatherHistory};
 
@@ -84,12 +82,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 fn show(a: ShowArgs) -> anyhow::Result<()> {
     let mut opts = LoadOptions::default();
     if let Some(s) = &a.start {
-        let t = DateTime::<FixedOffset>::parse_from_rfc3339(s).with_context(|| {
-            format!(
-                "--start: `{s}` is not RFC 3339 with an offset (e.g. 2025-06-20T00:00:00-04:00)"
-            )
-        })?;
-        opts = opts.with_start(t);
+        opts = opts.with_start(super::args::parse_time("--start", s)?);
     }
     if let (Some(lat), Some(lon)) = (a.lat, a.lon) {
         opts = opts.with_site(Site::new(lat, lon, a.alt)?);

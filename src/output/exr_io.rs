@@ -88,7 +88,7 @@ pub fn flat_exr_layer<'a>(
 /// in errors ("OpenEXR", "tile").
 ///
 /// The blocks (16 scan lines each) are ZIP-compressed in parallel on a pool
-/// of as many threads as the caller's rayon pool has (`--threads`; exr's
+/// of as many threads as the caller's rayon pool has (exr's
 /// own parallel writer would take every core), and written in increasing
 /// line order, so the file is the same for any thread count.
 pub fn write_flat_exr(path: &Path, layer: FlatExrLayer, what: &str) -> Result<()> {

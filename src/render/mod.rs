@@ -11,7 +11,7 @@
 //!   reduces the oversampling with the PSF into a [`RowBand`];
 //!   [`finish`] applies the image-wide effects (MTF, NEdT noise,
 //!   quantisation), computes apparent temperatures and builds the layers.
-//! - [`tile`]: a render split into row bands (`--tile K/N`), partial files
+//! - [`tile`]: a render split into row bands (tile `K` of `N`), partial files
 //!   and their assembly (`irsig merge`).
 //! - [`session`]: the whole chain for a loaded scene file — the tracer built
 //!   once, exposure and thermal state per image time, each sensor rendered

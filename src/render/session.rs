@@ -1,17 +1,26 @@
-//! The whole chain for a scene file: what `irsig render` runs.
+//! The whole chain for a scene file: the library's front, re-exported at
+//! the crate root.
 //!
 //! [`Session::open`] loads the scene (geometry, materials, weather), types
 //! its `sensors`, `atmosphere` and `render` sections, and builds the tracer
 //! once. [`Session::thermal`] computes every facet's thermal state at the
 //! image times in one go (one spin-up for the whole series).
-//! [`Session::render_image`] renders one sensor at one time — whole, or one
-//! tile of row bands — and [`Session::run`] loops over times and sensors,
-//! writing the files.
+//! [`Session::render_rows`] renders rows of one sensor under one time's
+//! conditions, [`Session::finish`] applies the image-wide sensor effects
+//! and [`Session::write_image`] writes the files; [`Session::run`] loops
+//! over times and sensors (whole images, or one tile of row bands each),
+//! reporting to a [`Progress`] observer.
+//!
+//! Owns the session state and its [`Timings`]; takes a scene file and
+//! [`RunOptions`], gives image files (or row bands and thermal states to a
+//! caller that goes step by step). Knows nothing of the command line: no
+//! argument parsing, no terminal output; errors name fields.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use chrono::{DateTime, FixedOffset, TimeDelta};
+use chrono::{DateTime, FixedOffset};
 use serde::Deserialize;
 
 use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
@@ -21,6 +30,7 @@ use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
 use crate::exposure::FacetTracers;
+use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
 use crate::scene::Scene;
 use crate::sensor::{Sensor, SensorConfig};
@@ -50,8 +60,8 @@ pub enum AtmosphereConfig {
     },
 }
 
-/// Options of a render run (the command line).
-#[derive(Debug, Clone, PartialEq)]
+/// Options of a render run.
+#[derive(Clone)]
 pub struct RunOptions {
     /// Tracing backend.
     pub backend: Backend,
@@ -61,10 +71,24 @@ pub struct RunOptions {
     pub tile: Option<(usize, usize)>,
     /// Noise seed overriding the sensors' own.
     pub seed: Option<u64>,
-    /// Show a progress bar (stderr).
-    pub progress: bool,
+    /// Told how the run progresses ([`Stage::Thermal`], then
+    /// [`Stage::Rows`]); `None`: nobody is told.
+    pub progress: Option<Arc<dyn Progress>>,
     /// Only these sensors (by name); empty: all.
     pub sensors: Vec<String>,
+}
+
+impl std::fmt::Debug for RunOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RunOptions")
+            .field("backend", &self.backend)
+            .field("times", &self.times)
+            .field("tile", &self.tile)
+            .field("seed", &self.seed)
+            .field("progress", &self.progress.is_some())
+            .field("sensors", &self.sensors)
+            .finish()
+    }
 }
 
 impl Default for RunOptions {
@@ -74,7 +98,7 @@ impl Default for RunOptions {
             times: Vec::new(),
             tile: None,
             seed: None,
-            progress: false,
+            progress: None,
             sensors: Vec::new(),
         }
     }
@@ -470,16 +494,17 @@ impl Session {
         Ok(f)
     }
 
-    /// Render every (selected) sensor at every time into `out_dir`: whole
-    /// images (`STEM.exr`, `.img`/`.hdr`, `.png`), or with `options.tile`
-    /// one tile file each (skipped when already complete). Returns the
-    /// stems written or skipped.
-    pub fn run(&mut self, out_dir: &Path, options: &RunOptions) -> Result<Vec<String>> {
-        std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
-        for name in &options.sensors {
-            if !self.sensors.iter().any(|s| &s.name == name) {
-                return Err(Error::invalid(
-                    "--sensor",
+    /// The index of the sensor called `name`.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for field `sensor`, listing the scene's sensors.
+    pub fn sensor_index(&self, name: &str) -> Result<usize> {
+        self.sensors
+            .iter()
+            .position(|s| s.name == name)
+            .ok_or_else(|| {
+                Error::invalid(
+                    "sensor",
                     format!(
                         "`{name}`: no such sensor (the scene has {})",
                         self.sensors
@@ -488,8 +513,43 @@ impl Session {
                             .collect::<Vec<_>>()
                             .join(", ")
                     ),
-                ));
-            }
+                )
+            })
+    }
+
+    /// Write the finished image of sensor `s` at `time` into `out_dir` as
+    /// `STEM.exr`, `STEM.img` + `STEM.hdr` (ENVI) and `STEM.png`, described
+    /// by the scene file's absolute path, the backend, sensor and time.
+    /// Counts as output time.
+    pub fn write_image(
+        &mut self,
+        out_dir: &Path,
+        stem: &str,
+        s: usize,
+        time: &DateTime<FixedOffset>,
+        image: &Finished,
+    ) -> Result<()> {
+        let t0 = Instant::now();
+        let scene = std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone());
+        let desc = super::description(
+            &scene,
+            self.backend.as_str(),
+            &self.sensors[s].name,
+            &time.to_rfc3339(),
+        );
+        write_outputs(out_dir, stem, image, &desc)?;
+        self.timings.output += t0.elapsed();
+        Ok(())
+    }
+
+    /// Render every (selected) sensor at every time into `out_dir`: whole
+    /// images (`STEM.exr`, `.img`/`.hdr`, `.png`), or with `options.tile`
+    /// one tile file each (skipped when already complete). Returns the
+    /// stems written or skipped.
+    pub fn run(&mut self, out_dir: &Path, options: &RunOptions) -> Result<Vec<String>> {
+        std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+        for name in &options.sensors {
+            self.sensor_index(name)?;
         }
         let times = if options.times.is_empty() {
             vec![self.scene.time]
@@ -524,7 +584,12 @@ impl Session {
         if jobs.is_empty() {
             return Ok(done);
         }
+        let progress: &dyn Progress = options.progress.as_deref().unwrap_or(&NoProgress);
+        let facets = self.scene.geometry.facet_count() as u64;
+        progress.start(Stage::Thermal, facets);
         let states = self.thermal(&times)?;
+        progress.advance(facets);
+        progress.finish();
         let total_rows: u64 = jobs
             .iter()
             .map(|(_, s, _, _)| match options.tile {
@@ -532,17 +597,17 @@ impl Session {
                 None => self.sensors[*s].height() as u64,
             })
             .sum();
-        let bar = progress_bar(total_rows, options.progress);
+        progress.start(Stage::Rows, total_rows);
         for (ti, s, stem, seed) in jobs {
             let time = times[ti];
-            bar.set_message(stem.clone());
+            progress.item(&stem);
             let height = self.sensors[s].height();
             let rows = match options.tile {
                 Some((k, n)) => tile_rows(k, n, height),
                 None => 0..height,
             };
             let cond = &states.conditions[ti];
-            let band = self.render_rows(s, cond, rows, &|n| bar.inc(n))?;
+            let band = self.render_rows(s, cond, rows, &|n| progress.advance(n))?;
             match options.tile {
                 Some(tile) => {
                     let info = self.tile_info(s, &stem, &time, tile, seed);
@@ -552,109 +617,14 @@ impl Session {
                 }
                 None => {
                     let f = self.finish(s, band, seed)?;
-                    let t0 = Instant::now();
-                    let scene =
-                        std::path::absolute(&self.scene.path).unwrap_or(self.scene.path.clone());
-                    let desc = super::description(
-                        &scene,
-                        self.backend.as_str(),
-                        &self.sensors[s].name,
-                        &time.to_rfc3339(),
-                    );
-                    write_outputs(out_dir, &stem, &f, &desc)?;
-                    self.timings.output += t0.elapsed();
+                    self.write_image(out_dir, &stem, s, &time, &f)?;
                 }
             }
             done.push(stem);
         }
-        bar.finish_and_clear();
+        progress.finish();
         Ok(done)
     }
-}
-
-fn progress_bar(total: u64, show: bool) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !show || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} {msg:20} [{bar:40}] {pos}/{len} rows ({eta})",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar
-}
-
-/// Parse `--times`: a comma-separated list of RFC 3339 times, or
-/// `START/END/STEP` with STEP like `30s`, `15min`, `1h`.
-pub fn parse_times(s: &str) -> Result<Vec<DateTime<FixedOffset>>> {
-    let time = |t: &str| {
-        DateTime::parse_from_rfc3339(t.trim()).map_err(|e| {
-            Error::invalid(
-                "--times",
-                format!("`{t}`: {e}: expected an RFC 3339 time like 2025-06-21T14:00:00-04:00"),
-            )
-        })
-    };
-    let parts: Vec<&str> = s.split('/').collect();
-    match parts.as_slice() {
-        [start, end, step] => {
-            let (a, b) = (time(start)?, time(end)?);
-            let step = parse_duration(step)?;
-            if b < a {
-                return Err(Error::invalid(
-                    "--times",
-                    format!("`{s}`: the end is before the start"),
-                ));
-            }
-            let mut out = Vec::new();
-            let mut t = a;
-            while t <= b {
-                out.push(t);
-                if out.len() > 10_000 {
-                    return Err(Error::invalid(
-                        "--times",
-                        format!("`{s}`: more than 10000 times"),
-                    ));
-                }
-                t += step;
-            }
-            Ok(out)
-        }
-        [_] => s.split(',').map(time).collect(),
-        _ => Err(Error::invalid(
-            "--times",
-            format!("`{s}`: expected T1,T2,… or START/END/STEP"),
-        )),
-    }
-}
-
-fn parse_duration(s: &str) -> Result<TimeDelta> {
-    let bad = || {
-        Error::invalid(
-            "--times",
-            format!("step `{s}`: expected a positive duration like 30s, 15min or 1h"),
-        )
-    };
-    let s = s.trim();
-    let split = s
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .ok_or_else(bad)?;
-    let (num, unit) = s.split_at(split);
-    let v: f64 = num.parse().map_err(|_| bad())?;
-    let secs = match unit {
-        "s" => v,
-        "m" | "min" => v * 60.0,
-        "h" => v * 3600.0,
-        _ => return Err(bad()),
-    };
-    if !(secs.is_finite() && secs >= 1.0) {
-        return Err(bad());
-    }
-    Ok(TimeDelta::milliseconds((secs * 1000.0).round() as i64))
 }
 
 /// The thermal state at each image time from the scene-wide solve

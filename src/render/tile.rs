@@ -1,5 +1,6 @@
-//! Tiles: a render split into `N` bands of image rows (`--tile K/N`), each
-//! written to a partial file and assembled by `irsig merge`.
+//! Tiles: a render split into `N` bands of image rows (tile `K` of `N`,
+//! [`RunOptions::tile`](super::session::RunOptions::tile)), each written to
+//! a partial file and assembled by [`merge_tiles`].
 //!
 //! A tile file `NAME.tileK-of-N.exr` is an OpenEXR image of the tile's rows
 //! holding, per band, the radiance after the PSF reduction but before the
@@ -74,23 +75,6 @@ pub fn tile_rows(k: usize, n: usize, height: usize) -> std::ops::Range<usize> {
     start..start + len
 }
 
-/// Parse `K/N` (1 ≤ K ≤ N).
-pub fn parse_tile(s: &str) -> Result<(usize, usize)> {
-    let bad = || {
-        Error::invalid(
-            "--tile",
-            format!("`{s}`: expected K/N with 1 ≤ K ≤ N, e.g. 3/8"),
-        )
-    };
-    let (k, n) = s.split_once('/').ok_or_else(bad)?;
-    let k: usize = k.trim().parse().map_err(|_| bad())?;
-    let n: usize = n.trim().parse().map_err(|_| bad())?;
-    if k == 0 || n == 0 || k > n {
-        return Err(bad());
-    }
-    Ok((k, n))
-}
-
 /// The tile file of `stem` in `dir`: `dir/STEM.tileK-of-N.exr`.
 pub fn tile_path(dir: &Path, stem: &str, k: usize, n: usize) -> PathBuf {
     dir.join(format!("{stem}.tile{k}-of-{n}.exr"))
@@ -154,7 +138,7 @@ pub fn read_tile(path: &Path) -> Result<(TileInfo, RowBand)> {
             .map_err(|e| bad(format!("attribute `{TILE_ATTRIBUTE}`: {e}")))?,
         _ => {
             return Err(bad(format!(
-                "no `{TILE_ATTRIBUTE}` attribute: expected a tile written by `irsig render --tile K/N`"
+                "no `{TILE_ATTRIBUTE}` attribute: expected a tile file of a render split into tiles"
             )));
         }
     };

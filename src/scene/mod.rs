@@ -375,16 +375,10 @@ impl Loader {
             longitude_deg: s.longitude_deg,
             altitude_m: s.altitude_m,
         };
-        let time = match DateTime::parse_from_rfc3339(&f.time) {
+        let time = match crate::sun::parse_time(&f.time) {
             Ok(t) => Some(t),
             Err(e) => {
-                self.err(
-                    "time",
-                    format!(
-                        "`{}`: {e}; expected RFC 3339 with offset, e.g. 2025-06-21T14:00:00-04:00",
-                        f.time
-                    ),
-                );
+                self.err("time", e.to_string());
                 None
             }
         };
@@ -398,10 +392,10 @@ impl Loader {
             }
             let mut ok = true;
             if let Some(st) = &w.start {
-                match DateTime::parse_from_rfc3339(st) {
+                match crate::sun::parse_time(st) {
                     Ok(t) => opts = opts.with_start(t),
                     Err(e) => {
-                        self.err("weather.start", format!("`{st}`: {e}; expected RFC 3339"));
+                        self.err("weather.start", e.to_string());
                         ok = false;
                     }
                 }

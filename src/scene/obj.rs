@@ -1,5 +1,7 @@
 //! Wavefront OBJ loading (through `tobj`), triangulated, one [`ObjGroup`]
-//! per object/group and material.
+//! per object/group and material, or as bare geometry
+//! ([`load_obj_geometry`]). Knows nothing of materials' properties or of
+//! the scene file around the OBJ.
 //!
 //! The `usemtl` names are kept even when the `.mtl` file is absent (irsig
 //! maps them to its own material database, not to the MTL's colours): the
@@ -12,7 +14,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::error::{Error, Location, Result};
-use crate::geometry::TriangleMesh;
+use crate::geometry::{Instance, SceneGeometry, TriangleMesh};
 
 /// One group of an OBJ file: the faces of one `o`/`g` name and `usemtl`.
 #[derive(Debug, Clone)]
@@ -23,6 +25,30 @@ pub struct ObjGroup {
     pub material_name: Option<String>,
     /// The triangles (polygons fan-triangulated), in the file's units.
     pub mesh: TriangleMesh,
+}
+
+/// Load an OBJ file as scene geometry in its own units: one mesh per
+/// group, each instanced once in place (materials ignored).
+///
+/// # Errors
+/// Those of [`load_obj`], and [`Error::Parse`] naming the file when it has
+/// no faces.
+pub fn load_obj_geometry(path: &Path) -> Result<SceneGeometry> {
+    let mut geom = SceneGeometry::default();
+    for g in load_obj(path)? {
+        geom.meshes.push(g.mesh);
+        geom.instances.push(Instance {
+            mesh: geom.meshes.len() - 1,
+            world_from_object: glam::Affine3A::IDENTITY,
+        });
+    }
+    if geom.facet_count() == 0 {
+        return Err(Error::parse(
+            Location::file(path),
+            "the OBJ file has no faces (expected `f` lines)",
+        ));
+    }
+    Ok(geom)
 }
 
 /// Load an OBJ file as triangulated groups. Errors name the file (and, for

@@ -31,49 +31,12 @@ use crate::textio;
 pub const CSV_HEADER: &str = "time,air_temperature_k,dew_point_k,relative_humidity,pressure_pa,wind_speed_m_s,wind_direction_deg,direct_normal_w_m2,diffuse_horizontal_w_m2,global_horizontal_w_m2,sky_longwave_w_m2,total_sky_cover,opaque_sky_cover";
 
 fn parse_time(s: &str, loc: &Location) -> Result<DateTime<FixedOffset>> {
-    DateTime::parse_from_rfc3339(s.trim()).map_err(|e| {
-        Error::parse(
-            loc.clone(),
-            format!(
-                "time `{}` is not RFC 3339 with a UTC offset (e.g. 2025-06-21T14:00:00-04:00): {e}",
-                s.trim()
-            ),
-        )
-    })
+    crate::sun::parse_time(s).map_err(|e| Error::parse(loc.clone(), format!("time {e}")))
 }
 
 fn parse_site_comment(rest: &str, loc: &Location) -> Result<Site> {
-    let (mut lat, mut lon, mut alt) = (None, None, None);
-    for kv in rest.split_whitespace() {
-        let (k, v) = kv.split_once('=').ok_or_else(|| {
-            Error::parse(
-                loc.clone(),
-                format!("site comment: expected key=value, found `{kv}`"),
-            )
-        })?;
-        let value = opt_number(v, &loc.clone().with_field(k.to_string()), k)?;
-        match k {
-            "latitude_deg" => lat = value,
-            "longitude_deg" => lon = value,
-            "altitude_m" => alt = value,
-            _ => {
-                return Err(Error::parse(
-                    loc.clone(),
-                    format!(
-                        "site comment: unknown key `{k}`; expected latitude_deg, longitude_deg, altitude_m"
-                    ),
-                ));
-            }
-        }
-    }
-    match (lat, lon) {
-        (Some(la), Some(lo)) => Site::new(la, lo, alt.unwrap_or(0.0))
-            .map_err(|e| Error::parse(loc.clone(), e.to_string())),
-        _ => Err(Error::parse(
-            loc.clone(),
-            "site comment needs latitude_deg= and longitude_deg=",
-        )),
-    }
+    rest.parse::<Site>()
+        .map_err(|e| Error::parse(loc.clone(), format!("site comment: {e}")))
 }
 
 fn set_field(r: &mut RawRecord, name: &str, v: Option<f64>) {

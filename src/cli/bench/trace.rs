@@ -1,4 +1,5 @@
-//! Benchmarks of the tracing backends (`irsig bench trace`).
+//! What `irsig bench trace` measures: the tracing backends on the same rays.
+//! Returns a report; the printing is in the parent module.
 //!
 //! [`trace_bench`] builds every [`Backend`] over the same triangles, traces
 //! the same three ray sets through each and reports build time and
@@ -22,9 +23,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use crate::error::{Error, Result};
-use crate::geometry::SceneGeometry;
-use crate::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
+use irsig::geometry::SceneGeometry;
+use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
+use irsig::{Error, Result};
 
 /// Pixel-tile shape of the primary rays: consecutive rays cover one tile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,11 +41,6 @@ impl TileShape {
     pub const T4X2: TileShape = TileShape {
         width: 4,
         height: 2,
-    };
-    /// 8×1 pixels: one 8-wide packet per scanline segment.
-    pub const T8X1: TileShape = TileShape {
-        width: 8,
-        height: 1,
     };
 }
 

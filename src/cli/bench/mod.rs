@@ -1,5 +1,5 @@
 //! `irsig bench`: benchmarks. `irsig bench trace` compares the ray-tracing
-//! backends (see [`irsig::bench`]); `irsig bench render` times a whole
+//! backends (see [`trace`]); `irsig bench render` times a whole
 //! render of a scene file by stage and compares the primary-ray pipeline with
 //! bare packet tracing of the same rays.
 
@@ -7,12 +7,16 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use irsig::bench::{TileShape, TraceBenchOptions, trace_bench};
 use irsig::geometry::SceneGeometry;
 use irsig::geometry::procedural::{self, TerrainParams};
-use irsig::render::session::Session;
-use irsig::trace::{Backend, Coherence, Watertight};
+use irsig::trace::{Coherence, Watertight};
+use irsig::{Backend, Session, Timings};
 use rayon::prelude::*;
+
+use super::args::FlagContext;
+use trace::{TileShape, TraceBenchOptions, trace_bench};
+
+mod trace;
 
 /// Arguments of `irsig bench`.
 #[derive(Debug, clap::Args)]
@@ -99,21 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn load_scene(a: &TraceArgs) -> anyhow::Result<SceneGeometry> {
     if let Some(path) = &a.scene {
-        let groups = irsig::scene::obj::load_obj(path)?;
-        let mut geom = SceneGeometry::default();
-        for g in groups {
-            geom.meshes.push(g.mesh);
-            geom.instances.push(irsig::geometry::Instance {
-                mesh: geom.meshes.len() - 1,
-                world_from_object: glam::Affine3A::IDENTITY,
-            });
-        }
-        anyhow::ensure!(
-            geom.facet_count() > 0,
-            "{}: the OBJ file has no faces (expected `f` lines)",
-            path.display()
-        );
-        Ok(geom)
+        Ok(irsig::scene::obj::load_obj_geometry(path)?)
     } else {
         let n = a.triangles.unwrap_or(1_000_000);
         anyhow::ensure!(
@@ -248,11 +238,8 @@ struct RenderReport {
 }
 
 /// `a − b`, per stage.
-fn timings_since(
-    a: &irsig::render::session::Timings,
-    b: &irsig::render::session::Timings,
-) -> irsig::render::session::Timings {
-    irsig::render::session::Timings {
+fn timings_since(a: &Timings, b: &Timings) -> Timings {
+    Timings {
         load: a.load - b.load,
         bvh_build: a.bvh_build - b.bvh_build,
         thermal: a.thermal - b.thermal,
@@ -276,21 +263,9 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
     let s = match &a.sensor {
         None => 0,
         Some(name) => session
-            .sensors
-            .iter()
-            .position(|s| &s.name == name)
-            .with_context(|| {
-                format!(
-                    "--sensor `{name}`: no such sensor in {} (it has {})",
-                    a.scene.display(),
-                    session
-                        .sensors
-                        .iter()
-                        .map(|s| s.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            })?,
+            .sensor_index(name)
+            .for_flags(&[("sensor", "--sensor")])
+            .with_context(|| format!("in {}", a.scene.display()))?,
     };
     let name = session.sensors[s].name.clone();
     let out_dir = tempfile::tempdir().context("creating a temporary output folder")?;
@@ -315,7 +290,7 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
     // round after round (so both see the same machine load); the best
     // round of each counts.
     let base = session.timings;
-    let mut best: Option<(f64, irsig::render::session::Timings)> = None;
+    let mut best: Option<(f64, Timings)> = None;
     let mut finished = None;
     for _ in 0..a.rounds {
         let before = session.timings;
@@ -337,22 +312,16 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         bare = bare.min(t0.elapsed().as_secs_f64());
         std::hint::black_box(&hits);
     }
-    let sensor = &session.sensors[s];
     let (_, round) = best.expect("at least one round");
     let finished = finished.expect("at least one round");
-    let t0 = std::time::Instant::now();
-    let desc = irsig::render::description(
-        &session.scene.path,
-        a.backend.as_str(),
-        &name,
-        &time.to_rfc3339(),
-    );
-    irsig::render::write_outputs(out_dir.path(), &name, &finished, &desc)?;
-    let t = irsig::render::session::Timings {
-        output: t0.elapsed(),
-        ..timings_since(&base, &irsig::render::session::Timings::default())
+    let before = session.timings;
+    session.write_image(out_dir.path(), &name, s, &time, &finished)?;
+    let sensor = &session.sensors[s];
+    let t = Timings {
+        output: session.timings.output - before.output,
+        ..timings_since(&base, &Timings::default())
     };
-    let t = irsig::render::session::Timings {
+    let t = Timings {
         radiometry_setup: round.radiometry_setup,
         ray_generation: round.ray_generation,
         primary_trace: round.primary_trace,
