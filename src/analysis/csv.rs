@@ -276,13 +276,10 @@ pub fn read_temperature_series(
     };
     let mut out: Vec<(DateTime<FixedOffset>, f64)> = Vec::with_capacity(t.rows.len());
     for (line, r) in &t.rows {
-        let time = DateTime::parse_from_rfc3339(&r[tc]).map_err(|e| {
+        let time = crate::sun::parse_time(&r[tc]).map_err(|e| {
             Error::parse(
                 Location::file(path).at_line(*line).with_field("time"),
-                format!(
-                    "expected an RFC 3339 time like 2024-06-21T14:00:00-04:00, found `{}` ({e})",
-                    r[tc]
-                ),
+                e.to_string(),
             )
         })?;
         let v = number(path, *line, "surface_temperature_k", &r[vc])?;
