@@ -87,14 +87,15 @@ impl Aerodynamic {
         non_negative("displacement_height_m", displacement_height_m)?;
         positive("roughness_momentum_m", roughness_momentum_m)?;
         positive("roughness_heat_m", roughness_heat_m)?;
-        for (field, z) in [("wind_height_m", wind_height_m), ("air_height_m", air_height_m)] {
+        for (field, z) in [
+            ("wind_height_m", wind_height_m),
+            ("air_height_m", air_height_m),
+        ] {
             if z <= displacement_height_m {
                 return Err(InputError::OutOfRange {
                     field,
                     value: z,
-                    expected: format!(
-                        "above the displacement height {displacement_height_m} m"
-                    ),
+                    expected: format!("above the displacement height {displacement_height_m} m"),
                 });
             }
         }
@@ -342,7 +343,13 @@ mod tests {
         assert_eq!(e.field(), "roughness_heat_m");
         // Negative, zero or NaN values.
         let e = Aerodynamic::new(2.0, 2.0, 0.0, -0.1, 0.01).unwrap_err();
-        assert_eq!(e, InputError::Negative { field: "roughness_momentum_m", value: -0.1 });
+        assert_eq!(
+            e,
+            InputError::Negative {
+                field: "roughness_momentum_m",
+                value: -0.1
+            }
+        );
         let e = Aerodynamic::new(2.0, 2.0, -0.5, 0.1, 0.01).unwrap_err();
         assert_eq!(e.field(), "displacement_height_m");
         let e = Aerodynamic::new(f64::NAN, 2.0, 0.0, 0.1, 0.01).unwrap_err();

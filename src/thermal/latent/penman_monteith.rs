@@ -27,9 +27,9 @@
 
 use super::psychrometrics::{
     AIR_SPECIFIC_HEAT_J_KG_K, FAO_LATENT_HEAT_J_KG, air_density_kg_m3,
-    latent_heat_of_vaporisation_j_kg, psychrometric_constant_pa_k,
-    saturation_vapour_pressure_pa, saturation_vapour_pressure_slope_pa_k,
-    vapour_pressure_from_dew_point_pa, vapour_pressure_from_relative_humidity_pa,
+    latent_heat_of_vaporisation_j_kg, psychrometric_constant_pa_k, saturation_vapour_pressure_pa,
+    saturation_vapour_pressure_slope_pa_k, vapour_pressure_from_dew_point_pa,
+    vapour_pressure_from_relative_humidity_pa,
 };
 use super::{InputError, finite, in_range};
 
@@ -223,8 +223,8 @@ impl ReferenceEtInputs {
     fn et0(&self, cn: f64) -> f64 {
         let t = self.air_temperature_c;
         let delta = saturation_vapour_pressure_slope_pa_k(t + 273.15) / 1000.0;
-        let gamma = psychrometric_constant_pa_k(self.pressure_kpa * 1000.0, FAO_LATENT_HEAT_J_KG)
-            / 1000.0;
+        let gamma =
+            psychrometric_constant_pa_k(self.pressure_kpa * 1000.0, FAO_LATENT_HEAT_J_KG) / 1000.0;
         let u2 = self.wind_speed_2m_m_s;
         let vpd = self.saturation_vapour_pressure_kpa - self.actual_vapour_pressure_kpa;
         (0.408 * delta * (self.net_radiation_mj_m2 - self.soil_heat_flux_mj_m2)
@@ -362,7 +362,10 @@ mod tests {
         // ET₀ = 3.9 mm/day.
         let p = atmospheric_pressure_pa(100.0);
         assert_eq!(
-            printed(psychrometric_constant_pa_k(p, FAO_LATENT_HEAT_J_KG) / 1000.0, 4),
+            printed(
+                psychrometric_constant_pa_k(p, FAO_LATENT_HEAT_J_KG) / 1000.0,
+                4
+            ),
             0.0666
         );
         let et0 = reference_et0_daily_mm(&ReferenceEtInputs {
@@ -419,7 +422,10 @@ mod tests {
                 actual_vapour_pressure_kpa: air.vapour_pressure_pa() / 1e3,
                 pressure_kpa: p / 1e3,
             });
-            assert!((eq3_mm_day - eq6).abs() < 0.02 * eq6, "{eq3_mm_day} vs {eq6}");
+            assert!(
+                (eq3_mm_day - eq6).abs() < 0.02 * eq6,
+                "{eq3_mm_day} vs {eq6}"
+            );
         }
     }
 
@@ -432,7 +438,9 @@ mod tests {
         let air = sunny_air();
         let mut last = f64::INFINITY;
         for r_s in [0.0, 50.0, 500.0, 5e3, 5e5, 5e8] {
-            let le = TurbulentExchange::new(air, 50.0, r_s).unwrap().latent_w_m2(305.0);
+            let le = TurbulentExchange::new(air, 50.0, r_s)
+                .unwrap()
+                .latent_w_m2(305.0);
             assert!(le > 0.0 && le < last, "r_s = {r_s}: {le}");
             last = le;
         }
@@ -441,8 +449,16 @@ mod tests {
         assert_eq!(dry.latent_w_m2(305.0), 0.0);
         assert_eq!(dry.latent_derivative_w_m2_k(305.0), 0.0);
         // Sensible heat does not depend on r_s.
-        assert_eq!(dry.sensible_w_m2(305.0), TurbulentExchange::new(air, 50.0, 0.0).unwrap().sensible_w_m2(305.0));
-        assert_eq!(penman_monteith_latent_w_m2(500.0, &air, 50.0, f64::INFINITY).unwrap(), 0.0);
+        assert_eq!(
+            dry.sensible_w_m2(305.0),
+            TurbulentExchange::new(air, 50.0, 0.0)
+                .unwrap()
+                .sensible_w_m2(305.0)
+        );
+        assert_eq!(
+            penman_monteith_latent_w_m2(500.0, &air, 50.0, f64::INFINITY).unwrap(),
+            0.0
+        );
     }
 
     #[test]
@@ -454,7 +470,10 @@ mod tests {
                 let h = 1e-3;
                 let fd = (x.latent_w_m2(t + h) - x.latent_w_m2(t - h)) / (2.0 * h);
                 let d = x.latent_derivative_w_m2_k(t);
-                assert!((fd - d).abs() < 1e-6 * d.abs().max(1e-9), "LE': {fd} vs {d}");
+                assert!(
+                    (fd - d).abs() < 1e-6 * d.abs().max(1e-9),
+                    "LE': {fd} vs {d}"
+                );
                 let fd = (x.sensible_w_m2(t + h) - x.sensible_w_m2(t - h)) / (2.0 * h);
                 let d = x.sensible_coefficient_w_m2_k();
                 assert!((fd - d).abs() < 1e-6 * d, "H': {fd} vs {d}");
@@ -468,7 +487,11 @@ mod tests {
         // LE found equals eq. 3 up to the linearisation of e°(T_s) about T_a
         // (a few per cent for a few kelvin).
         let air = sunny_air();
-        for (a, r_a, r_s) in [(400.0, 40.0, 70.0), (200.0, 100.0, 200.0), (600.0, 30.0, 0.0)] {
+        for (a, r_a, r_s) in [
+            (400.0, 40.0, 70.0),
+            (200.0, 100.0, 200.0),
+            (600.0, 30.0, 0.0),
+        ] {
             let x = TurbulentExchange::new(air, r_a, r_s).unwrap();
             let mut t = air.temperature_k();
             for _ in 0..20 {
@@ -480,7 +503,11 @@ mod tests {
             assert!(closure.abs() < 1e-9 * a, "residual {closure}");
             let pm = penman_monteith_latent_w_m2(a, &air, r_a, r_s).unwrap();
             let le = x.latent_w_m2(t);
-            assert!((le - pm).abs() < 0.05 * pm, "A = {a}: LE {le} vs PM {pm} (T_s − T_a = {})", t - 300.0);
+            assert!(
+                (le - pm).abs() < 0.05 * pm,
+                "A = {a}: LE {le} vs PM {pm} (T_s − T_a = {})",
+                t - 300.0
+            );
         }
     }
 
@@ -488,7 +515,13 @@ mod tests {
     fn bad_resistances_and_air_are_errors_naming_the_field() {
         let air = sunny_air();
         let e = TurbulentExchange::new(air, 50.0, -1.0).unwrap_err();
-        assert_eq!(e, InputError::Negative { field: "surface_resistance_s_m", value: -1.0 });
+        assert_eq!(
+            e,
+            InputError::Negative {
+                field: "surface_resistance_s_m",
+                value: -1.0
+            }
+        );
         let e = TurbulentExchange::new(air, -3.0, 70.0).unwrap_err();
         assert_eq!(e.field(), "aerodynamic_resistance_s_m");
         let e = TurbulentExchange::new(air, 0.0, 70.0).unwrap_err();

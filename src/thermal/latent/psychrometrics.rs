@@ -166,8 +166,14 @@ mod tests {
     fn fao56_example_3_saturation_vapour_pressure() {
         // Example 3: T_max 24.5 °C, T_min 15 °C → e°(24.5) = 3.075 kPa,
         // e°(15) = 1.705 kPa, e_s = 2.39 kPa.
-        assert_eq!(printed(saturation_vapour_pressure_pa(24.5 + K) / 1e3, 3), 3.075);
-        assert_eq!(printed(saturation_vapour_pressure_pa(15.0 + K) / 1e3, 3), 1.705);
+        assert_eq!(
+            printed(saturation_vapour_pressure_pa(24.5 + K) / 1e3, 3),
+            3.075
+        );
+        assert_eq!(
+            printed(saturation_vapour_pressure_pa(15.0 + K) / 1e3, 3),
+            1.705
+        );
         let es = mean_saturation_vapour_pressure_pa(15.0 + K, 24.5 + K);
         assert_eq!(printed(es / 1e3, 2), 2.39);
     }
@@ -192,14 +198,23 @@ mod tests {
     fn fao56_slope_of_the_vapour_pressure_curve() {
         // Example 17 (T_mean 30.2 °C → Δ = 0.246 kPa/°C) and Example 18
         // (T_mean 16.9 °C → Δ = 0.122 kPa/°C).
-        assert_eq!(printed(saturation_vapour_pressure_slope_pa_k(30.2 + K) / 1e3, 3), 0.246);
-        assert_eq!(printed(saturation_vapour_pressure_slope_pa_k(16.9 + K) / 1e3, 3), 0.122);
+        assert_eq!(
+            printed(saturation_vapour_pressure_slope_pa_k(30.2 + K) / 1e3, 3),
+            0.246
+        );
+        assert_eq!(
+            printed(saturation_vapour_pressure_slope_pa_k(16.9 + K) / 1e3, 3),
+            0.122
+        );
     }
 
     #[test]
     fn fao56_example_20_dew_point() {
         // Example 20: T_dew = T_min = 14.8 °C → e_a = 1.68 kPa (eq. 14).
-        assert_eq!(printed(vapour_pressure_from_dew_point_pa(14.8 + K) / 1e3, 2), 1.68);
+        assert_eq!(
+            printed(vapour_pressure_from_dew_point_pa(14.8 + K) / 1e3, 2),
+            1.68
+        );
     }
 
     #[test]
@@ -217,7 +232,10 @@ mod tests {
     #[test]
     fn latent_heat_and_density_are_physical() {
         // λ(20 °C) = 2.454 MJ/kg, FAO's 2.45 to its precision.
-        assert_eq!(printed(latent_heat_of_vaporisation_j_kg(20.0 + K) / 1e6, 2), 2.45);
+        assert_eq!(
+            printed(latent_heat_of_vaporisation_j_kg(20.0 + K) / 1e6, 2),
+            2.45
+        );
         // ρ at 101.3 kPa, 20 °C ≈ 1.19 kg/m³ (1.01 T_v approximation).
         let rho = air_density_kg_m3(101_300.0, 20.0 + K);
         assert!((rho - 1.19).abs() < 0.01, "ρ = {rho}");

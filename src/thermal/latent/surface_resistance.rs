@@ -97,8 +97,14 @@ impl JarvisStewart {
     /// limit, a negative sensitivity, water contents outside 0..1 or a field
     /// capacity not above the wilting point, anything not finite.
     pub fn validate(&self) -> Result<(), InputError> {
-        non_negative("min_stomatal_resistance_s_m", self.min_stomatal_resistance_s_m)?;
-        positive("max_stomatal_resistance_s_m", self.max_stomatal_resistance_s_m)?;
+        non_negative(
+            "min_stomatal_resistance_s_m",
+            self.min_stomatal_resistance_s_m,
+        )?;
+        positive(
+            "max_stomatal_resistance_s_m",
+            self.max_stomatal_resistance_s_m,
+        )?;
         if self.max_stomatal_resistance_s_m <= self.min_stomatal_resistance_s_m {
             return Err(InputError::OutOfRange {
                 field: "max_stomatal_resistance_s_m",
@@ -112,7 +118,12 @@ impl JarvisStewart {
         non_negative("leaf_area_index", self.leaf_area_index)?;
         positive("shortwave_limit_w_m2", self.shortwave_limit_w_m2)?;
         non_negative("vpd_sensitivity_per_pa", self.vpd_sensitivity_per_pa)?;
-        in_range("optimum_temperature_k", self.optimum_temperature_k, 250.0, 330.0)?;
+        in_range(
+            "optimum_temperature_k",
+            self.optimum_temperature_k,
+            250.0,
+            330.0,
+        )?;
         non_negative(
             "temperature_sensitivity_per_k2",
             self.temperature_sensitivity_per_k2,
@@ -123,10 +134,7 @@ impl JarvisStewart {
             return Err(InputError::OutOfRange {
                 field: "field_capacity_m3_m3",
                 value: self.field_capacity_m3_m3,
-                expected: format!(
-                    "above wilting_point_m3_m3 = {}",
-                    self.wilting_point_m3_m3
-                ),
+                expected: format!("above wilting_point_m3_m3 = {}", self.wilting_point_m3_m3),
             });
         }
         Ok(())
@@ -137,8 +145,8 @@ impl JarvisStewart {
         let lai = self.leaf_area_index;
         let ratio = self.min_stomatal_resistance_s_m / self.max_stomatal_resistance_s_m;
         let sunlight = if lai > 0.0 {
-            let f = 0.55 * (c.shortwave_down_w_m2.max(0.0) / self.shortwave_limit_w_m2)
-                * (2.0 / lai);
+            let f =
+                0.55 * (c.shortwave_down_w_m2.max(0.0) / self.shortwave_limit_w_m2) * (2.0 / lai);
             (f + ratio) / (1.0 + f)
         } else {
             0.0
@@ -202,9 +210,22 @@ mod tests {
     fn an_unstressed_sunlit_canopy_approaches_the_minimum() {
         let mut j = crop();
         j.vpd_sensitivity_per_pa = 0.0;
-        let r = j.surface_resistance_s_m(&noon());
         let floor = j.min_stomatal_resistance_s_m / j.leaf_area_index;
-        assert!(r > floor && r < 1.1 * floor, "r_s = {r}, floor {floor}");
+        // At noon, NP89's sunlight factor: r_s = (r_min/LAI)(1 + f)/(f + r_min/r_max).
+        let r = j.surface_resistance_s_m(&noon());
+        let f = 0.55 * (800.0 / 30.0) * (2.0 / 3.0);
+        let expect = floor * (1.0 + f) / (f + 40.0 / 5000.0);
+        assert!(
+            (r - expect).abs() < 1e-9 * expect,
+            "r_s = {r}, expected {expect}"
+        );
+        // Ever brighter light: r_s → r_min / LAI from above.
+        let bright = CanopyConditions {
+            shortwave_down_w_m2: 1e6,
+            ..noon()
+        };
+        let r = j.surface_resistance_s_m(&bright);
+        assert!(r > floor && r < 1.001 * floor, "r_s = {r}, floor {floor}");
     }
 
     #[test]
@@ -212,7 +233,10 @@ mod tests {
         let j = crop();
         let base = j.surface_resistance_s_m(&noon());
         // Night: r_s,max / LAI.
-        let dark = CanopyConditions { shortwave_down_w_m2: 0.0, ..noon() };
+        let dark = CanopyConditions {
+            shortwave_down_w_m2: 0.0,
+            ..noon()
+        };
         let r = j.surface_resistance_s_m(&dark);
         let f = j.stress_factors(&dark);
         let expect = j.max_stomatal_resistance_s_m
@@ -220,38 +244,83 @@ mod tests {
             / (f.vapour_pressure_deficit * f.soil_moisture * f.temperature);
         assert!((r - expect).abs() < 1e-9 * expect, "{r} vs {expect}");
         // Each stress raises r_s monotonically.
-        let dry_air = CanopyConditions { vapour_pressure_deficit_pa: 3000.0, ..noon() };
+        let dry_air = CanopyConditions {
+            vapour_pressure_deficit_pa: 3000.0,
+            ..noon()
+        };
         assert!(j.surface_resistance_s_m(&dry_air) > base);
-        let drier = CanopyConditions { soil_moisture_m3_m3: 0.2, ..noon() };
+        let drier = CanopyConditions {
+            soil_moisture_m3_m3: 0.2,
+            ..noon()
+        };
         assert!(j.surface_resistance_s_m(&drier) > base);
-        let hot = CanopyConditions { air_temperature_k: 310.0, ..noon() };
+        let hot = CanopyConditions {
+            air_temperature_k: 310.0,
+            ..noon()
+        };
         assert!(j.surface_resistance_s_m(&hot) > base);
         // Wilted soil, or no leaves: shut.
-        let wilted = CanopyConditions { soil_moisture_m3_m3: 0.05, ..noon() };
+        let wilted = CanopyConditions {
+            soil_moisture_m3_m3: 0.05,
+            ..noon()
+        };
         assert_eq!(j.surface_resistance_s_m(&wilted), f64::INFINITY);
-        let bare = JarvisStewart { leaf_area_index: 0.0, ..j };
+        let bare = JarvisStewart {
+            leaf_area_index: 0.0,
+            ..j
+        };
         assert_eq!(bare.surface_resistance_s_m(&noon()), f64::INFINITY);
     }
 
     #[test]
     fn bad_parameters_are_errors_naming_the_field() {
-        let e = JarvisStewart { leaf_area_index: -1.0, ..crop() }.validate().unwrap_err();
-        assert_eq!(e, InputError::Negative { field: "leaf_area_index", value: -1.0 });
-        let e = JarvisStewart { min_stomatal_resistance_s_m: -5.0, ..crop() }
-            .validate()
-            .unwrap_err();
+        let e = JarvisStewart {
+            leaf_area_index: -1.0,
+            ..crop()
+        }
+        .validate()
+        .unwrap_err();
+        assert_eq!(
+            e,
+            InputError::Negative {
+                field: "leaf_area_index",
+                value: -1.0
+            }
+        );
+        let e = JarvisStewart {
+            min_stomatal_resistance_s_m: -5.0,
+            ..crop()
+        }
+        .validate()
+        .unwrap_err();
         assert_eq!(e.field(), "min_stomatal_resistance_s_m");
-        let e = JarvisStewart { max_stomatal_resistance_s_m: 10.0, ..crop() }
-            .validate()
-            .unwrap_err();
+        let e = JarvisStewart {
+            max_stomatal_resistance_s_m: 10.0,
+            ..crop()
+        }
+        .validate()
+        .unwrap_err();
         assert_eq!(e.field(), "max_stomatal_resistance_s_m");
-        let e = JarvisStewart { field_capacity_m3_m3: 0.05, ..crop() }.validate().unwrap_err();
+        let e = JarvisStewart {
+            field_capacity_m3_m3: 0.05,
+            ..crop()
+        }
+        .validate()
+        .unwrap_err();
         assert_eq!(e.field(), "field_capacity_m3_m3");
-        let e = JarvisStewart { shortwave_limit_w_m2: 0.0, ..crop() }.validate().unwrap_err();
+        let e = JarvisStewart {
+            shortwave_limit_w_m2: 0.0,
+            ..crop()
+        }
+        .validate()
+        .unwrap_err();
         assert_eq!(e.field(), "shortwave_limit_w_m2");
-        let e = JarvisStewart { vpd_sensitivity_per_pa: f64::NAN, ..crop() }
-            .validate()
-            .unwrap_err();
+        let e = JarvisStewart {
+            vpd_sensitivity_per_pa: f64::NAN,
+            ..crop()
+        }
+        .validate()
+        .unwrap_err();
         assert_eq!(e.field(), "vpd_sensitivity_per_pa");
         assert!(crop().validate().is_ok());
     }
