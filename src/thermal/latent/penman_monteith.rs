@@ -169,7 +169,8 @@ fn check_resistances(r_a: f64, r_s: f64) -> Result<(), InputError> {
 /// λE = [Δ (Rn − G) + ρ c_p (e_s − e_a) / r_a] / [Δ + γ (1 + r_s / r_a)]
 ///
 /// with `available_energy_w_m2` = Rn − G, Δ, ρ, γ and e_s at the air
-/// temperature, resistances in s m⁻¹. r_s = +∞ gives 0.
+/// temperature, resistances in s m⁻¹. r_s = +∞ gives 0; r_a = +∞ gives the
+/// limit of the formula, Δ(Rn − G)/(Δ + γ).
 ///
 /// # Errors
 /// [`InputError`] naming the field for r_a ≤ 0 or NaN, r_s < 0 or NaN, or
@@ -189,8 +190,10 @@ pub fn penman_monteith_latent_w_m2(
     let delta = saturation_vapour_pressure_slope_pa_k(air.temperature_k);
     let gamma = air.psychrometric_constant_pa_k();
     let rho_cp = air.density_kg_m3() * AIR_SPECIFIC_HEAT_J_KG_K;
+    // r_a = +∞ (no turbulent exchange) is eq. 3's limit, the equilibrium
+    // evaporation Δ(Rn − G)/(Δ + γ) of a fully decoupled surface.
     let (aero, ratio) = if r_a == f64::INFINITY {
-        (0.0, if r_s == 0.0 { 0.0 } else { f64::INFINITY })
+        (0.0, 0.0)
     } else {
         (rho_cp * air.vapour_pressure_deficit_pa() / r_a, r_s / r_a)
     };
@@ -459,6 +462,11 @@ mod tests {
             penman_monteith_latent_w_m2(500.0, &air, 50.0, f64::INFINITY).unwrap(),
             0.0
         );
+        // No turbulent exchange: the equilibrium evaporation, eq. 3's limit.
+        let delta = saturation_vapour_pressure_slope_pa_k(air.temperature_k());
+        let eq = delta * 500.0 / (delta + air.psychrometric_constant_pa_k());
+        let le = penman_monteith_latent_w_m2(500.0, &air, f64::INFINITY, 70.0).unwrap();
+        assert!((le - eq).abs() < 1e-9 * eq, "{le} vs {eq}");
     }
 
     #[test]
