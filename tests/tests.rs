@@ -9,6 +9,7 @@ mod atmosphere;
 mod backends;
 mod cli;
 mod exposure;
+mod flux;
 mod fuzz_smoke;
 mod material;
 mod radiometry;

@@ -47,6 +47,7 @@
 
 pub mod balance;
 pub mod conduction;
+pub mod latent;
 pub mod linear;
 
 use crate::error::{Error, Result};

@@ -33,6 +33,7 @@ use crate::sun::Site;
 
 mod epw;
 mod fill;
+pub mod flux;
 mod irsig;
 pub mod physics;
 pub mod synth;
