@@ -597,3 +597,34 @@ fn malformed_input_table_baseline_is_valid() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// A closed stdout (`irsig … | head`) ends a command quietly with success:
+/// no panic, no error message (ripgrep's convention). The reading end of the
+/// pipe is closed before the command starts, so its first write fails.
+#[test]
+fn closed_stdout_is_not_an_error() {
+    for args in [
+        &[
+            "radiance",
+            "--band",
+            "8-14",
+            "--temperature",
+            "300",
+            "--json",
+        ][..],
+        &["radiance", "--band", "8-14", "--temperature", "300"][..],
+        &["weather", "show", "scenes/town/weather.csv"][..],
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = Command::new(irsig_bin())
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(writer)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {:?} {stderr}", out.status);
+        assert!(stderr.is_empty(), "{args:?}: {stderr}");
+    }
+}

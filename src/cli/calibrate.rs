@@ -195,19 +195,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::bail!("-o writes the fitted material of the one-facet form (--thermal)");
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&result)?);
+        outln!("{}", serde_json::to_string_pretty(&result)?);
     } else {
-        print_result(&result);
+        print_result(&result)?;
     }
     Ok(())
 }
 
-fn print_result(c: &Calibration) {
-    println!(
+fn print_result(c: &Calibration) -> anyhow::Result<()> {
+    outln!(
         "fit to {} values ({} degrees of freedom), {} model evaluations",
-        c.n_obs, c.dof, c.evaluations
+        c.n_obs,
+        c.dof,
+        c.evaluations
     );
-    println!(
+    outln!(
         "RMSE {:.4} → {:.4}   bias {:+.4} → {:+.4}   Spearman {:.4} → {:.4}",
         c.initial.rmse,
         c.fitted.rmse,
@@ -216,7 +218,7 @@ fn print_result(c: &Calibration) {
         c.initial.spearman,
         c.fitted.spearman
     );
-    println!(
+    outln!(
         "{:<40} {:>12} {:>12} {:>12}  {:.0}% interval",
         "parameter",
         "initial",
@@ -225,7 +227,7 @@ fn print_result(c: &Calibration) {
         c.confidence * 100.0
     );
     for p in &c.params {
-        println!(
+        outln!(
             "{:<40} {:>12.5} {:>12.5} {:>12.5}  [{:.5}, {:.5}]{}",
             p.name,
             p.initial,
@@ -236,4 +238,5 @@ fn print_result(c: &Calibration) {
             if p.at_bound { "  (at a bound)" } else { "" }
         );
     }
+    Ok(())
 }

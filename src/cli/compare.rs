@@ -218,9 +218,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_report(&report);
+        print_report(&report)?;
     }
     Ok(())
 }
@@ -253,53 +253,69 @@ fn georeference(
     Ok(geo::points_to_pixels(&session, s, &pts, file)?)
 }
 
-fn print_agreement(label: &str, a: &Agreement, unit: &str) {
-    println!(
+fn print_agreement(label: &str, a: &Agreement, unit: &str) -> anyhow::Result<()> {
+    outln!(
         "  {label:<16} n={:<8} bias {:+.4} {unit}  RMSE {:.4} {unit}  MAE {:.4} {unit}  Spearman {:.4}  Pearson {:.4}",
-        a.n, a.bias, a.rmse, a.mae, a.spearman, a.pearson
+        a.n,
+        a.bias,
+        a.rmse,
+        a.mae,
+        a.spearman,
+        a.pearson
     );
+    Ok(())
 }
 
-fn print_materials(m: &[MaterialAgreement], unit: &str) {
+fn print_materials(m: &[MaterialAgreement], unit: &str) -> anyhow::Result<()> {
     if !m.is_empty() {
-        println!("  per material:");
+        outln!("  per material:");
         for g in m {
-            print_agreement(&format!("  {}", g.material), &g.agreement, unit);
+            print_agreement(&format!("  {}", g.material), &g.agreement, unit)?;
         }
     }
+    Ok(())
 }
 
-fn print_report(r: &Report) {
-    println!("synthetic {}  vs  truth {}", r.synthetic, r.truth);
+fn print_report(r: &Report) -> anyhow::Result<()> {
+    outln!("synthetic {}  vs  truth {}", r.synthetic, r.truth);
     if let Some(i) = &r.image {
-        println!("image, layer `{}` (synthetic − truth):", i.layer);
-        print_agreement("all pixels", &i.overall, &i.unit);
-        print_materials(&i.per_material, &i.unit);
+        outln!("image, layer `{}` (synthetic − truth):", i.layer);
+        print_agreement("all pixels", &i.overall, &i.unit)?;
+        print_materials(&i.per_material, &i.unit)?;
     }
     if let Some(p) = &r.points {
-        println!(
+        outln!(
             "validation points, layer `{}` (synthetic − truth):",
             p.layer
         );
-        print_agreement("all points", &p.overall, &p.unit);
-        print_materials(&p.per_material, &p.unit);
+        print_agreement("all points", &p.overall, &p.unit)?;
+        print_materials(&p.per_material, &p.unit)?;
     }
     if let Some(g) = &r.geometry {
-        println!(
+        outln!(
             "geometric accuracy from {} control points (truth − synthetic):",
             g.n
         );
-        println!(
+        outln!(
             "  bias x {:+.3} px, y {:+.3} px; RMSE x {:.3} px, y {:.3} px, radial {:.3} px",
-            g.bias_px[0], g.bias_px[1], g.rmse_px[0], g.rmse_px[1], g.rmse_radial_px
+            g.bias_px[0],
+            g.bias_px[1],
+            g.rmse_px[0],
+            g.rmse_px[1],
+            g.rmse_radial_px
         );
         if let (Some(b), Some(e), Some(rr), Some(gsd)) =
             (g.bias_m, g.rmse_m, g.rmse_radial_m, g.gsd_m)
         {
-            println!(
+            outln!(
                 "  at {gsd} m/px: bias x {:+.3} m, y {:+.3} m; RMSE x {:.3} m, y {:.3} m, radial {:.3} m",
-                b[0], b[1], e[0], e[1], rr
+                b[0],
+                b[1],
+                e[0],
+                e[1],
+                rr
             );
         }
     }
+    Ok(())
 }

@@ -172,10 +172,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         band_radiance: radiance,
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    println!(
+    outln!(
         "{} ({} pixels) vs {} ({} pixels) in sensor `{}`, {} to {}",
         report.target,
         report.target_pixels.len(),
@@ -195,7 +195,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .iter()
             .map(|c| c.format("%H:%M").to_string())
             .collect();
-        println!(
+        outln!(
             "  {:<22} greatest contrast {:+.4} {} at {}; crossovers: {}",
             s.quantity,
             s.max_contrast_signed,

@@ -11,6 +11,16 @@
 
 use clap::{Parser, Subcommand};
 
+/// `println!` that returns the write error instead of panicking, so that a
+/// closed stdout (`irsig … | head`) ends the command quietly (`main` treats
+/// a broken pipe as success).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    }};
+}
+
 mod args;
 mod bench;
 mod calibrate;

@@ -105,18 +105,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         let l = band.blackbody_radiance(t);
         if args.json {
-            println!("{}", serde_json::json!({ "radiance_w_m2_sr": l }));
+            outln!("{}", serde_json::json!({ "radiance_w_m2_sr": l }));
         } else {
-            println!("band {lo}–{hi} µm, T = {t} K: band radiance {l:.9} W/m²/sr");
+            outln!("band {lo}–{hi} µm, T = {t} K: band radiance {l:.9} W/m²/sr");
         }
     } else if let Some(l) = args.radiance {
         let t = band
             .brightness_temperature(l)
             .context("--radiance: no brightness temperature")?;
         if args.json {
-            println!("{}", serde_json::json!({ "temperature_k": t }));
+            outln!("{}", serde_json::json!({ "temperature_k": t }));
         } else {
-            println!("band {lo}–{hi} µm, L = {l} W/m²/sr: brightness temperature {t:.6} K");
+            outln!("band {lo}–{hi} µm, L = {l} W/m²/sr: brightness temperature {t:.6} K");
         }
     }
     Ok(())

@@ -489,41 +489,47 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         plot::tornado(p, &title, "ΔT (K)", legend, &bars)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    println!("sensitivity ({}) at {}", report.method, report.time);
+    outln!("sensitivity ({}) at {}", report.method, report.time);
     if let Study::Scene(s) = &study {
         let (sampled, neighbours) = s.facet_counts();
-        println!(
+        outln!(
             "scene study: {} sample pixels of sensor `{}`; per evaluation {sampled} facets under them and {neighbours} neighbours re-solved",
             s.points.len(),
             s.session.sensors[s.sensor].name
         );
     }
     for (o, name) in outputs.iter().enumerate() {
-        println!("{name}:");
+        outln!("{name}:");
         if let Some(oat) = &report.oat {
-            println!("  nominal {:.4}", oat.nominal_outputs[o]);
+            outln!("  nominal {:.4}", oat.nominal_outputs[o]);
             for i in oat.ranking(o) {
                 let e = &oat.effects[o][i];
-                println!(
+                outln!(
                     "  {:<40} low {:+10.4}  high {:+10.4}  per unit {:+.4e}",
-                    factors[i].name, e.at_low, e.at_high, e.per_unit
+                    factors[i].name,
+                    e.at_low,
+                    e.at_high,
+                    e.per_unit
                 );
             }
         }
         if let Some(m) = &report.morris {
             for i in m.ranking(o) {
                 let e = &m.effects[o][i];
-                println!(
+                outln!(
                     "  {:<40} mu* {:10.4}  mu {:+10.4}  sigma {:10.4}",
-                    factors[i].name, e.mu_star, e.mu, e.sigma
+                    factors[i].name,
+                    e.mu_star,
+                    e.mu,
+                    e.sigma
                 );
             }
         }
         let b = &report.error_budget[o];
-        println!(
+        outln!(
             "  estimated error (RSS of uncertainty × sensitivity): {:.4}",
             b.combined
         );
