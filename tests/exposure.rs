@@ -758,7 +758,7 @@ fn sky_sampling_parses_from_text() {
 }
 // ---- Scene-wide thermal solve ----
 
-use irsig::exposure::{Dedup, FacetThermal, ThermalParams, solve_facet_temperatures};
+use irsig::thermal::scene::{Dedup, FacetThermal, ThermalParams, solve_facet_temperatures};
 use irsig::thermal::{BackBoundary, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties};
 
 /// A clear day, 15-min records over 24 h: air 288 ± 6 K peaking at 15:00,
@@ -1126,7 +1126,7 @@ fn rms_max(a: &[f32], b: &[f32]) -> (f64, f64) {
 /// and 2 threads.
 #[test]
 fn linearized_solve_matches_the_per_facet_exact_solve() {
-    use irsig::exposure::{LinearizedParams, ThermalMethod};
+    use irsig::thermal::scene::{LinearizedParams, ThermalMethod};
     let (geo, ds, kinds, props) = yard();
     let (forcing, dirs) = clear_day(false);
     let exp = compute_exposure(&Checked::new(&geo), &geo, &ds, &dirs, &stratified(64)).unwrap();
@@ -1200,7 +1200,7 @@ fn linearized_solve_matches_the_per_facet_exact_solve() {
 /// two-pass default (RMS 0.01 K, max 0.05 K).
 #[test]
 fn linearized_solve_matches_the_exact_solve_for_any_pass_count() {
-    use irsig::exposure::{LinearizedParams, ThermalMethod};
+    use irsig::thermal::scene::{LinearizedParams, ThermalMethod};
     let (geo, ds, kinds, props) = yard();
     let (forcing, dirs) = clear_day(false);
     let exp = compute_exposure(&Checked::new(&geo), &geo, &ds, &dirs, &stratified(64)).unwrap();
@@ -1253,7 +1253,9 @@ fn linearized_solve_matches_the_exact_solve_for_any_pass_count() {
 #[test]
 fn scene_pipeline_on_the_town_weather() {
     use chrono::{DateTime, TimeDelta};
-    use irsig::exposure::{FacetThermalSetup, SceneThermalParams, solve_scene_temperatures};
+    use irsig::render::scene_thermal::{
+        FacetThermalSetup, SceneThermalParams, solve_scene_temperatures,
+    };
     let (weather, _) = irsig::weather::synth::town_history().unwrap();
     let site = *weather.site().expect("the town history has a site");
     let (geo, _, ground, wall) = wall_on_ground(false);
@@ -1362,7 +1364,7 @@ fn backends_agree_on_a_procedural_town() {
 /// traced one, and the scene's weather, site and image time drive it.
 #[test]
 fn solve_scene_from_a_scene_file() {
-    use irsig::exposure::{SceneThermalParams, solve_scene};
+    use irsig::render::scene_thermal::{SceneThermalParams, solve_scene};
     use irsig::scene::Scene;
     let d = tempfile::tempdir().unwrap();
     std::fs::copy(
@@ -1462,7 +1464,7 @@ fn solve_scene_from_a_scene_file() {
 /// keep theirs. The ground's twin property set differs only in its back.
 #[test]
 fn facets_on_the_ground_get_the_deep_ground_boundary() {
-    use irsig::exposure::FacetThermalSetup;
+    use irsig::render::scene_thermal::FacetThermalSetup;
     let mut m = TriangleMesh::default();
     let ground = quad(
         &mut m,
