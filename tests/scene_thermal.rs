@@ -290,6 +290,79 @@ fn scene_solve_rejects_mismatched_inputs() {
     let _ = Dedup::default();
 }
 
+/// Plain per-facet inputs (not from an exposure) that do not fit together
+/// are reported before any work, naming the array: a background entry
+/// naming a facet that does not exist, an array one facet short, offsets
+/// that run backwards.
+#[test]
+fn scene_inputs_that_do_not_fit_are_rejected() {
+    use irsig::geometry::BackgroundEntry;
+    use irsig::thermal::scene::SceneInputs;
+    let (forcing, _) = clear_day(true);
+    let r = forcing.len();
+    let sun = vec![0.0f32; 2 * r];
+    // Facet 1 sees facet 0 over half its hemisphere.
+    let (normal, ds, f) = ([Vec3::Z; 2], [false; 2], [1.0f32, 0.5]);
+    let (back, ground) = ([None; 2], [0.0f32; 2]);
+    let offsets = [0u32, 0, 1];
+    let entries = [BackgroundEntry {
+        facet: 0,
+        weight: 0.5,
+    }];
+    let good = SceneInputs {
+        records: r,
+        sun_fraction: &sun,
+        cos_incidence: &sun,
+        normal: &normal,
+        double_sided: &ds,
+        shape_factor: &f,
+        back_shape_factor: &back,
+        ground_weight: &ground,
+        background_offsets: &offsets,
+        background: &entries,
+    };
+    let kinds = [FacetThermal::Solve(0); 2];
+    let solve = |inputs: SceneInputs| {
+        solve_facet_temperatures(
+            inputs,
+            &kinds,
+            &[asphalt()],
+            &forcing,
+            &[r - 1],
+            &ThermalParams::default(),
+        )
+    };
+    assert_eq!(solve(good).unwrap().surface_temperature_k[0].len(), 2);
+    let far = [BackgroundEntry {
+        facet: 7,
+        weight: 0.5,
+    }];
+    let e = solve(SceneInputs {
+        background: &far,
+        ..good
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("background") && e.contains("facet 7"), "{e}");
+    let e = solve(SceneInputs {
+        ground_weight: &ground[..1],
+        ..good
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("ground_weight") && e.contains("one entry per facet"),
+        "{e}"
+    );
+    let e = solve(SceneInputs {
+        background_offsets: &[0, 1, 0],
+        ..good
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("background_offsets"), "{e}");
+}
+
 /// A 20 m × 20 m yard (512 ground facets: asphalt on the deep ground in the
 /// south half, an insulated slab in the north half), a brick wall running
 /// east–west (interior back) and a thin double-sided steel fence running

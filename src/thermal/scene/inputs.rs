@@ -139,10 +139,13 @@ impl<'a> SceneInputs<'a> {
                 ),
             ));
         }
-        if let Some(e) = self.background.iter().find(|e| e.facet as usize >= n) {
+        // One pass over what may be millions of entries: the largest id.
+        if let Some(last) = self.background.iter().map(|e| e.facet).max()
+            && last as usize >= n
+        {
             return Err(Error::invalid(
                 "background",
-                format!("facet {} does not exist (there are {n})", e.facet),
+                format!("facet {last} does not exist (there are {n})"),
             ));
         }
         Ok(())
