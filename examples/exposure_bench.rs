@@ -31,12 +31,16 @@ use std::path::Path;
 use std::time::Instant;
 
 use chrono::DateTime;
-use irsig::exposure::{
-    Dedup, FacetThermal, FacetThermalSetup, LinearizedParams, SceneThermalParams, SkySampling,
-    ThermalMethod, ThermalParams, solve_facet_temperatures, solve_scene, solve_scene_temperatures,
-};
+use irsig::exposure::SkySampling;
 use irsig::geometry::procedural::{TerrainParams, generate};
+use irsig::render::scene_thermal::{
+    FacetThermalSetup, SceneThermal, SceneThermalParams, solve_scene, solve_scene_temperatures,
+};
 use irsig::scene::Scene;
+use irsig::thermal::scene::{
+    Dedup, FacetThermal, LinearizedParams, SceneTemperatures, ThermalMethod, ThermalParams,
+    solve_facet_temperatures,
+};
 use irsig::thermal::{BackBoundary, Forcing, SlabProperties};
 use irsig::trace::{self, Backend, Watertight};
 
@@ -181,11 +185,7 @@ fn main() -> anyhow::Result<()> {
 
 /// Solves the thermal passes of `r` again `rounds` times (same exposure,
 /// setup and parameters) and prints the best time of each stage.
-fn thermal_rounds(
-    r: &irsig::exposure::SceneThermal,
-    params: &ThermalParams,
-    rounds: usize,
-) -> anyhow::Result<()> {
+fn thermal_rounds(r: &SceneThermal, params: &ThermalParams, rounds: usize) -> anyhow::Result<()> {
     let forcing = Forcing::from_records(&r.records)?;
     let images = &r.temperatures.image_records;
     let setup = &r.setup;
@@ -221,7 +221,7 @@ fn thermal_rounds(
 /// Re-solves the thermal passes of `r` with the fine quanta (reference) and
 /// with the fast slab options, and prints their time and the difference of
 /// the image-time temperatures.
-fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyhow::Result<()> {
+fn compare(r: &SceneThermal, setup: &FacetThermalSetup) -> anyhow::Result<()> {
     let forcing = Forcing::from_records(&r.records)?;
     let images = &r.temperatures.image_records;
     let solve = |p: &ThermalParams| {
@@ -231,7 +231,7 @@ fn compare(r: &irsig::exposure::SceneThermal, setup: &FacetThermalSetup) -> anyh
         anyhow::Ok((s, t.elapsed().as_secs_f64()))
     };
     let (reference, t_ref) = solve(&ThermalParams::fine_reference())?;
-    let report = |name: &str, s: &irsig::exposure::SceneTemperatures, secs: f64| {
+    let report = |name: &str, s: &SceneTemperatures, secs: f64| {
         let (a, b) = (
             &s.surface_temperature_k[0],
             &reference.surface_temperature_k[0],

@@ -16,6 +16,7 @@ mod radiometry;
 mod reliability;
 mod render;
 mod scene;
+mod scene_thermal;
 mod sensor;
 mod sun;
 mod thermal;

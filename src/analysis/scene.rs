@@ -45,12 +45,13 @@ use rayon::prelude::*;
 use super::params::ParamSet;
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 use crate::exposure::{
-    Exposure, ExposureParams, FacetThermal, FacetThermalSetup, HistoryWindow, SceneThermalParams,
-    ThermalParams, compute_exposure, history_times, sun_directions,
+    Exposure, ExposureParams, HistoryWindow, compute_exposure, history_times, sun_directions,
 };
 use crate::render::path::PathTables;
+use crate::render::scene_thermal::{FacetThermalSetup, SceneThermalParams};
 use crate::render::session::{AtmosphereConfig, Session};
 use crate::render::{Conditions, ShadeOptions, Shader, Sky};
+use crate::thermal::scene::{FacetThermal, ThermalParams};
 use crate::thermal::{
     self, BackBoundary, Background, FacetInputs, Forcing, SlabProperties, SolveOptions,
 };

@@ -1,6 +1,17 @@
 //! Ray-traced per-facet inputs of the thermal model: solar history, shape
 //! factor and background, for every facet of a scene.
 //!
+//! # What it owns, takes and gives
+//! - Takes a [`SceneGeometry`], any [`Tracer`], per-facet double-sided
+//!   flags and the sun's direction at each history step.
+//! - Gives an [`Exposure`]: per facet, the sunlit fraction and cos-incidence
+//!   history, the shape factor and the background (which facets its
+//!   blocked hemisphere rays hit). Plus the time grid of the history
+//!   ([`history_times`]) and the sun along it ([`sun_directions`]).
+//! - It knows no thermal model: materials, temperatures and the scene
+//!   solve live in `irsig::thermal::scene`, which reads these results as
+//!   plain arrays; `irsig::render::scene_thermal` runs the two in turn.
+//!
 //! # How the parts fit
 //! - [`FacetSamples`]: per-facet frame and `n²` stratified sample points
 //!   (the ray origins), built once from the [`SceneGeometry`].
@@ -10,19 +21,12 @@
 //! - [`sky_view`]: hemisphere rays (DIRSIG's fixed 15°×30° grid or
 //!   stratified cosine-weighted sampling, [`SkySampling`]) → [`SkyView`]:
 //!   the shape factor F (view factor to the sky dome), its standard error,
-//!   and the background — which facets the blocked rays hit, with weights —
-//!   plus the weight of the ground beyond the scene.
+//!   and the background — which facets the blocked rays hit, with weights
+//!   ([`BackgroundEntry`]) — plus the weight of the ground beyond the scene.
 //! - [`compute_exposure`] runs all of it and times it ([`Exposure`]).
 //! - [`history_times`] / [`sun_directions`]: the record times of the
 //!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min) and the
 //!   sun's direction at each, computed once for the scene (NREL SPA).
-//! - [`solve_facet_temperatures`]: the scene-wide thermal solve — every
-//!   facet through [`crate::thermal::solve`], deduplicated, two passes (the
-//!   second with the neighbours' temperatures as background), fixed
-//!   facets bypassing it ([`FacetThermal`]).
-//! - [`solve_scene_temperatures`]: all of the above for a render — history
-//!   window, sun, rays, thermal → [`SceneThermal`] (temperatures, shape
-//!   factors and sun fractions at the image times, timings).
 //!
 //! Rays go through any [`Tracer`] (Embree or obvhs) in batches of
 //! [`ExposureParams::batch_facets`] facets, batches in parallel (rayon).
@@ -42,29 +46,19 @@
 
 mod facets;
 mod history;
-mod linear;
-mod pipeline;
 pub mod sampling;
 mod sky;
 mod solar;
-mod solve;
 
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+pub use crate::geometry::BackgroundEntry;
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_times, sun_directions};
-pub use pipeline::{
-    FacetThermalSetup, FacetTracers, SceneThermal, SceneThermalParams, SceneThermalTimings,
-    solve_scene, solve_scene_temperatures,
-};
-pub use sky::{BackgroundEntry, SkySampling, SkyView, sky_view};
+pub use sky::{SkySampling, SkyView, sky_view};
 pub use solar::{SolarHistory, solar_history};
-pub use solve::{
-    Dedup, FacetThermal, LinearizedParams, PassStats, SceneTemperatures, ThermalMethod,
-    ThermalParams, solve_facet_temperatures,
-};
 
 use crate::geometry::SceneGeometry;
 use crate::trace::Tracer;

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::FacetSamples;
 use super::sampling::{HemiSample, dirsig_grid, jitter_rng, stratified_cosine};
-use crate::geometry::SceneGeometry;
+use crate::geometry::{BackgroundEntry, SceneGeometry};
 use crate::trace::{Coherence, Hit, Ray, Tracer};
 
 /// How the hemisphere over a facet is sampled for its shape factor.
@@ -106,16 +106,6 @@ impl Default for SkySampling {
     fn default() -> Self {
         SkySampling::DIRSIG
     }
-}
-
-/// One entry of a facet's background: another facet seen from it, with the
-/// share of the facet's cosine-weighted hemisphere it fills.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BackgroundEntry {
-    /// Global facet id of the facet seen.
-    pub facet: u32,
-    /// Its view factor from this facet (share of `∫cosθ dω/π`).
-    pub weight: f32,
 }
 
 /// The sky view of every facet, in global facet order.

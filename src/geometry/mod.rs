@@ -12,6 +12,18 @@ use glam::{Affine3A, Vec3};
 
 pub mod procedural;
 
+/// One entry of a facet's background: another facet seen from it, with the
+/// share of the facet's cosine-weighted hemisphere it fills (a view factor).
+/// The exposure traces these ([`crate::exposure::SkyView`]); the scene
+/// thermal solve reads them ([`crate::thermal::scene::SceneInputs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BackgroundEntry {
+    /// Global facet id of the facet seen ([`SceneGeometry::facet_id`]).
+    pub facet: u32,
+    /// Its view factor from this facet (share of `∫cosθ dω/π`).
+    pub weight: f32,
+}
+
 /// A triangle mesh in its own (object) space.
 #[derive(Debug, Clone, Default)]
 pub struct TriangleMesh {

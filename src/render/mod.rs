@@ -24,6 +24,7 @@
 
 pub mod image;
 pub mod path;
+pub mod scene_thermal;
 pub mod session;
 pub mod shade;
 pub mod tile;

@@ -25,11 +25,11 @@ use serde::Deserialize;
 
 use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
 use super::path::PathTables;
+use super::scene_thermal::FacetTracers;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
-use crate::exposure::FacetTracers;
 use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
 use crate::scene::Scene;
@@ -202,7 +202,7 @@ pub struct ThermalStates {
     pub records: Vec<WeatherRecord>,
     /// Where the scene-wide solve's time went (history setup, per-facet
     /// rays, thermal passes).
-    pub timings: crate::exposure::SceneThermalTimings,
+    pub timings: super::scene_thermal::SceneThermalTimings,
 }
 
 fn parse_at<T: for<'de> Deserialize<'de>>(
@@ -628,7 +628,7 @@ impl Session {
 }
 
 /// The thermal state at each image time from the scene-wide solve
-/// ([`crate::exposure::solve_scene`]: per-facet solar history and sky view
+/// ([`super::scene_thermal::solve_scene`]: per-facet solar history and sky view
 /// traced once, the two-pass slab model spun up over the history window
 /// covering all times), plus what the shading needs at each time: the
 /// sun's incidence, the background temperatures, the sky and the sun.
@@ -637,7 +637,7 @@ fn scene_thermal(
     tracers: FacetTracers<'_>,
     times: &[DateTime<FixedOffset>],
 ) -> Result<ThermalStates> {
-    use crate::exposure::{SceneThermalParams, solve_scene};
+    use super::scene_thermal::{SceneThermalParams, solve_scene};
     let scene = &session.scene;
     let mut params = SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;

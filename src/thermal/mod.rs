@@ -26,8 +26,22 @@
 //!   energy diagnostics. It is a pure function, cheap (tens of µs), and safe
 //!   to call from many threads (`rayon`).
 //!
-//! Facets with a fixed temperature or a temperature from a file do not go
-//! through this module: that is the caller's (the scene integrator's) job.
+//! - [`linear`]: the tangent-linear model — one facet's Green's matrices
+//!   `∂T(t)/∂S_k`, from which facets of the same material follow by a
+//!   matrix product.
+//! - [`scene`]: the scene-wide solve — every facet of a scene, coupled
+//!   through their backgrounds, from plain per-facet inputs
+//!   ([`scene::SceneInputs`]); fixed-temperature facets bypass the slab
+//!   model there.
+//!
+//! # What it owns, takes and gives
+//! Owns the physics of facet temperatures: the surface energy balance, the
+//! conduction through the slab, and the scene solve built on them. Takes
+//! material properties, weather records and per-facet inputs as plain
+//! numbers; gives temperatures. It must not know how the per-facet inputs
+//! are traced (rays, tracers, the exposure module), nor sensors, shading
+//! or images: the render's pipeline (`irsig::render::scene_thermal`) feeds
+//! it.
 //!
 //! ```
 //! use irsig::thermal::{self, BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions};
@@ -49,6 +63,7 @@ pub mod balance;
 pub mod conduction;
 pub mod latent;
 pub mod linear;
+pub mod scene;
 
 use crate::error::{Error, Result};
 use crate::material::Material;

@@ -1,25 +1,59 @@
-//! The whole per-facet pipeline for a render: history window → sun
-//! directions → rays ([`compute_exposure`]) → thermal passes
+//! The per-facet pipeline of a render: history window → sun directions →
+//! rays ([`compute_exposure`]) → thermal passes
 //! ([`solve_facet_temperatures`]) → temperatures at the image times.
+//!
+//! # What it owns, takes and gives
+//! - Owns the order of the stages and the thermal side of a scene
+//!   ([`FacetThermalSetup`]: which facets are solved with which property
+//!   set, which are fixed, which lie on the ground).
+//! - Takes a scene (or its geometry, weather, site and setup), the tracers
+//!   ([`FacetTracers`]) and the image times; gives [`SceneThermal`]: every
+//!   facet's temperature at the image times with the ray-traced inputs the
+//!   shading reuses (sun fraction, incidence, shape factor, background).
+//! - It is the one place that knows both [`crate::exposure`] (what the
+//!   rays find) and [`crate::thermal::scene`] (what the slab model makes of
+//!   it): neither of those knows the other. The [`Exposure`] reaches the
+//!   thermal solve as plain arrays ([`SceneInputs`], `From<&Exposure>`).
+//!   It knows nothing of sensors, shading or images.
 
 use std::time::{Duration, Instant};
 
 use chrono::{DateTime, FixedOffset, TimeDelta};
+use rayon::prelude::*;
 
-use super::{
-    Exposure, ExposureParams, FacetThermal, HistoryWindow, SceneTemperatures, ThermalParams,
-    compute_exposure, history_times, solve_facet_temperatures, sun_directions,
+use crate::exposure::{
+    Exposure, ExposureParams, FacetSamples, HistoryWindow, compute_exposure, history_times,
+    sun_directions,
 };
 use crate::geometry::SceneGeometry;
 use crate::scene::Scene;
 use crate::sun::Site;
-use rayon::prelude::*;
-
-use super::FacetSamples;
+use crate::thermal::scene::{
+    FacetThermal, SceneInputs, SceneTemperatures, ThermalParams, solve_facet_temperatures,
+};
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};
 use crate::trace::{Coherence, Ray, Tracer};
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
+
+impl<'a> From<&'a Exposure> for SceneInputs<'a> {
+    /// The exposure's per-facet results as the thermal solve's inputs
+    /// (borrowed, no copies).
+    fn from(e: &'a Exposure) -> Self {
+        SceneInputs {
+            records: e.solar.steps,
+            sun_fraction: &e.solar.sun_fraction,
+            cos_incidence: &e.solar.cos_incidence,
+            normal: &e.facets.normal,
+            double_sided: &e.facets.double_sided,
+            shape_factor: &e.sky.shape_factor,
+            back_shape_factor: &e.sky.back_shape_factor,
+            ground_weight: &e.sky.ground_weight,
+            background_offsets: &e.sky.offsets,
+            background: &e.sky.entries,
+        }
+    }
+}
 
 /// How each facet's temperature is obtained: the thermal side of a scene.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -247,7 +281,7 @@ impl SceneThermal {
     /// Background temperature of every facet at image time `image`, K: the
     /// radiative mean of the final temperatures of what its blocked
     /// hemisphere rays hit, with the ground beyond the scene at the air
-    /// temperature ([`super::SkyView::background_temperature`]).
+    /// temperature ([`crate::exposure::SkyView::background_temperature`]).
     pub fn background_temperature_k(&self, image: usize) -> Vec<f32> {
         let r = self.temperatures.image_records[image];
         let air = self.records[r].air_temperature_k as f32;
@@ -292,9 +326,15 @@ impl<'a, T: Tracer> From<&'a T> for FacetTracers<'a> {
     }
 }
 
-/// Every facet's surface temperature at `image_times`: builds the history
-/// window, traces the sun at every record and the sky of every facet, and
-/// runs the thermal passes. This is what a render calls.
+/// Every facet's surface temperature at `image_times`. This is what a
+/// render calls. Stages:
+/// 1. the history window: record times, weather and sun at each, the
+///    records of the image times;
+/// 2. the rays: solar history and sky view of every facet
+///    ([`compute_exposure`]), with the setup's shape-factor overrides;
+/// 3. the ground test ([`FacetThermalSetup::ground_facets`], when
+///    [`SceneThermalParams::ground`]);
+/// 4. the thermal passes ([`solve_facet_temperatures`]).
 ///
 /// # Errors
 /// Bad window, weather not covering it, bad site, mismatched setup lengths,
@@ -310,30 +350,111 @@ pub fn solve_scene_temperatures<'a>(
 ) -> Result<SceneThermal> {
     let tracers = tracers.into();
     let t0 = Instant::now();
-    let times = history_times(weather, image_times, &params.window)?;
-    let records = times
-        .iter()
-        .map(|&t| weather.at(t))
-        .collect::<Result<Vec<_>>>()?;
-    let forcing = Forcing::from_records(&records)?;
-    let dirs = sun_directions(site, &times)?;
-    let image_records: Vec<usize> = image_times
-        .iter()
-        .map(|t| {
-            times
-                .iter()
-                .position(|x| (*x - *t).abs() < TimeDelta::seconds(1))
-                .expect("image times are on the grid")
-        })
-        .collect();
+    let history = History::new(weather, site, image_times, &params.window)?;
     let t1 = Instant::now();
-    let mut exposure = compute_exposure(
+    let exposure = trace_exposure(
         tracers.exposure,
         geometry,
-        &setup.double_sided,
-        &dirs,
+        setup,
+        &history.sun,
         &params.exposure,
     )?;
+    let (setup, ground_facets) = if params.ground {
+        let ground = setup.ground_facets(tracers.exact, &exposure.facets);
+        let count = ground.iter().filter(|&&g| g).count();
+        (setup.with_ground(&ground), count)
+    } else {
+        (setup.clone(), 0)
+    };
+    let t2 = Instant::now();
+    let temperatures = solve_facet_temperatures(
+        &exposure,
+        &setup.kinds,
+        &setup.props,
+        &history.forcing,
+        &history.image_records,
+        &params.thermal,
+    )?;
+    let t3 = Instant::now();
+    Ok(SceneThermal {
+        times: history.times,
+        records: history.records,
+        image_times: image_times.to_vec(),
+        exposure,
+        temperatures,
+        setup,
+        ground_facets,
+        timings: SceneThermalTimings {
+            setup: t1 - t0,
+            rays: t2 - t1,
+            thermal: t3 - t2,
+        },
+    })
+}
+
+/// Stage 1: the history window's record times, the weather and the sun at
+/// each, and the records of the image times.
+struct History {
+    /// Record times.
+    times: Vec<DateTime<FixedOffset>>,
+    /// The weather at each record (interpolated).
+    records: Vec<WeatherRecord>,
+    /// The same as the slab model's forcing.
+    forcing: Forcing,
+    /// Unit east-north-up vector toward the sun at each record.
+    sun: Vec<glam::Vec3>,
+    /// Record of each image time.
+    image_records: Vec<usize>,
+}
+
+impl History {
+    /// # Errors
+    /// Bad window, weather not covering it, bad site.
+    fn new(
+        weather: &WeatherHistory,
+        site: &Site,
+        image_times: &[DateTime<FixedOffset>],
+        window: &HistoryWindow,
+    ) -> Result<History> {
+        let times = history_times(weather, image_times, window)?;
+        let records = times
+            .iter()
+            .map(|&t| weather.at(t))
+            .collect::<Result<Vec<_>>>()?;
+        let forcing = Forcing::from_records(&records)?;
+        let sun = sun_directions(site, &times)?;
+        let image_records: Vec<usize> = image_times
+            .iter()
+            .map(|t| {
+                times
+                    .iter()
+                    .position(|x| (*x - *t).abs() < TimeDelta::seconds(1))
+                    .expect("image times are on the grid")
+            })
+            .collect();
+        Ok(History {
+            times,
+            records,
+            forcing,
+            sun,
+            image_records,
+        })
+    }
+}
+
+/// Stage 2: the rays — solar history and sky view of every facet — with the
+/// setup's shape-factor overrides in place of the traced values.
+///
+/// # Errors
+/// As [`compute_exposure`]; an override list of the wrong length.
+fn trace_exposure(
+    tracer: &dyn Tracer,
+    geometry: &SceneGeometry,
+    setup: &FacetThermalSetup,
+    sun: &[glam::Vec3],
+    params: &ExposureParams,
+) -> Result<Exposure> {
+    let mut exposure = compute_exposure(tracer, geometry, &setup.double_sided, sun, params)?;
     if !setup.shape_factor_override.is_empty() {
         if setup.shape_factor_override.len() != exposure.facets.len() {
             return Err(Error::invalid(
@@ -351,37 +472,7 @@ pub fn solve_scene_temperatures<'a>(
             }
         }
     }
-    let (setup, ground_facets) = if params.ground {
-        let ground = setup.ground_facets(tracers.exact, &exposure.facets);
-        let count = ground.iter().filter(|&&g| g).count();
-        (setup.with_ground(&ground), count)
-    } else {
-        (setup.clone(), 0)
-    };
-    let t2 = Instant::now();
-    let temperatures = solve_facet_temperatures(
-        &exposure,
-        &setup.kinds,
-        &setup.props,
-        &forcing,
-        &image_records,
-        &params.thermal,
-    )?;
-    let t3 = Instant::now();
-    Ok(SceneThermal {
-        times,
-        records,
-        image_times: image_times.to_vec(),
-        exposure,
-        temperatures,
-        setup,
-        ground_facets,
-        timings: SceneThermalTimings {
-            setup: t1 - t0,
-            rays: t2 - t1,
-            thermal: t3 - t2,
-        },
-    })
+    Ok(exposure)
 }
 
 /// [`solve_scene_temperatures`] for a loaded scene at its image time: the

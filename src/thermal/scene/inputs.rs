@@ -1,0 +1,153 @@
+//! The per-facet inputs of the scene solve: what the ray tracer found for
+//! every facet, borrowed as plain arrays.
+//!
+//! Owns [`SceneInputs`] and the rules that read it (a facet's histories,
+//! its mean shape factor, its background entries). Takes nothing but
+//! slices; it does not know who traced them (in irsig the exposure
+//! module, whose `Exposure` converts into it in
+//! [`crate::render::scene_thermal`]).
+
+use glam::Vec3;
+
+use crate::geometry::BackgroundEntry;
+use crate::{Error, Result};
+
+/// The ray-traced inputs of every facet of a scene, in global facet order:
+/// `n` facets, `R` records per history (one per weather record).
+///
+/// The view factors of a facet add up to one:
+/// `F + ground_weight + Σ background.weight = 1` (for a double-sided facet
+/// `(F + F_back)/2 + …`, see [`SceneInputs::mean_shape_factor`]).
+#[derive(Debug, Clone, Copy)]
+pub struct SceneInputs<'a> {
+    /// Records per facet history, `R`.
+    pub records: usize,
+    /// Sunlit fraction ∈ [0, 1], facet-major: `[facet·R + record]`.
+    pub sun_fraction: &'a [f32],
+    /// Cosine of the solar incidence angle, facet-major (0 at night or
+    /// behind a single-sided facet; `|n·s|` for a double-sided one).
+    pub cos_incidence: &'a [f32],
+    /// Unit front normal per facet (it fixes the cos θ history, so the
+    /// per-class method keys on it).
+    pub normal: &'a [Vec3],
+    /// Whether both faces of the facet are front faces, per facet.
+    pub double_sided: &'a [bool],
+    /// Shape factor F (view factor to the sky) of the front face, per facet.
+    pub shape_factor: &'a [f32],
+    /// Shape factor of the back face of double-sided facets (`None` for
+    /// single-sided ones), per facet.
+    pub back_shape_factor: &'a [Option<f32>],
+    /// View factor to the ground beyond the scene (taken at the air
+    /// temperature), per facet.
+    pub ground_weight: &'a [f32],
+    /// Start of each facet's entries in `background`; `n + 1` entries.
+    pub background_offsets: &'a [u32],
+    /// The facets each facet sees, with their view factors, facet after
+    /// facet.
+    pub background: &'a [BackgroundEntry],
+}
+
+impl<'a> SceneInputs<'a> {
+    /// Number of facets.
+    pub fn facet_count(&self) -> usize {
+        self.shape_factor.len()
+    }
+
+    /// Sunlit fraction of `facet` at every record.
+    #[inline]
+    pub fn sun_fraction(&self, facet: usize) -> &'a [f32] {
+        &self.sun_fraction[facet * self.records..(facet + 1) * self.records]
+    }
+
+    /// Cosine of incidence of `facet` at every record.
+    #[inline]
+    pub fn cos_incidence(&self, facet: usize) -> &'a [f32] {
+        &self.cos_incidence[facet * self.records..(facet + 1) * self.records]
+    }
+
+    /// Shape factor of the back face of `facet` when it is double-sided.
+    #[inline]
+    pub fn back_shape_factor(&self, facet: usize) -> Option<f32> {
+        self.back_shape_factor[facet]
+    }
+
+    /// Mean sky view factor over the facet's faces: F, or `(F + F_back)/2`
+    /// for a double-sided facet. `1 −` it is the view factor to the
+    /// background (neighbours and ground).
+    #[inline]
+    pub fn mean_shape_factor(&self, facet: usize) -> f32 {
+        match self.back_shape_factor(facet) {
+            Some(b) => 0.5 * (self.shape_factor[facet] + b),
+            None => self.shape_factor[facet],
+        }
+    }
+
+    /// The facets seen by `facet`, with their view factors.
+    #[inline]
+    pub fn background(&self, facet: usize) -> &'a [BackgroundEntry] {
+        &self.background
+            [self.background_offsets[facet] as usize..self.background_offsets[facet + 1] as usize]
+    }
+
+    /// Checks that every array has one entry per facet (`R` per facet for
+    /// the histories) and that the background entries are in range.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming the array.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.facet_count();
+        let per_facet = [
+            ("normal", self.normal.len()),
+            ("double_sided", self.double_sided.len()),
+            ("back_shape_factor", self.back_shape_factor.len()),
+            ("ground_weight", self.ground_weight.len()),
+        ];
+        for (name, len) in per_facet {
+            if len != n {
+                return Err(Error::invalid(
+                    name,
+                    format!("expected one entry per facet ({n}), got {len}"),
+                ));
+            }
+        }
+        for (name, len) in [
+            ("sun_fraction", self.sun_fraction.len()),
+            ("cos_incidence", self.cos_incidence.len()),
+        ] {
+            if len != n * self.records {
+                return Err(Error::invalid(
+                    name,
+                    format!(
+                        "expected {} records for each of {n} facets, got {len} values",
+                        self.records
+                    ),
+                ));
+            }
+        }
+        let offsets = self.background_offsets;
+        if offsets.len() != n + 1
+            || offsets.first() != Some(&0)
+            || offsets.windows(2).any(|w| w[0] > w[1])
+            || offsets[n] as usize != self.background.len()
+        {
+            return Err(Error::invalid(
+                "background_offsets",
+                format!(
+                    "expected {} ascending offsets from 0 to the {} entries",
+                    n + 1,
+                    self.background.len()
+                ),
+            ));
+        }
+        // One pass over what may be millions of entries: the largest id.
+        if let Some(last) = self.background.iter().map(|e| e.facet).max()
+            && last as usize >= n
+        {
+            return Err(Error::invalid(
+                "background",
+                format!("facet {last} does not exist (there are {n})"),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,372 @@
+//! Stage 4 of the linearised solve: the passes, facet by facet, from the
+//! references chosen in stages 1–3.
+//!
+//! Owns the pass loop's per-facet work: which facets keep full histories
+//! ([`Slots`]), the background term, and the first- and second-order
+//! products with a reference's Green's matrices. Takes the facets, groups,
+//! references and bins of [`super`]; knows nothing of how they were chosen.
+
+use rayon::prelude::*;
+
+use super::kernels::{columns, curvature, dot, matvec_cols};
+use super::reference::{NodeGreen, Reference, sunlit_cos};
+use super::{CHUNK, Facets, Groups, Scratch};
+use crate::thermal;
+use crate::thermal::scene::{FacetThermal, SceneInputs};
+
+/// The facets some facet sees: each gets a slot in the `T⁴` histories a
+/// pass before the last stores for the next pass's backgrounds (none with
+/// one pass). Slots are in facet order, so a chunk of `CHUNK` facets has a
+/// contiguous run of them.
+pub(super) struct Slots {
+    /// Slot of each facet (`u32::MAX`: none).
+    of_facet: Vec<u32>,
+    /// Number of slots.
+    count: usize,
+    /// First slot of each chunk of facets (one more than chunks).
+    chunk_start: Vec<usize>,
+}
+
+impl Slots {
+    pub(super) fn new(inputs: &SceneInputs, kinds: &[FacetThermal], passes: u32) -> Slots {
+        let n = kinds.len();
+        let mut slot = vec![u32::MAX; n];
+        let mut slots = 0usize;
+        if passes > 1 {
+            let mut needed = vec![false; n];
+            for e in inputs.background {
+                needed[e.facet as usize] = true;
+            }
+            for f in 0..n {
+                if needed[f] && matches!(kinds[f], FacetThermal::Solve(_)) {
+                    slot[f] = slots as u32;
+                    slots += 1;
+                }
+            }
+        }
+        let chunks = n.div_ceil(CHUNK);
+        let mut chunk_slot = vec![0usize; chunks + 1];
+        for (c, ch) in slot.chunks(CHUNK).enumerate() {
+            chunk_slot[c + 1] = chunk_slot[c] + ch.iter().filter(|&&x| x != u32::MAX).count();
+        }
+        Slots {
+            of_facet: slot,
+            count: slots,
+            chunk_start: chunk_slot,
+        }
+    }
+}
+
+/// Stage 4: the passes. Pass 1 takes the air as background; a later pass
+/// adds the background excess over the air, `c·σ(T_bg⁴ − T_air⁴)`, to the
+/// sources. A pass that is not the last yields (first-order) `T⁴`
+/// histories of the facets others see ([`Slots`]), for the next one's
+/// backgrounds; every pass yields the image records. Pass 1's image
+/// records (first order, air background) are kept: a later pass adds to
+/// them the background term `G·(c·bg)` at the image rows alone, unless it
+/// needs the facet's full history.
+pub(super) struct PassPlan<'a> {
+    pub facets: &'a Facets<'a>,
+    pub groups: &'a Groups<'a>,
+    pub refs: &'a [Reference],
+    /// Reference (bin) of each facet.
+    pub ref_of: &'a [u32],
+    pub slots: Slots,
+    pub image_records: &'a [usize],
+    /// Add the second-order correction in the last pass.
+    pub second_order: bool,
+}
+
+/// What changes from pass to pass.
+#[derive(Clone, Copy)]
+struct Pass<'a> {
+    /// The last pass: no `T⁴` histories to store.
+    last: bool,
+    /// The second-order correction (last pass only).
+    second: bool,
+    /// The previous pass's `T⁴` histories, by slot (`None` in pass 1).
+    prev4: Option<&'a [f32]>,
+    /// Pass 1's image records, `[facet·W + image]` (`None` in pass 1).
+    base: Option<&'a [f32]>,
+}
+
+impl PassPlan<'_> {
+    /// Width of a facet's row of image records in the pass output.
+    fn width(&self) -> usize {
+        self.image_records.len().max(1)
+    }
+
+    /// One pass: every facet's image records (`[facet·W + image]`,
+    /// [`PassPlan::width`]) and, unless it is the `last`, the `T⁴`
+    /// histories of the slotted facets (`[slot·R + record]`). Written in
+    /// place, chunk by chunk (no per-chunk copies).
+    pub(super) fn run(
+        &self,
+        last: bool,
+        prev4: Option<&[f32]>,
+        base: Option<&[f32]>,
+    ) -> (Vec<f32>, Vec<f32>) {
+        let pass = Pass {
+            last,
+            second: last && self.second_order,
+            prev4,
+            base,
+        };
+        let n = self.facets.len();
+        let r = self.facets.forcing.len();
+        let wi = self.width();
+        let chunks = n.div_ceil(CHUNK);
+        let store4 = !last;
+        let chunk_slot = &self.slots.chunk_start;
+        let mut img = vec![0.0f32; n * wi];
+        let mut next4 = vec![0.0f32; if store4 { self.slots.count * r } else { 0 }];
+        let mut parts: Vec<&mut [f32]> = Vec::with_capacity(chunks);
+        let mut rest: &mut [f32] = &mut next4;
+        for c in 0..chunks {
+            let len = if store4 {
+                (chunk_slot[c + 1] - chunk_slot[c]) * r
+            } else {
+                0
+            };
+            let (a, b) = std::mem::take(&mut rest).split_at_mut(len);
+            parts.push(a);
+            rest = b;
+        }
+        let ni = self.image_records.len();
+        img.par_chunks_mut(CHUNK * wi)
+            .zip(parts.into_par_iter())
+            .enumerate()
+            .for_each_init(
+                || Scratch::new(r),
+                |s, (c, (img, out4))| {
+                    let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                    for (i, f) in range.enumerate() {
+                        let o = &mut img[i * wi..i * wi + ni];
+                        let slot = self.slots.of_facet[f];
+                        let out4 = if store4 && slot != u32::MAX {
+                            let k = (slot as usize - chunk_slot[c]) * r;
+                            Some(&mut out4[k..k + r])
+                        } else {
+                            None
+                        };
+                        self.facet(&pass, s, f, o, out4);
+                    }
+                },
+            );
+        (img, next4)
+    }
+
+    /// The image-time temperatures `[image][facet]` of a pass's output.
+    pub(super) fn image_temperatures(&self, img: &[f32]) -> Vec<Vec<f32>> {
+        let (n, wi) = (self.facets.len(), self.width());
+        (0..self.image_records.len())
+            .map(|i| (0..n).map(|f| img[f * wi + i]).collect::<Vec<f32>>())
+            .collect()
+    }
+
+    /// One facet of a pass: its image records into `o` and, when it has a
+    /// slot and the pass is not the last, its `T⁴` history into `out4`.
+    fn facet(
+        &self,
+        pass: &Pass,
+        s: &mut Scratch,
+        f: usize,
+        o: &mut [f32],
+        out4: Option<&mut [f32]>,
+    ) {
+        let facets = self.facets;
+        if let FacetThermal::Fixed(t) = facets.kinds[f] {
+            o.iter_mut().for_each(|v| *v = t);
+            return;
+        }
+        let rep = &self.refs[self.ref_of[f] as usize];
+        let has_slot = self.slots.of_facet[f] != u32::MAX;
+        let full = pass.second || (!pass.last && has_slot);
+        let bgc = self.background_term(pass, f, s);
+        if !full && let Some(base) = pass.base {
+            self.image_from_base(rep, base, f, bgc, s, o);
+            return;
+        }
+        let st = facets.state(f);
+        let (df, dfb) = (st.f - rep.facet.f, st.f_back - rep.facet.f_back);
+        s.sc.iter_mut()
+            .zip(sunlit_cos(st))
+            .for_each(|(o, v)| *o = v);
+        if !full {
+            // Pass 1, image records only.
+            for (i, v) in o.iter_mut().enumerate() {
+                *v = rep.front.temperature_k[self.image_records[i]] + rep.probe(i, &s.sc, df, dfb);
+            }
+            return;
+        }
+        // The full first-order history of the front node: ΔS = ΔF·∂S/∂F
+        // + (s cos θ − s cos θ_ref)·αE_dn (+ c·bg), the F terms and the
+        // reference's sun one column each.
+        let g = self.groups.of_solved(f);
+        let sun = &self.groups.sun32[g];
+        columns(s.sc.iter().zip(sun).map(|(a, b)| a * b), 1.0, &mut s.cols);
+        let change = Change { df, dfb, bgc };
+        change.history(
+            &rep.front,
+            rep.has_back,
+            &s.bg,
+            &s.cols,
+            &mut s.cols_bg,
+            &mut s.d,
+        );
+        if pass.second {
+            if rep.has_back {
+                change.history(
+                    &rep.back,
+                    rep.has_back,
+                    &s.bg,
+                    &s.cols,
+                    &mut s.cols_bg,
+                    &mut s.dback,
+                );
+            }
+            self.second_order_image(rep, g, change, s, o);
+            return;
+        }
+        for (v, &t) in o.iter_mut().zip(self.image_records) {
+            *v = rep.front.temperature_k[t] + s.d[t];
+        }
+        let out4 = out4.expect("a full history before the last pass has a slot");
+        for ((o, d), t) in out4.iter_mut().zip(&s.d).zip(&rep.front.temperature_k) {
+            *o = (t + d).powi(4);
+        }
+    }
+
+    /// From pass 2 on: the background excess history of `f` into `s.bg`
+    /// and its coefficients `(c_front, c_back)` in the facet's sources;
+    /// `None` in pass 1 or when the facet sees only sky.
+    fn background_term(&self, pass: &Pass, f: usize, s: &mut Scratch) -> Option<(f32, f32)> {
+        let facets = self.facets;
+        let prev = pass.prev4?;
+        if !facets.background_excess(f, prev, &self.slots.of_facet, &mut s.bg, &mut s.cols_bg) {
+            return None;
+        }
+        let inputs = facets.inputs;
+        let (cf, cb) = thermal::background_coefficients(
+            facets.props_of(f),
+            inputs.shape_factor[f] as f64,
+            inputs.back_shape_factor(f).map(f64::from),
+        );
+        Some((cf as f32, cb as f32))
+    }
+
+    /// A later pass without the full history: pass 1's image records plus
+    /// the background term at the image rows.
+    fn image_from_base(
+        &self,
+        rep: &Reference,
+        base: &[f32],
+        f: usize,
+        bgc: Option<(f32, f32)>,
+        s: &Scratch,
+        o: &mut [f32],
+    ) {
+        let (wi, ni) = (self.width(), o.len());
+        o.copy_from_slice(&base[f * wi..f * wi + ni]);
+        if let Some((cf, cb)) = bgc {
+            for (i, v) in o.iter_mut().enumerate() {
+                *v += cf * dot(rep.row_front(i), &s.bg);
+                if rep.has_back {
+                    *v += cb * dot(rep.row_back(i), &s.bg);
+                }
+            }
+        }
+    }
+
+    /// The last pass with the second-order correction: `T = T_ref + G (ΔS
+    /// + r(Δ))` at the image records, `Δ = G ΔS` the first-order change of
+    /// the front (`s.d`) and back (`s.dback`) nodes.
+    fn second_order_image(
+        &self,
+        rep: &Reference,
+        g: usize,
+        change: Change,
+        s: &mut Scratch,
+        o: &mut [f32],
+    ) {
+        let groups = self.groups;
+        let Change { df, dfb, bgc } = change;
+        let sun = &groups.sun32[g];
+        for (((((o, sc), rsc), w), sh), (d, t)) in
+            s.ds.iter_mut()
+                .zip(&s.sc)
+                .zip(&rep.facet.sc)
+                .zip(sun)
+                .zip(&groups.shape32[g])
+                .zip(s.d.iter().zip(&rep.front.temperature_k))
+        {
+            *o = df * sh + (sc - rsc) * w + curvature(rep.front.radiative, *t, *d);
+        }
+        if let Some((cf, _)) = bgc {
+            s.ds.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cf * e);
+        }
+        if rep.has_back {
+            for ((o, sh), (d, t)) in
+                s.db.iter_mut()
+                    .zip(&groups.back_shape32[g])
+                    .zip(s.dback.iter().zip(&rep.back.temperature_k))
+            {
+                *o = dfb * sh + curvature(rep.back.radiative, *t, *d);
+            }
+            if let Some((_, cb)) = bgc {
+                s.db.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cb * e);
+            }
+        }
+        for (i, v) in o.iter_mut().enumerate() {
+            let mut x = dot(rep.row_front(i), &s.ds);
+            if rep.has_back {
+                x += dot(rep.row_back(i), &s.db);
+            }
+            *v = rep.front.temperature_k[self.image_records[i]] + x;
+        }
+    }
+}
+
+/// A facet's source differences from its reference: shape factors, and the
+/// background coefficients `(c_front, c_back)` when it has a background
+/// term.
+#[derive(Clone, Copy)]
+struct Change {
+    df: f32,
+    dfb: f32,
+    bgc: Option<(f32, f32)>,
+}
+
+impl Change {
+    /// The first-order change history `y = G ΔS` of one node: the
+    /// precomputed `ΔF·G∂S/∂F − G(s cos θ_ref αE_dn)` (`+ ΔF_b·G_b∂B/∂F_b`),
+    /// plus `G` times the facet's sun columns `cols` (`s cos θ·αE_dn`) and
+    /// its background term `c·bg`.
+    fn history(
+        &self,
+        node: &NodeGreen,
+        has_back: bool,
+        bg: &[f32],
+        cols: &[(u32, f32)],
+        cols_bg: &mut Vec<(u32, f32)>,
+        y: &mut [f32],
+    ) {
+        for ((v, a), b) in y.iter_mut().zip(&node.shape).zip(&node.reference_sun) {
+            *v = self.df * a - b;
+        }
+        if has_back {
+            for (v, g) in y.iter_mut().zip(&node.back_shape) {
+                *v += self.dfb * g;
+            }
+        }
+        matvec_cols(&node.from_front, cols, y);
+        if let Some((cf, cb)) = self.bgc {
+            columns(bg.iter().copied(), cf, cols_bg);
+            matvec_cols(&node.from_front, cols_bg, y);
+            if has_back {
+                columns(bg.iter().copied(), cb, cols_bg);
+                matvec_cols(&node.from_back, cols_bg, y);
+            }
+        }
+    }
+}

@@ -1,0 +1,243 @@
+//! A reference facet of the linearised solve: its nonlinear solution and
+//! Green's matrices ([`crate::thermal::Linearization`]) laid out for the
+//! per-facet products.
+//!
+//! Owns [`Reference`] and its parts: the reference facet's own inputs
+//! ([`RefFacet`]), the Green's matrices of each node with their products
+//! with the source model ([`NodeGreen`]), and the probes that predict a
+//! facet's change at a few records ([`Probes`]). Takes a
+//! [`Linearization`], the probed records and the property set's
+//! [`SourceModel`]; knows nothing of passes, bins or backgrounds.
+
+use super::kernels::dot;
+use crate::thermal::{Linearization, SourceModel};
+
+/// What a facet's sources are made of (see [`SourceModel`]): its shape
+/// factors and its sun histories.
+#[derive(Clone, Copy)]
+pub(super) struct FacetState<'a> {
+    /// Shape factor of the front face.
+    pub f: f32,
+    /// Shape factor of the back face (`1 − F` for a single-sided facet).
+    pub f_back: f32,
+    /// Sunlit fraction per record.
+    pub sun_fraction: &'a [f32],
+    /// Cosine of incidence per record.
+    pub cos_incidence: &'a [f32],
+}
+
+/// `s·max(cos θ, 0)` at each record.
+pub(super) fn sunlit_cos<'a>(st: FacetState<'a>) -> impl Iterator<Item = f32> + 'a {
+    st.sun_fraction
+        .iter()
+        .zip(st.cos_incidence)
+        .map(|(s, c)| s.clamp(0.0, 1.0) * c.max(0.0))
+}
+
+/// The reference facet's own inputs, from which a facet's differences are
+/// taken.
+pub(super) struct RefFacet {
+    /// Shape factor of the front face.
+    pub f: f32,
+    /// Shape factor of the back face.
+    pub f_back: f32,
+    /// `s·max(cos θ, 0)` history.
+    pub sc: Vec<f32>,
+}
+
+/// One node (front surface or back face) of a reference: its Green's
+/// matrices in `f32`, column-major (`g[k·R + t] = ∂T(t)/∂S_k`), their
+/// products with the parts of the affine source model, and the
+/// reference's own history of the node.
+pub(super) struct NodeGreen {
+    /// `∂T(t)/∂S_k`: the response to the front sources.
+    pub from_front: Vec<f32>,
+    /// `∂T(t)/∂B_k`: the response to the back sources (empty without an
+    /// exposed back).
+    pub from_back: Vec<f32>,
+    /// `G·∂S/∂F`, K per unit of shape factor.
+    pub shape: Vec<f32>,
+    /// `G_b·∂B/∂F_b`, K per unit of back shape factor.
+    pub back_shape: Vec<f32>,
+    /// `G·(s cos θ_ref·αE_dn)`, K: the reference's own sun term.
+    pub reference_sun: Vec<f32>,
+    /// The reference's temperature of this node at each record, K.
+    pub temperature_k: Vec<f32>,
+    /// Radiative coefficient of this node's emission: `εσ` of the front,
+    /// `a·εσ` of an exposed back (0 otherwise), W m⁻² K⁻⁴.
+    pub radiative: f32,
+}
+
+/// Probes of the front temperature: the rows of the image records (then
+/// the first and last), and the column means `(1/R) Σ_t G[t][k]`, so that
+/// a facet's first-order change at a probed record is one dot product over
+/// its `s·max(cos θ, 0)` history plus a few scalars.
+pub(super) struct Probes {
+    /// Rows `[i][k]` of `∂T_front(rows[i])/∂S_k`.
+    pub rows_front: Vec<f32>,
+    /// Rows `[i][k]` of `∂T_front(rows[i])/∂B_k`.
+    pub rows_back: Vec<f32>,
+    /// `P_j[k]·αE_dn[k]`, `[j][k]`.
+    pub sun: Vec<f32>,
+    /// `P_j·∂S/∂F`, K per unit.
+    pub shape: Vec<f32>,
+    /// `P_fb,j·∂B/∂F_b`, K per unit.
+    pub back_shape: Vec<f32>,
+    /// `P_j·(s cos θ_ref·αE_dn)`, K.
+    pub reference_sun: Vec<f32>,
+}
+
+/// A reference facet's linearisation in the layout the per-facet products
+/// use: `T' = T_ref + G·ΔS` with
+/// `ΔS = ΔF·∂S/∂F + (s cos θ − s cos θ_ref)·αE_dn (+ ΔF_b·∂B/∂F_b)`.
+pub(super) struct Reference {
+    /// Whether the back face is exposed (back sources exist).
+    pub has_back: bool,
+    /// The reference facet's inputs.
+    pub facet: RefFacet,
+    /// The front node.
+    pub front: NodeGreen,
+    /// The back node (its matrices empty without an exposed back).
+    pub back: NodeGreen,
+    /// Probes of the front node.
+    pub probes: Probes,
+    /// The reference solve's last spin-up change, K.
+    pub spinup_change_k: f64,
+}
+
+impl Reference {
+    /// Lays out `lin` (the linearisation about the facet `st`) for the
+    /// probed `rows` and the property set's source `model`.
+    pub fn new(
+        lin: Linearization,
+        rows: &[usize],
+        model: &SourceModel,
+        st: FacetState,
+    ) -> Reference {
+        let r = lin.records;
+        let sc: Vec<f32> = sunlit_cos(st).collect();
+        let sun = model.front_per_sunlit_cos();
+        let ref_sun: Vec<f64> = sc.iter().zip(sun).map(|(&c, w)| c as f64 * w).collect();
+        let times = |g: &[f64], v: &[f64]| -> Vec<f32> {
+            if g.is_empty() || v.is_empty() {
+                return Vec::new();
+            }
+            (0..r)
+                .map(|t| {
+                    g[t * r..(t + 1) * r]
+                        .iter()
+                        .zip(v)
+                        .map(|(a, b)| a * b)
+                        .sum::<f64>() as f32
+                })
+                .collect()
+        };
+        let shape = model.front_per_shape_factor();
+        let back_shape = model.back_per_shape_factor();
+        let transpose = |g: &[f64]| -> Vec<f32> {
+            if g.is_empty() {
+                return Vec::new();
+            }
+            let mut out = vec![0.0f32; r * r];
+            for t in 0..r {
+                for k in 0..r {
+                    out[k * r + t] = g[t * r + k] as f32;
+                }
+            }
+            out
+        };
+        // Probe vectors (f64): the rows, then the column means.
+        let probes = |g: &[f64]| -> Vec<Vec<f64>> {
+            if g.is_empty() {
+                return Vec::new();
+            }
+            let mut p: Vec<Vec<f64>> = rows
+                .iter()
+                .map(|&t| g[t * r..(t + 1) * r].to_vec())
+                .collect();
+            p.push(
+                (0..r)
+                    .map(|k| (0..r).map(|t| g[t * r + k]).sum::<f64>() / r as f64)
+                    .collect(),
+            );
+            p
+        };
+        let (pf, pb) = (probes(&lin.front_from_front), probes(&lin.front_from_back));
+        let dot64 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let rows_of = |p: &[Vec<f64>]| -> Vec<f32> {
+            p.iter()
+                .take(rows.len())
+                .flat_map(|v| v.iter().map(|&x| x as f32))
+                .collect()
+        };
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        Reference {
+            has_back: lin.has_back(),
+            front: NodeGreen {
+                from_front: transpose(&lin.front_from_front),
+                from_back: transpose(&lin.front_from_back),
+                shape: times(&lin.front_from_front, shape),
+                back_shape: times(&lin.front_from_back, back_shape),
+                reference_sun: times(&lin.front_from_front, &ref_sun),
+                temperature_k: f32s(&lin.solution.surface_temperature_k),
+                radiative: lin.front_radiative_w_m2_k4 as f32,
+            },
+            back: NodeGreen {
+                from_front: transpose(&lin.back_from_front),
+                from_back: transpose(&lin.back_from_back),
+                shape: times(&lin.back_from_front, shape),
+                back_shape: times(&lin.back_from_back, back_shape),
+                reference_sun: times(&lin.back_from_front, &ref_sun),
+                temperature_k: f32s(&lin.solution.back_temperature_k),
+                radiative: lin.back_radiative_w_m2_k4 as f32,
+            },
+            probes: Probes {
+                rows_front: rows_of(&pf),
+                rows_back: rows_of(&pb),
+                sun: pf
+                    .iter()
+                    .flat_map(|p| p.iter().zip(sun).map(|(a, b)| (a * b) as f32))
+                    .collect(),
+                shape: pf.iter().map(|p| dot64(p, shape) as f32).collect(),
+                back_shape: pb.iter().map(|p| dot64(p, back_shape) as f32).collect(),
+                reference_sun: pf.iter().map(|p| dot64(p, &ref_sun) as f32).collect(),
+            },
+            spinup_change_k: lin.solution.spinup_change_k.unwrap_or(0.0),
+            facet: RefFacet {
+                f: st.f,
+                f_back: st.f_back,
+                sc,
+            },
+        }
+    }
+
+    /// First-order change of the front temperature at probe `j` (K) of a
+    /// facet with `s·max(cos θ, 0)` history `sc` and shape factors `df`,
+    /// `dfb` from the reference's, with the air as background.
+    #[inline]
+    pub fn probe(&self, j: usize, sc: &[f32], df: f32, dfb: f32) -> f32 {
+        let p = &self.probes;
+        let r = sc.len();
+        let mut v = dot(&p.sun[j * r..(j + 1) * r], sc) - p.reference_sun[j] + df * p.shape[j];
+        if self.has_back {
+            v += dfb * p.back_shape[j];
+        }
+        v
+    }
+
+    /// Row `i` (an image record) of the front node's response to the front
+    /// sources.
+    #[inline]
+    pub fn row_front(&self, i: usize) -> &[f32] {
+        let r = self.facet.sc.len();
+        &self.probes.rows_front[i * r..(i + 1) * r]
+    }
+
+    /// Row `i` (an image record) of the front node's response to the back
+    /// sources.
+    #[inline]
+    pub fn row_back(&self, i: usize) -> &[f32] {
+        let r = self.facet.sc.len();
+        &self.probes.rows_back[i * r..(i + 1) * r]
+    }
+}
