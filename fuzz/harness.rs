@@ -493,7 +493,7 @@ fn gltf_seeds() -> Vec<Vec<u8>> {
     let text = doc.replace("URI", &uri).into_bytes();
     // GLB (glTF 2.0 §4.4): header, JSON chunk (space-padded), BIN chunk.
     let mut json = doc.replace("URI", "").into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

@@ -70,7 +70,7 @@ pub fn gltf_doc() -> (serde_json::Value, Vec<u8>) {
     for i in &idx {
         bin.extend(i.to_le_bytes());
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let quad_off = bin.len();
@@ -131,11 +131,11 @@ pub fn gltf_embedded(mut doc: serde_json::Value, bin: &[u8]) -> String {
 /// Binary glTF (GLB): header, JSON chunk, BIN chunk (glTF 2.0 §4.4).
 pub fn glb(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     let mut json = doc.to_string().into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

@@ -298,7 +298,7 @@ where
     M: Fn(&[f64]) -> Result<Vec<f64>> + Sync,
 {
     check_factors(factors)?;
-    if opts.levels < 2 || opts.levels % 2 != 0 {
+    if opts.levels < 2 || !opts.levels.is_multiple_of(2) {
         return Err(Error::invalid(
             "levels",
             format!("expected an even number ≥ 2, got {}", opts.levels),

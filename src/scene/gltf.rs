@@ -383,7 +383,7 @@ fn primitive_triangles(
     let mut indices = Vec::new();
     match mode {
         Mode::Triangles => {
-            if order.len() % 3 != 0 {
+            if !order.len().is_multiple_of(3) {
                 return Err(Error::parse(
                     at(".indices"),
                     format!(

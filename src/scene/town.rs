@@ -415,7 +415,7 @@ pub fn town_scene() -> Value {
             return; // empty space
         }
         let t = tf(x, y, h(x, y), rot);
-        if k % 5 == 0 {
+        if k.is_multiple_of(5) {
             running.push(t)
         } else {
             parked.push(t)
