@@ -16,6 +16,9 @@
 //! Internal units are SI (m, K, W, W·m⁻²·sr⁻¹·µm⁻¹); conversions happen at the
 //! file boundary. World space is east-north-up metres ([`geometry`]).
 #![warn(missing_docs)]
+// `unsafe` lives only in `trace::embree` (the Embree FFI layer), which is
+// allowed it explicitly; `deny` rather than `forbid` so that one module can.
+#![deny(unsafe_code)]
 
 pub mod analysis;
 pub mod atmosphere;

@@ -28,6 +28,7 @@
 //! other. [`Coherence::Coherent`] sets Embree's coherent context flag.
 
 use std::ffi::{CStr, c_char, c_void};
+use std::marker::PhantomData;
 use std::sync::{Arc, Mutex};
 
 use embree_sys as raw;
@@ -37,27 +38,65 @@ use super::{Coherence, Hit, Ray, Tracer, Watertight};
 use crate::error::{Error, Result};
 use crate::geometry::SceneGeometry;
 
-/// Sets flush-to-zero and denormals-are-zero in this thread's SSE control
-/// register (MXCSR), as Embree recommends for performance. Affects only the
-/// calling thread. No-op on other architectures.
-pub fn set_flush_denormals() {
+/// The calling thread's SSE control and status register (MXCSR), for checks
+/// that Embree calls leave it as they found it. x86-64 only.
+#[cfg(target_arch = "x86_64")]
+pub fn mxcsr() -> u32 {
+    let mut csr: u32 = 0;
+    // SAFETY: `stmxcsr` stores the 32-bit MXCSR register to the given
+    // address, which points to a live local `u32`.
+    unsafe {
+        std::arch::asm!("stmxcsr [{}]", in(reg) &mut csr, options(nostack, preserves_flags));
+    }
+    csr
+}
+
+/// Sets flush-to-zero and denormals-are-zero in this thread's MXCSR for as
+/// long as it lives, as Embree recommends for performance, and restores the
+/// previous setting on drop (also when unwinding). One guard spans each batch
+/// of Embree calls, so the flags never leak into the caller's own maths.
+/// No-op on other architectures.
+#[must_use]
+struct FlushDenormals {
     #[cfg(target_arch = "x86_64")]
-    {
-        const FTZ: u32 = 1 << 15;
-        const DAZ: u32 = 1 << 6;
-        let mut csr: u32 = 0;
-        // SAFETY: `stmxcsr` stores the 32-bit MXCSR register to the given
-        // address, which points to a live local `u32`.
-        unsafe {
-            std::arch::asm!("stmxcsr [{}]", in(reg) &mut csr, options(nostack, preserves_flags));
-        }
-        if csr & (FTZ | DAZ) != FTZ | DAZ {
-            let new = csr | FTZ | DAZ;
-            // SAFETY: `ldmxcsr` loads MXCSR from a live local `u32`; the value
-            // only adds the FTZ and DAZ bits to the current (valid) setting.
-            unsafe {
-                std::arch::asm!("ldmxcsr [{}]", in(reg) &new, options(nostack, readonly, preserves_flags));
+    saved: u32,
+}
+
+#[cfg(target_arch = "x86_64")]
+fn set_mxcsr(csr: u32) {
+    // SAFETY: `ldmxcsr` loads MXCSR from a live local `u32`. Callers pass
+    // either a value read from MXCSR or one with only FTZ/DAZ added to it,
+    // so no reserved bit is ever set (which would fault). Changing the
+    // floating-point mode is what this is for; Rust code that runs meanwhile
+    // (our own ray packing) does not depend on denormals.
+    unsafe {
+        std::arch::asm!("ldmxcsr [{}]", in(reg) &csr, options(nostack, readonly, preserves_flags));
+    }
+}
+
+impl FlushDenormals {
+    #[cfg(target_arch = "x86_64")]
+    const FTZ_DAZ: u32 = (1 << 15) | (1 << 6);
+
+    fn new() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let saved = mxcsr();
+            if saved & Self::FTZ_DAZ != Self::FTZ_DAZ {
+                set_mxcsr(saved | Self::FTZ_DAZ);
             }
+            FlushDenormals { saved }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        FlushDenormals {}
+    }
+}
+
+impl Drop for FlushDenormals {
+    fn drop(&mut self) {
+        #[cfg(target_arch = "x86_64")]
+        if mxcsr() != self.saved {
+            set_mxcsr(self.saved);
         }
     }
 }
@@ -67,6 +106,7 @@ pub fn set_flush_denormals() {
 struct DeviceInner {
     raw: raw::RTCDevice,
     error: Box<Mutex<Option<String>>>,
+    config: String,
 }
 
 // SAFETY: Embree devices are thread-safe (the API may be called from any
@@ -121,33 +161,90 @@ fn error_name(code: raw::RTCError) -> &'static str {
     }
 }
 
+/// How to create a [`Device`].
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct DeviceConfig {
+    /// Threads Embree's builder may use (`threads=N`); `None` for rayon's
+    /// thread count where the device is created
+    /// ([`rayon::current_num_threads`]: the global pool, which the CLI sizes
+    /// from `--threads`, or the pool the call runs in).
+    pub threads: Option<usize>,
+    /// Embree's `verbose=N` (0: quiet). Level 1 prints the configuration,
+    /// including the thread count, to standard output.
+    pub verbose: u32,
+}
+
+impl DeviceConfig {
+    /// The configuration string passed to `rtcNewDevice`, e.g. `"threads=2"`.
+    pub fn to_config_string(&self) -> String {
+        let threads = self
+            .threads
+            .unwrap_or_else(rayon::current_num_threads)
+            .max(1);
+        let mut s = format!("threads={threads}");
+        if self.verbose > 0 {
+            s.push_str(&format!(",verbose={}", self.verbose));
+        }
+        s
+    }
+}
+
 /// An Embree device (the library instance: thread pool, ISA choice).
 #[derive(Clone)]
 pub struct Device(Arc<DeviceInner>);
 
 impl Device {
-    /// Creates a device with the default configuration.
+    /// Creates a device whose builder uses rayon's thread count
+    /// ([`DeviceConfig::default`]).
     pub fn new() -> Result<Self> {
-        // SAFETY: a NULL config string selects the defaults.
-        let dev = unsafe { raw::rtcNewDevice(std::ptr::null()) };
+        Self::with_config(&DeviceConfig::default())
+    }
+
+    /// Creates a device whose builder uses `threads` threads.
+    pub fn with_threads(threads: usize) -> Result<Self> {
+        Self::with_config(&DeviceConfig {
+            threads: Some(threads),
+            ..DeviceConfig::default()
+        })
+    }
+
+    /// Creates a device configured by `config`.
+    pub fn with_config(config: &DeviceConfig) -> Result<Self> {
+        let text = config.to_config_string();
+        let c_text =
+            std::ffi::CString::new(text.clone()).expect("the configuration string has no NUL byte");
+        // SAFETY: `c_text` is a NUL-terminated string that lives across the
+        // call (Embree parses it during the call and keeps no pointer).
+        let dev = unsafe { raw::rtcNewDevice(c_text.as_ptr()) };
         if dev.is_null() {
             // SAFETY: querying the error of a NULL device returns the error
             // of the last failed device creation on this thread.
             let code = unsafe { raw::rtcGetDeviceError(std::ptr::null_mut()) };
             return Err(Error::Embree(format!(
-                "cannot create a device: {}",
+                "cannot create a device (`{text}`): {}",
                 error_name(code)
             )));
         }
         let inner = DeviceInner {
             raw: dev,
             error: Box::new(Mutex::new(None)),
+            config: text,
         };
         let user = &*inner.error as *const Mutex<Option<String>> as *mut c_void;
         // SAFETY: `dev` is valid; `user` points to the boxed Mutex, which
         // lives as long as `inner` (the callback is unset before release).
         unsafe { raw::rtcSetDeviceErrorFunction(dev, Some(error_callback), user) };
         Ok(Device(Arc::new(inner)))
+    }
+
+    /// The configuration string the device was created with, e.g.
+    /// `"threads=2"`.
+    pub fn config(&self) -> &str {
+        &self.0.config
+    }
+
+    fn same_as(&self, other: &Device) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
     }
 
     /// The raw handle (valid while `self` lives).
@@ -206,26 +303,42 @@ impl Device {
     }
 }
 
+/// Memory a geometry or scene keeps alive because Embree reads it: owned
+/// vertex buffers and instanced scenes (with what they keep in turn).
+type KeepAlive<'a> = Arc<dyn Send + Sync + 'a>;
+
 /// An Embree scene (an acceleration structure over geometries).
-pub struct Scene {
+///
+/// `'a` bounds the vertex memory its geometries borrow
+/// ([`Geometry::triangles`]): the scene cannot outlive it, so dropping a
+/// borrowed [`VertexBuffer`] before the scene does not compile. Memory
+/// handed over in an `Arc` ([`Geometry::triangles_shared`], instanced
+/// scenes) is kept alive by the scene itself.
+pub struct Scene<'a> {
     raw: raw::RTCScene,
     device: Device,
+    keep: Vec<KeepAlive<'a>>,
+    committed: bool,
+    _borrows: PhantomData<&'a VertexBuffer>,
 }
 
 // SAFETY: Embree scenes may be used from any thread; after `commit` they are
 // immutable and queries are thread-safe. Mutation goes through `&mut self`.
-unsafe impl Send for Scene {}
+// What `keep` holds is itself `Send + Sync`.
+unsafe impl Send for Scene<'_> {}
 // SAFETY: as above: `&Scene` only allows queries.
-unsafe impl Sync for Scene {}
+unsafe impl Sync for Scene<'_> {}
 
-impl Drop for Scene {
+impl Drop for Scene<'_> {
     fn drop(&mut self) {
-        // SAFETY: we own one reference to a valid scene.
+        // SAFETY: we own one reference to a valid scene. Embree may keep the
+        // scene alive longer (an instance holds a reference), but only
+        // through handles that also hold `keep` (see `Geometry::instance`).
         unsafe { raw::rtcReleaseScene(self.raw) }
     }
 }
 
-impl Scene {
+impl<'a> Scene<'a> {
     /// A new empty scene on `device`; `watertight` selects Embree's robust
     /// triangle and box tests (`RTC_SCENE_FLAG_ROBUST`).
     pub fn new(device: &Device, watertight: Watertight) -> Result<Self> {
@@ -249,21 +362,45 @@ impl Scene {
         Ok(Scene {
             raw: s,
             device: device.clone(),
+            keep: Vec::new(),
+            committed: false,
+            _borrows: PhantomData,
         })
     }
 
-    /// Attaches `geom` under the id `id` (the scene keeps its own reference).
-    pub fn attach(&mut self, geom: &Geometry, id: u32) -> Result<()> {
-        // SAFETY: valid scene and committed geometry of the same device.
+    /// Attaches `geom` under the id `id`. The scene keeps its own Embree
+    /// reference to the geometry and whatever memory the geometry keeps
+    /// alive, so `geom` may be dropped afterwards.
+    pub fn attach(&mut self, geom: &Geometry<'a>, id: u32) -> Result<()> {
+        if !self.device.same_as(&geom.device) {
+            return Err(Error::invalid(
+                "geometry",
+                "attached to a scene of another Embree device",
+            ));
+        }
+        // SAFETY: valid scene and committed geometry of the same device
+        // (checked above). The memory the geometry reads is either borrowed
+        // for `'a`, which the scene cannot outlive, or kept in `keep`.
         unsafe { raw::rtcAttachGeometryByID(self.raw, geom.raw, id) };
-        self.device.check()
+        self.device.check()?;
+        self.keep.extend(geom.keep.iter().cloned());
+        self.committed = false;
+        Ok(())
     }
 
     /// Builds the acceleration structure.
     pub fn commit(&mut self) -> Result<()> {
-        // SAFETY: valid scene.
+        // SAFETY: valid scene; every geometry's memory is alive (see
+        // `attach`).
         unsafe { raw::rtcCommitScene(self.raw) };
-        self.device.check()
+        self.device.check()?;
+        self.committed = true;
+        Ok(())
+    }
+
+    /// Whether the scene was committed since the last change.
+    pub fn is_committed(&self) -> bool {
+        self.committed
     }
 
     /// The raw handle (valid while `self` lives).
@@ -273,12 +410,24 @@ impl Scene {
 }
 
 /// An Embree geometry (a triangle mesh or an instance).
-pub struct Geometry {
+///
+/// `'a` bounds the vertex memory it borrows ([`Geometry::triangles`]);
+/// `Geometry<'static>` borrows nothing.
+pub struct Geometry<'a> {
     raw: raw::RTCGeometry,
     device: Device,
+    keep: Option<KeepAlive<'a>>,
+    _borrows: PhantomData<&'a VertexBuffer>,
 }
 
-impl Drop for Geometry {
+// SAFETY: Embree geometries may be used from any thread; mutation happens
+// only while building (inside the constructors). What `keep` holds is
+// `Send + Sync`.
+unsafe impl Send for Geometry<'_> {}
+// SAFETY: as above: `&Geometry` only allows attaching it to a scene.
+unsafe impl Sync for Geometry<'_> {}
+
+impl Drop for Geometry<'_> {
     fn drop(&mut self) {
         // SAFETY: we own one reference to a valid geometry.
         unsafe { raw::rtcReleaseGeometry(self.raw) }
@@ -287,6 +436,8 @@ impl Drop for Geometry {
 
 /// Vertex storage for a shared Embree buffer: `xyz` per vertex plus one float
 /// of padding at the end (Embree reads 16 bytes for the last vertex).
+///
+/// Immutable once made: Embree reads it in place while traced.
 pub struct VertexBuffer(Vec<f32>);
 
 impl VertexBuffer {
@@ -299,21 +450,87 @@ impl VertexBuffer {
         v.push(0.0);
         VertexBuffer(v)
     }
-    fn count(&self) -> usize {
+
+    /// The number of vertices.
+    pub fn count(&self) -> usize {
         (self.0.len() - 1) / 3
     }
 }
 
-impl Geometry {
-    /// A triangle mesh over `vertices` (shared: Embree reads it in place, so
-    /// it must outlive every scene the geometry is attached to — the caller
-    /// keeps it) and `indices` (copied into a new Embree buffer).
+impl<'a> Geometry<'a> {
+    /// A triangle mesh over `vertices` (borrowed: Embree reads it in place,
+    /// so neither this geometry nor any scene it is attached to may outlive
+    /// it — enforced by `'a`) and `indices` (copied into a new Embree
+    /// buffer).
     ///
     /// Indices are validated against the vertex count.
+    ///
+    /// ```
+    /// use irsig::trace::Watertight;
+    /// use irsig::trace::embree::{Device, Geometry, Scene, VertexBuffer};
+    /// use glam::Vec3;
+    ///
+    /// let device = Device::new()?;
+    /// let vb = VertexBuffer::new([Vec3::ZERO, Vec3::X, Vec3::Y].into_iter());
+    /// let mut scene = Scene::new(&device, Watertight::Yes)?;
+    /// let g = Geometry::triangles(&device, &vb, &[[0, 1, 2]])?;
+    /// scene.attach(&g, 0)?;
+    /// drop(g); // the scene keeps the geometry, but not the buffer:
+    /// scene.commit()?;
+    /// drop(scene); // so the buffer must outlive the scene.
+    /// drop(vb);
+    /// # Ok::<(), irsig::Error>(())
+    /// ```
+    ///
+    /// Dropping the buffer before the scene's last use does not compile
+    /// (E0505: move out of `vb` while borrowed):
+    ///
+    /// ```compile_fail,E0505
+    /// use irsig::trace::Watertight;
+    /// use irsig::trace::embree::{Device, Geometry, Scene, VertexBuffer};
+    /// use glam::Vec3;
+    ///
+    /// let device = Device::new()?;
+    /// let vb = VertexBuffer::new([Vec3::ZERO, Vec3::X, Vec3::Y].into_iter());
+    /// let mut scene = Scene::new(&device, Watertight::Yes)?;
+    /// let g = Geometry::triangles(&device, &vb, &[[0, 1, 2]])?;
+    /// scene.attach(&g, 0)?;
+    /// drop(g);
+    /// drop(vb);
+    /// scene.commit()?; // Embree would read the freed vertices here
+    /// # Ok::<(), irsig::Error>(())
+    /// ```
     pub fn triangles(
         device: &Device,
-        vertices: &VertexBuffer,
+        vertices: &'a VertexBuffer,
         indices: &[[u32; 3]],
+    ) -> Result<Self> {
+        Self::new_triangles(device, vertices, indices, None)
+    }
+
+    /// A triangle mesh over `vertices`, which the geometry (and every scene
+    /// it is attached to) keeps alive; otherwise as [`Geometry::triangles`].
+    pub fn triangles_shared(
+        device: &Device,
+        vertices: Arc<VertexBuffer>,
+        indices: &[[u32; 3]],
+    ) -> Result<Geometry<'static>> {
+        let vb: *const VertexBuffer = Arc::as_ptr(&vertices);
+        // SAFETY: `vb` points into `vertices`, which the returned geometry
+        // keeps alive (its `keep`) as long as Embree may read it.
+        Geometry::new_triangles(
+            device,
+            unsafe { &*vb },
+            indices,
+            Some(vertices as KeepAlive<'static>),
+        )
+    }
+
+    fn new_triangles(
+        device: &Device,
+        vertices: &'a VertexBuffer,
+        indices: &[[u32; 3]],
+        keep: Option<KeepAlive<'a>>,
     ) -> Result<Self> {
         let nv = vertices.count();
         if let Some((i, t)) = indices
@@ -332,10 +549,13 @@ impl Geometry {
         let geom = Geometry {
             raw: g,
             device: device.clone(),
+            keep,
+            _borrows: PhantomData,
         };
         // SAFETY: `vertices.0` holds `nv` packed float3 plus one pad float, so
-        // Embree's 16-byte loads stay in bounds; the caller keeps it alive
-        // (documented above).
+        // Embree's 16-byte loads stay in bounds. It outlives the geometry and
+        // every scene the geometry is attached to: it is borrowed for `'a`,
+        // which bounds both (for `triangles_shared`, `keep` holds it).
         unsafe {
             raw::rtcSetSharedGeometryBuffer(
                 g,
@@ -383,13 +603,32 @@ impl Geometry {
     }
 
     /// An instance of the committed `scene`, placed by `world_from_object`.
-    pub fn instance(device: &Device, scene: &Scene, world_from_object: &Affine3A) -> Result<Self> {
+    /// The instance keeps the scene (and the memory it keeps) alive.
+    pub fn instance(
+        device: &Device,
+        scene: &Arc<Scene<'a>>,
+        world_from_object: &Affine3A,
+    ) -> Result<Self> {
+        if !scene.committed {
+            return Err(Error::invalid(
+                "instanced scene",
+                "not committed (call Scene::commit first)",
+            ));
+        }
+        if !device.same_as(&scene.device) {
+            return Err(Error::invalid(
+                "instanced scene",
+                "belongs to another Embree device",
+            ));
+        }
         // SAFETY: valid device and geometry type.
         let g = unsafe { raw::rtcNewGeometry(device.as_raw(), raw::RTC_GEOMETRY_TYPE_INSTANCE) };
         device.check()?;
         let geom = Geometry {
             raw: g,
             device: device.clone(),
+            keep: Some(scene.clone() as KeepAlive<'a>),
+            _borrows: PhantomData,
         };
         let m = world_from_object.matrix3;
         let t = world_from_object.translation;
@@ -399,8 +638,10 @@ impl Geometry {
             m.z_axis.y, m.z_axis.z, t.x, t.y, t.z,
         ];
         // SAFETY: valid instance geometry and a committed scene of the same
-        // device (the instance keeps its own reference to it); `xfm` holds 12
-        // floats in the declared format and is copied by Embree.
+        // device (checked above; the instance keeps both an Embree reference
+        // to it and, in `keep`, the Rust handle with the memory it reads);
+        // `xfm` holds 12 floats in the declared format and is copied by
+        // Embree.
         unsafe {
             raw::rtcSetGeometryInstancedScene(g, scene.raw);
             raw::rtcSetGeometryTransform(
@@ -432,11 +673,9 @@ pub enum RayMode {
 
 /// Embree tracer over a [`SceneGeometry`].
 pub struct EmbreeTracer {
-    // Field order matters for drop: the scenes go before the vertex storage
-    // they read from.
-    scene: Scene,
-    _mesh_scenes: Vec<Scene>,
-    _vertices: Vec<VertexBuffer>,
+    /// The top-level scene; it keeps alive every vertex buffer and instanced
+    /// scene it reads.
+    scene: Scene<'static>,
     /// Per instance: the cofactor matrix turning an object-space geometric
     /// normal into world space, for instances traced through Embree
     /// instancing (Embree reports their `Ng` in object space).
@@ -485,7 +724,11 @@ impl EmbreeTracer {
         Self::with_device(Device::new()?, geom, mode, Watertight::Yes)
     }
 
-    fn with_device(
+    /// Builds a scene on `device` (e.g. one made with
+    /// [`Device::with_threads`]) with an explicit ray mode and triangle
+    /// tests; a packet width the library does not support natively is an
+    /// error.
+    pub fn with_device(
         device: Device,
         geom: &SceneGeometry,
         mode: RayMode,
@@ -517,8 +760,8 @@ impl EmbreeTracer {
             uses[inst.mesh] += 1;
         }
         let mut top = Scene::new(&device, watertight)?;
-        let mut vertices = Vec::new();
-        let mut mesh_scenes: Vec<Option<Scene>> = (0..geom.meshes.len()).map(|_| None).collect();
+        let mut mesh_scenes: Vec<Option<Arc<Scene<'static>>>> =
+            (0..geom.meshes.len()).map(|_| None).collect();
         let mut normal_from_object = Vec::with_capacity(geom.instances.len());
         for (i, inst) in geom.instances.iter().enumerate() {
             let mesh = &geom.meshes[inst.mesh];
@@ -535,19 +778,17 @@ impl EmbreeTracer {
                             .map(|p| inst.world_from_object.transform_point3(*p)),
                     )
                 };
-                let g = Geometry::triangles(&device, &vb, &mesh.indices)?;
+                let g = Geometry::triangles_shared(&device, Arc::new(vb), &mesh.indices)?;
                 top.attach(&g, id)?;
-                vertices.push(vb);
                 normal_from_object.push(None);
             } else {
                 if mesh_scenes[inst.mesh].is_none() {
                     let vb = VertexBuffer::new(mesh.positions.iter().copied());
-                    let g = Geometry::triangles(&device, &vb, &mesh.indices)?;
+                    let g = Geometry::triangles_shared(&device, Arc::new(vb), &mesh.indices)?;
                     let mut s = Scene::new(&device, watertight)?;
                     s.attach(&g, 0)?;
                     s.commit()?;
-                    vertices.push(vb);
-                    mesh_scenes[inst.mesh] = Some(s);
+                    mesh_scenes[inst.mesh] = Some(Arc::new(s));
                 }
                 let s = mesh_scenes[inst.mesh].as_ref().expect("built above");
                 let g = Geometry::instance(&device, s, &inst.world_from_object)?;
@@ -562,8 +803,6 @@ impl EmbreeTracer {
         };
         Ok(EmbreeTracer {
             scene: top,
-            _mesh_scenes: mesh_scenes.into_iter().flatten().collect(),
-            _vertices: vertices,
             normal_from_object,
             device,
             mode,
@@ -814,7 +1053,7 @@ impl Tracer for EmbreeTracer {
             out.len(),
             "intersect: rays and out differ in length"
         );
-        set_flush_denormals();
+        let _ftz = FlushDenormals::new();
         match self.mode {
             RayMode::Single => self.intersect_single(rays, coherence, out),
             RayMode::Packet(4) => self.intersect4(rays, coherence, out),
@@ -829,7 +1068,7 @@ impl Tracer for EmbreeTracer {
             out.len(),
             "occluded: rays and out differ in length"
         );
-        set_flush_denormals();
+        let _ftz = FlushDenormals::new();
         match self.mode {
             RayMode::Single => self.occluded_single(rays, coherence, out),
             RayMode::Packet(4) => self.occluded4(rays, coherence, out),

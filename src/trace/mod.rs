@@ -32,6 +32,9 @@ use crate::error::{Error, Result};
 use crate::geometry::SceneGeometry;
 
 pub mod bvh;
+// The only module with `unsafe` code (the crate denies it everywhere else):
+// the safe wrappers over `embree-sys`.
+#[allow(unsafe_code)]
 pub mod embree;
 
 /// A ray: `origin + t·dir` for `t` in `[tnear, tfar]`. `dir` need not be
@@ -228,10 +231,9 @@ pub fn occluded_all(tracer: &dyn Tracer, rays: &[Ray], coherence: Coherence) -> 
     out
 }
 
-/// Prepares a worker thread for tracing: sets flush-to-zero and
-/// denormals-are-zero, as Embree recommends. Call it from a rayon pool's
-/// `start_handler` (the CLI does). The Embree tracer also sets them on the
-/// calling thread at the start of every batch.
-pub fn init_worker_thread() {
-    embree::set_flush_denormals();
-}
+/// Formerly set flush-to-zero and denormals-are-zero on a worker thread for
+/// good; now does nothing. The Embree tracer sets them itself around each
+/// batch of Embree calls and restores the thread's previous setting after,
+/// so they no longer leak into the thermal and radiometry maths that runs
+/// on the same threads. Kept so existing `start_handler`s still compile.
+pub fn init_worker_thread() {}
