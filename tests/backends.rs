@@ -739,3 +739,48 @@ fn r22_shared_vertex_buffer_outlives_the_callers_handles() {
     let e = mine.attach(&g, 1).unwrap_err();
     assert!(e.to_string().contains("another Embree device"), "{e}");
 }
+
+/// Issue 22: the default Embree tracer picks its query from the batch's
+/// coherence — packets for coherent batches, the stream API (Embree 3) or
+/// single rays (Embree 4) for incoherent ones — and every mode gives the
+/// same hits, bit for bit.
+#[test]
+fn r22_query_mode_follows_coherence_and_all_modes_agree() {
+    let geom = procedural::generate(&TerrainParams::with_triangles(20_000, 7));
+    let rays = random_rays(&geom, 20_000, 22);
+    let auto = EmbreeTracer::new(&geom, true).unwrap();
+    let w = match auto.mode() {
+        RayMode::ByCoherence(w) => w,
+        m => panic!("default mode {m:?}"),
+    };
+    assert_eq!(auto.name(), "embree");
+    assert_eq!(
+        auto.mode().for_batch(Coherence::Coherent),
+        RayMode::Packet(w)
+    );
+    let scattered = if irsig::trace::embree::STREAM_API {
+        RayMode::Stream
+    } else {
+        RayMode::Single
+    };
+    assert_eq!(auto.mode().for_batch(Coherence::Incoherent), scattered);
+    let single = EmbreeTracer::with_mode(&geom, RayMode::Single).unwrap();
+    let reference = trace::intersect_all(&single, &rays, Coherence::Incoherent);
+    let occ_ref = trace::occluded_all(&single, &rays, Coherence::Incoherent);
+    let mut others = vec![auto];
+    match EmbreeTracer::with_mode(&geom, RayMode::Stream) {
+        Ok(t) => others.push(t),
+        Err(e) => {
+            assert_eq!(irsig::trace::embree::STREAM_API, false, "{e}");
+            assert!(e.to_string().contains("no stream API"), "{e}");
+        }
+    }
+    for t in &others {
+        for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+            let hits = trace::intersect_all(t, &rays, coherence);
+            assert!(hits == reference, "{} {coherence:?}", t.name());
+            let occ = trace::occluded_all(t, &rays, coherence);
+            assert!(occ == occ_ref, "{} {coherence:?}", t.name());
+        }
+    }
+}

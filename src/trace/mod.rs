@@ -80,12 +80,17 @@ pub struct Hit {
     pub ng: Vec3,
 }
 
-/// Hints about a batch of rays.
+/// Hints about a batch of rays; the Embree backend picks its query from it
+/// ([`embree::RayMode::ByCoherence`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Coherence {
-    /// Rays of a scanline / tile from one camera: packet tracing pays off.
+    /// Rays of a scanline / tile from one camera, or parallel rays from
+    /// neighbouring points: packet tracing pays off. Embree traces them as
+    /// packets at the native width with its coherent flag.
     Coherent,
-    /// Scattered rays (diffuse, hemisphere, shadow from many facets).
+    /// Scattered rays (diffuse, hemisphere, shadow from many facets). Embree
+    /// traces them through its stream API (Embree 3) or one at a time
+    /// (Embree 4), which measured faster than packets for such rays.
     #[default]
     Incoherent,
 }
@@ -93,7 +98,7 @@ pub enum Coherence {
 /// Batched ray queries over a built scene. Implementations are `Sync`: callers
 /// split large batches over threads (rayon) and call these per chunk.
 pub trait Tracer: Send + Sync {
-    /// Short name for reports (`"embree_packet"`, `"obvhs"`, ...).
+    /// Short name for reports (`"embree"`, `"embree_single"`, `"obvhs"`, ...).
     fn name(&self) -> &str;
     /// Closest hit of every ray; `out.len() == rays.len()`. Every element
     /// of `out` is written (`None` for a miss): callers may reuse it.
@@ -105,7 +110,10 @@ pub trait Tracer: Send + Sync {
 /// The ray-tracing backends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Backend {
-    /// Embree, packet API at the native width (the default).
+    /// Embree, the query chosen per batch (the default): packets at the
+    /// native width for [`Coherence::Coherent`] batches, the stream API
+    /// (Embree 3) or single rays (Embree 4) for [`Coherence::Incoherent`]
+    /// ones.
     #[default]
     Embree,
     /// Embree, one ray at a time (`rtcIntersect1`), for comparison.
