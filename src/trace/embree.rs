@@ -31,6 +31,16 @@
 //! stream API. Fixed modes ([`RayMode::Single`], [`RayMode::Packet`],
 //! [`RayMode::Stream`]) exist for comparisons; all give the same hits bit
 //! for bit (tests/backends.rs).
+//!
+//! # Embree 3 and 4
+//! `embree-sys` binds whichever is installed (Debian 12: 3.13, Debian 13:
+//! 4.3) and sets `cfg(embree4)` for Embree 4. The differences stay in this
+//! module: the per-query arguments (Embree 3's `RTCIntersectContext` before
+//! the rays, Embree 4's `RTCIntersectArguments` / `RTCOccludedArguments`
+//! after them: `QueryArgs`, `intersect_call!`, `occluded_call!`) and the
+//! stream API, which Embree 4 dropped ([`STREAM_API`]). Everything else —
+//! devices, scenes, buffers, instances, ray and hit layouts as used here —
+//! is the same in both.
 
 use std::ffi::{CStr, c_char, c_void};
 use std::marker::PhantomData;
@@ -662,6 +672,95 @@ impl<'a> Geometry<'a> {
     }
 }
 
+/// The per-batch query arguments, where Embree 3 and 4 differ: Embree 3
+/// passes an `RTCIntersectContext` (holding the coherence flag) to every
+/// query; Embree 4 passes `RTCIntersectArguments` / `RTCOccludedArguments`
+/// (holding the flag; the ray-query context is optional and not needed
+/// here) after the rays.
+#[cfg(not(embree4))]
+struct QueryArgs(raw::RTCIntersectContext);
+
+#[cfg(embree4)]
+struct QueryArgs {
+    intersect: raw::RTCIntersectArguments,
+    occluded: raw::RTCOccludedArguments,
+}
+
+impl QueryArgs {
+    #[cfg(not(embree4))]
+    fn new(coherence: Coherence) -> Self {
+        let mut ctx = raw::RTCIntersectContext::default();
+        // SAFETY: `ctx` is a valid, writable RTCIntersectContext.
+        unsafe { raw::rtcInitIntersectContext(&mut ctx) };
+        if coherence == Coherence::Coherent {
+            ctx.flags = raw::RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        }
+        QueryArgs(ctx)
+    }
+
+    #[cfg(embree4)]
+    fn new(coherence: Coherence) -> Self {
+        let mut intersect = raw::RTCIntersectArguments::default();
+        let mut occluded = raw::RTCOccludedArguments::default();
+        // SAFETY: both point to valid, writable argument structures.
+        unsafe {
+            raw::rtcInitIntersectArguments(&mut intersect);
+            raw::rtcInitOccludedArguments(&mut occluded);
+        }
+        if coherence == Coherence::Coherent {
+            intersect.flags = raw::RTC_RAY_QUERY_FLAG_COHERENT;
+            occluded.flags = raw::RTC_RAY_QUERY_FLAG_COHERENT;
+        }
+        QueryArgs {
+            intersect,
+            occluded,
+        }
+    }
+}
+
+/// Calls an Embree intersect function in the installed version's argument
+/// order: `intersect_call!(single rtcIntersect1, scene, &mut QueryArgs,
+/// rayhit)` or `intersect_call!(packet rtcIntersect8, valid, scene, args,
+/// rayhit)`. Expands to an unsafe call.
+#[cfg(not(embree4))]
+macro_rules! intersect_call {
+    (single $f:path, $scene:expr, $args:expr, $r:expr) => {
+        $f($scene, &mut ($args).0, $r)
+    };
+    (packet $f:path, $valid:expr, $scene:expr, $args:expr, $r:expr) => {
+        $f($valid, $scene, &mut ($args).0, $r)
+    };
+}
+#[cfg(embree4)]
+macro_rules! intersect_call {
+    (single $f:path, $scene:expr, $args:expr, $r:expr) => {
+        $f($scene, $r, &mut ($args).intersect)
+    };
+    (packet $f:path, $valid:expr, $scene:expr, $args:expr, $r:expr) => {
+        $f($valid, $scene, $r, &mut ($args).intersect)
+    };
+}
+
+/// As [`intersect_call!`] for the occlusion functions (`rtcOccluded*`).
+#[cfg(not(embree4))]
+macro_rules! occluded_call {
+    (single $f:path, $scene:expr, $args:expr, $r:expr) => {
+        $f($scene, &mut ($args).0, $r)
+    };
+    (packet $f:path, $valid:expr, $scene:expr, $args:expr, $r:expr) => {
+        $f($valid, $scene, &mut ($args).0, $r)
+    };
+}
+#[cfg(embree4)]
+macro_rules! occluded_call {
+    (single $f:path, $scene:expr, $args:expr, $r:expr) => {
+        $f($scene, $r, &mut ($args).occluded)
+    };
+    (packet $f:path, $valid:expr, $scene:expr, $args:expr, $r:expr) => {
+        $f($valid, $scene, $r, &mut ($args).occluded)
+    };
+}
+
 /// Ray-packet valid mask, aligned as Embree requires for every width
 /// (16/32/64 bytes for 4/8/16 lanes).
 #[repr(C, align(64))]
@@ -902,26 +1001,19 @@ impl EmbreeTracer {
 
     /// Occlusion context for a packet width (see [`Device::native_packet_width`]:
     /// no coherent flag on 16-wide occlusion).
-    fn occlusion_context(width: usize, coherence: Coherence) -> raw::RTCIntersectContext {
+    /// Query arguments for an occlusion packet of `width` (see
+    /// [`Device::native_packet_width`]: no coherent flag on 16-wide
+    /// occlusion).
+    fn occlusion_args(width: usize, coherence: Coherence) -> QueryArgs {
         if width == 16 {
-            Self::context(Coherence::Incoherent)
+            QueryArgs::new(Coherence::Incoherent)
         } else {
-            Self::context(coherence)
+            QueryArgs::new(coherence)
         }
-    }
-
-    fn context(coherence: Coherence) -> raw::RTCIntersectContext {
-        let mut ctx = raw::RTCIntersectContext::default();
-        // SAFETY: `ctx` is a valid, writable RTCIntersectContext.
-        unsafe { raw::rtcInitIntersectContext(&mut ctx) };
-        if coherence == Coherence::Coherent {
-            ctx.flags = raw::RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        }
-        ctx
     }
 
     fn intersect_single(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]) {
-        let mut ctx = Self::context(coherence);
+        let mut args = QueryArgs::new(coherence);
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             let mut rh = raw::RTCRayHit {
                 ray: single_ray(r),
@@ -931,9 +1023,11 @@ impl EmbreeTracer {
                     ..Default::default()
                 },
             };
-            // SAFETY: committed scene; `ctx` initialised; `rh` is a valid,
+            // SAFETY: committed scene; `args` initialised; `rh` is a valid,
             // 16-byte-aligned RTCRayHit (its type's alignment).
-            unsafe { raw::rtcIntersect1(self.scene.raw, &mut ctx, &mut rh) };
+            unsafe {
+                intersect_call!(single raw::rtcIntersect1, self.scene.raw, &mut args, &mut rh)
+            };
             let h = &rh.hit;
             *o = self.make_hit(
                 rh.ray.tfar,
@@ -948,12 +1042,14 @@ impl EmbreeTracer {
     }
 
     fn occluded_single(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]) {
-        let mut ctx = Self::context(coherence);
+        let mut args = QueryArgs::new(coherence);
         for (r, o) in rays.iter().zip(out.iter_mut()) {
             let mut ray = single_ray(r);
-            // SAFETY: committed scene; `ctx` initialised; `ray` is a valid,
+            // SAFETY: committed scene; `args` initialised; `ray` is a valid,
             // 16-byte-aligned RTCRay.
-            unsafe { raw::rtcOccluded1(self.scene.raw, &mut ctx, &mut ray) };
+            unsafe {
+                occluded_call!(single raw::rtcOccluded1, self.scene.raw, &mut args, &mut ray)
+            };
             *o = ray.tfar == f32::NEG_INFINITY;
         }
     }
@@ -961,11 +1057,23 @@ impl EmbreeTracer {
 
 /// Whether the linked Embree has the stream API (`rtcIntersect1M`:
 /// Embree 3 only), i.e. whether [`RayMode::Stream`] can be used.
-pub const STREAM_API: bool = true;
+pub const STREAM_API: bool = cfg!(not(embree4));
 
+#[cfg(embree4)]
+impl EmbreeTracer {
+    fn intersect_stream(&self, _: &[Ray], _: Coherence, _: &mut [Option<Hit>]) {
+        unreachable!("RayMode::Stream is refused on Embree 4 when the tracer is built")
+    }
+
+    fn occluded_stream(&self, _: &[Ray], _: Coherence, _: &mut [bool]) {
+        unreachable!("RayMode::Stream is refused on Embree 4 when the tracer is built")
+    }
+}
+
+#[cfg(not(embree4))]
 impl EmbreeTracer {
     fn intersect_stream(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]) {
-        let mut ctx = Self::context(coherence);
+        let mut args = QueryArgs::new(coherence);
         let mut rh: Vec<raw::RTCRayHit> = rays
             .iter()
             .map(|r| raw::RTCRayHit {
@@ -978,12 +1086,12 @@ impl EmbreeTracer {
             })
             .collect();
         for c in rh.chunks_mut(u32::MAX as usize) {
-            // SAFETY: committed scene; `ctx` initialised; `c` holds `c.len()`
+            // SAFETY: committed scene; `args` initialised; `c` holds `c.len()`
             // valid, 16-byte-aligned RTCRayHit at a stride of their size.
             unsafe {
                 raw::rtcIntersect1M(
                     self.scene.raw,
-                    &mut ctx,
+                    &mut args.0,
                     c.as_mut_ptr(),
                     c.len() as u32,
                     std::mem::size_of::<raw::RTCRayHit>(),
@@ -1009,15 +1117,15 @@ impl EmbreeTracer {
     /// wide) it was seen to loop forever on scattered rays, as
     /// `rtcOccluded16` does (see [`Device::native_packet_width`]).
     fn occluded_stream(&self, rays: &[Ray], _coherence: Coherence, out: &mut [bool]) {
-        let mut ctx = Self::context(Coherence::Incoherent);
+        let mut args = QueryArgs::new(Coherence::Incoherent);
         let mut rs: Vec<raw::RTCRay> = rays.iter().map(single_ray).collect();
         for c in rs.chunks_mut(u32::MAX as usize) {
-            // SAFETY: committed scene; `ctx` initialised; `c` holds `c.len()`
+            // SAFETY: committed scene; `args` initialised; `c` holds `c.len()`
             // valid, 16-byte-aligned RTCRay at a stride of their size.
             unsafe {
                 raw::rtcOccluded1M(
                     self.scene.raw,
-                    &mut ctx,
+                    &mut args.0,
                     c.as_mut_ptr(),
                     c.len() as u32,
                     std::mem::size_of::<raw::RTCRay>(),
@@ -1072,7 +1180,7 @@ macro_rules! packet_paths {
     ($w:literal, $isect_name:ident, $occl_name:ident, $rayhit:ty, $ray:ty, $isect:path, $occl:path) => {
         impl EmbreeTracer {
             fn $isect_name(&self, rays: &[Ray], coherence: Coherence, out: &mut [Option<Hit>]) {
-                let mut ctx = Self::context(coherence);
+                let mut args = QueryArgs::new(coherence);
                 let mut valid = Valid::<$w>([0; $w]);
                 let mut rh = <$rayhit>::default();
                 for (rc, oc) in rays.chunks($w).zip(out.chunks_mut($w)) {
@@ -1084,11 +1192,11 @@ macro_rules! packet_paths {
                         rh.hit.geomID[i] = raw::RTC_INVALID_GEOMETRY_ID;
                         rh.hit.instID[0][i] = raw::RTC_INVALID_GEOMETRY_ID;
                     }
-                    // SAFETY: committed scene; `ctx` initialised; `valid` and
+                    // SAFETY: committed scene; `args` initialised; `valid` and
                     // `rh` have the alignment Embree requires for this width
                     // (`Valid` is 64-byte aligned, the RTCRayHitN type carries
                     // its own alignment) and every lane is initialised.
-                    unsafe { $isect(valid.0.as_ptr(), self.scene.raw, &mut ctx, &mut rh) };
+                    unsafe { intersect_call!(packet $isect, valid.0.as_ptr(), self.scene.raw, &mut args, &mut rh) };
                     let h = &rh.hit;
                     for (i, o) in oc.iter_mut().enumerate() {
                         *o = self.make_hit(
@@ -1105,7 +1213,7 @@ macro_rules! packet_paths {
             }
 
             fn $occl_name(&self, rays: &[Ray], coherence: Coherence, out: &mut [bool]) {
-                let mut ctx = Self::occlusion_context($w, coherence);
+                let mut args = Self::occlusion_args($w, coherence);
                 let mut valid = Valid::<$w>([0; $w]);
                 let mut ray = <$ray>::default();
                 for (rc, oc) in rays.chunks($w).zip(out.chunks_mut($w)) {
@@ -1116,7 +1224,7 @@ macro_rules! packet_paths {
                     }
                     // SAFETY: as for the intersect path: committed scene,
                     // initialised context, aligned valid mask and ray packet.
-                    unsafe { $occl(valid.0.as_ptr(), self.scene.raw, &mut ctx, &mut ray) };
+                    unsafe { occluded_call!(packet $occl, valid.0.as_ptr(), self.scene.raw, &mut args, &mut ray) };
                     for (i, o) in oc.iter_mut().enumerate() {
                         *o = ray.tfar[i] == f32::NEG_INFINITY;
                     }
