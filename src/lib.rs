@@ -61,6 +61,9 @@
 //! The library knows no command line: errors name the field or parameter
 //! (`sensor`, `tilt_deg`), never a flag, and nothing here prints or draws.
 #![warn(missing_docs)]
+// `unsafe` lives only in `trace::embree` (the Embree FFI layer), which is
+// allowed it explicitly; `deny` rather than `forbid` so that one module can.
+#![deny(unsafe_code)]
 
 pub mod analysis;
 pub mod atmosphere;

@@ -594,3 +594,192 @@ fn rays_in_the_planes_of_shared_edges_do_not_slip_through_a_heightmap() {
         }
     }
 }
+
+/// Issue 22: every Embree batch sets flush-to-zero / denormals-are-zero for
+/// its own calls only; the thread's MXCSR (all of it: modes and flags) is as
+/// it was before, so the caller's maths keeps IEEE denormals.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn r22_mxcsr_is_unchanged_after_a_batch() {
+    use irsig::trace::embree::mxcsr;
+    let geom = procedural::generate(&TerrainParams::with_triangles(2_000, 2));
+    let rays = random_rays(&geom, 1000, 22);
+    // A fresh thread: Rust starts it with FTZ and DAZ off.
+    std::thread::spawn(move || {
+        const FTZ_DAZ: u32 = (1 << 15) | (1 << 6);
+        assert_eq!(mxcsr() & FTZ_DAZ, 0, "FTZ/DAZ already on");
+        let tracers = [
+            EmbreeTracer::new(&geom, true).unwrap(),
+            EmbreeTracer::with_mode(&geom, RayMode::Single).unwrap(),
+        ];
+        for t in &tracers {
+            let mode = t.mode();
+            for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+                let before = mxcsr();
+                let mut hits = vec![None; rays.len()];
+                t.intersect(&rays, coherence, &mut hits);
+                assert_eq!(mxcsr(), before, "{mode:?} {coherence:?}: intersect");
+                let mut occ = vec![false; rays.len()];
+                t.occluded(&rays, coherence, &mut occ);
+                assert_eq!(mxcsr(), before, "{mode:?} {coherence:?}: occluded");
+                assert!(hits.iter().any(Option::is_some));
+            }
+        }
+        // The denormal 1e-40 survives in this thread's maths.
+        let tiny = std::hint::black_box(1e-39_f32) * std::hint::black_box(0.1_f32);
+        assert!(tiny > 0.0, "flushed to zero after the batches");
+    })
+    .join()
+    .unwrap();
+}
+
+/// Issue 22: the Embree device is created with `threads=N` from the caller's
+/// setting, rayon's thread count by default. Embree has no property to read
+/// the count back, so the check is what Embree itself prints with
+/// `verbose=1` (its configuration dump, "Threads : N"): a child process (this
+/// test binary, re-run on this test) creates the device and the parent reads
+/// its standard output.
+#[test]
+fn r22_device_thread_count_is_the_callers() {
+    use irsig::trace::embree::DeviceConfig;
+    if let Ok(n) = std::env::var("IRSIG_R22_THREADS") {
+        let threads = n.parse::<usize>().unwrap();
+        let make = || {
+            Device::with_config(&DeviceConfig {
+                threads: None,
+                verbose: 1,
+            })
+            .unwrap()
+        };
+        let d = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(make);
+        assert_eq!(d.config(), format!("threads={threads},verbose=1"));
+        return;
+    }
+    for threads in [1, 3] {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args([
+                "--exact",
+                "backends::r22_device_thread_count_is_the_callers",
+            ])
+            .args(["--nocapture", "--test-threads=1"])
+            .env("IRSIG_R22_THREADS", threads.to_string())
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "child failed: {stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let reported: Vec<&str> = stdout
+            .lines()
+            .filter(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                w.len() == 3 && w[0] == "Threads" && w[1] == ":"
+            })
+            .collect();
+        assert!(
+            reported
+                .iter()
+                .any(|l| l.split_whitespace().nth(2) == Some(&threads.to_string())),
+            "Embree did not report {threads} threads: {reported:?}\n{stdout}"
+        );
+    }
+    // Explicit counts and the default.
+    assert_eq!(Device::with_threads(2).unwrap().config(), "threads=2");
+    let d = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| Device::new().unwrap());
+    assert_eq!(d.config(), "threads=1");
+}
+
+/// Issue 22: a geometry reading an `Arc`-shared vertex buffer keeps it
+/// alive, as does the scene it is attached to: the caller's handles can go
+/// first (that dropping a *borrowed* buffer early does not compile is the
+/// `compile_fail` doctest on `irsig::trace::embree::Geometry::triangles`).
+#[test]
+fn r22_shared_vertex_buffer_outlives_the_callers_handles() {
+    use irsig::trace::Watertight;
+    use irsig::trace::embree::{Geometry, Scene, VertexBuffer};
+    use std::sync::Arc;
+    let device = Device::new().unwrap();
+    let mut scene = Scene::new(&device, Watertight::Yes).unwrap();
+    {
+        let vb = Arc::new(VertexBuffer::new(
+            [Vec3::ZERO, Vec3::X, Vec3::Y].into_iter(),
+        ));
+        let g = Geometry::triangles_shared(&device, vb, &[[0, 1, 2]]).unwrap();
+        scene.attach(&g, 0).unwrap();
+    }
+    scene.commit().unwrap();
+    let scene = Arc::new(scene);
+    // An instance keeps the instanced scene; a scene keeps its instances.
+    let mut top = Scene::new(&device, Watertight::Yes).unwrap();
+    let g = Geometry::instance(&device, &scene, &Affine3A::IDENTITY).unwrap();
+    drop(scene);
+    top.attach(&g, 0).unwrap();
+    drop(g);
+    top.commit().unwrap();
+    // Not committed, or of another device: refused.
+    let other = Device::new().unwrap();
+    let open = Arc::new(Scene::new(&device, Watertight::Yes).unwrap());
+    let e = Geometry::instance(&device, &open, &Affine3A::IDENTITY)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("not committed"), "{e}");
+    let vb = VertexBuffer::new([Vec3::ZERO, Vec3::X, Vec3::Y].into_iter());
+    let mut mine = Scene::new(&device, Watertight::Yes).unwrap();
+    let g = Geometry::triangles(&other, &vb, &[[0, 1, 2]]).unwrap();
+    let e = mine.attach(&g, 1).unwrap_err();
+    assert!(e.to_string().contains("another Embree device"), "{e}");
+}
+
+/// Issue 22: the default Embree tracer picks its query from the batch's
+/// coherence — packets for coherent batches, the stream API (Embree 3) or
+/// single rays (Embree 4) for incoherent ones — and every mode gives the
+/// same hits, bit for bit.
+#[test]
+fn r22_query_mode_follows_coherence_and_all_modes_agree() {
+    let geom = procedural::generate(&TerrainParams::with_triangles(20_000, 7));
+    let rays = random_rays(&geom, 20_000, 22);
+    let auto = EmbreeTracer::new(&geom, true).unwrap();
+    let w = match auto.mode() {
+        RayMode::ByCoherence(w) => w,
+        m => panic!("default mode {m:?}"),
+    };
+    assert_eq!(auto.name(), "embree");
+    assert_eq!(
+        auto.mode().for_batch(Coherence::Coherent),
+        RayMode::Packet(w)
+    );
+    let scattered = if irsig::trace::embree::STREAM_API {
+        RayMode::Stream
+    } else {
+        RayMode::Single
+    };
+    assert_eq!(auto.mode().for_batch(Coherence::Incoherent), scattered);
+    let single = EmbreeTracer::with_mode(&geom, RayMode::Single).unwrap();
+    let reference = trace::intersect_all(&single, &rays, Coherence::Incoherent);
+    let occ_ref = trace::occluded_all(&single, &rays, Coherence::Incoherent);
+    let mut others = vec![auto];
+    let stream = EmbreeTracer::with_mode(&geom, RayMode::Stream);
+    assert_eq!(stream.is_ok(), irsig::trace::embree::STREAM_API);
+    match stream {
+        Ok(t) => others.push(t),
+        Err(e) => assert!(e.to_string().contains("no stream API"), "{e}"),
+    }
+    for t in &others {
+        for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+            let hits = trace::intersect_all(t, &rays, coherence);
+            assert!(hits == reference, "{} {coherence:?}", t.name());
+            let occ = trace::occluded_all(t, &rays, coherence);
+            assert!(occ == occ_ref, "{} {coherence:?}", t.name());
+        }
+    }
+}

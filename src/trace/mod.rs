@@ -32,6 +32,9 @@ use crate::error::{Error, Result};
 use crate::geometry::SceneGeometry;
 
 pub mod bvh;
+// The only module with `unsafe` code (the crate denies it everywhere else):
+// the safe wrappers over `embree-sys`.
+#[allow(unsafe_code)]
 pub mod embree;
 
 /// A ray: `origin + t·dir` for `t` in `[tnear, tfar]`. `dir` need not be
@@ -77,12 +80,17 @@ pub struct Hit {
     pub ng: Vec3,
 }
 
-/// Hints about a batch of rays.
+/// Hints about a batch of rays; the Embree backend picks its query from it
+/// ([`embree::RayMode::ByCoherence`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Coherence {
-    /// Rays of a scanline / tile from one camera: packet tracing pays off.
+    /// Rays of a scanline / tile from one camera, or parallel rays from
+    /// neighbouring points: packet tracing pays off. Embree traces them as
+    /// packets at the native width with its coherent flag.
     Coherent,
-    /// Scattered rays (diffuse, hemisphere, shadow from many facets).
+    /// Scattered rays (diffuse, hemisphere, shadow from many facets). Embree
+    /// traces them through its stream API (Embree 3) or one at a time
+    /// (Embree 4), which measured faster than packets for such rays.
     #[default]
     Incoherent,
 }
@@ -90,7 +98,7 @@ pub enum Coherence {
 /// Batched ray queries over a built scene. Implementations are `Sync`: callers
 /// split large batches over threads (rayon) and call these per chunk.
 pub trait Tracer: Send + Sync {
-    /// Short name for reports (`"embree_packet"`, `"obvhs"`, ...).
+    /// Short name for reports (`"embree"`, `"embree_single"`, `"obvhs"`, ...).
     fn name(&self) -> &str;
     /// Closest hit of every ray; `out.len() == rays.len()`. Every element
     /// of `out` is written (`None` for a miss): callers may reuse it.
@@ -102,7 +110,10 @@ pub trait Tracer: Send + Sync {
 /// The ray-tracing backends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Backend {
-    /// Embree, packet API at the native width (the default).
+    /// Embree, the query chosen per batch (the default): packets at the
+    /// native width for [`Coherence::Coherent`] batches, the stream API
+    /// (Embree 3) or single rays (Embree 4) for [`Coherence::Incoherent`]
+    /// ones.
     #[default]
     Embree,
     /// Embree, one ray at a time (`rtcIntersect1`), for comparison.
@@ -228,10 +239,9 @@ pub fn occluded_all(tracer: &dyn Tracer, rays: &[Ray], coherence: Coherence) -> 
     out
 }
 
-/// Prepares a worker thread for tracing: sets flush-to-zero and
-/// denormals-are-zero, as Embree recommends. Call it from a rayon pool's
-/// `start_handler` (the CLI does). The Embree tracer also sets them on the
-/// calling thread at the start of every batch.
-pub fn init_worker_thread() {
-    embree::set_flush_denormals();
-}
+/// Formerly set flush-to-zero and denormals-are-zero on a worker thread for
+/// good; now does nothing. The Embree tracer sets them itself around each
+/// batch of Embree calls and restores the thread's previous setting after,
+/// so they no longer leak into the thermal and radiometry maths that runs
+/// on the same threads. Kept so existing `start_handler`s still compile.
+pub fn init_worker_thread() {}
