@@ -51,9 +51,7 @@ fn main() -> anyhow::Result<()> {
         .map_or("scenes/town/scene.json", String::as_str);
     let backend: Backend = args.get(1).map_or(Ok(Backend::Embree), |s| s.parse())?;
     let sky: SkySampling = args.get(2).map_or(Ok(SkySampling::DIRSIG), |s| s.parse())?;
-    rayon::ThreadPoolBuilder::new()
-        .start_handler(|_| trace::init_worker_thread())
-        .build_global()?;
+    rayon::ThreadPoolBuilder::new().build_global()?;
     let params = SceneThermalParams {
         exposure: irsig::exposure::ExposureParams {
             sky,

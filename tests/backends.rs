@@ -348,7 +348,6 @@ fn results_do_not_depend_on_the_thread_count() {
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
-                .start_handler(|_| trace::init_worker_thread())
                 .build()
                 .unwrap()
                 .install(|| trace::intersect_all(t.as_ref(), &rays, Coherence::Incoherent))

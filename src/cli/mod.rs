@@ -87,8 +87,7 @@ enum Command {
 /// Parse the command line and run the chosen subcommand.
 pub fn run() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    let mut pool =
-        rayon::ThreadPoolBuilder::new().start_handler(|_| irsig::trace::init_worker_thread());
+    let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = cli.threads {
         anyhow::ensure!(n > 0, "--threads must be at least 1");
         pool = pool.num_threads(n);

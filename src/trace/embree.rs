@@ -781,7 +781,7 @@ pub enum RayMode {
     /// (camera rows and tiles); for incoherent ones (per-facet shadow, sky
     /// and other scattered rays) the stream API on Embree 3 and single rays
     /// on Embree 4, which has no stream API. Measured with
-    /// `examples/embree_modes.rs` (Embree 3.13.5, 1 M triangles, 2 threads):
+    /// `irsig bench modes --watertight no` (Embree 3.13.5, 1 M triangles, 2 threads):
     /// on scattered rays the stream beat single rays by 5–40 % and packets
     /// by 0–60 %; packets beat single rays about 2× on camera tiles.
     ByCoherence(usize),

@@ -238,10 +238,3 @@ pub fn occluded_all(tracer: &dyn Tracer, rays: &[Ray], coherence: Coherence) -> 
         .for_each(|(r, o)| tracer.occluded(r, coherence, o));
     out
 }
-
-/// Formerly set flush-to-zero and denormals-are-zero on a worker thread for
-/// good; now does nothing. The Embree tracer sets them itself around each
-/// batch of Embree calls and restores the thread's previous setting after,
-/// so they no longer leak into the thermal and radiometry maths that runs
-/// on the same threads. Kept so existing `start_handler`s still compile.
-pub fn init_worker_thread() {}

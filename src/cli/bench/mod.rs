@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use super::args::FlagContext;
 use trace::{TileShape, TraceBenchOptions, trace_bench};
 
+mod modes;
 mod trace;
 
 /// Arguments of `irsig bench`.
@@ -37,6 +38,11 @@ enum What {
     /// output), and the primary-ray pipeline (ray generation + primary trace + radiometry +
     /// sensor) against bare coherent tracing of the same primary rays.
     Render(RenderArgs),
+    /// Embree's query modes side by side on `bench trace`'s scene and rays:
+    /// single rays, native-width packets, the stream API (Embree 3) and the
+    /// default choice by coherence (packets for camera rows, the stream or
+    /// single rays for scattered rays), Mrays/s per ray class.
+    Modes(TraceArgs),
 }
 
 /// Arguments of `irsig bench render`.
@@ -98,6 +104,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     match args.what {
         What::Trace(a) => run_trace(a),
         What::Render(a) => run_render(a),
+        What::Modes(a) => {
+            anyhow::ensure!(a.rays > 0, "--rays must be at least 1");
+            anyhow::ensure!(a.rounds > 0, "--rounds must be at least 1");
+            let geom = load_scene(&a)?;
+            let opts = TraceBenchOptions {
+                rays: a.rays,
+                rounds: a.rounds,
+                seed: a.seed,
+                tile: a.tile,
+                watertight: a.watertight,
+            };
+            modes::run(&geom, &opts)
+        }
     }
 }
 

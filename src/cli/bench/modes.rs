@@ -1,0 +1,75 @@
+//! `irsig bench modes`: Embree's query modes side by side, in one run —
+//! single rays, packets at the native width, (Embree 3) the stream API, and
+//! the default per-coherence choice ([`RayMode::ByCoherence`]) — on the three
+//! ray sets of `irsig bench trace` (same scene, same rays). Rounds are
+//! interleaved mode after mode; the best of each counts.
+
+use std::io::Write;
+use std::time::Instant;
+
+use irsig::geometry::SceneGeometry;
+use irsig::trace::embree::{Device, EmbreeTracer, RayMode};
+use irsig::trace::{self, Coherence, Watertight};
+
+use super::trace::{TraceBenchOptions, make_ray_sets};
+
+/// Throughput (Mrays/s, best of `rounds`) of every Embree mode on
+/// primary, shadow and diffuse rays, printed as a table.
+pub fn run(geom: &SceneGeometry, opts: &TraceBenchOptions) -> anyhow::Result<()> {
+    let sets = make_ray_sets(geom, opts)?;
+    let w = Device::new()?.native_packet_width();
+    let mut modes = vec![RayMode::Single, RayMode::Packet(w), RayMode::ByCoherence(w)];
+    if EmbreeTracer::with_mode(&SceneGeometry::default(), RayMode::Stream).is_ok() {
+        modes.insert(2, RayMode::Stream);
+    }
+    let tracers: Vec<EmbreeTracer> = modes
+        .iter()
+        .map(|&m| EmbreeTracer::with_device(Device::new()?, geom, m, opts.watertight))
+        .collect::<irsig::Result<_>>()?;
+    let mut best = vec![[0f64; 3]; modes.len()];
+    let mrays = |n: usize, s: f64| n as f64 / s.max(1e-12) / 1e6;
+    for _ in 0..opts.rounds {
+        for (t, b) in tracers.iter().zip(best.iter_mut()) {
+            let t0 = Instant::now();
+            let p = trace::intersect_all(t, &sets.primary, Coherence::Coherent);
+            let t1 = Instant::now();
+            let s = trace::occluded_all(t, &sets.shadow, Coherence::Incoherent);
+            let t2 = Instant::now();
+            let d = trace::intersect_all(t, &sets.diffuse, Coherence::Incoherent);
+            let t3 = Instant::now();
+            std::hint::black_box((p, s, d));
+            b[0] = b[0].max(mrays(sets.primary.len(), (t1 - t0).as_secs_f64()));
+            b[1] = b[1].max(mrays(sets.shadow.len(), (t2 - t1).as_secs_f64()));
+            b[2] = b[2].max(mrays(sets.diffuse.len(), (t3 - t2).as_secs_f64()));
+        }
+    }
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "irsig bench modes: Embree {} · {} triangles · {} threads · {} · best of {} rounds (Mrays/s)",
+        Device::new()?.version(),
+        geom.stored_triangle_count(),
+        rayon::current_num_threads(),
+        match opts.watertight {
+            Watertight::Yes => "watertight",
+            Watertight::No => "not watertight",
+        },
+        opts.rounds
+    )?;
+    writeln!(
+        out,
+        "{:<16} {:>9} {:>9} {:>9}",
+        "mode", "primary", "shadow", "diffuse"
+    )?;
+    for (m, b) in modes.iter().zip(&best) {
+        writeln!(
+            out,
+            "{:<16} {:>9.2} {:>9.2} {:>9.2}",
+            format!("{m:?}"),
+            b[0],
+            b[1],
+            b[2]
+        )?;
+    }
+    Ok(())
+}
