@@ -290,7 +290,11 @@ fn packet_and_single_ray_paths_give_identical_results() {
     assert!(!widths.is_empty(), "no packet width supported");
     for w in widths {
         let packet = EmbreeTracer::with_mode(&geom, RayMode::Packet(w)).unwrap();
-        for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+        for coherence in [
+            Coherence::Coherent,
+            Coherence::Incoherent,
+            Coherence::Scattered,
+        ] {
             let hits = trace::intersect_all(&packet, &rays, coherence);
             let (mismatched, _) = compare(&geom, &reference, &hits);
             assert_eq!(mismatched, 0, "width {w}");
@@ -580,7 +584,11 @@ fn rays_in_the_planes_of_shared_edges_do_not_slip_through_a_heightmap() {
     }
     for backend in Backend::ALL {
         let tracer = trace::build(&geom, backend).unwrap();
-        for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+        for coherence in [
+            Coherence::Coherent,
+            Coherence::Incoherent,
+            Coherence::Scattered,
+        ] {
             let hits = trace::intersect_all(tracer.as_ref(), &rays, coherence);
             let misses = hits.iter().filter(|h| h.is_none()).count();
             assert_eq!(
@@ -613,7 +621,11 @@ fn r22_mxcsr_is_unchanged_after_a_batch() {
         ];
         for t in &tracers {
             let mode = t.mode();
-            for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+            for coherence in [
+                Coherence::Coherent,
+                Coherence::Incoherent,
+                Coherence::Scattered,
+            ] {
                 let before = mxcsr();
                 let mut hits = vec![None; rays.len()];
                 t.intersect(&rays, coherence, &mut hits);
@@ -762,7 +774,11 @@ fn r22_query_mode_follows_coherence_and_all_modes_agree() {
     } else {
         RayMode::Single
     };
-    assert_eq!(auto.mode().for_batch(Coherence::Incoherent), scattered);
+    assert_eq!(
+        auto.mode().for_batch(Coherence::Incoherent),
+        RayMode::Packet(w)
+    );
+    assert_eq!(auto.mode().for_batch(Coherence::Scattered), scattered);
     let single = EmbreeTracer::with_mode(&geom, RayMode::Single).unwrap();
     let reference = trace::intersect_all(&single, &rays, Coherence::Incoherent);
     let occ_ref = trace::occluded_all(&single, &rays, Coherence::Incoherent);
@@ -774,7 +790,11 @@ fn r22_query_mode_follows_coherence_and_all_modes_agree() {
         Err(e) => assert!(e.to_string().contains("no stream API"), "{e}"),
     }
     for t in &others {
-        for coherence in [Coherence::Coherent, Coherence::Incoherent] {
+        for coherence in [
+            Coherence::Coherent,
+            Coherence::Incoherent,
+            Coherence::Scattered,
+        ] {
             let hits = trace::intersect_all(t, &rays, coherence);
             assert!(hits == reference, "{} {coherence:?}", t.name());
             let occ = trace::occluded_all(t, &rays, coherence);

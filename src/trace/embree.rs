@@ -778,9 +778,10 @@ pub enum RayMode {
     Stream,
     /// Chosen per batch from its [`Coherence`] (the default,
     /// [`EmbreeTracer::new`]): packets of this width for coherent batches
-    /// (camera rows and tiles); for incoherent ones (per-facet shadow, sky
-    /// and other scattered rays) the stream API on Embree 3 and single rays
-    /// on Embree 4, which has no stream API. Measured with
+    /// (camera rows and tiles, with the coherent flag) and incoherent ones
+    /// (a facet's hemisphere rays, secondary rays; no flag); for scattered
+    /// ones (unrelated origins and directions) the stream API on Embree 3
+    /// and single rays on Embree 4, which has no stream API. Measured with
     /// `irsig bench modes --watertight no` (Embree 3.13.5, 1 M triangles, 2 threads):
     /// on scattered rays the stream beat single rays by 5–40 % and packets
     /// by 0–60 %; packets beat single rays about 2× on camera tiles.
@@ -792,8 +793,9 @@ impl RayMode {
     pub fn for_batch(self, coherence: Coherence) -> RayMode {
         match (self, coherence) {
             (RayMode::ByCoherence(w), Coherence::Coherent) => RayMode::Packet(w),
-            (RayMode::ByCoherence(_), Coherence::Incoherent) if STREAM_API => RayMode::Stream,
-            (RayMode::ByCoherence(_), Coherence::Incoherent) => RayMode::Single,
+            (RayMode::ByCoherence(w), Coherence::Incoherent) => RayMode::Packet(w),
+            (RayMode::ByCoherence(_), Coherence::Scattered) if STREAM_API => RayMode::Stream,
+            (RayMode::ByCoherence(_), Coherence::Scattered) => RayMode::Single,
             (m, _) => m,
         }
     }

@@ -33,9 +33,9 @@ pub fn run(geom: &SceneGeometry, opts: &TraceBenchOptions) -> anyhow::Result<()>
             let t0 = Instant::now();
             let p = trace::intersect_all(t, &sets.primary, Coherence::Coherent);
             let t1 = Instant::now();
-            let s = trace::occluded_all(t, &sets.shadow, Coherence::Incoherent);
+            let s = trace::occluded_all(t, &sets.shadow, Coherence::Scattered);
             let t2 = Instant::now();
-            let d = trace::intersect_all(t, &sets.diffuse, Coherence::Incoherent);
+            let d = trace::intersect_all(t, &sets.diffuse, Coherence::Scattered);
             let t3 = Instant::now();
             std::hint::black_box((p, s, d));
             b[0] = b[0].max(mrays(sets.primary.len(), (t1 - t0).as_secs_f64()));

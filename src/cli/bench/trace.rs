@@ -282,9 +282,9 @@ pub fn trace_bench(
             let t0 = Instant::now();
             let primary = trace::intersect_all(t.as_ref(), &sets.primary, Coherence::Coherent);
             let t1 = Instant::now();
-            let shadow = trace::occluded_all(t.as_ref(), &sets.shadow, Coherence::Incoherent);
+            let shadow = trace::occluded_all(t.as_ref(), &sets.shadow, Coherence::Scattered);
             let t2 = Instant::now();
-            let diffuse = trace::intersect_all(t.as_ref(), &sets.diffuse, Coherence::Incoherent);
+            let diffuse = trace::intersect_all(t.as_ref(), &sets.diffuse, Coherence::Scattered);
             let t3 = Instant::now();
             let p = mrays(sets.primary.len(), (t1 - t0).as_secs_f64());
             let s = mrays(sets.shadow.len(), (t2 - t1).as_secs_f64());
