@@ -802,3 +802,38 @@ fn r22_query_mode_follows_coherence_and_all_modes_agree() {
         }
     }
 }
+
+/// `irsig bench modes` times every Embree query mode on `bench trace`'s
+/// rays: one row per mode (the stream only on Embree 3), each with finite
+/// positive throughputs for the three ray classes.
+#[test]
+fn bench_modes_cli_prints_every_mode() {
+    let out = std::process::Command::new(crate::util::irsig_bin())
+        .args(["bench", "modes", "--triangles", "5000", "--rays", "2000"])
+        .args(["--rounds", "1", "--threads", "2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut modes = vec!["Single", "Packet(", "ByCoherence("];
+    if irsig::trace::embree::STREAM_API {
+        modes.push("Stream");
+    }
+    for m in modes {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(m))
+            .unwrap_or_else(|| panic!("no row for {m}: {text}"));
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .skip(1)
+            .map(|x| x.parse().unwrap())
+            .collect();
+        assert_eq!(v.len(), 3, "{line}");
+        assert!(v.iter().all(|x| x.is_finite() && *x > 0.0), "{line}");
+    }
+}

@@ -105,19 +105,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         What::Trace(a) => run_trace(a),
         What::Render(a) => run_render(a),
         What::Modes(a) => {
-            anyhow::ensure!(a.rays > 0, "--rays must be at least 1");
-            anyhow::ensure!(a.rounds > 0, "--rounds must be at least 1");
-            let geom = load_scene(&a)?;
-            let opts = TraceBenchOptions {
-                rays: a.rays,
-                rounds: a.rounds,
-                seed: a.seed,
-                tile: a.tile,
-                watertight: a.watertight,
-            };
+            let (geom, opts) = scene_and_options(&a)?;
             modes::run(&geom, &opts)
         }
     }
+}
+
+/// The scene and ray-set options of `bench trace` and `bench modes`.
+fn scene_and_options(a: &TraceArgs) -> anyhow::Result<(SceneGeometry, TraceBenchOptions)> {
+    anyhow::ensure!(a.rays > 0, "--rays must be at least 1");
+    anyhow::ensure!(a.rounds > 0, "--rounds must be at least 1");
+    let opts = TraceBenchOptions {
+        rays: a.rays,
+        rounds: a.rounds,
+        seed: a.seed,
+        tile: a.tile,
+        watertight: a.watertight,
+    };
+    Ok((load_scene(a)?, opts))
 }
 
 fn load_scene(a: &TraceArgs) -> anyhow::Result<SceneGeometry> {
@@ -136,16 +141,7 @@ fn load_scene(a: &TraceArgs) -> anyhow::Result<SceneGeometry> {
 }
 
 fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(a.rays > 0, "--rays must be at least 1");
-    anyhow::ensure!(a.rounds > 0, "--rounds must be at least 1");
-    let geom = load_scene(&a)?;
-    let opts = TraceBenchOptions {
-        rays: a.rays,
-        rounds: a.rounds,
-        seed: a.seed,
-        tile: a.tile,
-        watertight: a.watertight,
-    };
+    let (geom, opts) = scene_and_options(&a)?;
     let (report, info) = trace_bench(&geom, &opts).context("trace benchmark")?;
     let mut out = std::io::stdout().lock();
     if a.json {
