@@ -835,6 +835,9 @@ fn session_run_reports_the_facets_and_every_row_to_its_observer() {
         log,
         [
             format!("start Thermal {facets}"),
+            "item solar history and sky view".to_string(),
+            "item ground test".to_string(),
+            "item thermal solve".to_string(),
             format!("finish after {facets}"),
             "start Rows 12".to_string(),
             "item cam_20250621T140000".to_string(),

@@ -41,10 +41,10 @@ impl Progress for Bar {
         }
         let bar = ProgressBar::new(total);
         let template = match stage {
-            // Done in one step at the end: a turning spinner and the clock.
-            Stage::Thermal => {
-                "{spinner} {msg:20} {len} facets: rays and thermal solve ({elapsed})".to_string()
-            }
+            // Its sub-stages come as items (rays, ground test, thermal
+            // solve), the count in one step at the end: a turning spinner,
+            // the sub-stage and the clock.
+            Stage::Thermal => "{spinner} {len} facets: {msg:28} ({elapsed})".to_string(),
             _ => format!(
                 "{{spinner}} {{msg:20}} [{{bar:40}}] {{pos}}/{{len}} {} ({{eta}})",
                 stage.unit()

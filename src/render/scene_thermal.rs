@@ -26,6 +26,7 @@ use crate::exposure::{
     sun_directions,
 };
 use crate::geometry::SceneGeometry;
+use crate::progress::{NoProgress, Progress};
 use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
@@ -348,10 +349,41 @@ pub fn solve_scene_temperatures<'a>(
     image_times: &[DateTime<FixedOffset>],
     params: &SceneThermalParams,
 ) -> Result<SceneThermal> {
+    solve_scene_temperatures_observed(
+        tracers,
+        geometry,
+        setup,
+        weather,
+        site,
+        image_times,
+        params,
+        &NoProgress,
+    )
+}
+
+/// [`solve_scene_temperatures`], telling `progress` which stage runs
+/// ([`Progress::item`]: the rays, the ground test, the thermal passes) and
+/// advancing it by the facet count when done. The caller starts and
+/// finishes the [`crate::progress::Stage::Thermal`] stage.
+///
+/// # Errors
+/// As [`solve_scene_temperatures`].
+#[allow(clippy::too_many_arguments)]
+pub fn solve_scene_temperatures_observed<'a>(
+    tracers: impl Into<FacetTracers<'a>>,
+    geometry: &SceneGeometry,
+    setup: &FacetThermalSetup,
+    weather: &WeatherHistory,
+    site: &Site,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    progress: &dyn Progress,
+) -> Result<SceneThermal> {
     let tracers = tracers.into();
     let t0 = Instant::now();
     let history = History::new(weather, site, image_times, &params.window)?;
     let t1 = Instant::now();
+    progress.item("solar history and sky view");
     let exposure = trace_exposure(
         tracers.exposure,
         geometry,
@@ -360,6 +392,7 @@ pub fn solve_scene_temperatures<'a>(
         &params.exposure,
     )?;
     let (setup, ground_facets) = if params.ground {
+        progress.item("ground test");
         let ground = setup.ground_facets(tracers.exact, &exposure.facets);
         let count = ground.iter().filter(|&&g| g).count();
         (setup.with_ground(&ground), count)
@@ -367,6 +400,7 @@ pub fn solve_scene_temperatures<'a>(
         (setup.clone(), 0)
     };
     let t2 = Instant::now();
+    progress.item("thermal solve");
     let temperatures = solve_facet_temperatures(
         &exposure,
         &setup.kinds,
@@ -376,6 +410,7 @@ pub fn solve_scene_temperatures<'a>(
         &params.thermal,
     )?;
     let t3 = Instant::now();
+    progress.advance(exposure.facets.len() as u64);
     Ok(SceneThermal {
         times: history.times,
         records: history.records,
@@ -487,6 +522,21 @@ pub fn solve_scene<'a>(
     image_times: &[DateTime<FixedOffset>],
     params: &SceneThermalParams,
 ) -> Result<SceneThermal> {
+    solve_scene_observed(tracers, scene, image_times, params, &NoProgress)
+}
+
+/// [`solve_scene`], reporting its stages to `progress` as
+/// [`solve_scene_temperatures_observed`] does.
+///
+/// # Errors
+/// As [`solve_scene`].
+pub fn solve_scene_observed<'a>(
+    tracers: impl Into<FacetTracers<'a>>,
+    scene: &Scene,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    progress: &dyn Progress,
+) -> Result<SceneThermal> {
     let weather = scene.weather.as_ref().ok_or_else(|| {
         Error::parse(
             Location::file(&scene.path).with_field("weather"),
@@ -499,7 +549,7 @@ pub fn solve_scene<'a>(
     } else {
         image_times.to_vec()
     };
-    solve_scene_temperatures(
+    solve_scene_temperatures_observed(
         tracers,
         &scene.geometry,
         &setup,
@@ -507,5 +557,6 @@ pub fn solve_scene<'a>(
         &scene.site,
         &times,
         params,
+        progress,
     )
 }

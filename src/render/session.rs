@@ -341,13 +341,28 @@ impl Session {
     /// The thermal state of every facet at each of `times` (one exposure
     /// computation and one thermal spin-up for the whole series).
     pub fn thermal(&mut self, times: &[DateTime<FixedOffset>]) -> Result<ThermalStates> {
+        self.thermal_observed(times, &NoProgress)
+    }
+
+    /// [`Session::thermal`], telling `progress` which of its stages runs
+    /// (the rays, the ground test, the thermal passes) and advancing it by
+    /// the facet count when done; the caller starts and finishes the
+    /// [`Stage::Thermal`] stage.
+    ///
+    /// # Errors
+    /// As [`Session::thermal`].
+    pub fn thermal_observed(
+        &mut self,
+        times: &[DateTime<FixedOffset>],
+        progress: &dyn Progress,
+    ) -> Result<ThermalStates> {
         let own = self.exposure_tracer()?;
         let t0 = Instant::now();
         let tracers = FacetTracers {
             exposure: own.as_deref().unwrap_or(self.tracer.as_ref()),
             exact: self.tracer.as_ref(),
         };
-        let states = scene_thermal(self, tracers, times)?;
+        let states = scene_thermal(self, tracers, times, progress)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += states.timings.thermal;
         Ok(states)
@@ -587,8 +602,7 @@ impl Session {
         let progress: &dyn Progress = options.progress.as_deref().unwrap_or(&NoProgress);
         let facets = self.scene.geometry.facet_count() as u64;
         progress.start(Stage::Thermal, facets);
-        let states = self.thermal(&times)?;
-        progress.advance(facets);
+        let states = self.thermal_observed(&times, progress)?;
         progress.finish();
         let total_rows: u64 = jobs
             .iter()
@@ -636,12 +650,13 @@ fn scene_thermal(
     session: &Session,
     tracers: FacetTracers<'_>,
     times: &[DateTime<FixedOffset>],
+    progress: &dyn Progress,
 ) -> Result<ThermalStates> {
-    use super::scene_thermal::{SceneThermalParams, solve_scene};
+    use super::scene_thermal::{SceneThermalParams, solve_scene_observed};
     let scene = &session.scene;
     let mut params = SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;
-    let solved = solve_scene(tracers, scene, times, &params)?;
+    let solved = solve_scene_observed(tracers, scene, times, &params, progress)?;
     let n = scene.geometry.facet_count();
     let shape = solved.shape_factor().to_vec();
     let mut conditions = Vec::new();
