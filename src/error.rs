@@ -4,6 +4,8 @@
 //! file, and when known the line and/or the field (JSON path, column name),
 //! and says what was expected. Use [`Error::parse`] / [`Error::invalid`] and
 //! the [`Location`] builder rather than formatting paths by hand.
+//! Errors name fields and parameters (`sensor`, `tilt_deg`), never
+//! command-line flags: the command line adds those.
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -10,6 +10,11 @@
 //! * [`plot`] — histograms, tornado plots and curves as PNG (embedded font).
 //!
 //! Residuals are always `synthetic − truth`.
+//!
+//! Takes rendered or truth images, tables and scenes (through
+//! [`crate::render::session::Session`]); gives reports as plain data. It
+//! must not know the command line: it prints nothing and names fields, not
+//! flags, in its errors.
 
 pub mod calibrate;
 pub mod compare;

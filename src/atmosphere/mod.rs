@@ -13,6 +13,10 @@
 //!
 //! Geometry is flat-earth: a straight path from the sensor to the target,
 //! view zenith at the target cos θ = (h_sensor − h_target)/range.
+//!
+//! Takes the surface weather and a spectral grid; gives path and sky
+//! spectra. It must not know scenes, facets or sensors beyond a position and
+//! a view direction.
 
 pub mod builtin;
 pub mod lut;

@@ -7,6 +7,9 @@
 //! instance: the same mesh placed twice gives two sets of facets (they see
 //! different sun and sky). Facets are numbered globally, instance by instance,
 //! in instance order then primitive order ([`SceneGeometry::facet_id`]).
+//!
+//! Takes triangles and transforms; gives facets, their normals, areas and
+//! sample points. It must not know materials, files or ray-tracing backends.
 
 use glam::{Affine3A, Vec3};
 

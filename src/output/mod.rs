@@ -10,6 +10,9 @@
 //! - [`write_quicklook_png`]: PNG quick-look of apparent temperature with a
 //!   colour map and a scale bar in K.
 //! - [`read_image`]: read an EXR or ENVI file by its extension.
+//!
+//! Takes named layers; gives files (and reads them back). It must not know
+//! how the layers were computed: no scene, sensor or physics.
 
 pub mod atomic;
 mod envi;

@@ -15,6 +15,10 @@
 //!
 //! Internal units: wavelength µm, temperature K, spectral radiance
 //! W·m⁻²·sr⁻¹·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
+//!
+//! Takes temperatures, optical properties and incident terms; gives
+//! radiances. It must not know geometry, ray tracing or where the incident
+//! terms come from.
 
 pub mod band;
 pub mod emissivity;

@@ -21,6 +21,10 @@
 //! Results do not depend on the number of threads or on the tiling: rays
 //! are traced in fixed rows, every value depends only on its own rays, and
 //! noise streams are keyed by (seed, band, row).
+//!
+//! The one place that knows every stage: it takes a loaded scene and gives
+//! image files. It must not know the command line (progress goes to a
+//! [`crate::progress::Progress`] observer, errors name fields).
 
 pub mod image;
 pub mod path;

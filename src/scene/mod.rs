@@ -15,6 +15,9 @@
 //!
 //! [`Scene::check`] collects *every* problem (each naming the file and the
 //! JSON path and line) rather than stopping at the first.
+//!
+//! It must not know ray tracing, the thermal model or rendering: it
+//! describes the scene; later stages read it.
 
 pub mod file;
 pub mod gltf;

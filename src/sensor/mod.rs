@@ -16,6 +16,9 @@
 //!   (tests, ground-truth overlays).
 //!
 //! Transforms are named `<to>_from_<from>`; world space is ENU metres.
+//!
+//! Takes a sensor description; gives rays and, from radiances, the sensor's
+//! image. It must not know the scene, materials or the thermal model.
 
 pub mod camera;
 pub mod effects;

@@ -9,6 +9,10 @@
 //! [`intersect_all`] / [`occluded_all`], which split them over rayon in
 //! fixed-size chunks (results do not depend on the thread count).
 //!
+//! Takes geometry and rays; gives hits. It must not know what the rays are
+//! for (sun, sky, sensor) beyond their [`Coherence`], nor materials or
+//! temperatures. Only [`embree`] may use `unsafe` code.
+//!
 //! ```no_run
 //! use irsig::geometry::procedural::{self, TerrainParams};
 //! use irsig::trace::{self, Backend, Coherence, Ray};
