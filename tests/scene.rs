@@ -734,3 +734,131 @@ fn gltf_in_a_scene_and_errors_name_file_and_field() {
         "{e}"
     );
 }
+
+/// Issue 21: suspicious input is a warning, never silent — a site that
+/// looks like radians, a weather file for a place more than 50 km away
+/// (a wrong-sign longitude puts Rochester in Kyrgyzstan) or in another
+/// time zone; the real site and its own weather give none.
+#[test]
+fn suspicious_sites_and_weather_are_warned_about() {
+    let d = tempfile::tempdir().unwrap();
+    let town_weather = repo_path("scenes/town/weather.csv");
+    let with = SMALL.replace(
+        "\"materials\": [",
+        "\"weather\": {\"file\": \"w.csv\"},\n  \"materials\": [",
+    );
+    let p = small_scene(d.path(), &with);
+    std::fs::copy(&town_weather, p.parent().unwrap().join("w.csv")).unwrap();
+    let s = Scene::load(&p).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+
+    let sign = small_scene(
+        d.path(),
+        &with.replace("\"longitude_deg\": -77.61", "\"longitude_deg\": 77.61"),
+    );
+    let w = Scene::load(&sign).unwrap().warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("line 4: field `weather.file`") && w[0].contains("10104 km"),
+        "{w:?}"
+    );
+
+    let rad = small_scene(
+        d.path(),
+        &SMALL.replace(
+            "\"latitude_deg\": 43.16, \"longitude_deg\": -77.61",
+            "\"latitude_deg\": 0.7533, \"longitude_deg\": -1.3545",
+        ),
+    );
+    let w = Scene::load(&rad).unwrap().warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("field `site`") && w[0].contains("look like radians (43.16°, -77.61°)"),
+        "{w:?}"
+    );
+
+    // The town's weather kept in UTC−4; an image time in UTC+9 (Tokyo).
+    let tokyo = small_scene(
+        d.path(),
+        &with.replace("2025-06-21T14:00:00-04:00", "2025-06-22T03:00:00+09:00"),
+    );
+    let w = Scene::load(&tokyo).unwrap().warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("UTC-04:00") && w[0].contains("UTC+09:00"),
+        "{w:?}"
+    );
+}
+
+/// Great-circle distances against published values: Rochester NY to
+/// Bondville IL (the flux site), and a quarter meridian.
+#[test]
+fn site_distance_is_the_great_circle() {
+    let roc = irsig::sun::Site::new(43.16, -77.61, 0.0).unwrap();
+    let same = roc.distance_km(&roc);
+    assert_eq!(same, 0.0);
+    let pole = irsig::sun::Site::new(90.0, 0.0, 0.0).unwrap();
+    let equator = irsig::sun::Site::new(0.0, 0.0, 0.0).unwrap();
+    // A quarter of a great circle of the 6371.0088 km mean radius.
+    assert!((pole.distance_km(&equator) - 6371.0088 * std::f64::consts::FRAC_PI_2).abs() < 1e-6);
+    // Antipodes: half a circumference, without NaN from rounding.
+    let anti = irsig::sun::Site::new(-43.16, 102.39, 0.0).unwrap();
+    assert!((roc.distance_km(&anti) - 6371.0088 * std::f64::consts::PI).abs() < 1e-6);
+}
+
+/// The scene's warnings reach the user on stderr as `warning:` lines from
+/// both `scene check` (also with `--json`, whose stdout stays JSON) and
+/// `render` (before any work).
+#[test]
+fn cli_prints_scene_warnings_on_stderr() {
+    let d = tempfile::tempdir().unwrap();
+    let rad = small_scene(
+        d.path(),
+        &SMALL.replace(
+            "\"latitude_deg\": 43.16, \"longitude_deg\": -77.61",
+            "\"latitude_deg\": 0.7533, \"longitude_deg\": -1.3545",
+        ),
+    );
+    for args in [&["scene", "check"][..], &["scene", "check", "--json"][..]] {
+        let out = std::process::Command::new(irsig_bin())
+            .args(args)
+            .arg(&rad)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        assert!(
+            err.starts_with("warning: ") && err.contains("look like radians"),
+            "{args:?}: {err}"
+        );
+    }
+    // `render` says it before failing on the scene's missing weather.
+    let rad = small_scene(
+        d.path(),
+        &SMALL
+            .replace(
+                "\"latitude_deg\": 43.16, \"longitude_deg\": -77.61",
+                "\"latitude_deg\": 0.7533, \"longitude_deg\": -1.3545",
+            )
+            .replace(
+                r#""sensors": [{"type": "frame", "name": "cam", "width": 4}]"#,
+                r#""sensors": [{"type": "frame", "name": "cam", "width": 4, "height": 4,
+                    "fov_deg": 30, "position": [0, -50, 20], "look_at": [0, 0, 0],
+                    "bands": [{"name": "lwir", "response": [8, 12]}]}]"#,
+            ),
+    );
+    let out = std::process::Command::new(irsig_bin())
+        .args(["render", "--quiet", "-o"])
+        .arg(d.path().join("out"))
+        .arg(&rad)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.starts_with("warning: ")
+            && err.contains("look like radians")
+            && err.contains("weather"),
+        "{err}"
+    );
+}

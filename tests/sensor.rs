@@ -955,3 +955,39 @@ fn image_set_writes_exr_envi_and_png() {
     assert!(output::write_image_set(d2.path(), "x", &s, &[("nope", 4.0)], "").is_err());
     assert!(listing(d2.path()).is_empty());
 }
+
+/// Issue 21: band limits given in nanometres (or otherwise outside
+/// 0.2–100 µm) are an error naming the field, with the µm reading; response
+/// files likewise, naming file, line and column.
+#[test]
+fn bands_in_nanometres_are_errors() {
+    let e = sensor_from_json(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30,
+            "position": [0,0,1], "look_at": [0,1,1], "bands": [{"name": "lwir", "response": [8000, 12000]}]}"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("sensors[0].bands")
+            && e.contains("outside 0.2–100 µm")
+            && e.contains("[8, 12] µm"),
+        "{e}"
+    );
+    let e = sensor_from_json(
+        r#"{"type": "frame", "name": "c", "width": 4, "height": 4, "fov_deg": 30,
+            "position": [0,0,1], "look_at": [0,1,1], "bands": [{"name": "uv", "response": [0.1, 0.3]}]}"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("outside 0.2–100 µm"), "{e}");
+    let e = irsig::radiometry::response::parse_response_csv(
+        "wavelength_um,response\n7800,0\n8000,1\n",
+        "nm.csv",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("nm.csv") && e.contains("line 2") && e.contains("outside 0.2–100 µm"),
+        "{e}"
+    );
+}

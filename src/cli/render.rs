@@ -48,7 +48,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Vec::new(),
     };
     let tile = args.tile.as_deref().map(parse_tile).transpose()?;
-    let mut session = Session::open(&args.scene, args.backend)
+    let t0 = std::time::Instant::now();
+    let scene = irsig::scene::Scene::load(&args.scene)
+        .with_context(|| format!("loading {}", args.scene.display()))?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut session = Session::from_scene(scene, args.backend, t0)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let options = RunOptions {
         backend: args.backend,

@@ -78,6 +78,9 @@ fn check(file: &Path, json: bool) -> anyhow::Result<()> {
             anyhow::bail!("{}: {} problem(s) found", file.display(), errs.len());
         }
     };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
     let s = scene.summary();
     let mut out = std::io::stdout().lock();
     if json {
@@ -126,9 +129,6 @@ fn check(file: &Path, json: bool) -> anyhow::Result<()> {
     writeln!(out, "objects:")?;
     for (name, inst, tris) in &s.object_list {
         writeln!(out, "  {name:<24} {inst:>5} × {tris:>7} triangles")?;
-    }
-    for w in &scene.materials.warnings {
-        writeln!(out, "warning: {w}")?;
     }
     Ok(())
 }

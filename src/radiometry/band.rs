@@ -30,6 +30,11 @@ use crate::{Error, Result};
 /// rule, error ∝ step²).
 pub const DEFAULT_STEP_UM: f64 = 0.01;
 
+/// The wavelengths a sensor band or a response file may span, µm: from the
+/// near ultraviolet to the far infrared. Beyond them a value was most likely
+/// given in nanometres.
+pub const BAND_LIMITS_UM: (f64, f64) = (0.2, 100.0);
+
 /// Increasing wavelengths (µm) with trapezoid quadrature weights (µm).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpectralGrid {

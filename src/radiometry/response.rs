@@ -136,10 +136,11 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
                 format!("expected a positive wavelength in µm, found {l}"),
             ));
         }
-        if l > 1000.0 {
+        let (lo, hi) = super::band::BAND_LIMITS_UM;
+        if !(lo..=hi).contains(&l) {
             return Err(Error::parse(
                 loc().with_field("wavelength_um"),
-                format!("wavelength {l} is not plausible in µm (nm or cm⁻¹ given?)"),
+                format!("wavelength {l} µm is outside {lo}–{hi} µm (nanometres or cm⁻¹ given?)"),
             ));
         }
         if let Some(&prev) = wl.last() {

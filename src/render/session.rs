@@ -219,6 +219,18 @@ impl Session {
     pub fn open(scene_path: &Path, backend: Backend) -> Result<Session> {
         let t0 = Instant::now();
         let scene = Scene::load(scene_path)?;
+        Self::from_scene(scene, backend, t0)
+    }
+
+    /// [`Session::open`] for a scene already loaded (so that its
+    /// [`Scene::warnings`] can be shown before the render sections are
+    /// checked). `t0` is when loading began (the load time in [`Timings`]).
+    ///
+    /// # Errors
+    /// As [`Session::open`], for everything after reading the scene file.
+    pub fn from_scene(scene: Scene, backend: Backend, t0: Instant) -> Result<Session> {
+        let scene_path = scene.path.clone();
+        let scene_path = scene_path.as_path();
         let file = Location::file(scene_path);
         let config = RenderConfig::from_json(scene.render.as_ref(), &file)?;
         let atmosphere = match &scene.atmosphere {

@@ -124,7 +124,16 @@ pub struct Scene {
     pub atmosphere: Option<Value>,
     /// The `render` section, as written.
     pub render: Option<Value>,
+    /// Suspicious input that is not an error (each naming file, line and
+    /// field): a site that looks like radians, a weather file for another
+    /// place or time zone, a material's missing emissivity file. The
+    /// command line prints them as `warning:` lines.
+    pub warnings: Vec<String>,
 }
+
+/// How far (km) a weather file's own site may lie from the scene's before
+/// the scene warns.
+pub const WEATHER_SITE_TOLERANCE_KM: f64 = 50.0;
 
 /// What `irsig scene check` prints.
 #[derive(Debug, Clone, Serialize)]
@@ -305,6 +314,7 @@ struct Loader {
     text: String,
     lines: OnceCell<jsonloc::JsonLines>,
     errors: Vec<Error>,
+    warnings: Vec<String>,
 }
 
 impl Loader {
@@ -316,6 +326,7 @@ impl Loader {
             text,
             lines: OnceCell::new(),
             errors: Vec::new(),
+            warnings: Vec::new(),
         })
     }
 
@@ -333,6 +344,13 @@ impl Loader {
     fn err(&mut self, field: &str, msg: impl Into<String>) {
         let e = Error::parse(self.loc(field), msg);
         self.errors.push(e);
+    }
+
+    /// Something suspicious that is not an error: kept in
+    /// [`Scene::warnings`], named like an error (file, line, field).
+    fn warn(&mut self, field: &str, msg: impl Into<String>) {
+        let w = Error::parse(self.loc(field), msg).to_string();
+        self.warnings.push(w);
     }
 
     fn resolve(&self, p: &str) -> PathBuf {
@@ -378,6 +396,21 @@ impl Loader {
             longitude_deg: s.longitude_deg,
             altitude_m: s.altitude_m,
         };
+        if s.latitude_deg.abs() <= std::f64::consts::FRAC_PI_2
+            && s.longitude_deg.abs() <= std::f64::consts::PI
+            && (s.latitude_deg, s.longitude_deg) != (0.0, 0.0)
+        {
+            self.warn(
+                "site",
+                format!(
+                    "latitude {} and longitude {} look like radians ({:.2}°, {:.2}°); irsig takes degrees",
+                    s.latitude_deg,
+                    s.longitude_deg,
+                    s.latitude_deg.to_degrees(),
+                    s.longitude_deg.to_degrees()
+                ),
+            );
+        }
         let time = match crate::sun::parse_time(&f.time) {
             Ok(t) => Some(t),
             Err(e) => {
@@ -426,6 +459,7 @@ impl Loader {
                                 );
                             }
                         }
+                        self.check_weather_site(&site, time, &p, &h);
                         weather = Some(WeatherRef {
                             path: p,
                             history: h,
@@ -556,6 +590,8 @@ impl Loader {
         if !self.errors.is_empty() {
             return Err(self.errors);
         }
+        let mut warnings = self.warnings;
+        warnings.extend(materials.warnings.iter().cloned());
         let facet_offsets = geometry.facet_offsets();
         Ok(Scene {
             path: self.path,
@@ -574,7 +610,51 @@ impl Loader {
             sensors: f.sensors.into_iter().map(Value::Object).collect(),
             atmosphere: f.atmosphere.map(Value::Object),
             render: f.render.map(Value::Object),
+            warnings,
         })
+    }
+
+    /// Warnings where the weather file's own site (EPW, TMY3 and irsig
+    /// files carry one) is more than [`WEATHER_SITE_TOLERANCE_KM`] from the
+    /// scene's, or its clock differs from the image time's by more than an
+    /// hour (one hour is daylight saving: EPW and TMY3 are in standard time).
+    fn check_weather_site(
+        &mut self,
+        site: &Site,
+        time: Option<DateTime<FixedOffset>>,
+        path: &Path,
+        h: &WeatherHistory,
+    ) {
+        if let Some(w) = h.site() {
+            let d = site.distance_km(w);
+            if d > WEATHER_SITE_TOLERANCE_KM {
+                self.warn(
+                    "weather.file",
+                    format!(
+                        "{} is for a site {d:.0} km from the scene's ({:.3}°, {:.3}° against {:.3}°, {:.3}°): is it the right file, or the site's sign?",
+                        path.display(),
+                        w.latitude_deg,
+                        w.longitude_deg,
+                        site.latitude_deg,
+                        site.longitude_deg
+                    ),
+                );
+            }
+        }
+        if let (Some(t), Some(r)) = (time, h.records().first()) {
+            let dt = (t.offset().local_minus_utc() - r.time.offset().local_minus_utc()).abs();
+            if dt > 3600 {
+                self.warn(
+                    "weather.file",
+                    format!(
+                        "{} keeps time at UTC{} but the image time is at UTC{}: is it the right file?",
+                        path.display(),
+                        r.time.offset(),
+                        t.offset()
+                    ),
+                );
+            }
+        }
     }
 
     /// The merged, grouped mesh of an object's shapes (object space).

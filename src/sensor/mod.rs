@@ -573,6 +573,28 @@ fn check_bands(bands: &[BandConfig]) -> Result<()> {
                     ),
                 ));
             }
+            if lo < crate::radiometry::band::BAND_LIMITS_UM.0
+                || hi > crate::radiometry::band::BAND_LIMITS_UM.1
+            {
+                let hint = if lo >= 200.0 {
+                    format!(
+                        "; in nanometres that would be [{}, {}] µm",
+                        lo / 1000.0,
+                        hi / 1000.0
+                    )
+                } else {
+                    String::new()
+                };
+                return Err(Error::invalid(
+                    "bands",
+                    format!(
+                        "band `{}`: response [{lo}, {hi}] µm is outside {}–{} µm{hint}",
+                        b.name,
+                        crate::radiometry::band::BAND_LIMITS_UM.0,
+                        crate::radiometry::band::BAND_LIMITS_UM.1
+                    ),
+                ));
+            }
         }
     }
     Ok(())
