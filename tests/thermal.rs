@@ -3,6 +3,7 @@
 //! 1959), conservation of energy, the steady surface balance, and the
 //! qualitative behaviour of thin and thick objects.
 
+use irsig::thermal::latent::{AirState, TurbulentExchange};
 use irsig::thermal::{
     self, BackBoundary, Background, Boundary, FacetInputs, Forcing, Grid, STEFAN_BOLTZMANN_W_M2_K4,
     Slab, SlabProperties, SolveOptions, Spinup, SurfaceFlux, mcadams_h_w_m2_k,
@@ -153,6 +154,7 @@ fn sunny_front(t_air: f64, wind: f64) -> SurfaceFlux {
         source_w_m2: alpha * 800.0 + alpha * 100.0 + eps * 330.0 + h * t_air,
         linear_w_m2_k: h,
         radiative_w_m2_k4: eps * STEFAN_BOLTZMANN_W_M2_K4,
+        ..SurfaceFlux::default()
     }
 }
 
@@ -1129,4 +1131,135 @@ fn source_model_matches_the_balance() {
             }
         }
     }
+}
+
+/// The front law of `sunny_front` with a latent term for grass-like
+/// resistances: r_a 50 s/m, r_s `r_s` s/m, air at 60 % relative humidity.
+fn evaporating_front(t_air: f64, wind: f64, r_s: f64) -> SurfaceFlux {
+    let air = AirState::from_relative_humidity(t_air, 0.6, 101_325.0).unwrap();
+    let x = TurbulentExchange::new(air, 50.0, r_s).unwrap();
+    SurfaceFlux {
+        vapour_conductance_w_m2_pa: x.vapour_conductance_w_m2_pa(),
+        air_vapour_pressure_pa: air.vapour_pressure_pa(),
+        ..sunny_front(t_air, wind)
+    }
+}
+
+/// The latent term of the flux law is the Penman–Monteith latent flux at
+/// the surface temperature (FAO-56 eq. 3 through `TurbulentExchange`), and
+/// the derivative the Newton solve uses is the law's derivative.
+#[test]
+fn latent_flux_law_matches_penman_monteith_and_its_derivative() {
+    let dry = sunny_front(300.0, 2.0);
+    let wet = evaporating_front(300.0, 2.0, 70.0);
+    let air = AirState::from_relative_humidity(300.0, 0.6, 101_325.0).unwrap();
+    let x = TurbulentExchange::new(air, 50.0, 70.0).unwrap();
+    for t in [285.0, 300.0, 315.0] {
+        let le = x.latent_w_m2(t);
+        assert!((wet.latent_w_m2(t) - le).abs() < 1e-9 * le.abs().max(1.0));
+        assert!((dry.flux(t) - le - wet.flux(t)).abs() < 1e-9 * dry.flux(t).abs().max(1.0));
+        let h = 1e-3;
+        let fd = (wet.flux(t + h) - wet.flux(t - h)) / (2.0 * h);
+        let d = wet.derivative(t);
+        assert!((fd / d - 1.0).abs() < 1e-6, "dq/dT {d} vs FD {fd} at {t} K");
+        assert!(d < dry.derivative(t), "evaporation steepens the law");
+    }
+    assert!(wet.has_latent() && !dry.has_latent());
+    assert_eq!(dry.latent_w_m2(300.0), 0.0);
+    // lerp interpolates the latent fields.
+    let mid = dry.lerp(&wet, 0.5);
+    assert_eq!(
+        mid.vapour_conductance_w_m2_pa,
+        0.5 * wet.vapour_conductance_w_m2_pa
+    );
+    assert_eq!(mid.air_vapour_pressure_pa, 0.5 * wet.air_vapour_pressure_pa);
+}
+
+/// Runs a 0.3 m soil-like slab 12 h under `front`, insulated behind;
+/// returns the surface temperature after every 10 s step.
+fn surface_history(front: SurfaceFlux) -> Vec<f64> {
+    let mut slab = Slab::new(0.3, 1.0, 1.4e6, Grid::default(), 290.0);
+    let insulated = Boundary::Flux(SurfaceFlux::default());
+    (0..4320)
+        .map(|_| {
+            slab.step(10.0, |_| Boundary::Flux(front), |_| insulated);
+            slab.front_k()
+        })
+        .collect()
+}
+
+/// Issue 16: latent heat → 0 as the surface resistance → ∞ recovers
+/// today's (dry) model exactly: r_s = ∞ gives g_v = 0 and the same surface
+/// temperatures bit for bit; a huge finite r_s converges to them; a grass-
+/// like r_s cools the surface by kelvins.
+#[test]
+fn infinite_surface_resistance_recovers_the_dry_model_exactly() {
+    let dry = surface_history(sunny_front(295.0, 2.0));
+    let sealed = evaporating_front(295.0, 2.0, f64::INFINITY);
+    assert_eq!(sealed.vapour_conductance_w_m2_pa, 0.0);
+    assert_eq!(
+        surface_history(sealed),
+        dry,
+        "r_s = ∞ must be the dry model"
+    );
+    let nearly = surface_history(evaporating_front(295.0, 2.0, 1e9));
+    let max_diff = dry
+        .iter()
+        .zip(&nearly)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        max_diff > 0.0 && max_diff < 1e-4,
+        "r_s = 1e9 s/m: {max_diff} K"
+    );
+    let wet = surface_history(evaporating_front(295.0, 2.0, 70.0));
+    let cooling = dry.last().unwrap() - wet.last().unwrap();
+    eprintln!("r_s 70 s/m cools the surface by {cooling:.2} K after 12 h of sun");
+    assert!(
+        cooling > 3.0,
+        "evaporation should cool the surface: {cooling} K"
+    );
+}
+
+/// Issue 16: the surface energy balance closes every step with the latent
+/// term: the heat the scheme took in through the front face in a step
+/// equals the change of stored heat to 1e-6 relative, and the trapezoidal
+/// integral of the full law (absorbed, emitted, convected and evaporated)
+/// agrees with the stored heat to the quadrature error.
+#[test]
+fn surface_balance_with_latent_heat_closes_every_step() {
+    let front = evaporating_front(295.0, 2.0, 70.0);
+    let mut slab = Slab::new(0.2, K_CONCRETE, RHO_C_CONCRETE, Grid::default(), 280.0);
+    let e0 = slab.stored_energy_j_m2();
+    let insulated = Boundary::Flux(SurfaceFlux::default());
+    let dt = 10.0;
+    let mut integral = 0.0;
+    let mut latent = 0.0;
+    let mut q_prev = front.flux(slab.front_k());
+    let mut le_prev = front.latent_w_m2(slab.front_k());
+    let mut worst: f64 = 0.0;
+    for _ in 0..(6.0 * 3600.0 / dt) as usize {
+        let (e_before, (f_before, _)) = (slab.stored_energy_j_m2(), slab.boundary_energy_j_m2());
+        slab.step(dt, |_| Boundary::Flux(front), |_| insulated);
+        let de = slab.stored_energy_j_m2() - e_before;
+        let df = slab.boundary_energy_j_m2().0 - f_before;
+        worst = worst.max((de - df).abs() / de.abs().max(df.abs()).max(1e-300));
+        let q = front.flux(slab.front_k());
+        let le = front.latent_w_m2(slab.front_k());
+        integral += 0.5 * dt * (q_prev + q);
+        latent += 0.5 * dt * (le_prev + le);
+        q_prev = q;
+        le_prev = le;
+    }
+    let de = slab.stored_energy_j_m2() - e0;
+    eprintln!(
+        "latent energy: ∫q dt = {integral:.1} J/m², ΔE = {de:.1} J/m², ∫LE dt = {latent:.1} J/m², \
+         worst step closure {worst:.2e}"
+    );
+    assert!(worst < 1e-6, "a step's budget is off by {worst:e} relative");
+    assert!(latent > 1e6, "the surface should have evaporated: {latent}");
+    assert!(
+        (integral / de - 1.0).abs() < 1e-3,
+        "∫q dt {integral} vs ΔE {de}"
+    );
 }

@@ -1,5 +1,6 @@
 //! The surface energy balance: each term of the net heat flux into a face,
-//! written as a [`SurfaceFlux`] law `q(T) = S − H·T − R·T⁴` (W m⁻²).
+//! written as a [`SurfaceFlux`] law `q(T) = S − H·T − R·T⁴ − g_v(e°(T) − e_a)`
+//! (W m⁻²).
 //!
 //! Front face (the THERM balance of DIRSIG: Schott, *Remote Sensing: The
 //! Image Chain Approach*, 2nd ed., Oxford UP, 2007, DIRSIG chapter; DIRSIG
@@ -15,6 +16,11 @@
 //! | emission                     | `− ε · σ · T⁴`                     |
 //! | convection                   | `h(u) · (T_air − T)`               |
 //! | self-generated power         | `P`                                |
+//! | latent heat (evaporation)    | `− g_v · (e°(T) − e_a)`            |
+//!
+//! The latent row is zero (and skipped) for a surface that does not
+//! evaporate (`g_v = 0`, every material today); see [`SurfaceFlux`] for
+//! `g_v` and its source.
 //!
 //! `α` solar absorptivity, `ε` thermal emissivity (Kirchhoff: absorptivity
 //! for longwave = `ε`), `E_dn` direct-normal irradiance, `s` sunlit fraction
@@ -74,6 +80,11 @@ pub struct FrontForcing {
     pub shape_factor: f64,
     /// Background (non-sky) temperature, K.
     pub background_temperature_k: f64,
+    /// Vapour conductance `ρc_p/(γ(r_a + r_s))` of an evaporating surface,
+    /// W m⁻² Pa⁻¹; 0 for a dry one (see [`SurfaceFlux`]).
+    pub vapour_conductance_w_m2_pa: f64,
+    /// Actual vapour pressure of the air, Pa.
+    pub air_vapour_pressure_pa: f64,
 }
 
 /// The front-surface balance as a flux law (table in the module docs),
@@ -97,6 +108,8 @@ pub fn front_flux(f: &FrontForcing, alpha: f64, eps: f64, p_w_m2: f64) -> Surfac
             + p_w_m2,
         linear_w_m2_k: f.convection_w_m2_k,
         radiative_w_m2_k4: eps * sigma,
+        vapour_conductance_w_m2_pa: f.vapour_conductance_w_m2_pa,
+        air_vapour_pressure_pa: f.air_vapour_pressure_pa,
     }
 }
 
@@ -121,6 +134,7 @@ pub fn exposed_back_flux(
                 + f.convection_w_m2_k * f.air_temperature_k),
         linear_w_m2_k: a * f.convection_w_m2_k,
         radiative_w_m2_k4: a * eps * sigma,
+        ..SurfaceFlux::default()
     }
 }
 
@@ -131,6 +145,6 @@ pub fn film_flux(air_k: f64, h_w_m2_k: f64) -> SurfaceFlux {
     SurfaceFlux {
         source_w_m2: h_w_m2_k * air_k,
         linear_w_m2_k: h_w_m2_k,
-        radiative_w_m2_k4: 0.0,
+        ..SurfaceFlux::default()
     }
 }

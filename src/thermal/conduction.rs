@@ -34,17 +34,22 @@
 //! that is computed once per step size (static condensation), and each
 //! Newton iteration is a 2×2 solve.
 
+use super::latent::psychrometrics::{
+    saturation_vapour_pressure_pa, saturation_vapour_pressure_slope_pa_k,
+};
+
 /// Stefan–Boltzmann constant, W m⁻² K⁻⁴ (CODATA 2018, exact).
 pub const STEFAN_BOLTZMANN_W_M2_K4: f64 = 5.670_374_419e-8;
 
 /// TR-BDF2 stage fraction γ = 2 − √2.
 pub(crate) const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
 
-/// A boundary heat-flux law, linear plus radiative in the boundary
-/// temperature `T` (K):
+/// A boundary heat-flux law, linear plus radiative plus latent in the
+/// boundary temperature `T` (K):
 ///
 /// ```text
-/// q(T) = source_w_m2 − linear_w_m2_k·T − radiative_w_m2_k4·T⁴      [W m⁻²]
+/// q(T) = source_w_m2 − linear_w_m2_k·T − radiative_w_m2_k4·T⁴
+///        − vapour_conductance_w_m2_pa·(e°(T) − air_vapour_pressure_pa)   [W m⁻²]
 /// ```
 ///
 /// positive *into* the slab. Every boundary in the model has this form: the
@@ -53,6 +58,17 @@ pub(crate) const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
 /// `radiative` = `εσ`), an exposed back face, a film coefficient to interior
 /// air (`radiative` = 0), an insulated face (all zero) and a prescribed flux
 /// (`source` only).
+///
+/// The last term is the latent heat flux of a surface that evaporates: with
+/// the vapour conductance `g_v = ρ c_p / (γ (r_a + r_s))` (W m⁻² Pa⁻¹; air
+/// density ρ, specific heat c_p, psychrometric constant γ, aerodynamic and
+/// surface resistances r_a, r_s) it is `λE = g_v (e°(T_s) − e_a)`, the
+/// Penman–Monteith latent flux written at the surface temperature instead of
+/// linearised about the air temperature (FAO-56, Allen et al. 1998, eq. 3
+/// before the Δ-linearisation; e° by FAO-56 eq. 11, see
+/// [`crate::thermal::latent::psychrometrics::saturation_vapour_pressure_pa`]).
+/// With `g_v = 0` (every dry surface, and the limit `r_s → ∞`) the term is
+/// skipped and the law is the linear-plus-radiative one, bit for bit.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SurfaceFlux {
     /// Temperature-independent part, W m⁻².
@@ -61,6 +77,12 @@ pub struct SurfaceFlux {
     pub linear_w_m2_k: f64,
     /// Coefficient of `−T⁴`, W m⁻² K⁻⁴ (≥ 0; `ε·σ` for an emitting face).
     pub radiative_w_m2_k4: f64,
+    /// Vapour conductance `g_v = ρc_p/(γ(r_a + r_s))`, W m⁻² Pa⁻¹ (≥ 0; 0 for
+    /// a surface that does not evaporate).
+    pub vapour_conductance_w_m2_pa: f64,
+    /// Actual vapour pressure of the air `e_a`, Pa (used only when
+    /// `vapour_conductance_w_m2_pa > 0`).
+    pub air_vapour_pressure_pa: f64,
 }
 
 impl SurfaceFlux {
@@ -76,13 +98,42 @@ impl SurfaceFlux {
     #[inline]
     pub fn flux(&self, t_k: f64) -> f64 {
         let t2 = t_k * t_k;
-        self.source_w_m2 - self.linear_w_m2_k * t_k - self.radiative_w_m2_k4 * t2 * t2
+        let q = self.source_w_m2 - self.linear_w_m2_k * t_k - self.radiative_w_m2_k4 * t2 * t2;
+        if self.vapour_conductance_w_m2_pa == 0.0 {
+            q
+        } else {
+            q - self.latent_w_m2(t_k)
+        }
     }
 
     /// `dq/dT` at `t_k`, W m⁻² K⁻¹ (≤ 0).
     #[inline]
     pub fn derivative(&self, t_k: f64) -> f64 {
-        -self.linear_w_m2_k - 4.0 * self.radiative_w_m2_k4 * t_k * t_k * t_k
+        let d = -self.linear_w_m2_k - 4.0 * self.radiative_w_m2_k4 * t_k * t_k * t_k;
+        if self.vapour_conductance_w_m2_pa == 0.0 {
+            d
+        } else {
+            d - self.vapour_conductance_w_m2_pa * saturation_vapour_pressure_slope_pa_k(t_k)
+        }
+    }
+
+    /// The latent heat flux away from the surface at `t_k`,
+    /// `g_v (e°(T) − e_a)`, W m⁻² (negative = dew forming; 0 when
+    /// `g_v = 0`).
+    #[inline]
+    pub fn latent_w_m2(&self, t_k: f64) -> f64 {
+        if self.vapour_conductance_w_m2_pa == 0.0 {
+            0.0
+        } else {
+            self.vapour_conductance_w_m2_pa
+                * (saturation_vapour_pressure_pa(t_k) - self.air_vapour_pressure_pa)
+        }
+    }
+
+    /// Whether the law has a latent term (`g_v > 0`).
+    #[inline]
+    pub fn has_latent(&self) -> bool {
+        self.vapour_conductance_w_m2_pa != 0.0
     }
 
     /// Linear interpolation between two flux laws, `f ∈ [0, 1]`.
@@ -93,6 +144,10 @@ impl SurfaceFlux {
             linear_w_m2_k: self.linear_w_m2_k + f * (other.linear_w_m2_k - self.linear_w_m2_k),
             radiative_w_m2_k4: self.radiative_w_m2_k4
                 + f * (other.radiative_w_m2_k4 - self.radiative_w_m2_k4),
+            vapour_conductance_w_m2_pa: self.vapour_conductance_w_m2_pa
+                + f * (other.vapour_conductance_w_m2_pa - self.vapour_conductance_w_m2_pa),
+            air_vapour_pressure_pa: self.air_vapour_pressure_pa
+                + f * (other.air_vapour_pressure_pa - self.air_vapour_pressure_pa),
         }
     }
 }

@@ -375,6 +375,18 @@ pub fn linearize(
     let sources = source_history(props, forcing, inputs)?;
     opts.validate()?;
     let p = prepare(props, forcing, inputs);
+    // The Green's functions below would take the latent derivative from the
+    // Newton solve, but the second-order correction covers only the
+    // emission's curvature, not that of e°(T) in the latent term, and its
+    // accuracy against the per-facet solve has not been checked with latent
+    // heat: refuse rather than answer silently wrong.
+    if p.front.iter().any(|f| f.has_latent()) {
+        return Err(crate::error::Error::invalid(
+            "surface_energy",
+            "the linearised scene thermal solve does not handle latent heat yet; \
+             solve materials with a surface-energy block facet by facet (the exact method)",
+        ));
+    }
     let n = forcing.len();
     let has_back = sources.back_w_m2.is_some();
     let fixed_back = matches!(props.back, BackBoundary::Ground { .. });

@@ -871,6 +871,10 @@ fn front_forcing_at(forcing: &Forcing, inputs: &FacetInputs, k: usize) -> balanc
         cos_incidence: inputs.cos_incidence[k] as f64,
         shape_factor: inputs.shape_factor,
         background_temperature_k: bg,
+        // No material evaporates yet (issue 16, step 2 will set these from
+        // the material's surface-energy block): the dry balance.
+        vapour_conductance_w_m2_pa: 0.0,
+        air_vapour_pressure_pa: 0.0,
     }
 }
 

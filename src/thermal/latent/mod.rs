@@ -19,7 +19,9 @@
 //!   eq. 3), the FAO-56 reference ET₀ (daily eq. 6, hourly eq. 53), and
 //!   [`TurbulentExchange`]: latent and sensible flux at a given *surface*
 //!   temperature, with their derivatives, for a surface-energy-balance
-//!   solver.
+//!   solver;
+//! - [`surface_energy`]: [`SurfaceEnergy`], a surface's aerodynamic and
+//!   canopy parameters, giving the exchange at one weather record.
 //!
 //! **Takes** air temperature, humidity, pressure, wind and the surface's
 //! parameters, SI units in every name (Pa, K, s m⁻¹, W m⁻²); the FAO-56
@@ -48,6 +50,7 @@
 pub mod aerodynamic;
 pub mod penman_monteith;
 pub mod psychrometrics;
+pub mod surface_energy;
 pub mod surface_resistance;
 
 pub use aerodynamic::{Aerodynamic, VON_KARMAN};
@@ -55,6 +58,7 @@ pub use penman_monteith::{
     AirState, ReferenceEtInputs, TurbulentExchange, penman_monteith_latent_w_m2,
     reference_et0_daily_mm, reference_et0_hourly_mm,
 };
+pub use surface_energy::SurfaceEnergy;
 pub use surface_resistance::{CanopyConditions, JarvisStewart, StressFactors};
 
 /// A parameter outside its physical domain. Each variant names the field

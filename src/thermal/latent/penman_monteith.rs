@@ -296,8 +296,10 @@ impl TurbulentExchange {
     }
 
     /// ρ c_p / (γ (r_a + r_s)), W m⁻² Pa⁻¹: the vapour conductance in energy
-    /// units (0 when either resistance is infinite).
-    fn latent_conductance(&self) -> f64 {
+    /// units (0 when either resistance is infinite): the
+    /// `vapour_conductance_w_m2_pa` of the slab model's
+    /// [`crate::thermal::SurfaceFlux`].
+    pub fn vapour_conductance_w_m2_pa(&self) -> f64 {
         let r = self.aerodynamic_resistance_s_m + self.surface_resistance_s_m;
         self.rho_cp / (self.air.psychrometric_constant_pa_k() * r)
     }
@@ -306,14 +308,15 @@ impl TurbulentExchange {
     /// W m⁻² (positive: evaporation):
     /// LE = ρ c_p / γ · (e°(T_s) − e_a) / (r_a + r_s).
     pub fn latent_w_m2(&self, surface_temperature_k: f64) -> f64 {
-        self.latent_conductance()
+        self.vapour_conductance_w_m2_pa()
             * (saturation_vapour_pressure_pa(surface_temperature_k) - self.air.vapour_pressure_pa)
     }
 
     /// dLE/dT_s at `surface_temperature_k`, W m⁻² K⁻¹ (≥ 0):
     /// ρ c_p / γ · Δ(T_s) / (r_a + r_s).
     pub fn latent_derivative_w_m2_k(&self, surface_temperature_k: f64) -> f64 {
-        self.latent_conductance() * saturation_vapour_pressure_slope_pa_k(surface_temperature_k)
+        self.vapour_conductance_w_m2_pa()
+            * saturation_vapour_pressure_slope_pa_k(surface_temperature_k)
     }
 
     /// Sensible heat flux at `surface_temperature_k`, W m⁻² (positive:

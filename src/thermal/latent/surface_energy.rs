@@ -1,0 +1,126 @@
+//! The per-record coupling of a surface that evaporates: from its
+//! aerodynamic and canopy parameters and the weather at one record, the
+//! [`TurbulentExchange`] whose sensible coefficient `ρc_p/r_a` replaces the
+//! McAdams convection coefficient and whose vapour conductance
+//! `ρc_p/(γ(r_a + r_s))` is the latent term of the slab model's front law
+//! (issue 16, step 2 of the plan; the thermal solve calls
+//! [`SurfaceEnergy::exchange_at`] once per record).
+//!
+//! Stability is evaluated at a surface temperature the caller gives (the
+//! plan: the previous record's surface temperature, lagged), so the
+//! exchange stays a fixed law within a step and the slab's Newton solve
+//! sees only `e°(T)` as new nonlinearity.
+
+use super::{
+    Aerodynamic, AirState, CanopyConditions, InputError, JarvisStewart, TurbulentExchange, in_range,
+};
+
+/// A surface's turbulent-exchange parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceEnergy {
+    /// Heights and roughness of the aerodynamic resistance.
+    pub aerodynamic: Aerodynamic,
+    /// The Jarvis–Stewart surface resistance.
+    pub canopy: JarvisStewart,
+    /// Volumetric water content of the root zone θ, m³ m⁻³ (constant: no
+    /// soil water budget yet).
+    pub soil_moisture_m3_m3: f64,
+}
+
+impl SurfaceEnergy {
+    /// Checks the parts; errors name the field.
+    ///
+    /// # Errors
+    /// [`InputError`] from [`JarvisStewart::validate`] or a soil moisture
+    /// outside 0..=1.
+    pub fn new(
+        aerodynamic: Aerodynamic,
+        canopy: JarvisStewart,
+        soil_moisture_m3_m3: f64,
+    ) -> Result<SurfaceEnergy, InputError> {
+        canopy.validate()?;
+        in_range("soil_moisture_m3_m3", soil_moisture_m3_m3, 0.0, 1.0)?;
+        Ok(SurfaceEnergy {
+            aerodynamic,
+            canopy,
+            soil_moisture_m3_m3,
+        })
+    }
+
+    /// The exchange with `air` at wind speed `wind_speed_m_s` and global
+    /// shortwave `shortwave_down_w_m2` (W m⁻²), with the stability of a
+    /// surface at `surface_temperature_k`: r_a from
+    /// [`Aerodynamic::resistance_s_m`] (FAO-56 eq. 4, Louis 1979), r_s from
+    /// [`JarvisStewart::surface_resistance_s_m`] (Jarvis 1976; Noilhan &
+    /// Planton 1989).
+    ///
+    /// # Errors
+    /// [`InputError`] when the resistances are not usable (a NaN input).
+    pub fn exchange_at(
+        &self,
+        air: AirState,
+        wind_speed_m_s: f64,
+        shortwave_down_w_m2: f64,
+        surface_temperature_k: f64,
+    ) -> Result<TurbulentExchange, InputError> {
+        let r_a = self.aerodynamic.resistance_s_m(
+            wind_speed_m_s,
+            surface_temperature_k,
+            air.temperature_k(),
+        );
+        let r_s = self.canopy.surface_resistance_s_m(&CanopyConditions {
+            shortwave_down_w_m2: shortwave_down_w_m2.max(0.0),
+            vapour_pressure_deficit_pa: air.vapour_pressure_deficit_pa(),
+            air_temperature_k: air.temperature_k(),
+            soil_moisture_m3_m3: self.soil_moisture_m3_m3,
+        });
+        TurbulentExchange::new(air, r_a, r_s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grass() -> SurfaceEnergy {
+        SurfaceEnergy::new(
+            Aerodynamic::from_canopy_height(0.12, 2.0, 2.0).unwrap(),
+            JarvisStewart {
+                min_stomatal_resistance_s_m: 40.0,
+                max_stomatal_resistance_s_m: 5000.0,
+                leaf_area_index: 2.88,
+                shortwave_limit_w_m2: 30.0,
+                vpd_sensitivity_per_pa: 0.0,
+                optimum_temperature_k: 298.0,
+                temperature_sensitivity_per_k2: 0.0016,
+                wilting_point_m3_m3: 0.1,
+                field_capacity_m3_m3: 0.3,
+            },
+            0.3,
+        )
+        .unwrap()
+    }
+
+    /// Midday sun opens the stomata: the latent conductance is larger than
+    /// at night, and the sensible coefficient of a neutral surface is the
+    /// FAO-56 grass value ρc_p·u/208 at 2 m.
+    #[test]
+    fn sun_opens_the_canopy_and_neutral_r_a_is_fao56() {
+        let g = grass();
+        let air = AirState::from_relative_humidity(298.0, 0.5, 101_325.0).unwrap();
+        let day = g.exchange_at(air, 2.0, 800.0, 298.0).unwrap();
+        let night = g.exchange_at(air, 2.0, 0.0, 298.0).unwrap();
+        assert!(day.vapour_conductance_w_m2_pa() > 5.0 * night.vapour_conductance_w_m2_pa());
+        assert!((day.aerodynamic_resistance_s_m() - 104.0).abs() < 1.0);
+        // An unstable (warm) surface exchanges more than a neutral one.
+        let warm = g.exchange_at(air, 2.0, 800.0, 308.0).unwrap();
+        assert!(warm.sensible_coefficient_w_m2_k() > day.sensible_coefficient_w_m2_k());
+    }
+
+    #[test]
+    fn soil_moisture_out_of_range_names_the_field() {
+        let g = grass();
+        let e = SurfaceEnergy::new(g.aerodynamic, g.canopy, 1.5).unwrap_err();
+        assert_eq!(e.field(), "soil_moisture_m3_m3");
+    }
+}
