@@ -57,8 +57,8 @@ use glam::Vec3;
 pub use crate::geometry::BackgroundEntry;
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_times, sun_directions};
-pub use sky::{SkySampling, SkyView, sky_view};
-pub use solar::{SolarHistory, solar_history};
+pub use sky::{RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view};
+pub use solar::{RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_rays};
 
 use crate::geometry::SceneGeometry;
 use crate::trace::Tracer;
