@@ -23,6 +23,10 @@
 //!   the shape factor F (view factor to the sky dome), its standard error,
 //!   and the background — which facets the blocked rays hit, with weights
 //!   ([`BackgroundEntry`]) — plus the weight of the ground beyond the scene.
+//! - [`solar_rays`] / [`sky_rays`]: the rays those two trace for a batch
+//!   of facets, in their order, and the coherence they declare
+//!   ([`SOLAR_RAY_COHERENCE`], [`SKY_RAY_COHERENCE`]) — for benchmarks of
+//!   the tracers on the exposure stage's own rays (`irsig bench trace`).
 //! - [`compute_exposure`] runs all of it and times it ([`Exposure`]).
 //! - [`history_times`] / [`sun_directions`]: the record times of the
 //!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min) and the

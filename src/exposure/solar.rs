@@ -61,7 +61,12 @@ pub const RAY_COHERENCE: Coherence = Coherence::Coherent;
 /// within a facet one ray per sample point, lifted off the plane toward the
 /// sun. Trace them with [`RAY_COHERENCE`]. `irsig bench trace` uses this
 /// to time the tracers on the exposure stage's own shadow rays.
-pub fn solar_rays(facets: &FacetSamples, range: Range<usize>, sun_dirs: &[Vec3], rays: &mut Vec<Ray>) {
+pub fn solar_rays(
+    facets: &FacetSamples,
+    range: Range<usize>,
+    sun_dirs: &[Vec3],
+    rays: &mut Vec<Ray>,
+) {
     lay_out_rays(facets, range, sun_dirs, rays, |_, _, _| {});
 }
 

@@ -178,7 +178,12 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     writeln!(
         out,
         "{:<14} {:>9} {:>16} {:>15} {:>19} {:>16}",
-        "backend", "build s", "primary Mray/s", "shadow Mray/s", "hemisphere Mray/s", "diffuse Mray/s"
+        "backend",
+        "build s",
+        "primary Mray/s",
+        "shadow Mray/s",
+        "hemisphere Mray/s",
+        "diffuse Mray/s"
     )?;
     for (name, r) in [
         ("embree_packet", &b.embree_packet),
@@ -199,7 +204,14 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     writeln!(
         out,
         "{:<11} {:>9} {:<11} {:<10} {:>13} {:>12} {:>8} {:>11}",
-        "class", "rays", "coherence", "embree", "embree Mray/s", "obvhs Mray/s", "ratio", "mismatched"
+        "class",
+        "rays",
+        "coherence",
+        "embree",
+        "embree Mray/s",
+        "obvhs Mray/s",
+        "ratio",
+        "mismatched"
     )?;
     let c = &report.classes;
     for (name, r) in trace::CLASSES

@@ -8,8 +8,8 @@ use std::io::Write;
 use std::time::Instant;
 
 use irsig::geometry::SceneGeometry;
-use irsig::trace::embree::{Device, EmbreeTracer, RayMode};
 use irsig::trace::Watertight;
+use irsig::trace::embree::{Device, EmbreeTracer, RayMode};
 
 use super::trace::{TraceBenchOptions, make_ray_sets};
 
