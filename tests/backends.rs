@@ -460,10 +460,54 @@ fn bench_trace_cli_prints_the_documented_json() {
             assert!(x > 0.0 && x.is_finite(), "{b}.{k} = {x}");
         }
     }
+    assert_eq!(v["threads"].as_u64(), Some(2));
     let rays = v["agreement"]["rays"].as_u64().unwrap();
-    assert!((11_900..=12_100).contains(&rays), "{rays}");
+    assert!((15_900..=16_100).contains(&rays), "{rays}");
     let bad = v["agreement"]["mismatched_rays"].as_u64().unwrap();
     assert!(bad * 1000 <= rays, "{bad} of {rays} rays disagree");
+    // One object per ray class, with the coherence its producer declares
+    // and the Embree query that coherence gets.
+    let width = Device::new().unwrap().native_packet_width();
+    let packets = format!("Packet({width})");
+    let scattered = if irsig::trace::embree::STREAM_API {
+        "Stream"
+    } else {
+        "Single"
+    };
+    let mut class_rays = 0;
+    let mut class_bad = 0;
+    for (class, coherence, mode) in [
+        ("primary", "Coherent", packets.as_str()),
+        ("shadow", "Coherent", packets.as_str()),
+        ("hemisphere", "Incoherent", packets.as_str()),
+        ("diffuse", "Scattered", scattered),
+    ] {
+        let c = &v["classes"][class];
+        assert_eq!(c["coherence"].as_str(), Some(coherence), "{class}: {c}");
+        assert_eq!(c["embree_mode"].as_str(), Some(mode), "{class}: {c}");
+        let n = c["rays"].as_u64().unwrap();
+        assert!((3_900..=4_100).contains(&n), "{class}: {n} rays");
+        let (e, o, r) = (
+            c["embree_mrays_s"].as_f64().unwrap(),
+            c["obvhs_mrays_s"].as_f64().unwrap(),
+            c["ratio"].as_f64().unwrap(),
+        );
+        assert!(
+            e > 0.0 && o > 0.0 && ((r - e / o) / r).abs() < 1e-9,
+            "{class}: {c}"
+        );
+        class_rays += n;
+        class_bad += c["mismatched"].as_u64().unwrap();
+    }
+    assert_eq!(class_rays, rays);
+    assert_eq!(class_bad, bad);
+    // The per-backend hemisphere column.
+    for b in ["embree_packet", "embree_single", "obvhs"] {
+        let x = v["backends"][b]["hemisphere_mrays_s"]
+            .as_f64()
+            .unwrap_or(-1.0);
+        assert!(x > 0.0 && x.is_finite(), "{b}.hemisphere_mrays_s = {x}");
+    }
 }
 
 /// `--watertight no` builds the Embree scenes without the robust flag (as
@@ -833,7 +877,8 @@ fn bench_modes_cli_prints_every_mode() {
             .skip(1)
             .map(|x| x.parse().unwrap())
             .collect();
-        assert_eq!(v.len(), 3, "{line}");
+        // Primary, shadow, hemisphere, diffuse.
+        assert_eq!(v.len(), 4, "{line}");
         assert!(v.iter().all(|x| x.is_finite() && *x > 0.0), "{line}");
     }
 }

@@ -23,6 +23,10 @@
 //!   the shape factor F (view factor to the sky dome), its standard error,
 //!   and the background — which facets the blocked rays hit, with weights
 //!   ([`BackgroundEntry`]) — plus the weight of the ground beyond the scene.
+//! - [`solar_rays`] / [`sky_rays`]: the rays those two trace for a batch
+//!   of facets, in their order, and the coherence they declare
+//!   ([`SOLAR_RAY_COHERENCE`], [`SKY_RAY_COHERENCE`]) — for benchmarks of
+//!   the tracers on the exposure stage's own rays (`irsig bench trace`).
 //! - [`compute_exposure`] runs all of it and times it ([`Exposure`]).
 //! - [`history_times`] / [`sun_directions`]: the record times of the
 //!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min) and the
@@ -57,8 +61,8 @@ use glam::Vec3;
 pub use crate::geometry::BackgroundEntry;
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_times, sun_directions};
-pub use sky::{SkySampling, SkyView, sky_view};
-pub use solar::{SolarHistory, solar_history};
+pub use sky::{RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view};
+pub use solar::{RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_rays};
 
 use crate::geometry::SceneGeometry;
 use crate::trace::Tracer;

@@ -202,6 +202,74 @@ fn pattern(sampling: SkySampling, grid: &[HemiSample], seed: u64, key: u64) -> V
     }
 }
 
+/// How [`sky_view`] hands its rays to the tracer: a facet's hemisphere rays
+/// share a neighbourhood but not a direction.
+pub const RAY_COHERENCE: Coherence = Coherence::Incoherent;
+
+/// Appends to `rays` the hemisphere rays that [`sky_view`] traces for the
+/// facets `range` (one of its batches), in its order: facet by facet, front
+/// face then (double-sided facets) back face, the face's pattern
+/// ([`SkySampling::rays_per_face`] rays: DIRSIG's 72-direction grid by
+/// default) with ray `k` from sample point `k mod n²`, lifted off the plane.
+/// Trace them with [`RAY_COHERENCE`]. `irsig bench trace` uses this to
+/// time the tracers on the exposure stage's own hemisphere rays.
+pub fn sky_rays(
+    facets: &FacetSamples,
+    range: std::ops::Range<usize>,
+    sampling: SkySampling,
+    seed: u64,
+    rays: &mut Vec<Ray>,
+) {
+    let grid = match sampling {
+        SkySampling::Grid {
+            zenith_step_deg,
+            azimuth_step_deg,
+        } => dirsig_grid(zenith_step_deg, azimuth_step_deg),
+        SkySampling::Stratified { .. } => Vec::new(),
+    };
+    let (mut weights, mut ranges) = (Vec::new(), Vec::new());
+    lay_out_rays(
+        facets,
+        range,
+        (sampling, &grid, seed),
+        rays,
+        &mut weights,
+        &mut ranges,
+    );
+}
+
+/// The rays of [`sky_rays`], each ray's weight in `weights` and the
+/// start of each facet's rays, then the end of the last, in `ranges`.
+fn lay_out_rays(
+    facets: &FacetSamples,
+    range: std::ops::Range<usize>,
+    (sampling, grid, seed): (SkySampling, &[HemiSample], u64),
+    rays: &mut Vec<Ray>,
+    weights: &mut Vec<f32>,
+    ranges: &mut Vec<usize>,
+) {
+    for f in range {
+        ranges.push(rays.len());
+        let pts = facets.facet_points(f);
+        let sides: &[f32] = if facets.double_sided[f] {
+            &[1.0, -1.0]
+        } else {
+            &[1.0]
+        };
+        let scale = 1.0 / sides.len() as f32;
+        for (si, &side) in sides.iter().enumerate() {
+            let lift = facets.normal[f] * (side * facets.offset_m);
+            let pat = pattern(sampling, grid, seed, (f as u64) << 1 | si as u64);
+            for (k, h) in pat.iter().enumerate() {
+                let dir = facets.to_world(f, h.dir, side);
+                rays.push(Ray::new(pts[k % pts.len()] + lift, dir));
+                weights.push(h.weight * scale);
+            }
+        }
+    }
+    ranges.push(rays.len());
+}
+
 /// Traces the shape factor and background of every facet. Rays of a face
 /// start from its sample points in turn (ray `k` from point `k mod n²`),
 /// lifted off the plane. Facets go through the tracer `batch_facets` at a
@@ -232,28 +300,16 @@ pub fn sky_view<T: Tracer + ?Sized>(
             let mut weights = Vec::new();
             // Range of rays of each facet.
             let mut ranges = Vec::with_capacity(f1 - f0 + 1);
-            for f in f0..f1 {
-                ranges.push(rays.len());
-                let pts = facets.facet_points(f);
-                let sides: &[f32] = if facets.double_sided[f] {
-                    &[1.0, -1.0]
-                } else {
-                    &[1.0]
-                };
-                let scale = 1.0 / sides.len() as f32;
-                for (si, &side) in sides.iter().enumerate() {
-                    let lift = facets.normal[f] * (side * facets.offset_m);
-                    let pat = pattern(sampling, &grid, seed, (f as u64) << 1 | si as u64);
-                    for (k, h) in pat.iter().enumerate() {
-                        let dir = facets.to_world(f, h.dir, side);
-                        rays.push(Ray::new(pts[k % pts.len()] + lift, dir));
-                        weights.push(h.weight * scale);
-                    }
-                }
-            }
-            ranges.push(rays.len());
+            lay_out_rays(
+                facets,
+                f0..f1,
+                (sampling, &grid, seed),
+                &mut rays,
+                &mut weights,
+                &mut ranges,
+            );
             let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
-            tracer.intersect(&rays, Coherence::Incoherent, &mut hits);
+            tracer.intersect(&rays, RAY_COHERENCE, &mut hits);
             let mut out = SkyView {
                 offsets: vec![0],
                 ..Default::default()

@@ -1,6 +1,8 @@
 //! Solar history: per facet and time step, the sunlit fraction and the cosine
 //! of the solar incidence angle.
 
+use std::ops::Range;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -47,6 +49,65 @@ impl SolarHistory {
     }
 }
 
+/// How [`solar_history`] hands its rays to the tracer: one step's rays are
+/// parallel and start on neighbouring facets, so coherent (Embree's hint;
+/// the answers are the same either way).
+pub const RAY_COHERENCE: Coherence = Coherence::Coherent;
+
+/// Appends to `rays` the occlusion rays that [`solar_history`] traces for
+/// the facets `range` (one of its batches), in its order: step by step
+/// (steps with the sun below the horizon skipped), within a step facet by
+/// facet (facets facing away from the sun skipped, unless double-sided),
+/// within a facet one ray per sample point, lifted off the plane toward the
+/// sun. Trace them with [`RAY_COHERENCE`]. `irsig bench trace` uses this
+/// to time the tracers on the exposure stage's own shadow rays.
+pub fn solar_rays(
+    facets: &FacetSamples,
+    range: Range<usize>,
+    sun_dirs: &[Vec3],
+    rays: &mut Vec<Ray>,
+) {
+    lay_out_rays(facets, range, sun_dirs, rays, |_, _, _| {});
+}
+
+/// The rays of [`solar_rays`]; `visit(slot, cos, rays)` is called for each
+/// (facet, step) the sun is in front of, `slot = (facet − range.start) ·
+/// steps + step`, `cos` the facet normal · sun, `rays` the number of rays
+/// pushed for it (`None` when the sun is exactly in the facet's plane).
+fn lay_out_rays(
+    facets: &FacetSamples,
+    range: Range<usize>,
+    sun_dirs: &[Vec3],
+    rays: &mut Vec<Ray>,
+    mut visit: impl FnMut(usize, f32, Option<u32>),
+) {
+    let steps = sun_dirs.len();
+    for (s, &dir) in sun_dirs.iter().enumerate() {
+        if dir.z <= 0.0 {
+            continue;
+        }
+        for f in range.clone() {
+            let c = facets.normal[f].dot(dir);
+            let side = if facets.double_sided[f] {
+                c.signum()
+            } else if c > 0.0 {
+                1.0
+            } else {
+                continue;
+            };
+            let slot = (f - range.start) * steps + s;
+            if c == 0.0 {
+                visit(slot, c, None);
+                continue;
+            }
+            let lift = facets.normal[f] * (side * facets.offset_m);
+            let pts = facets.facet_points(f);
+            rays.extend(pts.iter().map(|&p| Ray::new(p + lift, dir)));
+            visit(slot, c, Some(pts.len() as u32));
+        }
+    }
+}
+
 /// Traces the solar history of every facet: for each step whose sun is above
 /// the horizon and in front of the facet, one occlusion ray per sample
 /// point toward the sun. `sun_dirs` are unit east-north-up vectors toward
@@ -72,34 +133,14 @@ pub fn solar_history<T: Tracer + ?Sized>(
             let mut rays = Vec::new();
             // (slot in frac, number of rays) for each traced (facet, step).
             let mut slots: Vec<(u32, u32)> = Vec::new();
-            for (s, &dir) in sun_dirs.iter().enumerate() {
-                if dir.z <= 0.0 {
-                    continue;
+            lay_out_rays(facets, f0..f1, sun_dirs, &mut rays, |slot, c, m| {
+                cosi[slot] = c.abs().min(1.0);
+                if let Some(m) = m {
+                    slots.push((slot as u32, m));
                 }
-                for f in f0..f1 {
-                    let c = facets.normal[f].dot(dir);
-                    let side = if facets.double_sided[f] {
-                        c.signum()
-                    } else if c > 0.0 {
-                        1.0
-                    } else {
-                        continue;
-                    };
-                    let slot = (f - f0) * steps + s;
-                    cosi[slot] = c.abs().min(1.0);
-                    if c == 0.0 {
-                        continue;
-                    }
-                    let lift = facets.normal[f] * (side * facets.offset_m);
-                    let pts = facets.facet_points(f);
-                    rays.extend(pts.iter().map(|&p| Ray::new(p + lift, dir)));
-                    slots.push((slot as u32, pts.len() as u32));
-                }
-            }
+            });
             let mut occ = vec![false; rays.len()];
-            // One step's rays are parallel and start on neighbouring facets:
-            // coherent (Embree's hint; the answers are the same).
-            tracer.occluded(&rays, Coherence::Coherent, &mut occ);
+            tracer.occluded(&rays, RAY_COHERENCE, &mut occ);
             let mut k = 0usize;
             for &(slot, m) in &slots {
                 let lit = occ[k..k + m as usize].iter().filter(|&&o| !o).count();

@@ -85,9 +85,10 @@ struct TraceArgs {
     /// Seed of the generated scene and of the random rays.
     #[arg(long, value_name = "N", default_value_t = 1)]
     seed: u64,
-    /// Pixel tile of the primary rays (consecutive rays, one packet).
-    #[arg(long, value_name = "WxH", default_value = "4x2")]
-    tile: TileShape,
+    /// Pixel tiles for the primary rays (consecutive rays, one packet),
+    /// e.g. 4x2 [default: the renderer's layout, row by row: 8×1 runs].
+    #[arg(long, value_name = "WxH")]
+    tile: Option<TileShape>,
     /// Embree's triangle tests: `yes` watertight (`RTC_SCENE_FLAG_ROBUST`,
     /// what a render's sensor rays use), `no` Embree's faster default (what
     /// a render's per-facet shadow and sky rays use). obvhs is the same
@@ -152,28 +153,37 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     let b = &report.backends;
     writeln!(
         out,
-        "irsig bench trace: {} triangles ({} stored), Embree {} ({}-wide packets, {} tiles, {}), {} threads, best of {} rounds",
+        "irsig bench trace: {} triangles ({} stored), Embree {} ({}-wide packets, {}), {} threads (builds and tracing), best of {} rounds",
         report.triangles,
         geom.stored_triangle_count(),
         info.embree_version,
         info.packet_width,
-        format_args!("{}x{}", a.tile.width, a.tile.height),
         match a.watertight {
             Watertight::Yes => "watertight",
             Watertight::No => "not watertight",
         },
-        info.threads,
+        report.threads,
         a.rounds
     )?;
     writeln!(
         out,
-        "rays per set: primary {}, shadow {}, diffuse {}",
-        info.rays[0], info.rays[1], info.rays[2]
+        "primary: {}x{} camera, {}; shadow: solar-history rays, 4 steps; hemisphere: 72-direction sky-view grid; both from facet sample points in batches of 512 facets; diffuse: random",
+        info.camera.0,
+        info.camera.1,
+        match a.tile {
+            None => "row by row as the renderer".to_string(),
+            Some(t) => format!("{}x{} tiles", t.width, t.height),
+        }
     )?;
     writeln!(
         out,
-        "{:<14} {:>9} {:>16} {:>15} {:>16}",
-        "backend", "build s", "primary Mray/s", "shadow Mray/s", "diffuse Mray/s"
+        "{:<14} {:>9} {:>16} {:>15} {:>19} {:>16}",
+        "backend",
+        "build s",
+        "primary Mray/s",
+        "shadow Mray/s",
+        "hemisphere Mray/s",
+        "diffuse Mray/s"
     )?;
     for (name, r) in [
         ("embree_packet", &b.embree_packet),
@@ -182,18 +192,45 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     ] {
         writeln!(
             out,
-            "{:<14} {:>9.3} {:>16.2} {:>15.2} {:>16.2}",
-            name, r.build_s, r.primary_mrays_s, r.shadow_mrays_s, r.diffuse_mrays_s
+            "{:<14} {:>9.3} {:>16.2} {:>15.2} {:>19.2} {:>16.2}",
+            name,
+            r.build_s,
+            r.primary_mrays_s,
+            r.shadow_mrays_s,
+            r.hemisphere_mrays_s,
+            r.diffuse_mrays_s
         )?;
     }
-    let ratio = |x: f64, y: f64| x / y.max(1e-12);
     writeln!(
         out,
-        "embree_packet / obvhs: primary {:.2}x, shadow {:.2}x, diffuse {:.2}x",
-        ratio(b.embree_packet.primary_mrays_s, b.obvhs.primary_mrays_s),
-        ratio(b.embree_packet.shadow_mrays_s, b.obvhs.shadow_mrays_s),
-        ratio(b.embree_packet.diffuse_mrays_s, b.obvhs.diffuse_mrays_s)
+        "{:<11} {:>9} {:<11} {:<10} {:>13} {:>12} {:>8} {:>11}",
+        "class",
+        "rays",
+        "coherence",
+        "embree",
+        "embree Mray/s",
+        "obvhs Mray/s",
+        "ratio",
+        "mismatched"
     )?;
+    let c = &report.classes;
+    for (name, r) in trace::CLASSES
+        .iter()
+        .zip([&c.primary, &c.shadow, &c.hemisphere, &c.diffuse])
+    {
+        writeln!(
+            out,
+            "{:<11} {:>9} {:<11} {:<10} {:>13.2} {:>12.2} {:>7.2}x {:>11}",
+            name,
+            r.rays,
+            r.coherence,
+            r.embree_mode,
+            r.embree_mrays_s,
+            r.obvhs_mrays_s,
+            r.ratio,
+            r.mismatched
+        )?;
+    }
     writeln!(
         out,
         "agreement: {} of {} rays differ (hit/miss, or distance beyond 1e-4 relative)",

@@ -1,20 +1,20 @@
 //! `irsig bench modes`: Embree's query modes side by side, in one run —
 //! single rays, packets at the native width, (Embree 3) the stream API, and
-//! the default per-coherence choice ([`RayMode::ByCoherence`]) — on the three
-//! ray sets of `irsig bench trace` (same scene, same rays). Rounds are
+//! the default per-coherence choice ([`RayMode::ByCoherence`]) — on the four
+//! ray classes of `irsig bench trace` (same scene, same rays). Rounds are
 //! interleaved mode after mode; the best of each counts.
 
 use std::io::Write;
 use std::time::Instant;
 
 use irsig::geometry::SceneGeometry;
+use irsig::trace::Watertight;
 use irsig::trace::embree::{Device, EmbreeTracer, RayMode};
-use irsig::trace::{self, Coherence, Watertight};
 
 use super::trace::{TraceBenchOptions, make_ray_sets};
 
 /// Throughput (Mrays/s, best of `rounds`) of every Embree mode on
-/// primary, shadow and diffuse rays, printed as a table.
+/// primary, shadow, hemisphere and diffuse rays, printed as a table.
 pub fn run(geom: &SceneGeometry, opts: &TraceBenchOptions) -> anyhow::Result<()> {
     let sets = make_ray_sets(geom, opts)?;
     let w = Device::new()?.native_packet_width();
@@ -26,21 +26,21 @@ pub fn run(geom: &SceneGeometry, opts: &TraceBenchOptions) -> anyhow::Result<()>
         .iter()
         .map(|&m| EmbreeTracer::with_device(Device::new()?, geom, m, opts.watertight))
         .collect::<irsig::Result<_>>()?;
-    let mut best = vec![[0f64; 3]; modes.len()];
+    let classes = [&sets.primary, &sets.shadow, &sets.hemisphere, &sets.diffuse];
+    let mut best = vec![[0f64; 4]; modes.len()];
     let mrays = |n: usize, s: f64| n as f64 / s.max(1e-12) / 1e6;
     for _ in 0..opts.rounds {
         for (t, b) in tracers.iter().zip(best.iter_mut()) {
-            let t0 = Instant::now();
-            let p = trace::intersect_all(t, &sets.primary, Coherence::Coherent);
-            let t1 = Instant::now();
-            let s = trace::occluded_all(t, &sets.shadow, Coherence::Scattered);
-            let t2 = Instant::now();
-            let d = trace::intersect_all(t, &sets.diffuse, Coherence::Scattered);
-            let t3 = Instant::now();
-            std::hint::black_box((p, s, d));
-            b[0] = b[0].max(mrays(sets.primary.len(), (t1 - t0).as_secs_f64()));
-            b[1] = b[1].max(mrays(sets.shadow.len(), (t2 - t1).as_secs_f64()));
-            b[2] = b[2].max(mrays(sets.diffuse.len(), (t3 - t2).as_secs_f64()));
+            for (c, set) in classes.iter().enumerate() {
+                let t0 = Instant::now();
+                // Shadow rays are occlusion queries, the rest closest hits.
+                if c == 1 {
+                    std::hint::black_box(set.occluded(t));
+                } else {
+                    std::hint::black_box(set.intersect(t));
+                }
+                b[c] = b[c].max(mrays(set.rays.len(), t0.elapsed().as_secs_f64()));
+            }
         }
     }
     let mut out = std::io::stdout().lock();
@@ -58,17 +58,18 @@ pub fn run(geom: &SceneGeometry, opts: &TraceBenchOptions) -> anyhow::Result<()>
     )?;
     writeln!(
         out,
-        "{:<16} {:>9} {:>9} {:>9}",
-        "mode", "primary", "shadow", "diffuse"
+        "{:<16} {:>9} {:>9} {:>10} {:>9}",
+        "mode", "primary", "shadow", "hemisphere", "diffuse"
     )?;
     for (m, b) in modes.iter().zip(&best) {
         writeln!(
             out,
-            "{:<16} {:>9.2} {:>9.2} {:>9.2}",
+            "{:<16} {:>9.2} {:>9.2} {:>10.2} {:>9.2}",
             format!("{m:?}"),
             b[0],
             b[1],
-            b[2]
+            b[2],
+            b[3]
         )?;
     }
     Ok(())

@@ -1,29 +1,48 @@
-//! What `irsig bench trace` measures: the tracing backends on the same rays.
-//! Returns a report; the printing is in the parent module.
+//! What `irsig bench trace` measures: the tracing backends on the rays the
+//! renderer and the exposure stage make. Returns a report; the printing is
+//! in the parent module.
 //!
-//! [`trace_bench`] builds every [`Backend`] over the same triangles, traces
-//! the same three ray sets through each and reports build time and
-//! throughput, plus how often the backends disagree:
+//! [`trace_bench`] builds every [`Backend`] over the same triangles (both
+//! Embree's builder and obvhs's parallel build run on rayon's pool, sized
+//! by `--threads`), traces the same four ray classes through each and
+//! reports build time and throughput, plus how often the backends disagree:
 //!
-//! * **primary** — a pinhole camera looking obliquely down on the scene,
-//!   rays ordered in small pixel tiles ([`TileShape`]) so that consecutive
-//!   rays form coherent packets; traced with [`Coherence::Coherent`];
-//! * **shadow** — occlusion rays from random points on random facets toward
-//!   a sun at 40° elevation, azimuth 135° (south-east);
+//! * **primary** — a [`FrameCamera`] looking obliquely down on the scene,
+//!   its rays made by the renderer's own row generator
+//!   ([`FrameCamera::rays_for_row`]) and traced one row per batch as the
+//!   renderer does (8×1 runs in 8-wide packets), or re-ordered into pixel
+//!   tiles with `--tile WxH`; [`Coherence::Coherent`];
+//! * **shadow** — the exposure stage's solar-history rays
+//!   ([`exposure::solar_rays`]): from facet sample points toward the sun
+//!   over four history steps, batch by batch of 512 facets, with
+//!   [`exposure::SOLAR_RAY_COHERENCE`];
+//! * **hemisphere** — the exposure stage's sky-view rays
+//!   ([`exposure::sky_rays`]): DIRSIG's 72-direction grid from each sample
+//!   point, with [`exposure::SKY_RAY_COHERENCE`];
 //! * **diffuse** — closest-hit rays from random surface points in
-//!   cosine-weighted directions about the facet normal.
+//!   cosine-weighted directions, unrelated ray to ray
+//!   ([`Coherence::Scattered`]).
 //!
-//! Each set is traced in `rounds` interleaved rounds (backend after backend)
-//! over the global rayon pool; the best round counts.
+//! Exposure batches are runs of 512 consecutive facets spread evenly over
+//! the scene until the class has `--rays` rays (the last batch cut). Each
+//! class is traced in `rounds` interleaved rounds (backend after backend)
+//! over the global rayon pool, batch by batch (a batch in pieces of at most
+//! [`trace::CHUNK_RAYS`] rays from its start, so both threads stay busy);
+//! the best round counts.
 
+use std::ops::Range;
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use serde::Serialize;
 
+use irsig::exposure::{self, ExposureParams, FacetSamples};
 use irsig::geometry::SceneGeometry;
+use irsig::sensor::camera::{FrameCamera, look_at_axes};
+use irsig::trace::embree::RayMode;
 use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
 use irsig::{Error, Result};
 
@@ -34,14 +53,6 @@ pub struct TileShape {
     pub width: usize,
     /// Tile height, pixels.
     pub height: usize,
-}
-
-impl TileShape {
-    /// 4×2 pixels: one 8-wide packet per tile.
-    pub const T4X2: TileShape = TileShape {
-        width: 4,
-        height: 2,
-    };
 }
 
 impl std::str::FromStr for TileShape {
@@ -65,14 +76,14 @@ impl std::str::FromStr for TileShape {
 /// Options of [`trace_bench`].
 #[derive(Debug, Clone)]
 pub struct TraceBenchOptions {
-    /// Rays per set.
+    /// Rays per class.
     pub rays: usize,
-    /// Timed rounds per set and backend (best counts).
+    /// Timed rounds per class and backend (best counts).
     pub rounds: usize,
-    /// Seed of the shadow/diffuse ray origins and directions.
+    /// Seed of the diffuse rays.
     pub seed: u64,
-    /// Pixel tile of the primary rays.
-    pub tile: TileShape,
+    /// Pixel tile of the primary rays; `None`: the renderer's rows.
+    pub tile: Option<TileShape>,
     /// Triangle tests of the Embree scenes (obvhs is the same either way).
     pub watertight: Watertight,
 }
@@ -83,31 +94,140 @@ impl Default for TraceBenchOptions {
             rays: 1_000_000,
             rounds: 3,
             seed: 1,
-            tile: TileShape::T4X2,
+            tile: None,
             watertight: Watertight::Yes,
         }
     }
 }
 
-/// The three ray sets.
+/// One class of rays, laid out and batched as its producer does.
 #[derive(Debug, Clone)]
-pub struct RaySets {
-    /// Camera rays, tile by tile.
-    pub primary: Vec<Ray>,
-    /// Occlusion rays toward the sun.
-    pub shadow: Vec<Ray>,
-    /// Cosine-hemisphere rays from surface points.
-    pub diffuse: Vec<Ray>,
+pub struct RaySet {
+    /// The rays.
+    pub rays: Vec<Ray>,
+    /// Batches (one tracer call each, in parallel): start of each, then
+    /// the end of the last.
+    pub bounds: Vec<usize>,
+    /// The coherence the producer declares.
+    pub coherence: Coherence,
 }
 
-/// Unit vector toward the sun: elevation 40°, azimuth 135° (clockwise from
-/// north; x east, y north, z up).
-pub fn bench_sun_direction() -> Vec3 {
-    let (el, az) = (40f32.to_radians(), 135f32.to_radians());
+impl RaySet {
+    fn new(rays: Vec<Ray>, mut starts: Vec<usize>, coherence: Coherence) -> Self {
+        // Pieces of at most CHUNK_RAYS from each batch's start.
+        starts.retain(|&s| s < rays.len());
+        starts.push(rays.len());
+        let mut bounds = Vec::new();
+        for w in starts.windows(2) {
+            bounds.extend((w[0]..w[1]).step_by(trace::CHUNK_RAYS));
+        }
+        bounds.push(rays.len());
+        RaySet {
+            rays,
+            bounds,
+            coherence,
+        }
+    }
+
+    fn batches(&self) -> impl IndexedParallelIterator<Item = Range<usize>> + '_ {
+        self.bounds.par_windows(2).map(|w| w[0]..w[1])
+    }
+
+    /// Closest hits, batch by batch in parallel.
+    pub fn intersect(&self, tracer: &dyn Tracer) -> Vec<Option<Hit>> {
+        let mut out = vec![None; self.rays.len()];
+        let outs: Vec<Vec<Option<Hit>>> = self
+            .batches()
+            .map(|r| {
+                let mut o = vec![None; r.len()];
+                tracer.intersect(&self.rays[r], self.coherence, &mut o);
+                o
+            })
+            .collect();
+        for (r, o) in self.bounds.windows(2).zip(outs) {
+            out[r[0]..r[1]].copy_from_slice(&o);
+        }
+        out
+    }
+
+    /// Occlusion, batch by batch in parallel.
+    pub fn occluded(&self, tracer: &dyn Tracer) -> Vec<bool> {
+        let mut out = vec![false; self.rays.len()];
+        let outs: Vec<Vec<bool>> = self
+            .batches()
+            .map(|r| {
+                let mut o = vec![false; r.len()];
+                tracer.occluded(&self.rays[r], self.coherence, &mut o);
+                o
+            })
+            .collect();
+        for (r, o) in self.bounds.windows(2).zip(outs) {
+            out[r[0]..r[1]].copy_from_slice(&o);
+        }
+        out
+    }
+}
+
+/// The four ray classes.
+#[derive(Debug, Clone)]
+pub struct RaySets {
+    /// Camera rays, row by row (or tile by tile).
+    pub primary: RaySet,
+    /// Occlusion rays toward the sun from facet sample points.
+    pub shadow: RaySet,
+    /// DIRSIG-grid hemisphere rays from facet sample points.
+    pub hemisphere: RaySet,
+    /// Cosine-hemisphere rays from random surface points.
+    pub diffuse: RaySet,
+    /// Camera size, pixels.
+    pub camera: (usize, usize),
+}
+
+/// Unit vector toward the sun at elevation and azimuth (degrees, azimuth
+/// clockwise from north; x east, y north, z up).
+fn sun_at(el_deg: f32, az_deg: f32) -> Vec3 {
+    let (el, az) = (el_deg.to_radians(), az_deg.to_radians());
     Vec3::new(az.sin() * el.cos(), az.cos() * el.cos(), el.sin())
 }
 
-/// Builds the three ray sets of about `opts.rays` rays each.
+/// Rays of runs of `batch` consecutive facets spread evenly over
+/// `facets` facets, until `n` rays (the last run cut); `make` appends a
+/// run's rays. Returns the rays and the start of each run.
+fn exposure_batches(
+    facets: usize,
+    n: usize,
+    batch: usize,
+    make: impl Fn(Range<usize>, &mut Vec<Ray>),
+) -> (Vec<Ray>, Vec<usize>) {
+    let mut probe = Vec::new();
+    let first = batch.min(facets);
+    make(0..first, &mut probe);
+    let per_facet = (probe.len() as f64 / first.max(1) as f64).max(1e-3);
+    let needed = ((n as f64 / per_facet).ceil() as usize).clamp(1, facets);
+    let run = batch.min(needed);
+    let runs = needed.div_ceil(run);
+    let (mut rays, mut starts) = (Vec::with_capacity(n + probe.len()), Vec::new());
+    for i in 0..runs + 1 {
+        if rays.len() >= n || i * run >= facets {
+            break;
+        }
+        let f0 = (i * facets / runs).min(facets - run);
+        starts.push(rays.len());
+        make(f0..f0 + run, &mut rays);
+    }
+    rays.truncate(n);
+    (rays, starts)
+}
+
+fn lcm(a: usize, b: usize) -> usize {
+    let (mut x, mut y) = (a, b);
+    while y != 0 {
+        (x, y) = (y, x % y);
+    }
+    a / x * b
+}
+
+/// Builds the four ray classes of about `opts.rays` rays each.
 pub fn make_ray_sets(geom: &SceneGeometry, opts: &TraceBenchOptions) -> Result<RaySets> {
     let (lo, hi) = geom
         .bounds()
@@ -116,36 +236,59 @@ pub fn make_ray_sets(geom: &SceneGeometry, opts: &TraceBenchOptions) -> Result<R
     let centre = 0.5 * (lo + hi);
     let size = (hi - lo).max_element().max(1e-3);
 
-    // Primary: W×H pixels in whole tiles, W:H ≈ 4:3.
-    let TileShape {
-        width: tw,
-        height: th,
-    } = opts.tile;
+    // Primary: W×H pixels, W:H ≈ 4:3, W a multiple of 8 (whole packets per
+    // row), H of the tile height; 50° vertical field of view.
+    let th = opts.tile.map_or(1, |t| t.height);
+    let tw = opts.tile.map_or(8, |t| lcm(t.width, 8));
     let w = (((n as f64 * 4.0 / 3.0).sqrt() / tw as f64).round() as usize).max(1) * tw;
     let h = (((n / w) as f64 / th as f64).round() as usize).max(1) * th;
     let eye = centre + Vec3::new(-0.35 * size, -0.35 * size, 0.45 * size + (hi.z - centre.z));
-    let fwd = (centre - eye).normalize();
-    let right = fwd.cross(Vec3::Z).normalize();
-    let up = right.cross(fwd);
-    let tan_half = (25f32).to_radians().tan(); // 50° vertical field of view
-    let aspect = w as f32 / h as f32;
-    let mut primary = Vec::with_capacity(w * h);
-    for ty in (0..h).step_by(th) {
-        for tx in (0..w).step_by(tw) {
-            for y in ty..ty + th {
-                for x in tx..tx + tw {
-                    let sx = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0) * tan_half * aspect;
-                    let sy = (1.0 - 2.0 * (y as f32 + 0.5) / h as f32) * tan_half;
-                    primary.push(Ray::new(eye, (fwd + sx * right + sy * up).normalize()));
+    let (eye, centre) = (eye.as_dvec3(), centre.as_dvec3());
+    let axes = look_at_axes(eye, centre, DVec3::Z)?;
+    let focal_px = 0.5 * h as f64 / 25f64.to_radians().tan();
+    let camera = FrameCamera::new(w, h, focal_px, axes, eye, 1)?;
+    let mut rows = Vec::with_capacity(w * h);
+    for row in 0..h {
+        camera.rays_for_row(row, &mut rows);
+    }
+    let primary = match opts.tile {
+        None => RaySet::new(rows, (0..h).map(|r| r * w).collect(), Coherence::Coherent),
+        Some(TileShape {
+            width: tw,
+            height: th,
+        }) => {
+            let mut tiled = Vec::with_capacity(w * h);
+            for ty in (0..h).step_by(th) {
+                for tx in (0..w).step_by(tw) {
+                    for y in ty..(ty + th).min(h) {
+                        tiled.extend_from_slice(&rows[y * w + tx..y * w + (tx + tw).min(w)]);
+                    }
                 }
             }
+            RaySet::new(tiled, vec![0], Coherence::Coherent)
         }
-    }
+    };
+
+    // Shadow and hemisphere: the exposure stage's rays, its defaults.
+    let params = ExposureParams::default();
+    let samples = FacetSamples::new(geom, &[], params.samples_per_edge, params.offset_rel);
+    let facets = samples.len();
+    // Four history steps of a morning sun (elevation 37–40°, azimuth
+    // 127.5–142.5°: south-east).
+    let suns: Vec<Vec3> = (0..4)
+        .map(|k| sun_at(37.0 + k as f32, 127.5 + 5.0 * k as f32))
+        .collect();
+    let (rays, starts) = exposure_batches(facets, n, params.batch_facets, |r, out| {
+        exposure::solar_rays(&samples, r, &suns, out)
+    });
+    let shadow = RaySet::new(rays, starts, exposure::SOLAR_RAY_COHERENCE);
+    let (rays, starts) = exposure_batches(facets, n, params.batch_facets, |r, out| {
+        exposure::sky_rays(&samples, r, params.sky, params.seed, out)
+    });
+    let hemisphere = RaySet::new(rays, starts, exposure::SKY_RAY_COHERENCE);
 
     let offsets = geom.facet_offsets();
-    let facets = geom.facet_count();
     let eps = 1e-4 * size;
-    let sun = bench_sun_direction();
     // A random point on a random facet and the facet's unit normal.
     let surface_point = |rng: &mut ChaCha8Rng| -> (Vec3, Vec3) {
         loop {
@@ -164,15 +307,6 @@ pub fn make_ray_sets(geom: &SceneGeometry, opts: &TraceBenchOptions) -> Result<R
         }
     };
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    let shadow = (0..n)
-        .map(|_| {
-            let (p, mut nrm) = surface_point(&mut rng);
-            if nrm.dot(sun) < 0.0 {
-                nrm = -nrm;
-            }
-            Ray::new(p + eps * nrm, sun)
-        })
-        .collect();
     let diffuse = (0..n)
         .map(|_| {
             let (p, mut nrm) = surface_point(&mut rng);
@@ -190,7 +324,9 @@ pub fn make_ray_sets(geom: &SceneGeometry, opts: &TraceBenchOptions) -> Result<R
     Ok(RaySets {
         primary,
         shadow,
-        diffuse,
+        hemisphere,
+        diffuse: RaySet::new(diffuse, vec![0], Coherence::Scattered),
+        camera: (w, h),
     })
 }
 
@@ -203,14 +339,28 @@ pub struct BackendResult {
     pub primary_mrays_s: f64,
     /// Shadow (occlusion) rays, million rays per second.
     pub shadow_mrays_s: f64,
+    /// Hemisphere rays, million rays per second.
+    pub hemisphere_mrays_s: f64,
     /// Diffuse rays, million rays per second.
     pub diffuse_mrays_s: f64,
+}
+
+impl BackendResult {
+    fn mrays_s(&mut self, class: usize) -> &mut f64 {
+        match class {
+            0 => &mut self.primary_mrays_s,
+            1 => &mut self.shadow_mrays_s,
+            2 => &mut self.hemisphere_mrays_s,
+            _ => &mut self.diffuse_mrays_s,
+        }
+    }
 }
 
 /// Results per backend.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Backends {
-    /// Embree, packets at the native width.
+    /// Embree, the query chosen per batch from its coherence
+    /// ([`RayMode::ByCoherence`], the renderer's default).
     pub embree_packet: BackendResult,
     /// Embree, one ray at a time.
     pub embree_single: BackendResult,
@@ -221,7 +371,7 @@ pub struct Backends {
 /// How often the backends disagree.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct Agreement {
-    /// Rays compared (all three sets).
+    /// Rays compared (all classes).
     pub rays: usize,
     /// Rays on which some backend differs from Embree packets on hit/miss,
     /// or on the hit distance ([`trace::distances_agree`] with a floor of
@@ -229,34 +379,73 @@ pub struct Agreement {
     pub mismatched_rays: usize,
 }
 
+/// One ray class: Embree's default query on it against obvhs.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ClassResult {
+    /// Rays in the class.
+    pub rays: usize,
+    /// The coherence its producer declares (`Coherent`, `Incoherent`,
+    /// `Scattered`).
+    pub coherence: String,
+    /// The Embree query [`RayMode::for_batch`] picks for it, e.g.
+    /// `Packet(8)`, `Stream`, `Single`.
+    pub embree_mode: String,
+    /// Embree (`embree_packet`), million rays per second.
+    pub embree_mrays_s: f64,
+    /// obvhs, million rays per second.
+    pub obvhs_mrays_s: f64,
+    /// `embree_mrays_s / obvhs_mrays_s`.
+    pub ratio: f64,
+    /// Rays on which some backend disagrees (as [`Agreement`]).
+    pub mismatched: usize,
+}
+
+/// Per ray class.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Classes {
+    /// Camera rays in the renderer's layout.
+    pub primary: ClassResult,
+    /// The solar history's occlusion rays.
+    pub shadow: ClassResult,
+    /// The sky view's hemisphere rays.
+    pub hemisphere: ClassResult,
+    /// Random cosine-hemisphere rays.
+    pub diffuse: ClassResult,
+}
+
 /// The report of `irsig bench trace` (its `--json` shape).
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct TraceBenchReport {
     /// Triangles (facets) in the scene.
     pub triangles: usize,
+    /// Threads of both backends' builds and of the tracing (rayon's pool;
+    /// Embree's device gets `threads=N` of it).
+    pub threads: usize,
     /// Per backend.
     pub backends: Backends,
     /// Cross-check.
     pub agreement: Agreement,
+    /// Per ray class.
+    pub classes: Classes,
 }
 
 /// Extra facts for the human-readable report.
 #[derive(Debug, Clone)]
 pub struct TraceBenchInfo {
-    /// Rays per set (primary may differ slightly: whole tiles).
-    pub rays: [usize; 3],
-    /// Worker threads.
-    pub threads: usize,
+    /// Camera size of the primary rays, pixels.
+    pub camera: (usize, usize),
     /// Embree packet width used.
     pub packet_width: usize,
     /// Embree version.
     pub embree_version: String,
 }
 
-struct Outputs {
-    primary: Vec<Option<Hit>>,
-    shadow: Vec<bool>,
-    diffuse: Vec<Option<Hit>>,
+/// Class names, in the order of [`RaySets`].
+pub const CLASSES: [&str; 4] = ["primary", "shadow", "hemisphere", "diffuse"];
+
+enum Answers {
+    Hits(Vec<Option<Hit>>),
+    Occluded(Vec<bool>),
 }
 
 /// Runs the benchmark on `geom`.
@@ -265,6 +454,12 @@ pub fn trace_bench(
     opts: &TraceBenchOptions,
 ) -> Result<(TraceBenchReport, TraceBenchInfo)> {
     let sets = make_ray_sets(geom, opts)?;
+    let classes = [&sets.primary, &sets.shadow, &sets.hemisphere, &sets.diffuse];
+    // Shadow rays are occlusion queries, the rest closest hits.
+    let run = |t: &dyn Tracer, c: usize| match c {
+        1 => Answers::Occluded(classes[c].occluded(t)),
+        _ => Answers::Hits(classes[c].intersect(t)),
+    };
     let mut tracers: Vec<(Box<dyn Tracer>, BackendResult)> = Vec::new();
     for b in Backend::ALL {
         let t0 = Instant::now();
@@ -276,27 +471,19 @@ pub fn trace_bench(
         tracers.push((t, res));
     }
     let mrays = |n: usize, s: f64| n as f64 / s.max(1e-9) / 1e6;
-    let mut last: Vec<Option<Outputs>> = (0..tracers.len()).map(|_| None).collect();
+    let mut last: Vec<Vec<Option<Answers>>> = (0..tracers.len())
+        .map(|_| (0..classes.len()).map(|_| None).collect())
+        .collect();
     for _ in 0..opts.rounds.max(1) {
         for ((t, res), out) in tracers.iter_mut().zip(last.iter_mut()) {
-            let t0 = Instant::now();
-            let primary = trace::intersect_all(t.as_ref(), &sets.primary, Coherence::Coherent);
-            let t1 = Instant::now();
-            let shadow = trace::occluded_all(t.as_ref(), &sets.shadow, Coherence::Scattered);
-            let t2 = Instant::now();
-            let diffuse = trace::intersect_all(t.as_ref(), &sets.diffuse, Coherence::Scattered);
-            let t3 = Instant::now();
-            let p = mrays(sets.primary.len(), (t1 - t0).as_secs_f64());
-            let s = mrays(sets.shadow.len(), (t2 - t1).as_secs_f64());
-            let d = mrays(sets.diffuse.len(), (t3 - t2).as_secs_f64());
-            res.primary_mrays_s = res.primary_mrays_s.max(p);
-            res.shadow_mrays_s = res.shadow_mrays_s.max(s);
-            res.diffuse_mrays_s = res.diffuse_mrays_s.max(d);
-            *out = Some(Outputs {
-                primary,
-                shadow,
-                diffuse,
-            });
+            for (c, set) in classes.iter().enumerate() {
+                let t0 = Instant::now();
+                let a = run(t.as_ref(), c);
+                let m = mrays(set.rays.len(), t0.elapsed().as_secs_f64());
+                let best = res.mrays_s(c);
+                *best = best.max(m);
+                out[c] = Some(a);
+            }
         }
     }
 
@@ -307,42 +494,65 @@ pub fn trace_bench(
         (Some(x), Some(y)) => trace::distances_agree(x.t, y.t, abs_tol),
         _ => false,
     };
-    let outs: Vec<Outputs> = last.into_iter().map(|o| o.expect("one round")).collect();
-    let (reference, others) = outs.split_first().expect("three backends");
-    let mut mismatched = 0;
-    for i in 0..sets.primary.len() {
-        mismatched += others
-            .iter()
-            .any(|o| !hits_agree(&reference.primary[i], &o.primary[i]))
-            as usize;
-    }
-    for i in 0..sets.shadow.len() {
-        mismatched += others.iter().any(|o| reference.shadow[i] != o.shadow[i]) as usize;
-    }
-    for i in 0..sets.diffuse.len() {
-        mismatched += others
-            .iter()
-            .any(|o| !hits_agree(&reference.diffuse[i], &o.diffuse[i]))
-            as usize;
-    }
+    let (reference, others) = last.split_first().expect("three backends");
+    let mismatched: Vec<usize> = (0..classes.len())
+        .map(|c| {
+            let r = reference[c].as_ref().expect("one round");
+            (0..classes[c].rays.len())
+                .filter(|&i| {
+                    others
+                        .iter()
+                        .any(|o| match (r, o[c].as_ref().expect("one round")) {
+                            (Answers::Hits(a), Answers::Hits(b)) => !hits_agree(&a[i], &b[i]),
+                            (Answers::Occluded(a), Answers::Occluded(b)) => a[i] != b[i],
+                            _ => true,
+                        })
+                })
+                .count()
+        })
+        .collect();
 
     let embree = trace::embree::Device::new()?;
+    let width = embree.native_packet_width();
+    let (e, o) = (tracers[0].1, tracers[2].1);
+    let class = |c: usize| {
+        let (mut e, mut o) = (e, o);
+        let (em, om) = (*e.mrays_s(c), *o.mrays_s(c));
+        ClassResult {
+            rays: classes[c].rays.len(),
+            coherence: format!("{:?}", classes[c].coherence),
+            embree_mode: format!(
+                "{:?}",
+                RayMode::ByCoherence(width).for_batch(classes[c].coherence)
+            ),
+            embree_mrays_s: em,
+            obvhs_mrays_s: om,
+            ratio: em / om.max(1e-12),
+            mismatched: mismatched[c],
+        }
+    };
     let info = TraceBenchInfo {
-        rays: [sets.primary.len(), sets.shadow.len(), sets.diffuse.len()],
-        threads: rayon::current_num_threads(),
-        packet_width: embree.native_packet_width(),
+        camera: sets.camera,
+        packet_width: width,
         embree_version: embree.version(),
     };
     let report = TraceBenchReport {
         triangles: geom.facet_count(),
+        threads: rayon::current_num_threads(),
         backends: Backends {
             embree_packet: tracers[0].1,
             embree_single: tracers[1].1,
             obvhs: tracers[2].1,
         },
         agreement: Agreement {
-            rays: sets.primary.len() + sets.shadow.len() + sets.diffuse.len(),
-            mismatched_rays: mismatched,
+            rays: classes.iter().map(|s| s.rays.len()).sum(),
+            mismatched_rays: mismatched.iter().sum(),
+        },
+        classes: Classes {
+            primary: class(0),
+            shadow: class(1),
+            hemisphere: class(2),
+            diffuse: class(3),
         },
     };
     Ok((report, info))
