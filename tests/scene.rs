@@ -780,7 +780,9 @@ fn suspicious_sites_and_weather_are_warned_about() {
     // The town's weather kept in UTC−4; an image time in UTC+9 (Tokyo).
     let tokyo = small_scene(
         d.path(),
-        &with.replace("2025-06-21T14:00:00-04:00", "2025-06-22T03:00:00+09:00"),
+        &with
+            .replace("2025-06-21T14:00:00-04:00", "2025-06-22T03:00:00+09:00")
+            .replace("\"utc_offset_hours\": -4", "\"utc_offset_hours\": 9"),
     );
     let w = Scene::load(&tokyo).unwrap().warnings;
     assert_eq!(w.len(), 1, "{w:?}");
@@ -860,5 +862,22 @@ fn cli_prints_scene_warnings_on_stderr() {
             && err.contains("look like radians")
             && err.contains("weather"),
         "{err}"
+    );
+}
+
+/// Issue 21: `site.utc_offset_hours` must agree with the offset the image
+/// time carries (it used to be required but unused): a mismatch is an error
+/// naming the field and its line.
+#[test]
+fn utc_offset_must_agree_with_the_image_time() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(
+        d.path(),
+        &SMALL.replace("\"utc_offset_hours\": -4", "\"utc_offset_hours\": -5"),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("line 2: field `site.utc_offset_hours`") && e.contains("UTC-04:00"),
+        "{e}"
     );
 }

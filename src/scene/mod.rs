@@ -412,7 +412,23 @@ impl Loader {
             );
         }
         let time = match crate::sun::parse_time(&f.time) {
-            Ok(t) => Some(t),
+            Ok(t) => {
+                let offset_h = f64::from(t.offset().local_minus_utc()) / 3600.0;
+                if s.utc_offset_hours.is_finite() && (offset_h - s.utc_offset_hours).abs() > 1e-6
+                {
+                    self.err(
+                        "site.utc_offset_hours",
+                        format!(
+                            "{} h, but the image time {} is at UTC{}: the two must agree \
+                             (the site's offset is the one its times carry)",
+                            s.utc_offset_hours,
+                            f.time.trim(),
+                            t.offset()
+                        ),
+                    );
+                }
+                Some(t)
+            }
             Err(e) => {
                 self.err("time", e.to_string());
                 None
