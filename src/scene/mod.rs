@@ -414,8 +414,7 @@ impl Loader {
         let time = match crate::sun::parse_time(&f.time) {
             Ok(t) => {
                 let offset_h = f64::from(t.offset().local_minus_utc()) / 3600.0;
-                if s.utc_offset_hours.is_finite() && (offset_h - s.utc_offset_hours).abs() > 1e-6
-                {
+                if s.utc_offset_hours.is_finite() && (offset_h - s.utc_offset_hours).abs() > 1e-6 {
                     self.err(
                         "site.utc_offset_hours",
                         format!(
