@@ -39,6 +39,18 @@ pub enum SkySampling {
 }
 
 impl SkySampling {
+    /// The fixed directions of a [`SkySampling::Grid`] (empty for
+    /// stratified sampling, whose directions are drawn per face).
+    fn fixed_grid(self) -> Vec<HemiSample> {
+        match self {
+            SkySampling::Grid {
+                zenith_step_deg,
+                azimuth_step_deg,
+            } => dirsig_grid(zenith_step_deg, azimuth_step_deg),
+            SkySampling::Stratified { .. } => Vec::new(),
+        }
+    }
+
     /// DIRSIG's fixed grid: 15° zenith × 30° azimuth (72 rays per face).
     pub const DIRSIG: SkySampling = SkySampling::Grid {
         zenith_step_deg: 15.0,
@@ -220,13 +232,7 @@ pub fn sky_rays(
     seed: u64,
     rays: &mut Vec<Ray>,
 ) {
-    let grid = match sampling {
-        SkySampling::Grid {
-            zenith_step_deg,
-            azimuth_step_deg,
-        } => dirsig_grid(zenith_step_deg, azimuth_step_deg),
-        SkySampling::Stratified { .. } => Vec::new(),
-    };
+    let grid = sampling.fixed_grid();
     let (mut weights, mut ranges) = (Vec::new(), Vec::new());
     lay_out_rays(
         facets,
@@ -284,13 +290,7 @@ pub fn sky_view<T: Tracer + ?Sized>(
 ) -> (SkyView, u64) {
     let n = facets.len();
     let batch = batch_facets.max(1);
-    let grid = match sampling {
-        SkySampling::Grid {
-            zenith_step_deg,
-            azimuth_step_deg,
-        } => dirsig_grid(zenith_step_deg, azimuth_step_deg),
-        SkySampling::Stratified { .. } => Vec::new(),
-    };
+    let grid = sampling.fixed_grid();
     let face_rays = sampling.rays_per_face();
     let chunks: Vec<(SkyView, u64)> = (0..n.div_ceil(batch))
         .into_par_iter()

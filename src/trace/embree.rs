@@ -962,6 +962,21 @@ impl EmbreeTracer {
         &self.device
     }
 
+    /// The hit of one single-ray query (`rtcIntersect1` or the stream).
+    #[inline]
+    fn single_hit(&self, rh: &raw::RTCRayHit) -> Option<Hit> {
+        let h = &rh.hit;
+        self.make_hit(
+            rh.ray.tfar,
+            h.geomID,
+            h.instID[0],
+            h.primID,
+            h.u,
+            h.v,
+            Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
+        )
+    }
+
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn make_hit(
@@ -1030,16 +1045,7 @@ impl EmbreeTracer {
             unsafe {
                 intersect_call!(single raw::rtcIntersect1, self.scene.raw, &mut args, &mut rh)
             };
-            let h = &rh.hit;
-            *o = self.make_hit(
-                rh.ray.tfar,
-                h.geomID,
-                h.instID[0],
-                h.primID,
-                h.u,
-                h.v,
-                Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
-            );
+            *o = self.single_hit(&rh);
         }
     }
 
@@ -1101,16 +1107,7 @@ impl EmbreeTracer {
             };
         }
         for (rh, o) in rh.iter().zip(out.iter_mut()) {
-            let h = &rh.hit;
-            *o = self.make_hit(
-                rh.ray.tfar,
-                h.geomID,
-                h.instID[0],
-                h.primID,
-                h.u,
-                h.v,
-                Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
-            );
+            *o = self.single_hit(rh);
         }
     }
 
