@@ -638,22 +638,17 @@ fn interpolate_gaps(
     recs: &[FluxRecord],
     field: impl Fn(&FluxRecord) -> Option<f64>,
 ) -> Option<Vec<f64>> {
-    let known: Vec<(usize, f64)> = recs
+    let (xs, ys): (Vec<f64>, Vec<f64>) = recs
         .iter()
         .enumerate()
-        .filter_map(|(i, r)| field(r).map(|v| (i, v)))
-        .collect();
-    let (&first, &last) = (known.first()?, known.last()?);
-    let mut out = vec![0.0; recs.len()];
-    out[..=first.0].fill(first.1);
-    out[last.0..].fill(last.1);
-    for w in known.windows(2) {
-        let ((i0, v0), (i1, v1)) = (w[0], w[1]);
-        for (i, o) in out.iter_mut().enumerate().take(i1 + 1).skip(i0) {
-            let f = (i - i0) as f64 / (i1 - i0) as f64;
-            *o = v0 + f * (v1 - v0);
-        }
+        .filter_map(|(i, r)| field(r).map(|v| (i as f64, v)))
+        .unzip();
+    if xs.is_empty() {
+        return None;
     }
+    let out = (0..recs.len())
+        .map(|i| crate::math::interp1d(&xs, &ys, i as f64))
+        .collect();
     Some(out)
 }
 
