@@ -49,6 +49,7 @@ fn asphalt() -> SlabProperties {
         thermal_emissivity: 0.95,
         self_power_w_m2: 0.0,
         back: BackBoundary::GROUND,
+        surface: None,
     }
 }
 
@@ -62,6 +63,7 @@ fn brick() -> SlabProperties {
         thermal_emissivity: 0.9,
         self_power_w_m2: 0.0,
         back: BackBoundary::BUILDING,
+        surface: None,
     }
 }
 
@@ -423,6 +425,7 @@ fn yard() -> (
         thermal_emissivity: 0.85,
         self_power_w_m2: 0.0,
         back: BackBoundary::BOTH_FACES,
+        surface: None,
     };
     let props = vec![
         asphalt(),

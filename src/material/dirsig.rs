@@ -271,9 +271,10 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             transmissivity: 0.0,
             emissivity_curve: curve,
             double_sided,
+            surface_energy: None,
         };
         if let Some((field, msg)) = m.problems().into_iter().next() {
-            let key = match field {
+            let key = match field.as_str() {
                 "specific_heat_j_kg_k" => "SPECIFIC_HEAT",
                 "conductivity_w_m_k" => "THERMAL_CONDUCTIVITY",
                 "density_kg_m3" => "MASS_DENSITY",

@@ -45,8 +45,8 @@
 
 use super::conduction::{GAMMA, Slab};
 use super::{
-    BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions, ThermalSolution, prepare,
-    solve_prepared,
+    BackBoundary, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, ThermalSolution,
+    prepare, solve_prepared,
 };
 use crate::error::Result;
 use crate::thermal::Boundary;
@@ -71,7 +71,21 @@ pub fn source_history(
     props.validate()?;
     forcing.validate()?;
     inputs.validate(forcing.len())?;
-    let p = prepare(props, forcing, inputs);
+    let exchange = Exchange::new(props, forcing)?;
+    source_history_with(props, forcing, &exchange, inputs)
+}
+
+/// [`source_history`] with the material's exchange made
+/// ([`Exchange::new`]); properties and forcing taken as validated.
+pub fn source_history_with(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    exchange: &Exchange,
+    inputs: &FacetInputs,
+) -> Result<SourceHistory> {
+    inputs.validate(forcing.len())?;
+    exchange.check_len(forcing.len())?;
+    let p = prepare(props, forcing, inputs, exchange);
     Ok(SourceHistory {
         front_w_m2: p.front.iter().map(|f| f.source_w_m2).collect(),
         back_w_m2: matches!(props.back, BackBoundary::Exposed { .. }).then(|| {
@@ -93,6 +107,7 @@ pub fn source_history(
 pub fn source_history_into(
     props: &SlabProperties,
     forcing: &Forcing,
+    exchange: &Exchange,
     inputs: &FacetInputs,
     front: &mut [f64],
     back: &mut [f64],
@@ -107,7 +122,7 @@ pub fn source_history_into(
         _ => None,
     };
     for k in 0..n {
-        let ff = super::front_forcing_at(forcing, inputs, k);
+        let ff = super::front_forcing_at(forcing, exchange, inputs, k);
         front[k] = super::balance::front_flux(
             &ff,
             props.solar_absorptivity,
@@ -141,8 +156,9 @@ pub struct SourceModel {
 }
 
 impl SourceModel {
-    /// The model of `props` under `forcing` (not validated here).
-    pub fn new(props: &SlabProperties, forcing: &Forcing) -> SourceModel {
+    /// The model of `props` under `forcing` with the material's exchange
+    /// ([`Exchange::new`]); not validated here.
+    pub fn new(props: &SlabProperties, forcing: &Forcing, exchange: &Exchange) -> SourceModel {
         let n = forcing.len();
         let one = vec![1.0f32; n];
         let zero = vec![0.0f32; n];
@@ -154,7 +170,7 @@ impl SourceModel {
             let mut front = vec![0.0; n];
             let mut back = vec![0.0; n];
             for k in 0..n {
-                let ff = super::front_forcing_at(forcing, &inputs, k);
+                let ff = super::front_forcing_at(forcing, exchange, &inputs, k);
                 front[k] = super::balance::front_flux(
                     &ff,
                     props.solar_absorptivity,
@@ -372,21 +388,27 @@ pub fn linearize(
     inputs: &FacetInputs,
     opts: &SolveOptions,
 ) -> Result<Linearization> {
-    let sources = source_history(props, forcing, inputs)?;
+    props.validate()?;
+    forcing.validate()?;
+    let exchange = Exchange::new(props, forcing)?;
+    linearize_with(props, forcing, &exchange, inputs, opts)
+}
+
+/// [`linearize`] with the material's exchange made ([`Exchange::new`]);
+/// properties and forcing taken as validated. The Green's functions carry
+/// the latent term's derivative `g_v·de°/dT` of the reference; the
+/// curvature of `e°(T)` away from the reference is neglected like the
+/// emission's (first order).
+pub fn linearize_with(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    exchange: &Exchange,
+    inputs: &FacetInputs,
+    opts: &SolveOptions,
+) -> Result<Linearization> {
+    let sources = source_history_with(props, forcing, exchange, inputs)?;
     opts.validate()?;
-    let p = prepare(props, forcing, inputs);
-    // The Green's functions below would take the latent derivative from the
-    // Newton solve, but the second-order correction covers only the
-    // emission's curvature, not that of e°(T) in the latent term, and its
-    // accuracy against the per-facet solve has not been checked with latent
-    // heat: refuse rather than answer silently wrong.
-    if p.front.iter().any(|f| f.has_latent()) {
-        return Err(crate::error::Error::invalid(
-            "surface_energy",
-            "the linearised scene thermal solve does not handle latent heat yet; \
-             solve materials with a surface-energy block facet by facet (the exact method)",
-        ));
-    }
+    let p = prepare(props, forcing, inputs, exchange);
     let n = forcing.len();
     let has_back = sources.back_w_m2.is_some();
     let fixed_back = matches!(props.back, BackBoundary::Ground { .. });

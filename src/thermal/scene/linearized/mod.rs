@@ -63,7 +63,7 @@ use self::passes::{PassPlan, Slots};
 use self::reference::{FacetState, Reference, sunlit_cos};
 use super::{FacetThermal, PassStats, SceneInputs, SceneTemperatures};
 use crate::thermal::{
-    self, Background, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
+    self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
 };
 use crate::{Error, Result};
 
@@ -110,6 +110,7 @@ pub(super) fn solve(
     inputs: &SceneInputs,
     kinds: &[FacetThermal],
     props: &[SlabProperties],
+    exchanges: &[Exchange],
     forcing: &Forcing,
     image_records: &[usize],
     passes: u32,
@@ -120,6 +121,7 @@ pub(super) fn solve(
         inputs,
         kinds,
         props,
+        exchanges,
         forcing,
         air4: forcing
             .air_temperature_k
@@ -129,7 +131,7 @@ pub(super) fn solve(
     };
     let rows = Rows::new(image_records, forcing.len());
     // 1. Groups of equal property sets and their source models.
-    let groups = Groups::new(props, kinds, forcing);
+    let groups = Groups::new(props, exchanges, kinds, forcing);
     // 2. Per group, the centre facet, linearised.
     let centre_refs: Vec<Option<Reference>> = groups
         .centre_facets(&facets)
@@ -210,6 +212,7 @@ struct Facets<'a> {
     inputs: &'a SceneInputs<'a>,
     kinds: &'a [FacetThermal],
     props: &'a [SlabProperties],
+    exchanges: &'a [Exchange],
     forcing: &'a Forcing,
     /// `T_air⁴` per record.
     air4: Vec<f32>,
@@ -286,9 +289,13 @@ impl Facets<'_> {
         rows: &[usize],
         model: &SourceModel,
     ) -> Result<Reference> {
-        let lin = thermal::linearize(
+        let FacetThermal::Solve(pi) = self.kinds[facet] else {
+            unreachable!("solved facets only")
+        };
+        let lin = thermal::linearize_with(
             self.props_of(facet),
             self.forcing,
+            &self.exchanges[pi as usize],
             &self.slab_inputs(facet),
             &lp.options,
         )
@@ -362,7 +369,12 @@ struct Groups<'a> {
 }
 
 impl<'a> Groups<'a> {
-    fn new(props: &[SlabProperties], kinds: &'a [FacetThermal], forcing: &Forcing) -> Self {
+    fn new(
+        props: &[SlabProperties],
+        exchanges: &[Exchange],
+        kinds: &'a [FacetThermal],
+        forcing: &Forcing,
+    ) -> Self {
         let r = forcing.len();
         let mut group_ids: BTreeMap<Vec<u64>, u32> = BTreeMap::new();
         let of_props: Vec<u32> = props
@@ -374,13 +386,16 @@ impl<'a> Groups<'a> {
             .collect();
         let groups = group_ids.len();
         // Group representatives' property sets → source models.
-        let mut group_props: Vec<Option<&SlabProperties>> = vec![None; groups];
-        for (p, &g) in props.iter().zip(&of_props) {
-            group_props[g as usize].get_or_insert(p);
+        let mut group_props: Vec<Option<usize>> = vec![None; groups];
+        for (i, &g) in of_props.iter().enumerate() {
+            group_props[g as usize].get_or_insert(i);
         }
         let models: Vec<SourceModel> = group_props
             .iter()
-            .map(|p| SourceModel::new(p.expect("every group has a property set"), forcing))
+            .map(|p| {
+                let i = p.expect("every group has a property set");
+                SourceModel::new(&props[i], forcing, &exchanges[i])
+            })
             .collect();
         let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
         let shape32 = models
@@ -606,6 +621,11 @@ fn prop_key(p: &SlabProperties) -> Vec<u64> {
             air_temperature_k.to_bits(),
             film_coefficient_w_m2_k.to_bits(),
         ]),
+    }
+    // The surface's parameters, by their exact (round-trip) decimal form.
+    if let Some(s) = &p.surface {
+        k.push(4);
+        k.extend(format!("{s:?}").bytes().map(u64::from));
     }
     k
 }
