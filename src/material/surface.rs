@@ -92,6 +92,11 @@ pub struct SurfaceEnergySpec {
     /// under 2 m, 20 above).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub skin_conductance_w_m2_k: Option<f64>,
+    /// Whether the canopy is a layer over the material's slab (default: true
+    /// for a canopy). A tree crown modelled as a thin leaf slab with an
+    /// exposed back sets `false`: the leaves are the slab.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin: Option<bool>,
 }
 
 fn default_rs_min() -> f64 {
@@ -135,6 +140,11 @@ impl SurfaceEnergySpec {
     pub fn measurement_m(&self) -> f64 {
         self.measurement_height_m
             .unwrap_or(self.canopy_height_m.unwrap_or(0.0) + 2.0)
+    }
+
+    /// Whether the canopy is a skin layer over the slab (field docs).
+    pub fn has_skin(&self) -> bool {
+        self.kind == SurfaceKind::Canopy && self.skin.unwrap_or(true)
     }
 
     /// Whether the canopy is high vegetation (trees).

@@ -382,7 +382,22 @@ pub struct Forcing {
     pub pressure_pa: Vec<f64>,
     /// Global-horizontal solar irradiance, W m⁻².
     pub global_horizontal_w_m2: Vec<f64>,
+    /// Height of the wind measurement above the ground, m (default
+    /// [`WIND_HEIGHT_M`]).
+    pub wind_height_m: f64,
+    /// Height of the air temperature and humidity measurement, m (default
+    /// [`AIR_HEIGHT_M`]).
+    pub air_height_m: f64,
 }
+
+/// Default height of a weather file's wind, m: the WMO standard anemometer
+/// height (WMO-No. 8, *Guide to Instruments and Methods of Observation*,
+/// 2018, Vol. I §5.9.2), which EPW and TMY3 airport data follow.
+pub const WIND_HEIGHT_M: f64 = 10.0;
+
+/// Default height of a weather file's air temperature and humidity, m: the
+/// WMO screen height 1.25–2 m (WMO-No. 8, Vol. I §2.1.4.1); 2 m.
+pub const AIR_HEIGHT_M: f64 = 2.0;
 
 impl Forcing {
     /// The forcing of a weather history (validated).
@@ -415,6 +430,8 @@ impl Forcing {
                 .collect(),
             pressure_pa: records.iter().map(|r| r.pressure_pa).collect(),
             global_horizontal_w_m2: records.iter().map(|r| r.global_horizontal_w_m2).collect(),
+            wind_height_m: WIND_HEIGHT_M,
+            air_height_m: AIR_HEIGHT_M,
         };
         f.validate()?;
         Ok(f)
@@ -449,6 +466,8 @@ impl Forcing {
             ],
             pressure_pa: vec![101_325.0; n],
             global_horizontal_w_m2: vec![direct_normal_w_m2 + diffuse_horizontal_w_m2; n],
+            wind_height_m: WIND_HEIGHT_M,
+            air_height_m: AIR_HEIGHT_M,
         }
     }
 
@@ -553,6 +572,17 @@ impl Forcing {
                 return Err(Error::invalid(
                     format!("records[{i}].{name}"),
                     format!("expected a finite value ({what}), got {v}"),
+                ));
+            }
+        }
+        for (name, z) in [
+            ("wind_height_m", self.wind_height_m),
+            ("air_height_m", self.air_height_m),
+        ] {
+            if !(z.is_finite() && z > 0.0) {
+                return Err(Error::invalid(
+                    name,
+                    format!("expected a measurement height > 0 m, got {z}"),
                 ));
             }
         }

@@ -71,8 +71,19 @@ pub struct Skin {
 /// A surface that exchanges heat and water vapour with the air.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LandSurface {
-    /// Aerodynamic and surface resistances.
-    pub energy: SurfaceEnergy,
+    /// Displacement height d, m.
+    pub displacement_height_m: f64,
+    /// Roughness length for momentum z_om, m (z_oh = z_om/10, FAO-56).
+    pub roughness_length_m: f64,
+    /// Height of the wind and air measurement to use instead of the
+    /// weather's, m (None: the weather's [`Forcing::wind_height_m`] and
+    /// [`Forcing::air_height_m`], each raised to at least 2 m above the
+    /// canopy top `d/(2/3)`, where the log profile holds).
+    pub measurement_height_m: Option<f64>,
+    /// The surface resistance.
+    pub resistance: SurfaceResistance,
+    /// Volumetric water content of the root zone or top soil, m³ m⁻³.
+    pub soil_moisture_m3_m3: f64,
     /// The canopy skin of vegetation (None: the slab's front is the surface).
     pub skin: Option<Skin>,
 }
@@ -84,9 +95,11 @@ impl LandSurface {
     /// # Errors
     /// [`InputError`] naming the field (as the block spells it).
     pub fn from_spec(spec: &SurfaceEnergySpec) -> std::result::Result<LandSurface, InputError> {
-        let z = spec.measurement_m();
         let z0 = spec.roughness_m();
-        let aerodynamic = Aerodynamic::new(z, z, spec.displacement_m(), z0, 0.1 * z0)?;
+        let d = spec.displacement_m();
+        if let Some(z) = spec.measurement_height_m {
+            Aerodynamic::new(z, z, d, z0, 0.1 * z0)?;
+        }
         let resistance = match spec.kind {
             SurfaceKind::Canopy => SurfaceResistance::Canopy(JarvisStewart {
                 min_stomatal_resistance_s_m: spec.min_stomatal_resistance_s_m,
@@ -102,12 +115,43 @@ impl LandSurface {
             SurfaceKind::BareSoil => SurfaceResistance::BareSoil,
             SurfaceKind::Water => SurfaceResistance::Open,
         };
-        let energy = SurfaceEnergy::new(aerodynamic, resistance, spec.soil_moisture_m3_m3)?;
-        let skin = (spec.kind == SurfaceKind::Canopy).then(|| Skin {
+        if let SurfaceResistance::Canopy(js) = &resistance {
+            js.validate()?;
+        }
+        let skin = spec.has_skin().then(|| Skin {
             capacity_j_m2_k: spec.canopy_capacity(),
             conductance_w_m2_k: spec.skin_conductance(),
         });
-        Ok(LandSurface { energy, skin })
+        Ok(LandSurface {
+            displacement_height_m: d,
+            roughness_length_m: z0,
+            measurement_height_m: spec.measurement_height_m,
+            resistance,
+            soil_moisture_m3_m3: spec.soil_moisture_m3_m3,
+            skin,
+        })
+    }
+
+    /// The surface's turbulent-exchange parameters under a weather measured
+    /// at `wind_height_m` and `air_height_m` (field docs of
+    /// [`LandSurface::measurement_height_m`]).
+    ///
+    /// # Errors
+    /// [`InputError`] naming the field when the log profile is undefined.
+    pub fn energy(
+        &self,
+        wind_height_m: f64,
+        air_height_m: f64,
+    ) -> std::result::Result<SurfaceEnergy, InputError> {
+        let d = self.displacement_height_m;
+        let z0 = self.roughness_length_m;
+        let floor = 1.5 * d + 2.0;
+        let (zw, za) = match self.measurement_height_m {
+            Some(z) => (z, z),
+            None => (wind_height_m.max(floor), air_height_m.max(floor)),
+        };
+        let aero = Aerodynamic::new(zw, za, d, z0, 0.1 * z0)?;
+        SurfaceEnergy::new(aero, self.resistance, self.soil_moisture_m3_m3)
     }
 
     /// Checks the skin; errors name the field.
@@ -137,7 +181,12 @@ impl LandSurface {
     /// The exchange at record `k` of `forcing` with the surface at
     /// `surface_k` (K): (sensible coefficient ρc_p/r_a in W m⁻² K⁻¹, vapour
     /// conductance in W m⁻² Pa⁻¹).
-    fn exchange_at(&self, forcing: &Forcing, k: usize, surface_k: f64) -> Result<(f64, f64)> {
+    fn exchange_at(
+        energy: &SurfaceEnergy,
+        forcing: &Forcing,
+        k: usize,
+        surface_k: f64,
+    ) -> Result<(f64, f64)> {
         let air = AirState::new(
             forcing.air_temperature_k[k],
             forcing.vapour_pressure_pa[k],
@@ -145,8 +194,7 @@ impl LandSurface {
         )
         .map_err(|e| Error::invalid(format!("records[{k}].{}", e.field()), e.to_string()))?;
         let wind = forcing.wind_speed_m_s[k].max(MIN_WIND_M_S);
-        let x = self
-            .energy
+        let x = energy
             .exchange_at(air, wind, forcing.global_horizontal_w_m2[k], surface_k)
             .map_err(|e| Error::invalid(format!("records[{k}].{}", e.field()), e.to_string()))?;
         Ok((
@@ -229,10 +277,13 @@ impl Exchange {
         surface_k: &[f64],
     ) -> Result<Exchange> {
         let n = forcing.len();
+        let energy = surface
+            .energy(forcing.wind_height_m, forcing.air_height_m)
+            .map_err(|e| Error::invalid(format!("surface_energy.{}", e.field()), e.to_string()))?;
         let mut sensible = Vec::with_capacity(n);
         let mut vapour = Vec::with_capacity(n);
         for (k, &t) in surface_k.iter().enumerate().take(n) {
-            let (h, g) = surface.exchange_at(forcing, k, t)?;
+            let (h, g) = LandSurface::exchange_at(&energy, forcing, k, t)?;
             sensible.push(h);
             vapour.push(g);
         }
