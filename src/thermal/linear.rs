@@ -280,6 +280,10 @@ pub struct Linearization {
     pub sources: SourceHistory,
     /// `εσ` of the front face, W m⁻² K⁻⁴.
     pub front_radiative_w_m2_k4: f64,
+    /// Vapour conductance of the front law at each record, W m⁻² Pa⁻¹
+    /// (empty for a dry surface): the latent term whose `e°(T)` curvature
+    /// the second order adds ([`latent_curvature`]).
+    pub front_vapour_conductance_w_m2_pa: Vec<f64>,
     /// `a·εσ` of an exposed back face (0 otherwise), W m⁻² K⁻⁴.
     pub back_radiative_w_m2_k4: f64,
     /// `∂T_front(t)/∂S_k`, row-major `[t][k]`, K per W m⁻².
@@ -343,7 +347,14 @@ impl Linearization {
             let rf: Vec<f64> = d
                 .iter()
                 .zip(t_ref)
-                .map(|(&dt, &t)| emission_curvature(self.front_radiative_w_m2_k4, t, dt))
+                .enumerate()
+                .map(|(k, (&dt, &t))| {
+                    emission_curvature(self.front_radiative_w_m2_k4, t, dt)
+                        + self
+                            .front_vapour_conductance_w_m2_pa
+                            .get(k)
+                            .map_or(0.0, |&g| latent_curvature(g, t, dt))
+                })
                 .collect();
             let rb = if self.has_back() {
                 let db = db.as_deref().expect("exposed back");
@@ -378,6 +389,20 @@ impl Linearization {
 #[inline]
 pub fn emission_curvature(radiative_w_m2_k4: f64, t_k: f64, dt_k: f64) -> f64 {
     -radiative_w_m2_k4 * dt_k * dt_k * (6.0 * t_k * t_k + 4.0 * t_k * dt_k + dt_k * dt_k)
+}
+
+/// The neglected curvature of the latent loss `−g_v e°(T)` about `t_k` for
+/// a change `dt_k`: `−g_v[e°(T+Δ) − e°(T) − e°′(T)Δ]`, W m⁻² (e° by FAO-56
+/// eq. 11, its slope by eq. 13).
+#[inline]
+pub fn latent_curvature(vapour_conductance_w_m2_pa: f64, t_k: f64, dt_k: f64) -> f64 {
+    use super::latent::psychrometrics::{
+        saturation_vapour_pressure_pa as es, saturation_vapour_pressure_slope_pa_k as des,
+    };
+    if vapour_conductance_w_m2_pa == 0.0 {
+        return 0.0;
+    }
+    -vapour_conductance_w_m2_pa * (es(t_k + dt_k) - es(t_k) - des(t_k) * dt_k)
 }
 
 /// Solves the reference facet with the nonlinear model and returns its
@@ -436,6 +461,14 @@ pub fn linearize_with(
         solution,
         sources,
         front_radiative_w_m2_k4: front_radiative,
+        front_vapour_conductance_w_m2_pa: if p.front.iter().any(|f| f.has_latent()) {
+            p.front
+                .iter()
+                .map(|f| f.vapour_conductance_w_m2_pa)
+                .collect()
+        } else {
+            Vec::new()
+        },
         back_radiative_w_m2_k4: back_radiative,
         front_from_front,
         front_from_back,
