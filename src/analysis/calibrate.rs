@@ -6,9 +6,11 @@
 //!   and Marquardt (1963, J. SIAM 11, 431–441) damped Gauss–Newton steps
 //!   `(JᵀJ + λ diag JᵀJ) δ = −Jᵀr` on the parameters scaled to their bounds
 //!   (`s = (x − low)/(high − low)`), the Jacobian `J` by finite differences
-//!   (evaluated in parallel), λ divided by 10 after a step that lowers the
-//!   sum of squares and multiplied by 10 after one that does not (Nocedal &
-//!   Wright, *Numerical Optimization*, 2nd ed., 2006, §10.3). Bounds by
+//!   (evaluated in parallel), λ updated from the ratio of actual to
+//!   predicted reduction after a step that lowers the sum of squares and
+//!   multiplied by 2, 4, 8, … after one that does not (Nielsen 1999;
+//!   Madsen, Nielsen & Tingleff 2004, *Methods for Non-Linear Least Squares
+//!   Problems*, §3.2). Bounds by
 //!   projection: a step is clipped into the box, and a parameter at a bound
 //!   whose gradient points out of the box is held there (an active set,
 //!   Kanzow, Yamashita & Fukushima 2004, J. Comput. Appl. Math. 172,
@@ -300,6 +302,7 @@ where
     let mut r: Vec<f64> = y0.iter().zip(truth).map(|(y, t)| y - t).collect();
     let mut cost = sum_of_squares(y0, truth);
     let mut lambda = 1e-3;
+    let mut nu = 2.0;
     let mut evaluations = 0usize;
     let mut iterations = 0u64;
     'outer: while iterations < max_iters && cost > 0.0 {
@@ -361,8 +364,23 @@ where
                     moved = moved.max(((xn[i] - x[i]) / range[i]).abs());
                 }
             }
-            if step.is_some() && moved < 1e-12 {
-                break 'outer; // the step no longer moves the parameters
+            let mut predicted = 0.0;
+            if let Some(d) = &step {
+                // Reduction of Σr² the Gauss–Newton model predicts for the
+                // (unclipped) step: −2gᵀδ − δᵀAδ. Below 10⁻¹² of Σr² (or a
+                // step that no longer moves) the fit has converged.
+                let gd: f64 = free.iter().zip(d).map(|(&i, di)| g[i] * di).sum();
+                let dad: f64 = free
+                    .iter()
+                    .zip(d)
+                    .map(|(&i, di)| {
+                        di * free.iter().zip(d).map(|(&k, dk)| a[i][k] * dk).sum::<f64>()
+                    })
+                    .sum();
+                predicted = -2.0 * gd - dad;
+                if predicted <= 1e-12 * cost || moved < 1e-12 {
+                    break 'outer;
+                }
             }
             let trial = if step.is_some() {
                 evaluations += 1;
@@ -376,16 +394,27 @@ where
             if cn < cost {
                 let y = trial.expect("a finite cost has a prediction");
                 let gain = (cost - cn) / cost;
+                let cost_before = cost;
                 r = y.iter().zip(truth).map(|(y, t)| y - t).collect();
                 x = xn;
                 cost = cn;
-                lambda = (lambda / 10.0).max(1e-12);
-                if gain < 1e-12 && moved < 1e-9 {
+                // Nielsen's (1999) update from the gain ratio ρ = actual /
+                // predicted reduction (Madsen, Nielsen & Tingleff 2004,
+                // *Methods for Non-Linear Least Squares Problems*, eq. 3.16).
+                let rho = if predicted > 0.0 {
+                    (cost_before - cn) / predicted
+                } else {
+                    0.0
+                };
+                lambda = (lambda * (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-9);
+                nu = 2.0;
+                if gain < 1e-10 {
                     break 'outer;
                 }
                 break;
             }
-            lambda *= 10.0;
+            lambda *= nu;
+            nu *= 2.0;
             if lambda > 1e12 {
                 break 'outer; // no step lowers the sum of squares
             }
@@ -508,9 +537,7 @@ where
         Method::LevenbergMarquardt => {
             levenberg_marquardt(factors, truth, model, &x0, &y0, opts.max_iters)?
         }
-        Method::NelderMead => {
-            nelder_mead(factors, truth, model, &x0, initial.rmse.powi(2), &opts)?
-        }
+        Method::NelderMead => nelder_mead(factors, truth, model, &x0, initial.rmse.powi(2), &opts)?,
     };
     let xf = search.x;
     let yf = evaluate_all(model, std::slice::from_ref(&xf), Some(n))?.remove(0);

@@ -25,7 +25,8 @@ use crate::material::{Material, MaterialDb};
 use crate::radiometry::band::Band;
 use crate::sun::{self, Site};
 use crate::thermal::{
-    self, BackBoundary, FacetInputs, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties, SolveOptions,
+    self, BackBoundary, FacetInputs, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties,
+    SolveOptions,
 };
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Result};

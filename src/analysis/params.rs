@@ -161,9 +161,7 @@ impl MaterialProperty {
     /// # Errors
     /// `m` cannot take the property (the error names material and property).
     pub fn set(&self, m: &mut Material, v: f64) -> Result<()> {
-        (self.0.set)(m, v).map_err(|why| {
-            Error::invalid(format!("{}.{}", m.name, self.0.name), why)
-        })
+        (self.0.set)(m, v).map_err(|why| Error::invalid(format!("{}.{}", m.name, self.0.name), why))
     }
 }
 
@@ -477,10 +475,8 @@ impl ParamSet {
                         ("material", Some(material.clone()), property.name())
                     }
                 };
-                let default_name = format!(
-                    "{}.{property}",
-                    material.as_deref().unwrap_or("weather")
-                );
+                let default_name =
+                    format!("{}.{property}", material.as_deref().unwrap_or("weather"));
                 registry::ListedParameter {
                     name: (p.name != default_name).then(|| p.name.clone()),
                     kind,

@@ -452,7 +452,10 @@ pub fn finite_difference_jacobian<M>(
 where
     M: Fn(&[f64]) -> Result<Vec<f64>> + Sync,
 {
-    let steps: Vec<f64> = factors.iter().map(|f| rel_step * (f.high - f.low)).collect();
+    let steps: Vec<f64> = factors
+        .iter()
+        .map(|f| rel_step * (f.high - f.low))
+        .collect();
     jacobian_with_steps(factors, x, &steps, model)
 }
 

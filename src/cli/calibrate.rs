@@ -49,7 +49,11 @@ pub struct Args {
     #[arg(long, value_name = "CSV", required_unless_present = "list_params")]
     pub truth: Option<PathBuf>,
     /// Parameters to fit, with bounds (JSON).
-    #[arg(long, value_name = "PARAMS.json", required_unless_present = "list_params")]
+    #[arg(
+        long,
+        value_name = "PARAMS.json",
+        required_unless_present = "list_params"
+    )]
     pub params: Option<PathBuf>,
     /// Print every fittable parameter of --material (and the weather
     /// scalings) with its physical bounds, and exit.
