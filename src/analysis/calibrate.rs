@@ -247,7 +247,7 @@ fn solve_spd(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
         for j in 0..=i {
             let s: f64 = a[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
             if i == j {
-                if !(s > 0.0) || !s.is_finite() {
+                if s <= 0.0 || !s.is_finite() {
                     return None;
                 }
                 l[i][i] = s.sqrt();
@@ -316,14 +316,9 @@ where
             for i in 0..p {
                 let ji = row[i] * range[i];
                 g[i] += ji * ro;
-                for k in 0..=i {
-                    a[i][k] += ji * row[k] * range[k];
+                for (k, aik) in a[i].iter_mut().enumerate() {
+                    *aik += ji * row[k] * range[k];
                 }
-            }
-        }
-        for i in 0..p {
-            for k in 0..i {
-                a[k][i] = a[i][k];
             }
         }
         // Active set: at a bound with the descent direction (−g) pointing out.

@@ -155,7 +155,7 @@ impl ThermalArgs {
             .material
             .as_deref()
             .context("--thermal needs --material NAME|FILE")?;
-        Ok(facet::find_material(spec, &self.materials).for_flags(FACET_FLAGS)?)
+        facet::find_material(spec, &self.materials).for_flags(FACET_FLAGS)
     }
 }
 
