@@ -39,7 +39,7 @@
 
 use serde::Serialize;
 
-use crate::material::Material;
+use crate::material::{Material, SurfaceKind};
 
 /// The domain a value must lie in for the model to accept it:
 /// `(min, max, min exclusive)`.
@@ -87,6 +87,32 @@ fn set_emissivity(m: &mut Material, v: f64) -> Result<(), String> {
     }
     m.thermal_emissivity = v;
     Ok(())
+}
+
+/// A row of a parameter of the `surface_energy` block: read through the
+/// block's effective value (its default where the file leaves it out), set
+/// into the block; absent where the material has no block.
+macro_rules! surface_param {
+    ($name:literal, $unit:literal, $low:expr, $high:expr, $domain:expr,
+     |$g:ident| $get:expr, |$s:ident, $v:ident| $set:expr, $source:literal) => {
+        MaterialParameter {
+            name: concat!("surface_energy.", $name),
+            aliases: &[],
+            unit: $unit,
+            low: $low,
+            high: $high,
+            domain: $domain,
+            get: |m| m.surface_energy.as_ref().and_then(|$g| $get),
+            set: |m, $v| match &mut m.surface_energy {
+                Some($s) => {
+                    $set;
+                    Ok(())
+                }
+                None => Err("the material has no `surface_energy` block to set it in".into()),
+            },
+            source: $source,
+        }
+    };
 }
 
 /// Every material property the thermal model and the radiometry use that a
@@ -202,6 +228,86 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         },
         source: "irsig choice: heated or cooled surfaces (engines, exhausts, chilled roofs) within a few hundred W/m²",
     },
+    surface_param!(
+        "leaf_area_index",
+        "m²/m²",
+        0.1,
+        8.0,
+        (0.0, f64::INFINITY, false),
+        |s| (s.kind == SurfaceKind::Canopy).then_some(s.leaf_area_index),
+        |s, v| s.leaf_area_index = v,
+        "Asner, Scurlock & Hicke (2003), Global Ecol. Biogeogr. 12:191, global LAI database: crops 3.6 ± 2.1, grasslands 1.7 ± 1.2, forests up to ≈ 8"
+    ),
+    surface_param!(
+        "min_stomatal_resistance_s_m",
+        "s/m",
+        20.0,
+        400.0,
+        (0.0, f64::INFINITY, false),
+        |s| (s.kind == SurfaceKind::Canopy).then_some(s.min_stomatal_resistance_s_m),
+        |s, v| s.min_stomatal_resistance_s_m = v,
+        "Noilhan & Planton (1989) and the ECMWF/Noah vegetation tables: r_s,min 40 (crops) to 400 s/m (sparse, evergreen)"
+    ),
+    surface_param!(
+        "soil_moisture_m3_m3",
+        "m³/m³",
+        0.02,
+        0.5,
+        FRACTION,
+        |s| (s.kind != SurfaceKind::Water).then_some(s.soil_moisture_m3_m3),
+        |s, v| s.soil_moisture_m3_m3 = v,
+        "Noilhan & Planton (1989), Table 2: air-dry soil ≈ 0.02 to saturation (porosity) ≈ 0.5"
+    ),
+    surface_param!(
+        "canopy_height_m",
+        "m",
+        0.02,
+        40.0,
+        POSITIVE,
+        |s| s.canopy_height_m.filter(|_| s.kind == SurfaceKind::Canopy),
+        |s, v| s.canopy_height_m = Some(v),
+        "mown lawn 0.02 m to tall forest 40 m"
+    ),
+    surface_param!(
+        "roughness_length_m",
+        "m",
+        1.0e-4,
+        2.0,
+        POSITIVE,
+        |s| Some(s.roughness_m()),
+        |s, v| s.roughness_length_m = Some(v),
+        "Oke (1987) Boundary Layer Climates, Table 2.2: water ≈ 1e-4 m to forest ≈ 1–2 m"
+    ),
+    surface_param!(
+        "skin_conductance_w_m2_k",
+        "W/(m²·K)",
+        3.0,
+        50.0,
+        POSITIVE,
+        |s| s.has_skin().then(|| s.skin_conductance()),
+        |s, v| s.skin_conductance_w_m2_k = Some(v),
+        "ECMWF IFS Cy47r3 Part IV §8.3 skin conductivities 7–20 (unstable up to ≈ 40) W/(m² K); irsig widens to 3–50"
+    ),
+    surface_param!(
+        "canopy_heat_capacity_j_m2_k",
+        "J/(m²·K)",
+        500.0,
+        50_000.0,
+        POSITIVE,
+        |s| s.has_skin().then(|| s.canopy_capacity()),
+        |s, v| s.canopy_heat_capacity_j_m2_k = Some(v),
+        "leaf water 0.1–0.5 kg per m² of leaf × LAI 1–8, plus stems and litter: ≈ 0.5–50 kJ/(m² K)"
+    ),
+    surface_param!(
+        "vpd_sensitivity_per_pa",
+        "1/Pa",
+        0.0,
+        1.0e-3,
+        (0.0, f64::INFINITY, false),
+        |s| (s.kind == SurfaceKind::Canopy).then_some(s.vpd_sensitivity_per_pa),
+        |s, v| s.vpd_sensitivity_per_pa = v,
+        "Noilhan & Planton (1989): g_D = 0.025 per hPa (2.5e-4 per Pa) for forest, 0 for crops; up to 1e-3 per Pa"
+    ),
 ];
 
 /// One weather scaling or offset (applied to every record).

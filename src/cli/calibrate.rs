@@ -295,8 +295,14 @@ fn list_params(args: &Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
+    let w = list
+        .iter()
+        .map(|p| p.property.len())
+        .max()
+        .unwrap_or(8)
+        .max(8);
     outln!(
-        "{:<9} {:<28} {:>12} {:<10} {:>12} {:>12}",
+        "{:<9} {:<w$} {:>12} {:<10} {:>12} {:>12}",
         "kind",
         "property",
         "value",
@@ -306,7 +312,7 @@ fn list_params(args: &Args) -> anyhow::Result<()> {
     );
     for p in &list {
         outln!(
-            "{:<9} {:<28} {:>12.6} {:<10} {:>12} {:>12}",
+            "{:<9} {:<w$} {:>12.6} {:<10} {:>12} {:>12}",
             p.kind,
             p.property,
             p.value,
