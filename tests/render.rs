@@ -1263,3 +1263,50 @@ fn row_bands_refuse_a_non_finite_value_and_name_the_layer_row_and_column() {
         assert!(l.data.iter().all(|v| v.is_finite()), "{}", l.name);
     }
 }
+
+/// Issue 17: a perfect horizontal mirror shows the sky radiance of the
+/// mirrored direction (the directional sky of the atmosphere model), not
+/// the isotropic sky.
+#[test]
+fn perfect_mirror_shows_the_sky_of_the_mirrored_direction() {
+    use irsig::atmosphere::{Profile, SkyConditions};
+    let geom = geometry(vec![ground("mirror", 0.0, 0.0, 5000.0, 0.0)]);
+    let optics = optics(&geom, vec![material("mirror", 1, 0.0, 1.0)], &[0]);
+    let atmosphere = Atmosphere::standard(Profile::MidLatitudeSummer, 0.0).unwrap();
+    let sky_c = SkyConditions {
+        air_temperature_k: 294.2,
+        sky_longwave_w_m2: f64::NAN,
+    };
+    let cond = Conditions {
+        surface: state(&geom, &[300.0]),
+        sky: Sky::Atmosphere(sky_c),
+        sun: None,
+        ground_temperature_k: 294.2,
+        atmosphere: atmosphere.clone(),
+    };
+    for zenith in [20.0f64, 45.0, 70.0] {
+        // A narrow camera looking down at the origin from `zenith`.
+        let (s, c) = zenith.to_radians().sin_cos();
+        let cam = json!({"type": "frame", "name": "cam", "width": 3, "height": 3,
+            "fov_deg": 0.05, "position": [0.0, -100.0 * s, 100.0 * c], "look_at": [0.0, 0.0, 0.0],
+            "up": [0.0, 0.0, 1.0], "oversample": 1,
+            "bands": [{"name": "LWIR", "response": [8.0, 12.0]}]});
+        let (bands, f) = render(&geom, &optics, &cond, &sensor(cam), Backend::Embree);
+        let got = layer(&f, "LWIR_radiance")[4] as f64;
+        let want = bands[0].integrate(
+            &atmosphere
+                .sky_radiance_toward(&sky_c, zenith, bands[0].grid())
+                .unwrap(),
+        );
+        let iso = bands[0].integrate(&atmosphere.sky_radiance(&sky_c, bands[0].grid()).unwrap());
+        println!("mirror at {zenith}°: {got:.4} W/m²/sr, sky there {want:.4}, isotropic {iso:.4}");
+        assert!(
+            (got - want).abs() < 0.005 * want,
+            "{zenith}°: {got} vs the sky there {want}"
+        );
+        assert!(
+            (want - iso).abs() > 0.02 * iso,
+            "{zenith}°: {want} vs {iso}"
+        );
+    }
+}
