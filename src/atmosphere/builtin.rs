@@ -1,6 +1,10 @@
 //! The built-in atmosphere: needs nothing external.
 //!
-//! **Profile.** Temperature: the US Standard Atmosphere 1976 (NOAA/NASA/USAF,
+//! **Profile.** Either one of the six AFGL model atmospheres
+//! ([`super::profile`], [`BuiltinParams::profile`]) with the surface weather
+//! blended into its lowest [`SURFACE_BLEND_DEPTH_M`]
+//! (see [`BuiltinAtmosphere::state`]), or the analytic profile:
+//! temperature the US Standard Atmosphere 1976 (NOAA/NASA/USAF,
 //! NOAA-S/T 76-1562, table I) shifted by ΔT = T_air − T_US76(z_ground); the
 //! shift applies in full up to 11 km and tapers linearly to zero at 20 km.
 //! Pressure: p(z) = p_s·exp(−(z − z_g)/H), H = 8 km. Water vapour: surface
@@ -32,11 +36,14 @@
 //!    self-broadening b and exponent n.
 //!    The water rotational band (> 16 µm) is not modelled: its far wing in
 //!    the window is part of the continuum above.
-//! 3. Not modelled: ozone (9.6 µm, stratospheric — matters only on paths to
-//!    space), N₂ continuum near 4 µm, CO/N₂O/CH₄ lines, aerosols and
-//!    scattering. Expect band transmittances within ~0.1 of MODTRAN for
-//!    clear, humid near-ground paths (see tests/atmosphere.rs, which compares
-//!    with tape7.LWIRSun).
+//!    Further bands: O₃ 9.6 µm (AFGL profiles only) and N₂O 4.5 µm (see
+//!    [`BANDS`] for parameters and sources).
+//! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
+//!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
+//! 4. Not modelled: CO/CH₄/HDO lines, the 3–5 µm water continuum beyond
+//!    Roberts' exponential term, aerosols and scattering. On the AFGL
+//!    tropical profile the zenith path is within 7 % of MODTRAN in 8–12 µm
+//!    and 31 % too transparent in 3.5–4.5 µm (docs/physics/atmosphere.md).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
@@ -226,6 +233,8 @@ struct WideBand {
     n: f64,
 }
 
+/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, CO₂ 4.3 µm, O₃ 9.6 µm,
+/// N₂O 4.5 µm.
 const BANDS: [WideBand; 5] = [
     WideBand {
         nu_cm: 1600.0,

@@ -4,8 +4,14 @@
 //!
 //! - [`Atmosphere`] is the closed set of models the render integrator calls:
 //!   `None` (vacuum), [`BuiltinAtmosphere`] (needs nothing external; see
-//!   [`builtin`] for the model and its sources) and [`Tape7Lut`] (a table of
-//!   MODTRAN runs, see [`lut`]).
+//!   [`builtin`] for the model and its sources, on the analytic profile or
+//!   one of the six AFGL model atmospheres of [`profile`]) and [`Tape7Lut`]
+//!   (a table of MODTRAN runs, see [`lut`]).
+//! - The sky depends on direction: [`Atmosphere::sky_radiance_toward`]
+//!   (what a ray leaving the scene sees), [`Atmosphere::sky_radiance`] (the
+//!   isotropic equivalent a diffuse surface reflects), and
+//!   [`Atmosphere::look_up`] (τ to space with the sky radiance, as
+//!   `irsig atmosphere --look up` prints it).
 //! - [`tape7`]: the MODTRAN tape7 reader (radiance and transmittance modes).
 //! - [`PathTable`]: path spectra tabulated over view zenith and range for one
 //!   sensor position — what a renderer should look up per hit (the built-in

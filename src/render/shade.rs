@@ -23,9 +23,13 @@
 //! past it, both take the diffuse environment `F·L_sky + (1 − F)·B(T_bg)`.
 //! The solar glint (a delta in the mirror direction) is left out.
 //!
-//! Rays that leave the scene see the sky radiance when they point above the
-//! horizon (`dir.z ≥ 0`) and the ground beyond the scene (a blackbody at
-//! [`Conditions::ground_temperature_k`]) when they point below it.
+//! Rays that leave the scene see the sky radiance arriving from their own
+//! direction when they point above the horizon (`dir.z ≥ 0`;
+//! [`crate::atmosphere::Atmosphere::sky_radiance_toward`] on [`SKY_NODES`]
+//! values of cos θ, linear between them) and the ground beyond the scene (a
+//! blackbody at [`Conditions::ground_temperature_k`]) when they point below
+//! it. `L_sky` in the diffuse term above is the isotropic-equivalent sky
+//! ([`crate::atmosphere::Atmosphere::sky_radiance`]).
 //!
 //! Units: wavelength µm, spectral radiance W·m⁻²·sr⁻¹·µm⁻¹, spectral
 //! irradiance W·m⁻²·µm⁻¹, band radiance ∫ R L dλ in W·m⁻²·sr⁻¹.
