@@ -109,7 +109,7 @@ pub struct SunInput {
     /// Unit east-north-up vector toward the sun.
     pub direction: Vec3,
     /// Direct normal irradiance at the surface, W/m² (broadband; distributed
-    /// over wavelength as a 5772 K blackbody, see [`solar_spectrum`]).
+    /// over wavelength by [`surface_solar_spectrum`]).
     pub direct_normal_w_m2: f64,
 }
 
@@ -234,6 +234,54 @@ pub fn solar_spectrum(planck: &Planck, wavelengths_um: &[f64], dni_w_m2: f64) ->
         .iter()
         .map(|&l| scale * planck.radiance(l, SUN_K))
         .collect()
+}
+
+/// Clear-sky direct normal irradiance at the ground for the sun at
+/// `zenith_deg`, W/m²: Meinel & Meinel (1976), *Applied Solar Energy*,
+/// I_D = S₀·0.7^(AM^0.678), AM = 1/cos z (S₀ the solar constant of
+/// [`crate::radiometry::equation::SOLAR_CONSTANT_W_M2`]); 0 at or below the horizon.
+pub fn clear_sky_dni_w_m2(zenith_deg: f64) -> f64 {
+    if !(zenith_deg.is_finite() && zenith_deg < 90.0) {
+        return 0.0;
+    }
+    let am = 1.0 / zenith_deg.max(0.0).to_radians().cos();
+    crate::radiometry::equation::SOLAR_CONSTANT_W_M2 * 0.7f64.powf(am.powf(0.678))
+}
+
+/// Solar spectral irradiance at the ground on a surface normal to the sun,
+/// W·m⁻²·µm⁻¹, on `grid`. With no atmosphere, the weather's broadband DNI
+/// spread as a 5772 K blackbody ([`solar_spectrum`]). With one, the
+/// top-of-atmosphere spectrum ([`crate::radiometry::solar_irradiance_toa`],
+/// 1 AU) times the atmosphere's τ₁(λ) along the sun's path
+/// ([`Atmosphere::solar_transmittance`]: no energy inside the absorption
+/// bands) times the weather's attenuation beyond a clear sky,
+/// c = min(1, DNI / DNI_clear) ([`clear_sky_dni_w_m2`]: clouds and haze,
+/// taken as grey; at most the clear sky, since near the horizon a measured
+/// DNI over a small modelled clear-sky DNI would otherwise multiply the
+/// spectrum without bound).
+pub fn surface_solar_spectrum(
+    atmosphere: &Atmosphere,
+    planck: &Planck,
+    sun: &SunInput,
+    grid: &crate::radiometry::SpectralGrid,
+) -> crate::Result<Vec<f64>> {
+    let wl = grid.wavelengths_um();
+    if matches!(atmosphere, Atmosphere::None) {
+        return Ok(solar_spectrum(planck, wl, sun.direct_normal_w_m2));
+    }
+    let d = sun.direction.normalize_or_zero();
+    let zenith = (d.z as f64).clamp(-1.0, 1.0).acos().to_degrees();
+    let clear = clear_sky_dni_w_m2(zenith);
+    if clear <= 0.0 || sun.direct_normal_w_m2 <= 0.0 {
+        return Ok(vec![0.0; wl.len()]);
+    }
+    let c = (sun.direct_normal_w_m2 / clear).min(1.0);
+    let tau = atmosphere.solar_transmittance(zenith, grid)?;
+    Ok(crate::radiometry::solar_irradiance_toa(grid, 1.0)
+        .into_iter()
+        .zip(tau)
+        .map(|(e, t)| e * t * c)
+        .collect())
 }
 
 /// One band's precomputed tables.
@@ -885,7 +933,9 @@ impl<'a> Shader<'a> {
                 .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
                 .collect();
             let sun = match conditions.sun {
-                Some(s) if s.direction.z > 0.0 => solar_spectrum(&planck, wl, s.direct_normal_w_m2),
+                Some(s) if s.direction.z > 0.0 => {
+                    surface_solar_spectrum(&conditions.atmosphere, &planck, &s, band.grid())?
+                }
                 _ => vec![0.0; wl.len()],
             };
             let eps = emissivities
