@@ -43,13 +43,12 @@ use chrono::{DateTime, FixedOffset};
 use rayon::prelude::*;
 
 use super::params::ParamSet;
-use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 use crate::exposure::{
     Exposure, ExposureParams, HistoryWindow, compute_exposure, history_times, sun_directions,
 };
 use crate::render::path::PathTables;
 use crate::render::scene_thermal::{FacetThermalSetup, SceneThermalParams};
-use crate::render::session::{AtmosphereConfig, Session};
+use crate::render::session::Session;
 use crate::render::{Conditions, ShadeOptions, Shader, Sky};
 use crate::thermal::scene::{FacetThermal, ThermalParams};
 use crate::thermal::{
@@ -322,7 +321,6 @@ pub struct SceneStudy {
     nominal_pass1: Vec<f32>,
     nominal_pass2: Vec<f32>,
     options: SolveOptions,
-    atmosphere: AtmosphereConfig,
 }
 
 impl std::fmt::Debug for SceneStudy {
@@ -379,11 +377,6 @@ impl SceneStudy {
         let base = states.conditions.remove(0);
         let record = states.records.remove(0);
         let scene = &session.scene;
-        let atmosphere = match &scene.atmosphere {
-            None => AtmosphereConfig::None,
-            Some(v) => serde_json::from_value(v.clone())
-                .map_err(|e| Error::invalid("atmosphere", e.to_string()))?,
-        };
         // The render's history window and per-facet exposure.
         let window = HistoryWindow::default();
         let times = history_times(&session.weather, &[time], &window)?;
@@ -471,7 +464,6 @@ impl SceneStudy {
             nominal_pass1: Vec::new(),
             nominal_pass2: Vec::new(),
             options,
-            atmosphere,
         };
         let (p1, p2) = study.solve(&study.params.nominal())?;
         study.nominal_pass1 = p1.iter().map(|h| h[image_record]).collect();
@@ -669,23 +661,8 @@ impl SceneStudy {
                 s.direct_normal_w_m2 = rec.direct_normal_w_m2;
             }
             cond.ground_temperature_k = rec.air_temperature_k;
-            if let AtmosphereConfig::Builtin {
-                co2_ppmv,
-                water_scale_height_m,
-            } = &self.atmosphere
-            {
-                let mut p = BuiltinParams::default();
-                if let Some(c) = co2_ppmv {
-                    p.co2_ppmv = *c;
-                }
-                if let Some(w) = water_scale_height_m {
-                    p.water_scale_height_m = *w;
-                }
-                cond.atmosphere = Atmosphere::Builtin(BuiltinAtmosphere::with_params(
-                    SurfaceMet::from_weather(&rec, site.altitude_m),
-                    p,
-                )?);
-            }
+            // The atmosphere from the perturbed record, as the render makes it.
+            cond.atmosphere = self.session.atmosphere_at(&rec)?;
         }
         let mut optics = self.session.optics.clone();
         for m in &mut optics.materials {

@@ -414,8 +414,9 @@ impl Session {
         })
     }
 
-    /// The atmosphere at one image time.
-    fn atmosphere_at(&self, record: &WeatherRecord) -> Result<Atmosphere> {
+    /// The atmosphere at one image time (the scene's configuration driven
+    /// by the weather `record`).
+    pub(crate) fn atmosphere_at(&self, record: &WeatherRecord) -> Result<Atmosphere> {
         Ok(match &self.atmosphere {
             AtmosphereConfig::None => Atmosphere::None,
             AtmosphereConfig::Builtin {
