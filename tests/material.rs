@@ -311,7 +311,11 @@ fn shipped_materials_json() {
     assert!(close(g("asphalt").thermal_inertia(), 1205.0, 0.01));
     assert!(close(g("sand").thermal_inertia(), 620.0, 0.01));
     let water = g("water");
-    assert!(close(water.density_kg_m3 * water.specific_heat_j_kg_k, 4.17e6, 0.01));
+    assert!(close(
+        water.density_kg_m3 * water.specific_heat_j_kg_k,
+        4.17e6,
+        0.01
+    ));
     assert!(water.thermal_inertia() > 1545.0);
     // Thin things exchange heat on both faces; ground does not.
     assert_eq!(g("painted_steel").exposed_fraction(), 1.0);

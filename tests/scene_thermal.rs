@@ -565,12 +565,12 @@ fn linearized_solve_matches_the_exact_solve_with_latent_heat() {
         &ThermalParams::default(),
     )
     .unwrap();
-    for i in 0..images.len() {
+    for (i, record) in images.iter().enumerate() {
         let (rms, max) = rms_max(
             &fast.surface_temperature_k[i],
             &exact.surface_temperature_k[i],
         );
-        eprintln!("image record {}: RMS {rms:.4} K, max {max:.4} K", images[i]);
+        eprintln!("image record {record}: RMS {rms:.4} K, max {max:.4} K");
         assert!(rms < 0.01 && max < 0.05, "RMS {rms} max {max}");
     }
 }

@@ -1285,9 +1285,9 @@ fn surfaces_that_evaporate_close_their_energy_balance() {
     use irsig::thermal::latent::psychrometrics::saturation_vapour_pressure_pa;
     let (mut forcing, cos) = one_clear_day();
     let n = forcing.len();
-    for k in 0..n {
+    for (k, c) in cos.iter().enumerate() {
         forcing.global_horizontal_w_m2[k] =
-            forcing.diffuse_horizontal_w_m2[k] + forcing.direct_normal_w_m2[k] * cos[k] as f64;
+            forcing.diffuse_horizontal_w_m2[k] + forcing.direct_normal_w_m2[k] * f64::from(*c);
     }
     let sun = vec![1.0f32; n];
     let inputs = FacetInputs::new(&sun, &cos, 1.0);

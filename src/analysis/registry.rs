@@ -91,7 +91,9 @@ fn set_emissivity(m: &mut Material, v: f64) -> Result<(), String> {
 
 /// A row of a parameter of the `surface_energy` block: read through the
 /// block's effective value (its default where the file leaves it out), set
-/// into the block; absent where the material has no block.
+/// into the block (a defaulted field stays defaulted when set to its
+/// default, so it keeps following what it derives from, e.g. the roughness
+/// the canopy height); absent where the material has no block.
 macro_rules! surface_param {
     ($name:literal, $unit:literal, $low:expr, $high:expr, $domain:expr,
      |$g:ident| $get:expr, |$s:ident, $v:ident| $set:expr, $source:literal) => {
@@ -275,7 +277,9 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         2.0,
         POSITIVE,
         |s| Some(s.roughness_m()),
-        |s, v| s.roughness_length_m = Some(v),
+        |s, v| if v != s.roughness_m() {
+            s.roughness_length_m = Some(v)
+        },
         "Oke (1987) Boundary Layer Climates, Table 2.2: water ≈ 1e-4 m to forest ≈ 1–2 m"
     ),
     surface_param!(
@@ -285,7 +289,9 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         50.0,
         POSITIVE,
         |s| s.has_skin().then(|| s.skin_conductance()),
-        |s, v| s.skin_conductance_w_m2_k = Some(v),
+        |s, v| if v != s.skin_conductance() {
+            s.skin_conductance_w_m2_k = Some(v)
+        },
         "ECMWF IFS Cy47r3 Part IV §8.3 skin conductivities 7–20 (unstable up to ≈ 40) W/(m² K); irsig widens to 3–50"
     ),
     surface_param!(
@@ -295,7 +301,9 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         50_000.0,
         POSITIVE,
         |s| s.has_skin().then(|| s.canopy_capacity()),
-        |s, v| s.canopy_heat_capacity_j_m2_k = Some(v),
+        |s, v| if v != s.canopy_capacity() {
+            s.canopy_heat_capacity_j_m2_k = Some(v)
+        },
         "leaf water 0.1–0.5 kg per m² of leaf × LAI 1–8, plus stems and litter: ≈ 0.5–50 kJ/(m² K)"
     ),
     surface_param!(

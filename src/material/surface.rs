@@ -226,7 +226,7 @@ impl SurfaceEnergySpec {
             &mut p,
             "leaf_area_index",
             lai,
-            lai >= 0.0 && lai <= 15.0,
+            (0.0..=15.0).contains(&lai),
             "0..=15 m²/m²",
         );
         if self.kind == SurfaceKind::Canopy && lai == 0.0 {

@@ -213,8 +213,10 @@ pub fn solve_facet_temperatures<'a>(
         ThermalMethod::Linearized(lp) => linearized::solve(
             inputs,
             kinds,
-            props,
-            &exchanges,
+            PropertySets {
+                props,
+                exchanges: &exchanges,
+            },
             forcing,
             image_records,
             params.passes,
@@ -230,6 +232,14 @@ pub fn solve_facet_temperatures<'a>(
             params,
         ),
     }
+}
+
+/// The property sets of a scene solve and each one's exchange with the
+/// air ([`Exchange::new`]), index for index.
+#[derive(Clone, Copy)]
+struct PropertySets<'a> {
+    props: &'a [SlabProperties],
+    exchanges: &'a [Exchange],
 }
 
 /// The checks of [`solve_facet_temperatures`], before any work.

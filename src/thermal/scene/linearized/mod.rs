@@ -61,7 +61,7 @@ use rayon::prelude::*;
 use self::kernels::accumulate_rows;
 use self::passes::{PassPlan, Slots};
 use self::reference::{FacetState, Reference, sunlit_cos};
-use super::{FacetThermal, PassStats, SceneInputs, SceneTemperatures};
+use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
 };
@@ -120,13 +120,13 @@ const MEDIAN_SAMPLE: usize = 1024;
 pub(super) fn solve(
     inputs: &SceneInputs,
     kinds: &[FacetThermal],
-    props: &[SlabProperties],
-    exchanges: &[Exchange],
+    sets: PropertySets,
     forcing: &Forcing,
     image_records: &[usize],
     passes: u32,
     lp: &LinearizedParams,
 ) -> Result<SceneTemperatures> {
+    let PropertySets { props, exchanges } = sets;
     let t_start = Instant::now();
     let facets = Facets {
         inputs,
