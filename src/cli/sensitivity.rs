@@ -129,6 +129,8 @@ pub(crate) fn setup_thermal(
     if let Some(s) = &t.start {
         opts = opts.with_start(parse_time("--start", s)?);
     }
+    // A typical-year EPW/TMY3 file takes the year of the last time used.
+    opts = opts.with_typical_year(chrono::Datelike::year(&until));
     let history = weather::load_with(wpath, &opts)?;
     let site = site.or(history.site().copied()).with_context(|| {
         format!(

@@ -30,6 +30,10 @@ pub struct Args {
     /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
     #[arg(long, value_name = "RFC3339")]
     pub start: Option<String>,
+    /// Replace the year of every EPW/TMY3 row. A typical-year file (months
+    /// from different years) takes --time's year without it.
+    #[arg(long, value_name = "YEAR")]
+    pub year: Option<i32>,
     /// Image time (RFC 3339 with offset): the history is solved from its
     /// first record up to this time.
     #[arg(long, value_name = "RFC3339")]
@@ -89,6 +93,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(s) = &args.start {
         opts = opts.with_start(parse_time("--start", s)?);
+    }
+    opts = opts.with_typical_year(chrono::Datelike::year(&time));
+    if let Some(y) = args.year {
+        opts = opts.with_year(y);
     }
     let history = weather::load_with(&args.weather, &opts)?;
     let site = site.or(history.site().copied()).ok_or_else(|| {

@@ -441,6 +441,10 @@ impl Loader {
             if let Some(y) = w.year {
                 opts = opts.with_year(y);
             }
+            if let Some(t) = time {
+                // A typical-year EPW/TMY3 file takes the image time's year.
+                opts = opts.with_typical_year(chrono::Datelike::year(&t));
+            }
             let mut ok = true;
             if let Some(st) = &w.start {
                 match crate::sun::parse_time(st) {
@@ -463,10 +467,20 @@ impl Loader {
                     Ok(h) => {
                         if let Some(t) = time {
                             if t < h.start() || t > h.end() {
+                                let hint = if matches!(
+                                    h.format(),
+                                    Some(crate::weather::Format::Epw | crate::weather::Format::Tmy3)
+                                ) && w.year.is_none()
+                                {
+                                    " (for a typical-year file written with one year, set \
+                                     `weather.year` to the image time's year)"
+                                } else {
+                                    ""
+                                };
                                 self.err(
                                     "weather.file",
                                     format!(
-                                        "the weather history covers {} .. {}, not the image time {}",
+                                        "the weather history covers {} .. {}, not the image time {}{hint}",
                                         h.start().to_rfc3339(),
                                         h.end().to_rfc3339(),
                                         t.to_rfc3339()

@@ -32,7 +32,7 @@ use std::path::Path;
 
 use chrono::TimeDelta;
 
-use super::LoadOptions;
+use super::{LoadOptions, Timing};
 use super::fill::{Parsed, RawRecord};
 use super::text::number;
 use crate::error::{Error, Location, Result};
@@ -171,6 +171,6 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     Ok(Parsed {
         records,
         site: None,
-        irradiance_offset: TimeDelta::zero(),
+        timing: Timing::Instant,
     })
 }
