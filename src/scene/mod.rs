@@ -615,6 +615,16 @@ impl Loader {
                     "a sensor needs a `type` string (`frame` or `line_scanner`)",
                 );
             }
+            // Response files read with changes (small negative values set to zero) warn
+            // here; their errors are the sensor's, reported when it is built.
+            let bands = s.get("bands").and_then(Value::as_array);
+            for b in bands.into_iter().flatten() {
+                if let Some(f) = b.get("response").and_then(Value::as_str) {
+                    if let Ok(r) = crate::radiometry::read_response_csv(self.resolve(f)) {
+                        self.warnings.extend(r.warnings().iter().cloned());
+                    }
+                }
+            }
         }
         if !self.errors.is_empty() {
             return Err(self.errors);
