@@ -570,6 +570,51 @@ fn scene_dirsig_wth_weather_starts_at_the_scene_start() {
 
 /// Issue 3/8: glTF import — node transforms (translation, scale, a
 /// mirroring scale), Y-up to Z-up, strips, grouping by material name; the
+/// Issue 20: a Draco- or meshopt-compressed glTF names the extension it requires
+/// (it used to fail validation with "Missing data (and 3 more problems)").
+#[test]
+fn gltf_unsupported_required_extensions_are_named() {
+    use irsig::scene::load_gltf;
+    let d = tempfile::tempdir().unwrap();
+    let (doc, bin) = gltf_doc();
+    let mut draco = doc.clone();
+    draco["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression", "KHR_materials_emissive_strength"]);
+    draco["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    // As a Draco exporter writes it: the accessors lose their buffer views.
+    draco["accessors"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("bufferView");
+    draco["meshes"][0]["primitives"][0]["extensions"] = serde_json::json!({
+        "KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}
+    });
+    let f = write(d.path(), "draco.gltf", &gltf_embedded(draco, &bin));
+    let e = load_gltf(&f).unwrap_err().to_string();
+    assert!(
+        e.contains("draco.gltf")
+            && e.contains("extensionsRequired")
+            && e.contains("`KHR_draco_mesh_compression` (Draco-compressed geometry)")
+            && e.contains("KHR_materials_emissive_strength")
+            && !e.contains("Missing data"),
+        "{e}"
+    );
+    let mut meshopt = doc.clone();
+    meshopt["extensionsUsed"] = serde_json::json!(["EXT_meshopt_compression"]);
+    meshopt["extensionsRequired"] = serde_json::json!(["EXT_meshopt_compression"]);
+    let f = d.path().join("meshopt.glb");
+    std::fs::write(&f, glb(&meshopt, &bin)).unwrap();
+    let e = load_gltf(&f).unwrap_err().to_string();
+    assert!(
+        e.contains("meshopt.glb") && e.contains("`EXT_meshopt_compression` (meshoptimizer"),
+        "{e}"
+    );
+    // Extensions used but not required leave the file readable.
+    let mut used = doc.clone();
+    used["extensionsUsed"] = serde_json::json!(["KHR_materials_emissive_strength"]);
+    let f = write(d.path(), "used.gltf", &gltf_embedded(used, &bin));
+    assert!(load_gltf(&f).is_ok());
+}
+
 /// `.gltf` (data URI), `.glb` and external-buffer forms give the same
 /// triangles.
 #[test]
