@@ -185,6 +185,70 @@ fn small_scene(dir: &Path, text: &str) -> std::path::PathBuf {
     write(&sd, "scene.json", text)
 }
 
+/// Issue 20: a Y-up OBJ (a 1 × 2 × 1 ft post, tall along y, as modelling tools export)
+/// stands upright with `up_axis: "y"`, in metres with `unit: "ft"`; the front-facing
+/// winding survives (the volume stays positive). `up_axis`/`unit` on a non-OBJ shape and
+/// unknown values are errors naming the field.
+#[test]
+fn obj_up_axis_and_unit_per_shape() {
+    // A closed box 1 × 2 × 1 (x, y, z), faces counter-clockwise from outside.
+    const POST: &str = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    let d = tempfile::tempdir().unwrap();
+    let scene = |shape: &str| {
+        SMALL.replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+            &format!(
+                r#"{{"name": "thing", "shapes": [{{"part": "glass", {}],"#,
+                &shape[1..]
+            ),
+        )
+    };
+    let p = small_scene(d.path(), SMALL);
+    write(&d.path().join("s/geo"), "post.obj", POST);
+    let extent = |shape: &str| {
+        write(&d.path().join("s"), "scene.json", &scene(shape));
+        let s = Scene::load(&p).unwrap();
+        let m = &s.geometry.meshes[s.objects[2].mesh];
+        let (lo, hi) = m.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        (lo, hi, signed_volume(&m.positions, &m.indices))
+    };
+    let (lo, hi, v) = extent(r#"{"obj": "geo/post.obj"}"#);
+    assert_eq!((lo, hi), (Vec3::ZERO, Vec3::new(1.0, 2.0, 1.0)));
+    assert!((v - 2.0).abs() < 1e-5, "{v}");
+    // Y up: the post's 2 ft length is now height (z), its depth runs to −y.
+    let (lo, hi, v) = extent(r#"{"obj": "geo/post.obj", "up_axis": "y", "unit": "ft"}"#);
+    let ft = 0.3048f32;
+    assert!((lo - Vec3::new(0.0, -ft, 0.0)).abs().max_element() < 1e-6, "{lo}");
+    assert!((hi - Vec3::new(ft, 0.0, 2.0 * ft)).abs().max_element() < 1e-6, "{hi}");
+    assert!((v - 2.0 * 0.3048f64.powi(3)).abs() < 1e-6, "{v}");
+    // Every unit, Z up stated.
+    for (unit, m) in [("m", 1.0), ("cm", 0.01), ("mm", 0.001), ("in", 0.0254)] {
+        let (_, hi, _) = extent(&format!(
+            r#"{{"obj": "geo/post.obj", "up_axis": "z", "unit": "{unit}"}}"#
+        ));
+        assert!((hi.y - 2.0 * m as f32).abs() < 1e-7, "{unit}: {hi}");
+    }
+    // Errors.
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"box": {"size": [1, 1, 1]}, "up_axis": "y"}"#),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("shapes[0].up_axis") && e.contains("obj"), "{e}");
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"obj": "geo/post.obj", "unit": "yd"}"#),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("scene.json") && e.contains("yd"), "{e}");
+}
+
 /// `heights_csv` gives the same terrain as inline `heights`: comments,
 /// blank lines, whitespace or comma separators, quoted cells; a bad cell
 /// names the file and line.

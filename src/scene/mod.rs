@@ -773,6 +773,17 @@ impl Loader {
             None::<GroupedMesh>
         };
         let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
+        if s.obj.is_none() && (s.up_axis.is_some() || s.unit.is_some()) {
+            let field = if s.up_axis.is_some() { "up_axis" } else { "unit" };
+            return bad(
+                self,
+                field,
+                format!(
+                    "`{field}` applies to `obj` shapes only (glTF is Y-up in metres by \
+                     definition; primitives are in metres, Z up)"
+                ),
+            );
+        }
         let mesh_file = match (&s.obj, &s.gltf) {
             (Some(p), _) => Some((p, "obj", load_obj as fn(&Path) -> Result<Vec<ObjGroup>>)),
             (None, Some(p)) => Some((p, "gltf", load_gltf as fn(&Path) -> Result<Vec<ObjGroup>>)),
@@ -791,6 +802,15 @@ impl Loader {
                         for t in g.mesh.indices {
                             m.indices.push(t.map(|i| i + base));
                             m.group_of.push(gi);
+                        }
+                    }
+                    let metres = s.unit.map_or(1.0, file::LengthUnit::metres) as f32;
+                    let y_up = s.up_axis == Some(file::UpAxis::Y);
+                    for p in &mut m.positions {
+                        *p *= metres;
+                        if y_up {
+                            // A proper rotation (+90° about x): faces keep their winding.
+                            *p = Vec3::new(p.x, -p.z, p.y);
                         }
                     }
                     Some(m)
