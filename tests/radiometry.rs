@@ -327,7 +327,9 @@ mod cli {
         assert_eq!(r.warnings().len(), 1);
         let w = &r.warnings()[0];
         assert!(
-            w.contains("b10.csv:line 3") && w.contains("2 small negative") && w.contains("set to zero"),
+            w.contains("b10.csv:line 3")
+                && w.contains("2 small negative")
+                && w.contains("set to zero"),
             "{w}"
         );
         // −1 % of the peak is still noise; −2 % is not.
@@ -336,9 +338,17 @@ mod cli {
         let e = parse_response_csv("10,0\n11,1\n12,-0.02\n", "b.csv")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("b.csv:line 3") && e.contains("≥ 0") && e.contains("-2.000%"), "{e}");
+        assert!(
+            e.contains("b.csv:line 3") && e.contains("≥ 0") && e.contains("-2.000%"),
+            "{e}"
+        );
         // A clean file has no warnings; the CLI prints them as `warning:` lines.
-        assert!(parse_response_csv("10,0\n11,1\n", "c.csv").unwrap().warnings().is_empty());
+        assert!(
+            parse_response_csv("10,0\n11,1\n", "c.csv")
+                .unwrap()
+                .warnings()
+                .is_empty()
+        );
         let dir = tempfile::tempdir().unwrap();
         let f = dir.path().join("b10.csv");
         std::fs::write(&f, text).unwrap();
@@ -349,7 +359,10 @@ mod cli {
             "--temperature",
             "300",
         ]);
-        assert!(ok && err.contains("warning:") && err.contains("b10.csv:line 3"), "{err}");
+        assert!(
+            ok && err.contains("warning:") && err.contains("b10.csv:line 3"),
+            "{err}"
+        );
     }
 }
 

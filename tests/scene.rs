@@ -222,8 +222,14 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
     // Y up: the post's 2 ft length is now height (z), its depth runs to −y.
     let (lo, hi, v) = extent(r#"{"obj": "geo/post.obj", "up_axis": "y", "unit": "ft"}"#);
     let ft = 0.3048f32;
-    assert!((lo - Vec3::new(0.0, -ft, 0.0)).abs().max_element() < 1e-6, "{lo}");
-    assert!((hi - Vec3::new(ft, 0.0, 2.0 * ft)).abs().max_element() < 1e-6, "{hi}");
+    assert!(
+        (lo - Vec3::new(0.0, -ft, 0.0)).abs().max_element() < 1e-6,
+        "{lo}"
+    );
+    assert!(
+        (hi - Vec3::new(ft, 0.0, 2.0 * ft)).abs().max_element() < 1e-6,
+        "{hi}"
+    );
     assert!((v - 2.0 * 0.3048f64.powi(3)).abs() < 1e-6, "{v}");
     // Every unit, Z up stated.
     for (unit, m) in [("m", 1.0), ("cm", 0.01), ("mm", 0.001), ("in", 0.0254)] {
@@ -642,7 +648,10 @@ fn gltf_unsupported_required_extensions_are_named() {
     let d = tempfile::tempdir().unwrap();
     let (doc, bin) = gltf_doc();
     let mut draco = doc.clone();
-    draco["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression", "KHR_materials_emissive_strength"]);
+    draco["extensionsUsed"] = serde_json::json!([
+        "KHR_draco_mesh_compression",
+        "KHR_materials_emissive_strength"
+    ]);
     draco["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
     // As a Draco exporter writes it: the accessors lose their buffer views.
     draco["accessors"][0]

@@ -4,9 +4,7 @@ use std::path::{Path, PathBuf};
 
 use chrono::{DateTime, FixedOffset, TimeDelta};
 use irsig::sun::{self, Site};
-use irsig::weather::{
-    self, Format, LoadOptions, Timing, WeatherHistory, WeatherRecord, physics,
-};
+use irsig::weather::{self, Format, LoadOptions, Timing, WeatherHistory, WeatherRecord, physics};
 
 use crate::util;
 
@@ -230,7 +228,11 @@ fn epw_fixture_reads_site_times_and_fills_longwave() {
     assert!(close(r.total_sky_cover, 0.35, 1e-12) && close(r.opaque_sky_cover, 0.25, 1e-12));
     // Clark & Allen at the mid-interval readings.
     let lw = physics::clark_allen_sky_longwave_w_m2(290.5, 285.15, 0.25);
-    assert!(close(r.sky_longwave_w_m2, lw, 1e-9), "{}", r.sky_longwave_w_m2);
+    assert!(
+        close(r.sky_longwave_w_m2, lw, 1e-9),
+        "{}",
+        r.sky_longwave_w_m2
+    );
     assert_eq!(h.filled(3), &["sky_longwave_w_m2"]);
     // The first record has no earlier stamp: it keeps its own readings (hour 5: 14.4 °C).
     assert!(close(h.records()[0].air_temperature_k, 287.55, 1e-9));
@@ -343,7 +345,11 @@ fn tmy3_fixture_reads_and_splits_missing_beam_by_erbs() {
         0.5 * (r0.air_temperature_k + 297.05),
         1e-9
     ));
-    assert!(close(r.pressure_pa, 0.5 * (r0.pressure_pa + 99_600.0), 1e-9));
+    assert!(close(
+        r.pressure_pa,
+        0.5 * (r0.pressure_pa + 99_600.0),
+        1e-9
+    ));
     assert_eq!(
         (
             r.global_horizontal_w_m2,
@@ -921,8 +927,8 @@ fn typical_year_epw_takes_the_image_year_and_handles_29_february() {
 /// TMY3 rows from different years, as NSRDB ships them, read as one year.
 #[test]
 fn typical_year_tmy3_takes_the_image_year() {
-    let text = std::fs::read_to_string(util::repo_path("tests/data/weather/723170TYA_jun21.csv"))
-        .unwrap();
+    let text =
+        std::fs::read_to_string(util::repo_path("tests/data/weather/723170TYA_jun21.csv")).unwrap();
     // 30 June from 1989 and 1 July from 1977, as NSRDB picks months.
     let mut lines = text.lines();
     let head: Vec<&str> = lines.by_ref().take(2).collect();
@@ -936,7 +942,12 @@ fn typical_year_tmy3_takes_the_image_year() {
     }
     let dir = tempfile::tempdir().unwrap();
     let p = write_tmp(&dir, "tmy3.csv", &mixed);
-    assert!(weather::load(&p).unwrap_err().to_string().contains("typical-year"));
+    assert!(
+        weather::load(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("typical-year")
+    );
     let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2025)).unwrap();
     assert_eq!(h.start(), t("2025-06-30T00:30:00-05:00"));
     assert_eq!(h.end(), t("2025-07-01T23:30:00-05:00"));
@@ -953,7 +964,9 @@ fn epw_latin1_header_bytes_are_accepted() {
     for (i, line) in text.lines().enumerate() {
         let mut l = line.as_bytes().to_vec();
         if i == 0 {
-            l = line.replacen("Rochester", "Rochester Montr\u{1}al", 1).into_bytes();
+            l = line
+                .replacen("Rochester", "Rochester Montr\u{1}al", 1)
+                .into_bytes();
         } else if i == 5 {
             l = line.replacen("irsig", "irsig caf\u{1}", 1).into_bytes();
         }
@@ -986,7 +999,10 @@ fn epw_latin1_header_bytes_are_accepted() {
     bad[row + 2] = 0xE9;
     std::fs::write(&p, &bad).unwrap();
     let e = weather::load(&p).unwrap_err().to_string();
-    assert!(e.contains("latin1.epw:line 10") && e.contains("0xE9"), "{e}");
+    assert!(
+        e.contains("latin1.epw:line 10") && e.contains("0xE9"),
+        "{e}"
+    );
 }
 
 // ---------------------------------------------------------------- timing (issue 16 item 3)

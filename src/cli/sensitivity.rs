@@ -85,9 +85,10 @@ pub struct ThermalArgs {
     /// Material: a name in --materials, a material file, or FILE#NAME.
     #[arg(long, value_name = "NAME|FILE", requires = "thermal")]
     pub material: Option<String>,
-    /// Material database for --material NAME.
-    #[arg(long, value_name = "FILE", default_value = "scenes/materials.json")]
-    pub materials: PathBuf,
+    /// Material database for --material NAME (default: the stock library,
+    /// built into irsig).
+    #[arg(long, value_name = "FILE")]
+    pub materials: Option<PathBuf>,
     /// Weather file (irsig CSV/JSON, EPW, TMY3, DIRSIG .wth).
     #[arg(long, value_name = "FILE", requires = "thermal")]
     pub weather: Option<PathBuf>,
@@ -120,7 +121,8 @@ pub(crate) fn setup_thermal(
         .weather
         .as_ref()
         .context("--thermal needs --weather FILE")?;
-    let material = facet::find_material(spec, &t.materials).for_flags(FACET_FLAGS)?;
+    let material =
+        super::thermal::find_material(spec, t.materials.as_deref()).for_flags(FACET_FLAGS)?;
     let site = t.site.as_deref().map(parse_site).transpose()?;
     let mut opts = LoadOptions::default();
     if let Some(s) = site {

@@ -21,9 +21,10 @@ pub struct Args {
     /// FILE#NAME for one material of a file.
     #[arg(long, value_name = "NAME|FILE")]
     pub material: String,
-    /// Material database for --material NAME.
-    #[arg(long, value_name = "FILE", default_value = "scenes/materials.json")]
-    pub materials: PathBuf,
+    /// Material database for --material NAME (default: the stock library,
+    /// built into irsig).
+    #[arg(long, value_name = "FILE")]
+    pub materials: Option<PathBuf>,
     /// Weather file: irsig CSV/JSON, EPW, TMY3 CSV or DIRSIG .wth.
     #[arg(long, value_name = "FILE")]
     pub weather: PathBuf,
@@ -72,11 +73,42 @@ pub struct Args {
     pub csv: bool,
 }
 
+/// `--material NAME|FILE|FILE#NAME` with `--materials FILE`, or, without it, a NAME from
+/// the stock library built into irsig (not a path relative to the working directory).
+pub(crate) fn find_material(
+    spec: &str,
+    db: Option<&std::path::Path>,
+) -> irsig::Result<irsig::material::Material> {
+    match db {
+        Some(db) => facet::find_material(spec, db),
+        None if spec.contains('#') || std::path::Path::new(spec).is_file() => {
+            facet::find_material(spec, std::path::Path::new(""))
+        }
+        None => {
+            let stock = irsig::material::stock::stock()?;
+            stock.get(spec).cloned().ok_or_else(|| {
+                irsig::Error::invalid(
+                    "material",
+                    format!(
+                        "no material named `{spec}` in the stock library (or no such file); it has: {}",
+                        stock
+                            .materials()
+                            .iter()
+                            .map(|m| m.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })
+        }
+    }
+}
+
 /// Run `irsig thermal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let time = parse_time("--time", &args.time)?;
     let site = args.site.as_deref().map(parse_site).transpose()?;
-    let material = facet::find_material(&args.material, &args.materials).for_flags(FLAGS)?;
+    let material = find_material(&args.material, args.materials.as_deref()).for_flags(FLAGS)?;
     let mut props = SlabProperties::from_material(&material)?;
     if let Some(kind) = &args.back {
         props = props.with_back(parse_back(kind)?);

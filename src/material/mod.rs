@@ -35,6 +35,7 @@
 
 pub mod db;
 pub mod dirsig;
+pub mod stock;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -44,7 +44,9 @@ pub fn load_gltf(path: &Path) -> Result<Vec<ObjGroup>> {
 fn check_required_extensions(required: &[String], used: &[String], path: &Path) -> Result<()> {
     let what = |name: &str| match name {
         "KHR_draco_mesh_compression" => " (Draco-compressed geometry)",
-        "EXT_meshopt_compression" | "KHR_meshopt_compression" => " (meshoptimizer-compressed buffers)",
+        "EXT_meshopt_compression" | "KHR_meshopt_compression" => {
+            " (meshoptimizer-compressed buffers)"
+        }
         "KHR_mesh_quantization" => " (quantized vertex attributes)",
         "EXT_mesh_gpu_instancing" => " (GPU instancing)",
         "KHR_texture_basisu" | "EXT_texture_webp" => " (compressed textures)",
@@ -53,7 +55,10 @@ fn check_required_extensions(required: &[String], used: &[String], path: &Path) 
     if required.is_empty() {
         return Ok(());
     }
-    let names: Vec<String> = required.iter().map(|n| format!("`{n}`{}", what(n))).collect();
+    let names: Vec<String> = required
+        .iter()
+        .map(|n| format!("`{n}`{}", what(n)))
+        .collect();
     let also_used: Vec<&String> = used.iter().filter(|u| !required.contains(u)).collect();
     Err(Error::parse(
         Location::file(path).with_field("extensionsRequired"),

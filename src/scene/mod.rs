@@ -469,7 +469,9 @@ impl Loader {
                             if t < h.start() || t > h.end() {
                                 let hint = if matches!(
                                     h.format(),
-                                    Some(crate::weather::Format::Epw | crate::weather::Format::Tmy3)
+                                    Some(
+                                        crate::weather::Format::Epw | crate::weather::Format::Tmy3
+                                    )
                                 ) && w.year.is_none()
                                 {
                                     " (for a typical-year file written with one year, set \
@@ -774,7 +776,11 @@ impl Loader {
         };
         let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
         if s.obj.is_none() && (s.up_axis.is_some() || s.unit.is_some()) {
-            let field = if s.up_axis.is_some() { "up_axis" } else { "unit" };
+            let field = if s.up_axis.is_some() {
+                "up_axis"
+            } else {
+                "unit"
+            };
             return bad(
                 self,
                 field,

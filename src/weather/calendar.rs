@@ -140,7 +140,9 @@ pub(crate) fn place(
             let midnight = offset
                 .from_local_datetime(&date.and_hms_opt(0, 0, 0).unwrap_or_default())
                 .single()
-                .ok_or_else(|| Error::parse(r.loc.clone(), "local midnight is not representable"))?;
+                .ok_or_else(|| {
+                    Error::parse(r.loc.clone(), "local midnight is not representable")
+                })?;
             r.time = midnight + TimeDelta::minutes(s.minutes);
             Ok(r)
         })

@@ -25,10 +25,10 @@ use std::path::Path;
 
 use chrono::{DateTime, FixedOffset};
 
-use super::{LoadOptions, Timing};
 use super::calendar::{self, Stamp};
 use super::fill::{Parsed, RawRecord};
 use super::text::number;
+use super::{LoadOptions, Timing};
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
 use crate::textio;

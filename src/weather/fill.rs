@@ -174,9 +174,7 @@ pub(crate) fn complete(
     .map_err(|e| match (format, e) {
         (Format::Epw | Format::Tmy3, Error::Parse { location, message }) => Error::parse(
             location,
-            format!(
-                "{message} (a typical-year file needs one year applied)"
-            ),
+            format!("{message} (a typical-year file needs one year applied)"),
         ),
         (_, e) => e,
     })?;
@@ -397,11 +395,7 @@ pub(crate) fn complete(
         filled_all.push(filled);
     }
     Ok(WeatherHistory::from_parts(
-        out,
-        site,
-        filled_all,
-        format,
-        timing,
+        out, site, filled_all, format, timing,
     ))
 }
 

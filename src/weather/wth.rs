@@ -32,9 +32,9 @@ use std::path::Path;
 
 use chrono::TimeDelta;
 
-use super::{LoadOptions, Timing};
 use super::fill::{Parsed, RawRecord};
 use super::text::number;
+use super::{LoadOptions, Timing};
 use crate::error::{Error, Location, Result};
 
 /// W/m² per Langley/hour.
