@@ -255,6 +255,50 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
     assert!(e.contains("scene.json") && e.contains("yd"), "{e}");
 }
 
+/// Issue 20: DIRSIG's OBJ convention `usemtl <ID>` maps a face group to the `.mat` entry
+/// with that ID when no material has the group's name.
+#[test]
+fn obj_usemtl_dirsig_id_maps_to_mat_entry() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let sd = d.path().join("s");
+    write(
+        &sd,
+        "lib.mat",
+        "MATERIAL_ENTRY {\n  ID = 19\n  NAME = Steel plate\n  TEMP_SOLVER_NAME = Therm\n  TEMP_SOLVER {\n    SPECIFIC_HEAT = 0.1\n    MASS_DENSITY = 7.8\n    THERMAL_CONDUCTIVITY = 430\n    SOLAR_ABSORPTION = 0.5\n    THERMAL_EMISSIVITY = 0.8\n    EXPOSED_AREA = 1\n    THICKNESS = 0.5\n  }\n}\n",
+    );
+    write(
+        &sd.join("geo"),
+        "ids.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl 19\nf 1 2 3\n",
+    );
+    let scene = SMALL
+        .replace(
+            r#""materials": ["../materials.json"],"#,
+            r#""materials": ["../materials.json", "lib.mat"],"#,
+        )
+        .replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],
+     "parts": [{"name": "glass", "material": "glass", "fixed_temperature_k": 300}],
+     "material": "concrete"}"#,
+            r#"{"name": "thing", "shapes": [{"obj": "geo/ids.obj"}]}"#,
+        );
+    assert!(scene.contains("ids.obj") && scene.contains("lib.mat"));
+    write(&sd, "scene.json", &scene);
+    let s = Scene::load(&p).unwrap();
+    let parts = s.facet_parts();
+    let last = *parts.last().unwrap() as usize;
+    assert_eq!(s.part_material(last).name, "Steel plate");
+    // An ID nothing has stays an error naming the group.
+    write(
+        &sd.join("geo"),
+        "ids.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl 77\nf 1 2 3\n",
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("`77`"), "{e}");
+}
+
 /// `heights_csv` gives the same terrain as inline `heights`: comments,
 /// blank lines, whitespace or comma separators, quoted cells; a bad cell
 /// names the file and line.

@@ -1140,7 +1140,23 @@ impl Loader {
                     Some(m) => (m.clone(), format!("{at}.material")),
                     None => (g.clone(), format!("{at}.shapes")),
                 };
-                match db.index_of(&name) {
+                // DIRSIG's OBJ convention: `usemtl <ID>` names a `.mat` ID (a number;
+                // a label ID is usually also the NAME). Used when no material has the
+                // group's name and exactly one has that ID.
+                let by_id = || {
+                    let id: u32 = g.trim().parse().ok()?;
+                    let mut hits = db
+                        .materials()
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, m)| m.id == id);
+                    let (i, _) = hits.next()?;
+                    hits.next().is_none().then_some(i)
+                };
+                let found = db
+                    .index_of(&name)
+                    .or_else(|| if o.material.is_none() { by_id() } else { None });
+                match found {
                     Some(m) => Some(Part {
                         name: g.clone(),
                         object,
