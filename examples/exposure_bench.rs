@@ -86,6 +86,7 @@ fn main() -> anyhow::Result<()> {
             thermal_emissivity: 0.95,
             self_power_w_m2: 0.0,
             back: BackBoundary::GROUND,
+            surface: None,
         };
         let brick = SlabProperties {
             conductivity_w_m_k: 0.7,
@@ -96,6 +97,7 @@ fn main() -> anyhow::Result<()> {
             thermal_emissivity: 0.9,
             self_power_w_m2: 0.0,
             back: BackBoundary::BUILDING,
+            surface: None,
         };
         let offsets = geo.facet_offsets();
         let setup = FacetThermalSetup {

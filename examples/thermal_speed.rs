@@ -41,6 +41,7 @@ fn main() {
         thermal_emissivity: 0.9,
         self_power_w_m2: 0.0,
         back,
+        surface: None,
     };
     let aluminium = SlabProperties {
         conductivity_w_m_k: 200.0,

@@ -109,6 +109,7 @@ fn material() -> impl Strategy<Value = Material> {
             transmissivity: t,
             emissivity_curve: None,
             double_sided: false,
+            surface_energy: None,
         })
 }
 

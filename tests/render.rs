@@ -39,6 +39,7 @@ fn material(name: &str, id: u32, emissivity: f64, specular: f64) -> Material {
         transmissivity: 0.0,
         emissivity_curve: None,
         double_sided: false,
+        surface_energy: None,
     }
 }
 

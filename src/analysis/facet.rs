@@ -25,7 +25,8 @@ use crate::material::{Material, MaterialDb};
 use crate::radiometry::band::Band;
 use crate::sun::{self, Site};
 use crate::thermal::{
-    self, FacetInputs, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties, SolveOptions,
+    self, BackBoundary, FacetInputs, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SlabProperties,
+    SolveOptions,
 };
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Result};
@@ -72,6 +73,9 @@ pub struct OneFacet {
     pub band: Band,
     /// The site (solar positions of perturbed weather).
     pub site: Site,
+    /// Back boundary overriding the one the material's exposed area gives
+    /// (as `irsig thermal --back`); `None`: the material's.
+    pub back: Option<BackBoundary>,
 }
 
 /// The records of `history` up to `until`, ending with the weather
@@ -183,6 +187,24 @@ impl OneFacet {
             options,
             band,
             site: *site,
+            back: None,
+        })
+    }
+
+    /// The same facet with the back boundary `back` for every material
+    /// (`None`: each material's own).
+    pub fn with_back(mut self, back: Option<BackBoundary>) -> Self {
+        self.back = back;
+        self
+    }
+
+    /// The slab properties of `material` on this facet (its back boundary
+    /// overridden where [`OneFacet::back`] says so).
+    pub fn slab(&self, material: &Material) -> Result<SlabProperties> {
+        let props = SlabProperties::from_material(material)?;
+        Ok(match self.back {
+            Some(b) => props.with_back(b),
+            None => props,
         })
     }
 
@@ -211,7 +233,7 @@ impl OneFacet {
                 "the perturbed history must keep the record times",
             ));
         }
-        let props = SlabProperties::from_material(material)?;
+        let props = self.slab(material)?;
         let forcing = Forcing::from_records(weather)?;
         let inputs = FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor);
         Ok(thermal::solve(&props, &forcing, &inputs, &self.options)?.surface_temperature_k)

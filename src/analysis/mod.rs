@@ -25,6 +25,7 @@ pub mod geo;
 pub mod image;
 pub mod params;
 pub mod plot;
+pub mod registry;
 pub mod scene;
 pub mod sensitivity;
 pub mod stats;

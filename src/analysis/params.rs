@@ -13,11 +13,15 @@
 //! A bare top-level array is accepted too. Per entry: `kind` (`weather` or
 //! `material`), `property`, `material` (material entries only), `low` and
 //! `high` (the plausible bounds), optional `name` (default
-//! `weather.<property>` / `<material>.<property>`), optional `nominal`
-//! (default: 0 for offsets, 1 for scales, the material's own value for
-//! material properties) and optional `uncertainty` (one standard
+//! `weather.<property>` / `<material>.<property>`), optional `value` (or
+//! its older name `nominal`; default: 0 for offsets, 1 for scales, the
+//! material's own value for material properties), optional `unit` (checked
+//! against the registry's) and optional `uncertainty` (one standard
 //! uncertainty, in the parameter's unit; default the standard deviation of
-//! a uniform distribution over the bounds, `(high − low)/√12`).
+//! a uniform distribution over the bounds, `(high − low)/√12`). The
+//! properties, their units and physical bounds are the rows of
+//! [`super::registry`]; `irsig calibrate --list-params` prints them in this
+//! format.
 //!
 //! Weather properties (applied to every record of the history):
 //! `air_temperature_offset_k` (K added to the air temperature; the dew
@@ -47,22 +51,27 @@
 //!
 //! An offset of 0 leaves a record exactly as it is.
 //!
-//! Material properties (absolute values, SI): `conductivity` (W/(m·K)),
-//! `specific_heat` (J/(kg·K)), `density` (kg/m³), `thickness` (m),
-//! `solar_absorptivity`, `thermal_emissivity` (a spectral emissivity curve
-//! is scaled by the same ratio, capped at 1), `exposed_area`.
+//! Material properties are absolute values in SI units, named as the
+//! material JSON spells them (`conductivity_w_m_k`, `specific_heat_j_kg_k`,
+//! `density_kg_m3`, `thickness_m`, `solar_absorptivity`,
+//! `thermal_emissivity` — a spectral emissivity curve is scaled by the same
+//! ratio, capped at 1 —, `exposed_area`, `self_power_w_m2`, and whatever
+//! rows [`super::registry::MATERIAL_PARAMETERS`] gains); the short names
+//! `conductivity`, `specific_heat`, `density`, `thickness` are still read.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
+use super::registry::{self, MaterialParameter, WeatherParameter};
 use crate::material::Material;
 use crate::sun::{self, Site};
 use crate::weather::WeatherRecord;
 use crate::weather::physics::{clark_allen_sky_emissivity, erbs_split};
 use crate::{Error, Location, Result};
 
-/// A weather property a parameter perturbs.
+/// A weather property a parameter perturbs (its name, unit, identity and
+/// bounds are the registry row [`WeatherProperty::row`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WeatherProperty {
     /// K added to the air temperature.
@@ -81,138 +90,78 @@ pub enum WeatherProperty {
     CloudCoverOffset,
 }
 
-const WEATHER_PROPERTIES: [(&str, WeatherProperty); 7] = [
-    (
-        "air_temperature_offset_k",
-        WeatherProperty::AirTemperatureOffsetK,
-    ),
-    ("wind_speed_scale", WeatherProperty::WindSpeedScale),
-    ("wind_speed_offset_m_s", WeatherProperty::WindSpeedOffsetMS),
-    (
-        "relative_humidity_offset",
-        WeatherProperty::RelativeHumidityOffset,
-    ),
-    ("insolation_scale", WeatherProperty::InsolationScale),
-    (
-        "sky_longwave_offset_w_m2",
-        WeatherProperty::SkyLongwaveOffsetWM2,
-    ),
-    ("cloud_cover_offset", WeatherProperty::CloudCoverOffset),
+/// In the order of [`registry::WEATHER_PARAMETERS`].
+const WEATHER_PROPERTIES: [WeatherProperty; 7] = [
+    WeatherProperty::AirTemperatureOffsetK,
+    WeatherProperty::WindSpeedScale,
+    WeatherProperty::WindSpeedOffsetMS,
+    WeatherProperty::RelativeHumidityOffset,
+    WeatherProperty::InsolationScale,
+    WeatherProperty::SkyLongwaveOffsetWM2,
+    WeatherProperty::CloudCoverOffset,
 ];
 
 impl WeatherProperty {
+    /// The property by its name in PARAMS files.
+    pub fn from_name(name: &str) -> Option<WeatherProperty> {
+        let i = registry::WEATHER_PARAMETERS
+            .iter()
+            .position(|p| p.name == name)?;
+        Some(WEATHER_PROPERTIES[i])
+    }
+    /// Its registry row (name, unit, identity, bounds).
+    pub fn row(&self) -> &'static WeatherParameter {
+        let i = WEATHER_PROPERTIES
+            .iter()
+            .position(|p| p == self)
+            .expect("every weather property has a registry row");
+        &registry::WEATHER_PARAMETERS[i]
+    }
     /// The property's name in PARAMS files.
     pub fn name(&self) -> &'static str {
-        WEATHER_PROPERTIES
-            .iter()
-            .find(|(_, p)| p == self)
-            .map(|(n, _)| *n)
-            .unwrap_or("?")
+        self.row().name
     }
     /// The value that leaves the weather unchanged.
     pub fn identity(&self) -> f64 {
-        match self {
-            WeatherProperty::WindSpeedScale | WeatherProperty::InsolationScale => 1.0,
-            _ => 0.0,
-        }
-    }
-    /// The values this property may take.
-    fn domain(&self) -> (f64, f64) {
-        match self {
-            WeatherProperty::WindSpeedScale | WeatherProperty::InsolationScale => (0.0, 10.0),
-            WeatherProperty::RelativeHumidityOffset | WeatherProperty::CloudCoverOffset => {
-                (-1.0, 1.0)
-            }
-            _ => (f64::NEG_INFINITY, f64::INFINITY),
-        }
+        self.row().identity
     }
 }
 
-/// A material property a parameter sets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MaterialProperty {
-    /// Thermal conductivity, W/(m·K).
-    Conductivity,
-    /// Specific heat, J/(kg·K).
-    SpecificHeat,
-    /// Density, kg/m³.
-    Density,
-    /// Slab thickness, m.
-    Thickness,
-    /// Solar absorptivity, 0–1.
-    SolarAbsorptivity,
-    /// Broadband thermal emissivity, 0–1.
-    ThermalEmissivity,
-    /// Exposed area (material module semantics).
-    ExposedArea,
-}
+/// A material property a parameter sets: a row of
+/// [`registry::MATERIAL_PARAMETERS`] (compared by name).
+#[derive(Debug, Clone, Copy)]
+pub struct MaterialProperty(&'static MaterialParameter);
 
-const MATERIAL_PROPERTIES: [(&str, MaterialProperty); 7] = [
-    ("conductivity", MaterialProperty::Conductivity),
-    ("specific_heat", MaterialProperty::SpecificHeat),
-    ("density", MaterialProperty::Density),
-    ("thickness", MaterialProperty::Thickness),
-    ("solar_absorptivity", MaterialProperty::SolarAbsorptivity),
-    ("thermal_emissivity", MaterialProperty::ThermalEmissivity),
-    ("exposed_area", MaterialProperty::ExposedArea),
-];
+impl PartialEq for MaterialProperty {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.name == other.0.name
+    }
+}
 
 impl MaterialProperty {
-    /// The property's name in PARAMS files.
-    pub fn name(&self) -> &'static str {
-        MATERIAL_PROPERTIES
-            .iter()
-            .find(|(_, p)| p == self)
-            .map(|(n, _)| *n)
-            .unwrap_or("?")
+    /// The property by its JSON name or an alias.
+    pub fn from_name(name: &str) -> Option<MaterialProperty> {
+        registry::material_parameter(name).map(MaterialProperty)
     }
-    /// The property's value in `m`.
-    pub fn get(&self, m: &Material) -> f64 {
-        match self {
-            MaterialProperty::Conductivity => m.conductivity_w_m_k,
-            MaterialProperty::SpecificHeat => m.specific_heat_j_kg_k,
-            MaterialProperty::Density => m.density_kg_m3,
-            MaterialProperty::Thickness => m.thickness_m,
-            MaterialProperty::SolarAbsorptivity => m.solar_absorptivity,
-            MaterialProperty::ThermalEmissivity => m.thermal_emissivity,
-            MaterialProperty::ExposedArea => m.exposed_area,
-        }
+    /// Its registry row (name, unit, bounds, get/set).
+    pub fn row(&self) -> &'static MaterialParameter {
+        self.0
+    }
+    /// The property's name (as the material JSON spells it).
+    pub fn name(&self) -> &'static str {
+        self.0.name
+    }
+    /// The property's value in `m` (`None`: `m` does not have it).
+    pub fn get(&self, m: &Material) -> Option<f64> {
+        (self.0.get)(m)
     }
     /// Set the property in `m` to `v` (emissivity also scales a spectral
     /// curve by the same ratio, capped at 1).
-    pub fn set(&self, m: &mut Material, v: f64) {
-        match self {
-            MaterialProperty::Conductivity => m.conductivity_w_m_k = v,
-            MaterialProperty::SpecificHeat => m.specific_heat_j_kg_k = v,
-            MaterialProperty::Density => m.density_kg_m3 = v,
-            MaterialProperty::Thickness => m.thickness_m = v,
-            MaterialProperty::SolarAbsorptivity => m.solar_absorptivity = v,
-            MaterialProperty::ThermalEmissivity => {
-                let old = m.thermal_emissivity;
-                if let Some(c) = &mut m.emissivity_curve {
-                    if old > 0.0 {
-                        let r = v / old;
-                        for row in &mut c.emissivity {
-                            for e in row {
-                                *e = (*e * r).min(1.0);
-                            }
-                        }
-                    }
-                }
-                m.thermal_emissivity = v;
-            }
-            MaterialProperty::ExposedArea => m.exposed_area = v,
-        }
-    }
-    /// The values this property may take.
-    fn domain(&self) -> (f64, f64, bool) {
-        // (min, max, min exclusive)
-        match self {
-            MaterialProperty::SolarAbsorptivity => (0.0, 1.0, false),
-            MaterialProperty::ThermalEmissivity => (0.0, 1.0, true),
-            MaterialProperty::ExposedArea => (-1.0, 1.0, false),
-            _ => (0.0, f64::INFINITY, true),
-        }
+    ///
+    /// # Errors
+    /// `m` cannot take the property (the error names material and property).
+    pub fn set(&self, m: &mut Material, v: f64) -> Result<()> {
+        (self.0.set)(m, v).map_err(|why| Error::invalid(format!("{}.{}", m.name, self.0.name), why))
     }
 }
 
@@ -237,7 +186,10 @@ pub struct Parameter {
     pub name: String,
     /// What it perturbs.
     pub target: Target,
-    /// Nominal (best-estimate) value.
+    /// Unit of the values.
+    pub unit: &'static str,
+    /// Nominal (best-estimate) value: the file's `value` (or `nominal`),
+    /// else the material's own or the weather identity.
     pub nominal: f64,
     /// Lower plausible bound.
     pub low: f64,
@@ -255,6 +207,8 @@ struct RawParam {
     property: String,
     material: Option<String>,
     nominal: Option<f64>,
+    value: Option<f64>,
+    unit: Option<String>,
     low: f64,
     high: f64,
     uncertainty: Option<f64>,
@@ -315,7 +269,7 @@ impl ParamSet {
                 serde_json::from_value::<RawParam>(v).map_err(|e| {
                     Error::parse(
                         Location::file(path).with_field(format!("params[{i}]")),
-                        format!("{e}; expected kind, property, [material], low, high, [nominal], [uncertainty], [name]"),
+                        format!("{e}; expected kind, property, [material], low, high, [value], [unit], [uncertainty], [name]"),
                     )
                 })
             })
@@ -329,7 +283,7 @@ impl ParamSet {
         let mut params: Vec<Parameter> = Vec::with_capacity(raw.len());
         for (i, r) in raw.into_iter().enumerate() {
             let at = |f: &str| Location::file(path).with_field(format!("params[{i}].{f}"));
-            let (target, default_nominal, (dmin, dmax, excl)) = match r.kind.as_str() {
+            let (target, default_nominal, (dmin, dmax, excl), unit) = match r.kind.as_str() {
                 "weather" => {
                     if r.material.is_some() {
                         return Err(Error::parse(
@@ -337,22 +291,22 @@ impl ParamSet {
                             "a weather parameter takes no `material`",
                         ));
                     }
-                    let p = WEATHER_PROPERTIES
-                        .iter()
-                        .find(|(n, _)| *n == r.property)
-                        .map(|(_, p)| *p)
-                        .ok_or_else(|| {
-                            Error::parse(
-                                at("property"),
-                                format!(
-                                    "unknown weather property `{}`; expected one of {}",
-                                    r.property,
-                                    WEATHER_PROPERTIES.map(|(n, _)| n).join(", ")
-                                ),
-                            )
-                        })?;
-                    let (a, b) = p.domain();
-                    (Target::Weather(p), p.identity(), (a, b, false))
+                    let p = WeatherProperty::from_name(&r.property).ok_or_else(|| {
+                        Error::parse(
+                            at("property"),
+                            format!(
+                                "unknown weather property `{}`; expected one of {}",
+                                r.property,
+                                registry::WEATHER_PARAMETERS
+                                    .iter()
+                                    .map(|p| p.name)
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ),
+                        )
+                    })?;
+                    let row = p.row();
+                    (Target::Weather(p), p.identity(), row.domain, row.unit)
                 }
                 "material" => {
                     let mname = r.material.clone().ok_or_else(|| {
@@ -361,25 +315,25 @@ impl ParamSet {
                             "a material parameter needs `material` (its name)",
                         )
                     })?;
-                    let p = MATERIAL_PROPERTIES
-                        .iter()
-                        .find(|(n, _)| *n == r.property)
-                        .map(|(_, p)| *p)
-                        .ok_or_else(|| {
-                            Error::parse(
-                                at("property"),
-                                format!(
-                                    "unknown material property `{}`; expected one of {}",
-                                    r.property,
-                                    MATERIAL_PROPERTIES.map(|(n, _)| n).join(", ")
-                                ),
-                            )
-                        })?;
+                    let p = MaterialProperty::from_name(&r.property).ok_or_else(|| {
+                        Error::parse(
+                            at("property"),
+                            format!(
+                                "unknown material property `{}`; expected one of {}",
+                                r.property,
+                                registry::MATERIAL_PARAMETERS
+                                    .iter()
+                                    .map(|p| p.name)
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ),
+                        )
+                    })?;
                     let m = materials.iter().find(|m| m.name == mname).ok_or_else(|| {
                         Error::parse(
                             at("material"),
                             format!(
-                                "no material `{mname}` in the scene; known: {}",
+                                "no material `{mname}` among the materials given (the scene's, or the one studied); known: {}",
                                 materials
                                     .iter()
                                     .map(|m| m.name.as_str())
@@ -388,13 +342,24 @@ impl ParamSet {
                             ),
                         )
                     })?;
+                    let current = p.get(m).ok_or_else(|| {
+                        Error::parse(
+                            at("property"),
+                            format!(
+                                "material `{mname}` has no `{}` (the block it belongs to is not set)",
+                                p.name()
+                            ),
+                        )
+                    })?;
+                    let row = p.row();
                     (
                         Target::Material {
                             material: mname,
                             property: p,
                         },
-                        p.get(m),
-                        p.domain(),
+                        current,
+                        row.domain,
+                        row.unit,
                     )
                 }
                 other => {
@@ -443,13 +408,28 @@ impl ParamSet {
                     ),
                 ));
             }
-            let nominal = r.nominal.unwrap_or(default_nominal);
+            if let Some(u) = &r.unit {
+                if u != unit {
+                    return Err(Error::parse(
+                        at("unit"),
+                        format!("`{name}` is in {unit}, not {u}"),
+                    ));
+                }
+            }
+            if r.nominal.is_some() && r.value.is_some() {
+                return Err(Error::parse(
+                    at("value"),
+                    "give `value` or `nominal` (the same thing), not both",
+                ));
+            }
+            let given = r.value.or(r.nominal);
+            let nominal = given.unwrap_or(default_nominal);
             if !(nominal >= r.low && nominal <= r.high) {
                 return Err(Error::parse(
                     at("nominal"),
                     format!(
                         "nominal {nominal}{} lies outside [{}, {}]",
-                        if r.nominal.is_none() {
+                        if given.is_none() {
                             " (the current value)"
                         } else {
                             ""
@@ -469,6 +449,7 @@ impl ParamSet {
             params.push(Parameter {
                 name,
                 target,
+                unit,
                 nominal,
                 low: r.low,
                 high: r.high,
@@ -476,6 +457,38 @@ impl ParamSet {
             });
         }
         Ok(ParamSet { params })
+    }
+
+    /// The parameters at `values` (one per parameter, in order) as a PARAMS
+    /// list ([`registry::ListedParameter`]): what `--list-params` prints and
+    /// what a calibration writes as its fitted parameters. Bounds are kept.
+    pub fn listing(&self, values: &[f64]) -> Result<Vec<registry::ListedParameter>> {
+        self.check_len(values)?;
+        Ok(self
+            .params
+            .iter()
+            .zip(values)
+            .map(|(p, &v)| {
+                let (kind, material, property) = match &p.target {
+                    Target::Weather(w) => ("weather", None, w.name()),
+                    Target::Material { material, property } => {
+                        ("material", Some(material.clone()), property.name())
+                    }
+                };
+                let default_name =
+                    format!("{}.{property}", material.as_deref().unwrap_or("weather"));
+                registry::ListedParameter {
+                    name: (p.name != default_name).then(|| p.name.clone()),
+                    kind,
+                    material,
+                    property: property.to_string(),
+                    value: v,
+                    unit: p.unit,
+                    low: p.low,
+                    high: p.high,
+                }
+            })
+            .collect())
     }
 
     /// The nominal values, in order.
@@ -567,7 +580,7 @@ impl ParamSet {
                     .ok_or_else(|| {
                         Error::invalid(&p.name, format!("no material `{material}` to apply it to"))
                     })?;
-                property.set(m, v);
+                property.set(m, v)?;
             }
         }
         Ok(out)
@@ -580,7 +593,7 @@ impl ParamSet {
         for (p, &v) in self.params.iter().zip(values) {
             if let Target::Material { material, property } = &p.target {
                 if *material == m.name {
-                    property.set(&mut m, v);
+                    property.set(&mut m, v)?;
                 }
             }
         }

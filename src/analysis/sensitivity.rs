@@ -452,10 +452,28 @@ pub fn finite_difference_jacobian<M>(
 where
     M: Fn(&[f64]) -> Result<Vec<f64>> + Sync,
 {
+    let steps: Vec<f64> = factors
+        .iter()
+        .map(|f| rel_step * (f.high - f.low))
+        .collect();
+    jacobian_with_steps(factors, x, &steps, model)
+}
+
+/// Central finite-difference derivatives `∂y_o/∂x_i` at `x` with step
+/// `steps[i]` for factor `i` (one-sided where a step would leave the
+/// bounds): `[output][factor]`. The `2p` evaluations run in parallel.
+pub fn jacobian_with_steps<M>(
+    factors: &[Factor],
+    x: &[f64],
+    steps: &[f64],
+    model: &M,
+) -> Result<Vec<Vec<f64>>>
+where
+    M: Fn(&[f64]) -> Result<Vec<f64>> + Sync,
+{
     let mut points = Vec::with_capacity(2 * factors.len());
-    let mut steps = Vec::with_capacity(factors.len());
-    for (i, f) in factors.iter().enumerate() {
-        let h = rel_step * (f.high - f.low);
+    let mut widths = Vec::with_capacity(factors.len());
+    for (i, (f, &h)) in factors.iter().zip(steps).enumerate() {
         let lo = (x[i] - h).max(f.low);
         let hi = (x[i] + h).min(f.high);
         let mut a = x.to_vec();
@@ -464,14 +482,14 @@ where
         b[i] = hi;
         points.push(a);
         points.push(b);
-        steps.push(hi - lo);
+        widths.push(hi - lo);
     }
     let ys = evaluate_all(model, &points, None)?;
     let n_out = ys.first().map_or(0, |y| y.len());
     Ok((0..n_out)
         .map(|o| {
             (0..factors.len())
-                .map(|i| (ys[2 * i + 1][o] - ys[2 * i][o]) / steps[i])
+                .map(|i| (ys[2 * i + 1][o] - ys[2 * i][o]) / widths[i])
                 .collect()
         })
         .collect())

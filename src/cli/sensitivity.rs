@@ -23,7 +23,8 @@ use irsig::analysis::scene::{self as scene_study, PixelPoint, SceneStudy};
 use irsig::analysis::sensitivity::{self, ErrorBudget, Morris, MorrisOptions, Oat};
 use irsig::analysis::study::MaterialStudy;
 use irsig::material::Material;
-use irsig::thermal::SolveOptions;
+use irsig::sun::Site;
+use irsig::thermal::{BackBoundary, SolveOptions};
 use irsig::weather::{self, LoadOptions};
 
 use super::args::{FlagContext, parse_site, parse_time};
@@ -36,14 +37,16 @@ pub(crate) const FACET_FLAGS: &[(&str, &str)] = &[
     ("material", "--material"),
 ];
 
-/// The one-facet description shared by `sensitivity`, `calibrate` and
-/// `diurnal` (as in `irsig thermal`).
+/// The one-facet model options shared by `irsig thermal`, `calibrate` and
+/// `sensitivity` (`--thermal`): everything besides material and weather
+/// that changes the solved temperatures, so a fit or a study and a later
+/// `irsig thermal` run take the same flags.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FacetArgs {
-    /// Facet tilt from horizontal, degrees (0 = facing up).
+    /// Facet tilt from horizontal, degrees (0 = facing up, 90 = vertical).
     #[arg(long, value_name = "DEG", default_value_t = 0.0)]
     pub tilt: f64,
-    /// Direction the facet faces, degrees clockwise from north.
+    /// Direction the facet faces, degrees clockwise from north (180 = south).
     #[arg(
         long,
         value_name = "DEG",
@@ -51,10 +54,31 @@ pub struct FacetArgs {
         allow_negative_numbers = true
     )]
     pub azimuth: f64,
-    /// Sky shape factor (default (1 + cos tilt)/2).
+    /// Sky shape factor of the front face, 0–1 (default: (1 + cos tilt)/2,
+    /// an unobstructed plane).
     #[arg(long, value_name = "F")]
     pub shape_factor: Option<f64>,
-    /// Accurate thermal solver preset (default: the default preset).
+    /// Site as LAT,LON,ALT (degrees north, degrees east, metres); default:
+    /// the weather file's site.
+    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
+    pub site: Option<String>,
+    /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
+    #[arg(long, value_name = "RFC3339")]
+    pub start: Option<String>,
+    /// Replace the year of every EPW/TMY3 row. A typical-year file (months
+    /// from different years) takes the year of the run's last time without it.
+    #[arg(long, value_name = "YEAR")]
+    pub year: Option<i32>,
+    /// Back boundary, overriding the material's exposed area:
+    /// insulated | exposed | ground | building.
+    #[arg(long, value_name = "KIND")]
+    pub back: Option<String>,
+    /// Repeat the first day up to N times before the run (spin-up; default:
+    /// the solver preset's, 3 days by default, 6 with --accurate).
+    #[arg(long, value_name = "N")]
+    pub spinup_days: Option<u32>,
+    /// Accurate thermal solver preset (finer grid and sub-steps, tighter
+    /// tolerances; default: the default preset).
     #[arg(long)]
     pub accurate: bool,
 }
@@ -67,13 +91,53 @@ impl FacetArgs {
             shape_factor: self.shape_factor,
         }
     }
+    /// The solver options: the preset, with --spinup-days.
     pub(crate) fn options(&self) -> SolveOptions {
-        if self.accurate {
+        let mut o = if self.accurate {
             SolveOptions::accurate()
         } else {
             SolveOptions::default()
+        };
+        if let Some(n) = self.spinup_days {
+            o.spinup.max_cycles = n;
         }
+        o
     }
+    /// The --back override, if given.
+    pub(crate) fn back(&self) -> anyhow::Result<Option<BackBoundary>> {
+        self.back.as_deref().map(parse_back).transpose()
+    }
+    /// The --site override, if given.
+    pub(crate) fn site(&self) -> anyhow::Result<Option<Site>> {
+        self.site.as_deref().map(parse_site).transpose()
+    }
+    /// Weather load options: --site, --start and --year; a typical-year EPW/TMY3
+    /// file takes `until`'s year (the run's last time) without --year.
+    pub(crate) fn load_options(&self, until: DateTime<FixedOffset>) -> anyhow::Result<LoadOptions> {
+        let mut opts = LoadOptions::default();
+        if let Some(s) = self.site()? {
+            opts = opts.with_site(s);
+        }
+        if let Some(s) = &self.start {
+            opts = opts.with_start(parse_time("--start", s)?);
+        }
+        opts = opts.with_typical_year(chrono::Datelike::year(&until));
+        if let Some(y) = self.year {
+            opts = opts.with_year(y);
+        }
+        Ok(opts)
+    }
+}
+
+/// The back boundary named by `--back`.
+pub(crate) fn parse_back(kind: &str) -> anyhow::Result<BackBoundary> {
+    Ok(match kind {
+        "insulated" => BackBoundary::Insulated,
+        "exposed" => BackBoundary::BOTH_FACES,
+        "ground" => BackBoundary::GROUND,
+        "building" => BackBoundary::BUILDING,
+        _ => anyhow::bail!("--back: `{kind}` is not one of insulated, exposed, ground, building"),
+    })
 }
 
 /// One-facet mode inputs (`--thermal`).
@@ -92,12 +156,17 @@ pub struct ThermalArgs {
     /// Weather file (irsig CSV/JSON, EPW, TMY3, DIRSIG .wth).
     #[arg(long, value_name = "FILE", requires = "thermal")]
     pub weather: Option<PathBuf>,
-    /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
-    #[arg(long, value_name = "RFC3339")]
-    pub start: Option<String>,
-    /// Site LAT,LON,ALT (default: the weather file's).
-    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
-    pub site: Option<String>,
+}
+
+impl ThermalArgs {
+    /// The --material, resolved in --materials.
+    pub(crate) fn material(&self) -> anyhow::Result<Material> {
+        let spec = self
+            .material
+            .as_deref()
+            .context("--thermal needs --material NAME|FILE")?;
+        super::thermal::find_material(spec, self.materials.as_deref()).for_flags(FACET_FLAGS)
+    }
 }
 
 /// Materials, weather records up to `until`, and site: from a scene or
@@ -113,27 +182,13 @@ pub(crate) fn setup_thermal(
     f: &FacetArgs,
     until: DateTime<FixedOffset>,
 ) -> anyhow::Result<Setup> {
-    let spec = t
-        .material
-        .as_deref()
-        .context("--thermal needs --material NAME|FILE")?;
+    let material = t.material()?;
     let wpath = t
         .weather
         .as_ref()
         .context("--thermal needs --weather FILE")?;
-    let material =
-        super::thermal::find_material(spec, t.materials.as_deref()).for_flags(FACET_FLAGS)?;
-    let site = t.site.as_deref().map(parse_site).transpose()?;
-    let mut opts = LoadOptions::default();
-    if let Some(s) = site {
-        opts = opts.with_site(s);
-    }
-    if let Some(s) = &t.start {
-        opts = opts.with_start(parse_time("--start", s)?);
-    }
-    // A typical-year EPW/TMY3 file takes the year of the last time used.
-    opts = opts.with_typical_year(chrono::Datelike::year(&until));
-    let history = weather::load_with(wpath, &opts)?;
+    let site = f.site()?;
+    let history = weather::load_with(wpath, &f.load_options(until)?)?;
     let site = site.or(history.site().copied()).with_context(|| {
         format!(
             "{}: the weather file names no site; give --site LAT,LON,ALT",
@@ -143,7 +198,8 @@ pub(crate) fn setup_thermal(
     let records =
         facet::records_until(&history, until).with_context(|| format!("{}", wpath.display()))?;
     let facet = OneFacet::new(records, &site, &f.spec(), f.options(), facet::lwir_band()?)
-        .for_flags(FACET_FLAGS)?;
+        .for_flags(FACET_FLAGS)?
+        .with_back(f.back()?);
     Ok(Setup {
         materials: vec![material],
         facet,

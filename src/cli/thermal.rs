@@ -6,12 +6,13 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use irsig::analysis::facet::{self, FacetSpec};
-use irsig::thermal::{BackBoundary, SlabProperties, SolveOptions, Spinup};
-use irsig::weather::{self, LoadOptions};
+use irsig::analysis::facet;
+use irsig::analysis::params::ParamSet;
+use irsig::thermal::SlabProperties;
+use irsig::weather;
 
-use super::args::{FlagContext, parse_site, parse_time};
-use super::sensitivity::FACET_FLAGS as FLAGS;
+use super::args::{FlagContext, parse_time};
+use super::sensitivity::{FACET_FLAGS as FLAGS, FacetArgs};
 
 /// Arguments of `irsig thermal`.
 #[derive(Debug, clap::Args)]
@@ -28,43 +29,17 @@ pub struct Args {
     /// Weather file: irsig CSV/JSON, EPW, TMY3 CSV or DIRSIG .wth.
     #[arg(long, value_name = "FILE")]
     pub weather: PathBuf,
-    /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
-    #[arg(long, value_name = "RFC3339")]
-    pub start: Option<String>,
-    /// Replace the year of every EPW/TMY3 row. A typical-year file (months
-    /// from different years) takes --time's year without it.
-    #[arg(long, value_name = "YEAR")]
-    pub year: Option<i32>,
     /// Image time (RFC 3339 with offset): the history is solved from its
     /// first record up to this time.
     #[arg(long, value_name = "RFC3339")]
     pub time: String,
-    /// Facet tilt from horizontal, degrees (0 = facing up, 90 = vertical).
-    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
-    pub tilt: f64,
-    /// Direction the facet faces, degrees clockwise from north (180 = south).
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 180.0,
-        allow_negative_numbers = true
-    )]
-    pub azimuth: f64,
-    /// Sky shape factor of the front face, 0–1 (default: (1 + cos tilt)/2,
-    /// an unobstructed plane).
-    #[arg(long, value_name = "F")]
-    pub shape_factor: Option<f64>,
-    /// Site as LAT,LON,ALT (degrees north, degrees east, metres); default:
-    /// the weather file's site.
-    #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
-    pub site: Option<String>,
-    /// Back boundary, overriding the material's exposed area:
-    /// insulated | exposed | ground | building.
-    #[arg(long, value_name = "KIND")]
-    pub back: Option<String>,
-    /// Repeat the first day up to N times before the run (spin-up).
-    #[arg(long, value_name = "N", default_value_t = Spinup::default().max_cycles)]
-    pub spinup_days: u32,
+    #[command(flatten)]
+    pub facet: FacetArgs,
+    /// Parameter values to apply (a PARAMS file: each entry's `value` set on
+    /// the material or the weather), e.g. the fitted parameters that
+    /// `irsig calibrate --thermal --params-out` writes.
+    #[arg(long, value_name = "PARAMS.json")]
+    pub params: Option<PathBuf>,
     /// Print JSON: {"records": [{"time", "surface_temperature_k"}, …]}.
     #[arg(long, conflicts_with = "csv")]
     pub json: bool,
@@ -107,47 +82,32 @@ pub(crate) fn find_material(
 /// Run `irsig thermal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let time = parse_time("--time", &args.time)?;
-    let site = args.site.as_deref().map(parse_site).transpose()?;
-    let material = find_material(&args.material, args.materials.as_deref()).for_flags(FLAGS)?;
-    let mut props = SlabProperties::from_material(&material)?;
-    if let Some(kind) = &args.back {
-        props = props.with_back(parse_back(kind)?);
-    }
-    let spec = FacetSpec {
-        tilt_deg: args.tilt,
-        azimuth_deg: args.azimuth,
-        shape_factor: args.shape_factor,
-    };
-
-    let mut opts = LoadOptions::default();
-    if let Some(s) = site {
-        opts = opts.with_site(s);
-    }
-    if let Some(s) = &args.start {
-        opts = opts.with_start(parse_time("--start", s)?);
-    }
-    opts = opts.with_typical_year(chrono::Datelike::year(&time));
-    if let Some(y) = args.year {
-        opts = opts.with_year(y);
-    }
-    let history = weather::load_with(&args.weather, &opts)?;
+    let f = &args.facet;
+    let site = f.site()?;
+    let mut material = find_material(&args.material, args.materials.as_deref()).for_flags(FLAGS)?;
+    let history = weather::load_with(&args.weather, &f.load_options(time)?)?;
     let site = site.or(history.site().copied()).ok_or_else(|| {
         anyhow::anyhow!(
             "{}: the weather file names no site; give one with --site LAT,LON,ALT",
             args.weather.display()
         )
     })?;
-    let records = facet::records_until(&history, time)
+    let mut records = facet::records_until(&history, time)
         .with_context(|| format!("{}: --time", args.weather.display()))?;
-    let options = SolveOptions {
-        spinup: Spinup {
-            max_cycles: args.spinup_days,
-            ..Spinup::default()
-        },
-        ..SolveOptions::default()
-    };
+    if let Some(p) = &args.params {
+        let ps = ParamSet::load(p, std::slice::from_ref(&material))
+            .with_context(|| format!("--params {}", p.display()))?;
+        let x = ps.nominal();
+        material = ps.apply_material(&x, &material)?;
+        records = ps.apply_weather_at(&x, &records, Some(&site))?;
+    }
+    let mut props = SlabProperties::from_material(&material)?;
+    if let Some(back) = f.back()? {
+        props = props.with_back(back);
+    }
+    let options = f.options();
     let (sol, shape_factor) =
-        facet::solve_free_facet(&props, &records, &site, &spec, &options).for_flags(FLAGS)?;
+        facet::solve_free_facet(&props, &records, &site, &f.spec(), &options).for_flags(FLAGS)?;
 
     let mut out = std::io::stdout().lock();
     let times = records.iter().map(|r| r.time);
@@ -170,7 +130,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         writeln!(
             out,
             "material {} ({:?}), tilt {:.1}°, azimuth {:.1}°, shape factor {shape_factor:.4}",
-            material.name, props.back, args.tilt, args.azimuth
+            material.name, props.back, f.tilt, f.azimuth
         )?;
         match sol.spinup_change_k {
             Some(c) => writeln!(
@@ -201,14 +161,4 @@ struct JsonOutput {
 struct JsonRecord {
     time: String,
     surface_temperature_k: f64,
-}
-
-fn parse_back(kind: &str) -> anyhow::Result<BackBoundary> {
-    Ok(match kind {
-        "insulated" => BackBoundary::Insulated,
-        "exposed" => BackBoundary::BOTH_FACES,
-        "ground" => BackBoundary::GROUND,
-        "building" => BackBoundary::BUILDING,
-        _ => anyhow::bail!("--back: `{kind}` is not one of insulated, exposed, ground, building"),
-    })
 }

@@ -135,6 +135,10 @@ pub struct MaterialEntry {
     /// Spectral emissivity file (DIRSIG `.ems` or CSV), relative to this file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emissivity_file: Option<String>,
+    /// How the surface evaporates (latent heat, canopy, water); absent: a
+    /// dry surface.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_energy: Option<crate::material::SurfaceEnergySpec>,
     /// Where the values come from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<MaterialSource>,
@@ -201,6 +205,7 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
             transmissivity: e.transmissivity,
             emissivity_curve: curve,
             double_sided: e.double_sided,
+            surface_energy: e.surface_energy,
         };
         let problems = m.problems();
         if !problems.is_empty() {

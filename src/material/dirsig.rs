@@ -321,6 +321,7 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             transmissivity: 0.0,
             emissivity_curve: curve,
             double_sided,
+            surface_energy: None,
         };
         // Real libraries hold THERM entries with THICKNESS = 0 (anadirsig.mat: water,
         // grass) whose meaning in THERM is not documented; irsig's slab cannot represent
@@ -341,7 +342,7 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             continue;
         }
         if let Some((field, msg)) = m.problems().into_iter().next() {
-            let key = match field {
+            let key = match field.as_str() {
                 "specific_heat_j_kg_k" => "SPECIFIC_HEAT",
                 "conductivity_w_m_k" => "THERMAL_CONDUCTIVITY",
                 "density_kg_m3" => "MASS_DENSITY",

@@ -36,6 +36,7 @@
 pub mod db;
 pub mod dirsig;
 pub mod stock;
+pub mod surface;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -45,6 +46,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Location, Result};
 use crate::math::{bracket, interp1d, lerp};
+pub use surface::{SurfaceEnergySpec, SurfaceKind};
 
 /// A spectral emissivity curve, optionally angle-dependent.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, JsonSchema)]
@@ -175,14 +177,19 @@ pub struct Material {
     pub emissivity_curve: Option<EmissivityCurve>,
     /// Whether both faces of a facet are front faces.
     pub double_sided: bool,
+    /// How the surface evaporates (`None`: a dry surface with McAdams'
+    /// convection).
+    pub surface_energy: Option<SurfaceEnergySpec>,
 }
 
 impl Material {
     /// Problems with the material as `(field, message)` pairs; empty when
     /// valid. Ranges: specific heat, conductivity, density, thickness > 0;
     /// absorptivity, emissivity, specular fraction, transmissivity in 0..=1;
-    /// `|exposed_area|` ≤ 1; self power finite; curve valid.
-    pub fn problems(&self) -> Vec<(&'static str, String)> {
+    /// `|exposed_area|` ≤ 1; self power finite; curve valid; the
+    /// `surface_energy` block valid (its fields named
+    /// `surface_energy.<name>`).
+    pub fn problems(&self) -> Vec<(String, String)> {
         let mut p = Vec::new();
         let mut positive = |field: &'static str, v: f64, unit: &str| {
             if !(v.is_finite() && v > 0.0) {
@@ -228,6 +235,12 @@ impl Material {
         if let Some(c) = &self.emissivity_curve {
             for m in c.problems() {
                 p.push(("emissivity_curve", m));
+            }
+        }
+        let mut p: Vec<(String, String)> = p.into_iter().map(|(f, m)| (f.to_string(), m)).collect();
+        if let Some(s) = &self.surface_energy {
+            for (f, m) in s.problems() {
+                p.push((format!("surface_energy.{f}"), m));
             }
         }
         p

@@ -299,6 +299,30 @@ impl Slab {
         }
     }
 
+    /// The slab with a **skin** node in front of its front surface: a node
+    /// of heat capacity `capacity_j_m2_k` (J m⁻² K⁻¹) joined to the old front
+    /// node by the conductance `conductance_w_m2_k` (W m⁻² K⁻¹), at depth 0.
+    /// The front boundary then acts on the skin: a vegetation canopy over
+    /// the soil column (`crate::thermal::surface`). Energy is conserved as
+    /// for any node.
+    pub fn with_skin(mut self, capacity_j_m2_k: f64, conductance_w_m2_k: f64) -> Slab {
+        debug_assert!(capacity_j_m2_k > 0.0 && conductance_w_m2_k > 0.0);
+        let t0 = self.temp[0];
+        self.depth_m.insert(0, 0.0);
+        self.capacity.insert(0, capacity_j_m2_k);
+        self.conductance.insert(0, conductance_w_m2_k);
+        self.temp.insert(0, t0);
+        let n = self.temp.len();
+        self.t_start = vec![0.0; n];
+        self.rhs = vec![0.0; n];
+        self.diag = vec![0.0; n];
+        self.cprime = vec![0.0; n];
+        for f in &mut self.factors {
+            f.c = f64::NAN;
+        }
+        self
+    }
+
     /// Newton convergence tolerance on the boundary temperatures, K, and the
     /// iteration limit per stage.
     pub fn set_newton(&mut self, tolerance_k: f64, max_iterations: u32) {

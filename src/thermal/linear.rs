@@ -45,8 +45,8 @@
 
 use super::conduction::{GAMMA, Slab};
 use super::{
-    BackBoundary, FacetInputs, Forcing, SlabProperties, SolveOptions, ThermalSolution, prepare,
-    solve_prepared,
+    BackBoundary, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, ThermalSolution,
+    prepare, solve_prepared,
 };
 use crate::error::Result;
 use crate::thermal::Boundary;
@@ -71,7 +71,21 @@ pub fn source_history(
     props.validate()?;
     forcing.validate()?;
     inputs.validate(forcing.len())?;
-    let p = prepare(props, forcing, inputs);
+    let exchange = Exchange::new(props, forcing)?;
+    source_history_with(props, forcing, &exchange, inputs)
+}
+
+/// [`source_history`] with the material's exchange made
+/// ([`Exchange::new`]); properties and forcing taken as validated.
+pub fn source_history_with(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    exchange: &Exchange,
+    inputs: &FacetInputs,
+) -> Result<SourceHistory> {
+    inputs.validate(forcing.len())?;
+    exchange.check_len(forcing.len())?;
+    let p = prepare(props, forcing, inputs, exchange);
     Ok(SourceHistory {
         front_w_m2: p.front.iter().map(|f| f.source_w_m2).collect(),
         back_w_m2: matches!(props.back, BackBoundary::Exposed { .. }).then(|| {
@@ -93,6 +107,7 @@ pub fn source_history(
 pub fn source_history_into(
     props: &SlabProperties,
     forcing: &Forcing,
+    exchange: &Exchange,
     inputs: &FacetInputs,
     front: &mut [f64],
     back: &mut [f64],
@@ -107,7 +122,7 @@ pub fn source_history_into(
         _ => None,
     };
     for k in 0..n {
-        let ff = super::front_forcing_at(forcing, inputs, k);
+        let ff = super::front_forcing_at(forcing, exchange, inputs, k);
         front[k] = super::balance::front_flux(
             &ff,
             props.solar_absorptivity,
@@ -141,8 +156,9 @@ pub struct SourceModel {
 }
 
 impl SourceModel {
-    /// The model of `props` under `forcing` (not validated here).
-    pub fn new(props: &SlabProperties, forcing: &Forcing) -> SourceModel {
+    /// The model of `props` under `forcing` with the material's exchange
+    /// ([`Exchange::new`]); not validated here.
+    pub fn new(props: &SlabProperties, forcing: &Forcing, exchange: &Exchange) -> SourceModel {
         let n = forcing.len();
         let one = vec![1.0f32; n];
         let zero = vec![0.0f32; n];
@@ -154,7 +170,7 @@ impl SourceModel {
             let mut front = vec![0.0; n];
             let mut back = vec![0.0; n];
             for k in 0..n {
-                let ff = super::front_forcing_at(forcing, &inputs, k);
+                let ff = super::front_forcing_at(forcing, exchange, &inputs, k);
                 front[k] = super::balance::front_flux(
                     &ff,
                     props.solar_absorptivity,
@@ -264,6 +280,10 @@ pub struct Linearization {
     pub sources: SourceHistory,
     /// `εσ` of the front face, W m⁻² K⁻⁴.
     pub front_radiative_w_m2_k4: f64,
+    /// Vapour conductance of the front law at each record, W m⁻² Pa⁻¹
+    /// (empty for a dry surface): the latent term whose `e°(T)` curvature
+    /// the second order adds ([`latent_curvature`]).
+    pub front_vapour_conductance_w_m2_pa: Vec<f64>,
     /// `a·εσ` of an exposed back face (0 otherwise), W m⁻² K⁻⁴.
     pub back_radiative_w_m2_k4: f64,
     /// `∂T_front(t)/∂S_k`, row-major `[t][k]`, K per W m⁻².
@@ -327,7 +347,14 @@ impl Linearization {
             let rf: Vec<f64> = d
                 .iter()
                 .zip(t_ref)
-                .map(|(&dt, &t)| emission_curvature(self.front_radiative_w_m2_k4, t, dt))
+                .enumerate()
+                .map(|(k, (&dt, &t))| {
+                    emission_curvature(self.front_radiative_w_m2_k4, t, dt)
+                        + self
+                            .front_vapour_conductance_w_m2_pa
+                            .get(k)
+                            .map_or(0.0, |&g| latent_curvature(g, t, dt))
+                })
                 .collect();
             let rb = if self.has_back() {
                 let db = db.as_deref().expect("exposed back");
@@ -364,6 +391,20 @@ pub fn emission_curvature(radiative_w_m2_k4: f64, t_k: f64, dt_k: f64) -> f64 {
     -radiative_w_m2_k4 * dt_k * dt_k * (6.0 * t_k * t_k + 4.0 * t_k * dt_k + dt_k * dt_k)
 }
 
+/// The neglected curvature of the latent loss `−g_v e°(T)` about `t_k` for
+/// a change `dt_k`: `−g_v[e°(T+Δ) − e°(T) − e°′(T)Δ]`, W m⁻² (e° by FAO-56
+/// eq. 11, its slope by eq. 13).
+#[inline]
+pub fn latent_curvature(vapour_conductance_w_m2_pa: f64, t_k: f64, dt_k: f64) -> f64 {
+    use super::latent::psychrometrics::{
+        saturation_vapour_pressure_pa as es, saturation_vapour_pressure_slope_pa_k as des,
+    };
+    if vapour_conductance_w_m2_pa == 0.0 {
+        return 0.0;
+    }
+    -vapour_conductance_w_m2_pa * (es(t_k + dt_k) - es(t_k) - des(t_k) * dt_k)
+}
+
 /// Solves the reference facet with the nonlinear model and returns its
 /// Green's matrices (module docs). Errors as [`super::solve`].
 pub fn linearize(
@@ -372,21 +413,27 @@ pub fn linearize(
     inputs: &FacetInputs,
     opts: &SolveOptions,
 ) -> Result<Linearization> {
-    let sources = source_history(props, forcing, inputs)?;
+    props.validate()?;
+    forcing.validate()?;
+    let exchange = Exchange::new(props, forcing)?;
+    linearize_with(props, forcing, &exchange, inputs, opts)
+}
+
+/// [`linearize`] with the material's exchange made ([`Exchange::new`]);
+/// properties and forcing taken as validated. The Green's functions carry
+/// the latent term's derivative `g_v·de°/dT` of the reference; the
+/// curvature of `e°(T)` away from the reference is neglected like the
+/// emission's (first order).
+pub fn linearize_with(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    exchange: &Exchange,
+    inputs: &FacetInputs,
+    opts: &SolveOptions,
+) -> Result<Linearization> {
+    let sources = source_history_with(props, forcing, exchange, inputs)?;
     opts.validate()?;
-    let p = prepare(props, forcing, inputs);
-    // The Green's functions below would take the latent derivative from the
-    // Newton solve, but the second-order correction covers only the
-    // emission's curvature, not that of e°(T) in the latent term, and its
-    // accuracy against the per-facet solve has not been checked with latent
-    // heat: refuse rather than answer silently wrong.
-    if p.front.iter().any(|f| f.has_latent()) {
-        return Err(crate::error::Error::invalid(
-            "surface_energy",
-            "the linearised scene thermal solve does not handle latent heat yet; \
-             solve materials with a surface-energy block facet by facet (the exact method)",
-        ));
-    }
+    let p = prepare(props, forcing, inputs, exchange);
     let n = forcing.len();
     let has_back = sources.back_w_m2.is_some();
     let fixed_back = matches!(props.back, BackBoundary::Ground { .. });
@@ -414,6 +461,14 @@ pub fn linearize(
         solution,
         sources,
         front_radiative_w_m2_k4: front_radiative,
+        front_vapour_conductance_w_m2_pa: if p.front.iter().any(|f| f.has_latent()) {
+            p.front
+                .iter()
+                .map(|f| f.vapour_conductance_w_m2_pa)
+                .collect()
+        } else {
+            Vec::new()
+        },
         back_radiative_w_m2_k4: back_radiative,
         front_from_front,
         front_from_back,

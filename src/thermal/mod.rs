@@ -50,7 +50,7 @@
 //! let props = SlabProperties {
 //!     conductivity_w_m_k: 1.4, density_kg_m3: 2300.0, specific_heat_j_kg_k: 880.0,
 //!     thickness_m: 0.2, solar_absorptivity: 0.7, thermal_emissivity: 0.9,
-//!     self_power_w_m2: 0.0, back: BackBoundary::Insulated,
+//!     self_power_w_m2: 0.0, back: BackBoundary::Insulated, surface: None,
 //! };
 //! let sun = [1.0f32, 1.0];
 //! let cos = [0.8f32, 0.8];
@@ -64,6 +64,7 @@ pub mod conduction;
 pub mod latent;
 pub mod linear;
 pub mod scene;
+pub mod surface;
 
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -71,9 +72,10 @@ use crate::weather::WeatherRecord;
 pub use balance::{INTERIOR_AIR_K, INTERIOR_FILM_W_M2_K, mcadams_h_w_m2_k};
 pub use conduction::{Boundary, Grid, STEFAN_BOLTZMANN_W_M2_K4, Slab, StepStats, SurfaceFlux};
 pub use linear::{
-    Linearization, SourceHistory, SourceModel, background_coefficients, linearize, source_history,
-    source_history_into,
+    Linearization, SourceHistory, SourceModel, background_coefficients, linearize, linearize_with,
+    source_history, source_history_into, source_history_with,
 };
+pub use surface::{Exchange, LandSurface, Skin};
 
 /// Angular frequency of the diurnal cycle, rad/s.
 pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
@@ -176,6 +178,9 @@ pub struct SlabProperties {
     pub self_power_w_m2: f64,
     /// What the back face touches.
     pub back: BackBoundary,
+    /// How the front surface exchanges heat and vapour with the air (None:
+    /// dry, McAdams' convection; [`surface`]).
+    pub surface: Option<LandSurface>,
 }
 
 impl SlabProperties {
@@ -224,6 +229,15 @@ impl SlabProperties {
             thermal_emissivity: m.thermal_emissivity,
             self_power_w_m2: m.self_power_w_m2,
             back: BackBoundary::from_exposed_area(m.exposed_area),
+            surface: match &m.surface_energy {
+                Some(spec) => Some(LandSurface::from_spec(spec).map_err(|e| {
+                    Error::invalid(
+                        field(&format!("surface_energy.{}", e.field())),
+                        e.to_string(),
+                    )
+                })?),
+                None => None,
+            },
         };
         p.validate_with(&field)?;
         Ok(p)
@@ -329,6 +343,12 @@ impl SlabProperties {
             }
             BackBoundary::Insulated => {}
         }
+        if let Some(s) = &self.surface {
+            s.validate().map_err(|e| match e {
+                Error::Invalid { field: f, message } => Error::invalid(field(&f), message),
+                other => other,
+            })?;
+        }
         Ok(())
     }
 }
@@ -356,7 +376,28 @@ pub struct Forcing {
     pub diffuse_horizontal_w_m2: Vec<f64>,
     /// Downwelling sky longwave on a horizontal surface, W m⁻².
     pub sky_longwave_w_m2: Vec<f64>,
+    /// Actual vapour pressure of the air, Pa.
+    pub vapour_pressure_pa: Vec<f64>,
+    /// Station pressure, Pa.
+    pub pressure_pa: Vec<f64>,
+    /// Global-horizontal solar irradiance, W m⁻².
+    pub global_horizontal_w_m2: Vec<f64>,
+    /// Height of the wind measurement above the ground, m (default
+    /// [`WIND_HEIGHT_M`]).
+    pub wind_height_m: f64,
+    /// Height of the air temperature and humidity measurement, m (default
+    /// [`AIR_HEIGHT_M`]).
+    pub air_height_m: f64,
 }
+
+/// Default height of a weather file's wind, m: the WMO standard anemometer
+/// height (WMO-No. 8, *Guide to Instruments and Methods of Observation*,
+/// 2018, Vol. I §5.9.2), which EPW and TMY3 airport data follow.
+pub const WIND_HEIGHT_M: f64 = 10.0;
+
+/// Default height of a weather file's air temperature and humidity, m: the
+/// WMO screen height 1.25–2 m (WMO-No. 8, Vol. I §2.1.4.1); 2 m.
+pub const AIR_HEIGHT_M: f64 = 2.0;
 
 impl Forcing {
     /// The forcing of a weather history (validated).
@@ -372,12 +413,34 @@ impl Forcing {
             direct_normal_w_m2: records.iter().map(|r| r.direct_normal_w_m2).collect(),
             diffuse_horizontal_w_m2: records.iter().map(|r| r.diffuse_horizontal_w_m2).collect(),
             sky_longwave_w_m2: records.iter().map(|r| r.sky_longwave_w_m2).collect(),
+            // FAO-56 eq. 14 from the dew point; eq. 10 from RH where the dew
+            // point is not a number.
+            vapour_pressure_pa: records
+                .iter()
+                .map(|r| {
+                    if r.dew_point_k.is_finite() {
+                        latent::psychrometrics::vapour_pressure_from_dew_point_pa(r.dew_point_k)
+                    } else {
+                        latent::psychrometrics::vapour_pressure_from_relative_humidity_pa(
+                            r.air_temperature_k,
+                            r.relative_humidity,
+                        )
+                    }
+                })
+                .collect(),
+            pressure_pa: records.iter().map(|r| r.pressure_pa).collect(),
+            global_horizontal_w_m2: records.iter().map(|r| r.global_horizontal_w_m2).collect(),
+            wind_height_m: WIND_HEIGHT_M,
+            air_height_m: AIR_HEIGHT_M,
         };
         f.validate()?;
         Ok(f)
     }
 
-    /// Constant weather at the given record times (for tests and studies).
+    /// Constant weather at the given record times (for tests and studies):
+    /// relative humidity 50 %, pressure 101 325 Pa, and a global horizontal
+    /// irradiance of `direct + diffuse` (the sun at the zenith); change the
+    /// fields for other air.
     pub fn constant(
         times_s: &[f64],
         air_temperature_k: f64,
@@ -394,6 +457,34 @@ impl Forcing {
             direct_normal_w_m2: vec![direct_normal_w_m2; n],
             diffuse_horizontal_w_m2: vec![diffuse_horizontal_w_m2; n],
             sky_longwave_w_m2: vec![sky_longwave_w_m2; n],
+            vapour_pressure_pa: vec![
+                latent::psychrometrics::vapour_pressure_from_relative_humidity_pa(
+                    air_temperature_k,
+                    0.5
+                );
+                n
+            ],
+            pressure_pa: vec![101_325.0; n],
+            global_horizontal_w_m2: vec![direct_normal_w_m2 + diffuse_horizontal_w_m2; n],
+            wind_height_m: WIND_HEIGHT_M,
+            air_height_m: AIR_HEIGHT_M,
+        }
+    }
+
+    /// Keep the first `n` records.
+    pub fn truncate(&mut self, n: usize) {
+        for v in [
+            &mut self.times_s,
+            &mut self.air_temperature_k,
+            &mut self.wind_speed_m_s,
+            &mut self.direct_normal_w_m2,
+            &mut self.diffuse_horizontal_w_m2,
+            &mut self.sky_longwave_w_m2,
+            &mut self.vapour_pressure_pa,
+            &mut self.pressure_pa,
+            &mut self.global_horizontal_w_m2,
+        ] {
+            v.truncate(n);
         }
     }
 
@@ -431,7 +522,7 @@ impl Forcing {
                 "the weather history is empty; at least one record is needed",
             ));
         }
-        let cols: [(&str, &Vec<f64>, f64, &str); 5] = [
+        let cols: [(&str, &Vec<f64>, f64, &str); 8] = [
             ("air_temperature_k", &self.air_temperature_k, 1.0, "K, > 0"),
             ("wind_speed_m_s", &self.wind_speed_m_s, 0.0, "m/s, ≥ 0"),
             (
@@ -452,6 +543,19 @@ impl Forcing {
                 0.0,
                 "W/m², ≥ 0",
             ),
+            (
+                "vapour_pressure_pa",
+                &self.vapour_pressure_pa,
+                0.0,
+                "Pa, ≥ 0",
+            ),
+            ("pressure_pa", &self.pressure_pa, 0.0, "Pa, ≥ 0"),
+            (
+                "global_horizontal_w_m2",
+                &self.global_horizontal_w_m2,
+                0.0,
+                "W/m², ≥ 0",
+            ),
         ];
         for (name, col, min, what) in cols {
             if col.len() != n {
@@ -468,6 +572,17 @@ impl Forcing {
                 return Err(Error::invalid(
                     format!("records[{i}].{name}"),
                     format!("expected a finite value ({what}), got {v}"),
+                ));
+            }
+        }
+        for (name, z) in [
+            ("wind_height_m", self.wind_height_m),
+            ("air_height_m", self.air_height_m),
+        ] {
+            if !(z.is_finite() && z > 0.0) {
+                return Err(Error::invalid(
+                    name,
+                    format!("expected a measurement height > 0 m, got {z}"),
                 ));
             }
         }
@@ -804,7 +919,12 @@ struct Prepared {
     deep_k: Option<f64>,
 }
 
-fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> Prepared {
+fn prepare(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    inputs: &FacetInputs,
+    exchange: &Exchange,
+) -> Prepared {
     let n = forcing.len();
     let mut front = Vec::with_capacity(n);
     let mut back = Vec::with_capacity(n);
@@ -819,7 +939,7 @@ fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> P
     };
     for k in 0..n {
         let air = forcing.air_temperature_k[k];
-        let ff = front_forcing_at(forcing, inputs, k);
+        let ff = front_forcing_at(forcing, exchange, inputs, k);
         front.push(balance::front_flux(
             &ff,
             props.solar_absorptivity,
@@ -854,7 +974,12 @@ fn prepare(props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs) -> P
 
 /// What the front balance needs at record `k` of a facet.
 #[inline]
-fn front_forcing_at(forcing: &Forcing, inputs: &FacetInputs, k: usize) -> balance::FrontForcing {
+fn front_forcing_at(
+    forcing: &Forcing,
+    exchange: &Exchange,
+    inputs: &FacetInputs,
+    k: usize,
+) -> balance::FrontForcing {
     let air = forcing.air_temperature_k[k];
     let bg = match inputs.background {
         Background::Air => air,
@@ -863,7 +988,7 @@ fn front_forcing_at(forcing: &Forcing, inputs: &FacetInputs, k: usize) -> balanc
     };
     balance::FrontForcing {
         air_temperature_k: air,
-        convection_w_m2_k: mcadams_h_w_m2_k(forcing.wind_speed_m_s[k]),
+        convection_w_m2_k: exchange.sensible_w_m2_k[k],
         direct_normal_w_m2: forcing.direct_normal_w_m2[k],
         diffuse_horizontal_w_m2: forcing.diffuse_horizontal_w_m2[k],
         sky_longwave_w_m2: forcing.sky_longwave_w_m2[k],
@@ -871,10 +996,8 @@ fn front_forcing_at(forcing: &Forcing, inputs: &FacetInputs, k: usize) -> balanc
         cos_incidence: inputs.cos_incidence[k] as f64,
         shape_factor: inputs.shape_factor,
         background_temperature_k: bg,
-        // No material evaporates yet (issue 16, step 2 will set these from
-        // the material's surface-energy block): the dry balance.
-        vapour_conductance_w_m2_pa: 0.0,
-        air_vapour_pressure_pa: 0.0,
+        vapour_conductance_w_m2_pa: exchange.vapour_conductance_w_m2_pa[k],
+        air_vapour_pressure_pa: forcing.vapour_pressure_pa[k],
     }
 }
 
@@ -946,9 +1069,29 @@ pub fn solve(
 ) -> Result<ThermalSolution> {
     props.validate()?;
     forcing.validate()?;
+    let exchange = Exchange::new(props, forcing)?;
+    solve_with(props, forcing, &exchange, inputs, opts)
+}
+
+/// [`solve`] with the material's [`Exchange`] under `forcing` already made
+/// ([`Exchange::new`]): for many facets of one material. `props` and
+/// `forcing` are taken as validated; the facet inputs and options are
+/// checked.
+///
+/// # Errors
+/// Facet inputs or options out of range; an exchange whose length is not
+/// the forcing's.
+pub fn solve_with(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    exchange: &Exchange,
+    inputs: &FacetInputs,
+    opts: &SolveOptions,
+) -> Result<ThermalSolution> {
     inputs.validate(forcing.len())?;
     opts.validate()?;
-    let p = prepare(props, forcing, inputs);
+    exchange.check_len(forcing.len())?;
+    let p = prepare(props, forcing, inputs, exchange);
     Ok(solve_prepared(props, forcing, &p, opts, None))
 }
 
@@ -969,6 +1112,9 @@ fn solve_prepared(
         opts.grid,
         p.initial_surface_k,
     );
+    if let Some(skin) = props.surface.and_then(|s| s.skin) {
+        slab = slab.with_skin(skin.capacity_j_m2_k, skin.conductance_w_m2_k);
+    }
     slab.set_newton(opts.newton_tolerance_k, 30);
     if let Some(deep) = p.deep_k {
         let top = p.initial_surface_k;

@@ -58,7 +58,7 @@ pub use penman_monteith::{
     AirState, ReferenceEtInputs, TurbulentExchange, penman_monteith_latent_w_m2,
     reference_et0_daily_mm, reference_et0_hourly_mm,
 };
-pub use surface_energy::SurfaceEnergy;
+pub use surface_energy::{SurfaceEnergy, SurfaceResistance, bare_soil_resistance_s_m};
 pub use surface_resistance::{CanopyConditions, JarvisStewart, StressFactors};
 
 /// A parameter outside its physical domain. Each variant names the field

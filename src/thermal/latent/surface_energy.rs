@@ -15,15 +15,54 @@ use super::{
     Aerodynamic, AirState, CanopyConditions, InputError, JarvisStewart, TurbulentExchange, in_range,
 };
 
+/// What resists vapour leaving the surface (the r_s of Penman–Monteith).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SurfaceResistance {
+    /// A transpiring canopy: the Jarvis–Stewart stomatal resistance.
+    Canopy(JarvisStewart),
+    /// Bare soil drying from the top: r_s = 10·exp(0.3563·(15 − θ)) s m⁻¹
+    /// for θ < 15 % (volumetric, in percent), 10 s m⁻¹ above (van de Griend
+    /// & Owe 1994, "Bare soil surface resistance to evaporation by vapor
+    /// diffusion under semiarid conditions", Water Resour. Res. 30(2):181–188,
+    /// doi:10.1029/93WR02747, eq. 9 with θ_min = 15 %), θ the water content
+    /// of the top 1–5 cm.
+    BareSoil,
+    /// An open water surface (a pond, or a surface wetted by rain): r_s = 0.
+    Open,
+}
+
+impl SurfaceResistance {
+    /// r_s under the conditions `c`, s m⁻¹ (+∞: no evaporation).
+    pub fn resistance_s_m(&self, c: &CanopyConditions) -> f64 {
+        match self {
+            SurfaceResistance::Canopy(js) => js.surface_resistance_s_m(c),
+            SurfaceResistance::BareSoil => bare_soil_resistance_s_m(c.soil_moisture_m3_m3),
+            SurfaceResistance::Open => 0.0,
+        }
+    }
+}
+
+/// Bare-soil surface resistance of van de Griend & Owe (1994), s m⁻¹
+/// ([`SurfaceResistance::BareSoil`]), at volumetric water content `theta`
+/// (m³ m⁻³).
+pub fn bare_soil_resistance_s_m(theta_m3_m3: f64) -> f64 {
+    let pct = 100.0 * theta_m3_m3;
+    if pct >= 15.0 {
+        10.0
+    } else {
+        10.0 * (0.3563 * (15.0 - pct)).exp()
+    }
+}
+
 /// A surface's turbulent-exchange parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceEnergy {
     /// Heights and roughness of the aerodynamic resistance.
     pub aerodynamic: Aerodynamic,
-    /// The Jarvis–Stewart surface resistance.
-    pub canopy: JarvisStewart,
+    /// The surface resistance.
+    pub resistance: SurfaceResistance,
     /// Volumetric water content of the root zone θ, m³ m⁻³ (constant: no
-    /// soil water budget yet).
+    /// soil water budget).
     pub soil_moisture_m3_m3: f64,
 }
 
@@ -35,14 +74,16 @@ impl SurfaceEnergy {
     /// outside 0..=1.
     pub fn new(
         aerodynamic: Aerodynamic,
-        canopy: JarvisStewart,
+        resistance: SurfaceResistance,
         soil_moisture_m3_m3: f64,
     ) -> Result<SurfaceEnergy, InputError> {
-        canopy.validate()?;
+        if let SurfaceResistance::Canopy(js) = &resistance {
+            js.validate()?;
+        }
         in_range("soil_moisture_m3_m3", soil_moisture_m3_m3, 0.0, 1.0)?;
         Ok(SurfaceEnergy {
             aerodynamic,
-            canopy,
+            resistance,
             soil_moisture_m3_m3,
         })
     }
@@ -51,8 +92,7 @@ impl SurfaceEnergy {
     /// shortwave `shortwave_down_w_m2` (W m⁻²), with the stability of a
     /// surface at `surface_temperature_k`: r_a from
     /// [`Aerodynamic::resistance_s_m`] (FAO-56 eq. 4, Louis 1979), r_s from
-    /// [`JarvisStewart::surface_resistance_s_m`] (Jarvis 1976; Noilhan &
-    /// Planton 1989).
+    /// [`SurfaceResistance::resistance_s_m`].
     ///
     /// # Errors
     /// [`InputError`] when the resistances are not usable (a NaN input).
@@ -68,7 +108,7 @@ impl SurfaceEnergy {
             surface_temperature_k,
             air.temperature_k(),
         );
-        let r_s = self.canopy.surface_resistance_s_m(&CanopyConditions {
+        let r_s = self.resistance.resistance_s_m(&CanopyConditions {
             shortwave_down_w_m2: shortwave_down_w_m2.max(0.0),
             vapour_pressure_deficit_pa: air.vapour_pressure_deficit_pa(),
             air_temperature_k: air.temperature_k(),
@@ -85,7 +125,7 @@ mod tests {
     fn grass() -> SurfaceEnergy {
         SurfaceEnergy::new(
             Aerodynamic::from_canopy_height(0.12, 2.0, 2.0).unwrap(),
-            JarvisStewart {
+            SurfaceResistance::Canopy(JarvisStewart {
                 min_stomatal_resistance_s_m: 40.0,
                 max_stomatal_resistance_s_m: 5000.0,
                 leaf_area_index: 2.88,
@@ -95,7 +135,7 @@ mod tests {
                 temperature_sensitivity_per_k2: 0.0016,
                 wilting_point_m3_m3: 0.1,
                 field_capacity_m3_m3: 0.3,
-            },
+            }),
             0.3,
         )
         .unwrap()
@@ -117,10 +157,21 @@ mod tests {
         assert!(warm.sensible_coefficient_w_m2_k() > day.sensible_coefficient_w_m2_k());
     }
 
+    /// van de Griend & Owe (1994): 10 s/m at and above 15 % water, rising
+    /// by e^0.3563 per percent below (≈ 350 s/m at 5 %).
+    #[test]
+    fn bare_soil_resistance_follows_van_de_griend_and_owe() {
+        assert_eq!(bare_soil_resistance_s_m(0.20), 10.0);
+        assert_eq!(bare_soil_resistance_s_m(0.15), 10.0);
+        let r5 = bare_soil_resistance_s_m(0.05);
+        assert!((r5 - 10.0 * (3.563f64).exp()).abs() < 1e-9, "{r5}");
+        assert!(bare_soil_resistance_s_m(0.10) < r5);
+    }
+
     #[test]
     fn soil_moisture_out_of_range_names_the_field() {
         let g = grass();
-        let e = SurfaceEnergy::new(g.aerodynamic, g.canopy, 1.5).unwrap_err();
+        let e = SurfaceEnergy::new(g.aerodynamic, g.resistance, 1.5).unwrap_err();
         assert_eq!(e.field(), "soil_moisture_m3_m3");
     }
 }

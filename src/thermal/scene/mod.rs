@@ -45,7 +45,9 @@ pub use inputs::SceneInputs;
 pub use linearized::LinearizedParams;
 pub use per_class::Dedup;
 
-use crate::thermal::{self, Forcing, SlabProperties, SolveOptions};
+use rayon::prelude::*;
+
+use crate::thermal::{self, Exchange, Forcing, SlabProperties, SolveOptions};
 use crate::{Error, Result};
 
 /// How a facet's temperature is obtained.
@@ -198,19 +200,35 @@ pub fn solve_facet_temperatures<'a>(
 ) -> Result<SceneTemperatures> {
     let inputs = &inputs.into();
     validate(inputs, kinds, props, forcing, image_records, params)?;
+    // Each property set's exchange with the air (shared by its facets).
+    let exchanges = props
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            Exchange::new(p, forcing)
+                .map_err(|e| Error::Other(format!("thermal exchange of property set {i}: {e}")))
+        })
+        .collect::<Result<Vec<_>>>()?;
     match &params.method {
         ThermalMethod::Linearized(lp) => linearized::solve(
             inputs,
             kinds,
             props,
+            &exchanges,
             forcing,
             image_records,
             params.passes,
             lp,
         ),
-        ThermalMethod::PerClass => {
-            per_class::solve(inputs, kinds, props, forcing, image_records, params)
-        }
+        ThermalMethod::PerClass => per_class::solve(
+            inputs,
+            kinds,
+            props,
+            &exchanges,
+            forcing,
+            image_records,
+            params,
+        ),
     }
 }
 

@@ -34,7 +34,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::{FacetThermal, PassStats, SceneInputs, SceneTemperatures, ThermalParams};
-use crate::thermal::{self, Background, FacetInputs, Forcing, SlabProperties};
+use crate::thermal::{self, Background, Exchange, FacetInputs, Forcing, SlabProperties};
 use crate::{Error, Result};
 
 /// Quanta of the dedup key: facets whose quantised inputs agree share one
@@ -106,6 +106,7 @@ pub(super) fn solve(
     inputs: &SceneInputs,
     kinds: &[FacetThermal],
     props: &[SlabProperties],
+    exchanges: &[Exchange],
     forcing: &Forcing,
     image_records: &[usize],
     params: &ThermalParams,
@@ -125,6 +126,7 @@ pub(super) fn solve(
             inputs,
             kinds,
             props,
+            exchanges,
             prev_used_air: pass == 1,
             air4: &air4,
             prev: prev.as_ref(),
@@ -199,8 +201,15 @@ fn solve_classes(
                 back_shape_factor: ctx.inputs.back_shape_factor(f).map(f64::from),
                 background,
             };
-            let sol = thermal::solve(&ctx.props[pi as usize], forcing, &inputs, &params.options)
-                .map_err(|e| Error::Other(format!("thermal model of facet {f}: {e}")))?;
+            let pi = pi as usize;
+            let sol = thermal::solve_with(
+                &ctx.props[pi],
+                forcing,
+                &ctx.exchanges[pi],
+                &inputs,
+                &params.options,
+            )
+            .map_err(|e| Error::Other(format!("thermal model of facet {f}: {e}")))?;
             Ok((
                 sol.surface_temperature_k
                     .iter()
@@ -272,6 +281,8 @@ struct PassInputs<'a> {
     inputs: &'a SceneInputs<'a>,
     kinds: &'a [FacetThermal],
     props: &'a [SlabProperties],
+    /// The exchange of each property set.
+    exchanges: &'a [Exchange],
     /// Whether the previous pass used the air as background (pass 2).
     prev_used_air: bool,
     air4: &'a [f32],

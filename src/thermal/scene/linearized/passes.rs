@@ -181,7 +181,10 @@ impl PassPlan<'_> {
         }
         let rep = &self.refs[self.ref_of[f] as usize];
         let has_slot = self.slots.of_facet[f] != u32::MAX;
-        let full = pass.second || (!pass.last && has_slot);
+        // The second order: asked for, or always for a surface that
+        // evaporates (the curvature of e°(T) is not negligible).
+        let second = pass.second || (pass.last && !rep.front.latent.is_empty());
+        let full = second || (!pass.last && has_slot);
         let bgc = self.background_term(pass, f, s);
         if !full && let Some(base) = pass.base {
             self.image_from_base(rep, base, f, bgc, s, o);
@@ -214,7 +217,7 @@ impl PassPlan<'_> {
             &mut s.cols_bg,
             &mut s.d,
         );
-        if pass.second {
+        if second {
             if rep.has_back {
                 change.history(
                     &rep.back,
@@ -292,15 +295,20 @@ impl PassPlan<'_> {
         let groups = self.groups;
         let Change { df, dfb, bgc } = change;
         let sun = &groups.sun32[g];
-        for (((((o, sc), rsc), w), sh), (d, t)) in
+        let latent = &rep.front.latent;
+        for (k, (((((o, sc), rsc), w), sh), (d, t))) in
             s.ds.iter_mut()
                 .zip(&s.sc)
                 .zip(&rep.facet.sc)
                 .zip(sun)
                 .zip(&groups.shape32[g])
                 .zip(s.d.iter().zip(&rep.front.temperature_k))
+                .enumerate()
         {
             *o = df * sh + (sc - rsc) * w + curvature(rep.front.radiative, *t, *d);
+            if let Some(&gv) = latent.get(k) {
+                *o += thermal::linear::latent_curvature(gv, f64::from(*t), f64::from(*d)) as f32;
+            }
         }
         if let Some((cf, _)) = bgc {
             s.ds.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cf * e);

@@ -66,6 +66,9 @@ pub(super) struct NodeGreen {
     /// Radiative coefficient of this node's emission: `εσ` of the front,
     /// `a·εσ` of an exposed back (0 otherwise), W m⁻² K⁻⁴.
     pub radiative: f32,
+    /// Vapour conductance of this node's latent loss at each record,
+    /// W m⁻² Pa⁻¹ (empty: none; only the front of an evaporating surface).
+    pub latent: Vec<f64>,
 }
 
 /// Probes of the front temperature: the rows of the image records (then
@@ -183,6 +186,7 @@ impl Reference {
                 reference_sun: times(&lin.front_from_front, &ref_sun),
                 temperature_k: f32s(&lin.solution.surface_temperature_k),
                 radiative: lin.front_radiative_w_m2_k4 as f32,
+                latent: lin.front_vapour_conductance_w_m2_pa.clone(),
             },
             back: NodeGreen {
                 from_front: transpose(&lin.back_from_front),
@@ -192,6 +196,7 @@ impl Reference {
                 reference_sun: times(&lin.back_from_front, &ref_sun),
                 temperature_k: f32s(&lin.solution.back_temperature_k),
                 radiative: lin.back_radiative_w_m2_k4 as f32,
+                latent: Vec::new(),
             },
             probes: Probes {
                 rows_front: rows_of(&pf),

@@ -1,0 +1,346 @@
+//! The `surface_energy` block of a material: how a surface that evaporates
+//! exchanges heat and water vapour with the air — as the material file
+//! spells it, SI units in every name.
+//!
+//! ```json
+//! "surface_energy": {
+//!   "kind": "canopy",
+//!   "canopy_height_m": 0.12,
+//!   "leaf_area_index": 2.9,
+//!   "min_stomatal_resistance_s_m": 100,
+//!   "soil_moisture_m3_m3": 0.28
+//! }
+//! ```
+//!
+//! | kind        | surface resistance r_s                         | skin (canopy layer) |
+//! |-------------|------------------------------------------------|---------------------|
+//! | `canopy`    | Jarvis–Stewart stomatal resistance             | yes                 |
+//! | `bare_soil` | van de Griend & Owe (1994) from soil moisture  | no                  |
+//! | `water`     | 0 (open water)                                 | no                  |
+//!
+//! The physics and the sources of each default are in
+//! [`crate::thermal::surface`] and `docs/physics/thermal.md`. This module
+//! owns the file-level description and its checks (each problem names the
+//! field as `surface_energy.<name>`); it knows nothing of the solver.
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// What kind of evaporating surface (module table).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceKind {
+    /// Vegetation: a transpiring canopy over the soil slab.
+    Canopy,
+    /// Bare soil evaporating from its top layer.
+    BareSoil,
+    /// Open water.
+    Water,
+}
+
+/// The `surface_energy` block (module docs). Every field but `kind` has a
+/// default; `None` fields take a default that depends on the kind.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceEnergySpec {
+    /// The kind of surface.
+    pub kind: SurfaceKind,
+    /// Height of the canopy, m (canopy: required; gives the displacement
+    /// height d = 2/3 h and roughness z_om = 0.123 h of FAO-56).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub canopy_height_m: Option<f64>,
+    /// Roughness length for momentum z_om, m (default: canopy 0.123 h; bare
+    /// soil 0.005; water 0.0002); z_oh = z_om / 10.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roughness_length_m: Option<f64>,
+    /// Height of the wind and air measurement above the ground, m (default:
+    /// 2 m above the canopy top, or 2 m over soil and water).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measurement_height_m: Option<f64>,
+    /// One-sided leaf area index, m² m⁻² (canopy).
+    #[serde(default)]
+    pub leaf_area_index: f64,
+    /// Minimum stomatal resistance of a leaf, s m⁻¹ (canopy; default 100).
+    #[serde(default = "default_rs_min")]
+    pub min_stomatal_resistance_s_m: f64,
+    /// Maximum (cuticular) resistance, s m⁻¹ (default 5000).
+    #[serde(default = "default_rs_max")]
+    pub max_stomatal_resistance_s_m: f64,
+    /// Shortwave limit of the light response, W m⁻² (default: 30 for a
+    /// canopy under 2 m, 100 above).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shortwave_limit_w_m2: Option<f64>,
+    /// Sensitivity of the stomata to the vapour-pressure deficit, Pa⁻¹
+    /// (default 0).
+    #[serde(default)]
+    pub vpd_sensitivity_per_pa: f64,
+    /// Volumetric water content of the root zone (canopy) or the top layer
+    /// (bare soil), m³ m⁻³.
+    #[serde(default = "default_theta")]
+    pub soil_moisture_m3_m3: f64,
+    /// Volumetric water content at the wilting point, m³ m⁻³ (default 0.12).
+    #[serde(default = "default_theta_wilt")]
+    pub wilting_point_m3_m3: f64,
+    /// Volumetric water content at field capacity, m³ m⁻³ (default 0.32).
+    #[serde(default = "default_theta_fc")]
+    pub field_capacity_m3_m3: f64,
+    /// Heat capacity of the canopy layer, J m⁻² K⁻¹ (canopy; default
+    /// 1200 × LAI + 2000).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub canopy_heat_capacity_j_m2_k: Option<f64>,
+    /// Conductance between canopy and soil, W m⁻² K⁻¹ (canopy; default 10
+    /// under 2 m, 20 above).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin_conductance_w_m2_k: Option<f64>,
+    /// Whether the canopy is a layer over the material's slab (default: true
+    /// for a canopy). A tree crown modelled as a thin leaf slab with an
+    /// exposed back sets `false`: the leaves are the slab.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin: Option<bool>,
+}
+
+fn default_rs_min() -> f64 {
+    100.0
+}
+fn default_rs_max() -> f64 {
+    5000.0
+}
+fn default_theta() -> f64 {
+    0.28
+}
+fn default_theta_wilt() -> f64 {
+    0.12
+}
+fn default_theta_fc() -> f64 {
+    0.32
+}
+
+/// Height above which a canopy counts as high vegetation (trees), m.
+pub const HIGH_VEGETATION_M: f64 = 2.0;
+
+impl SurfaceEnergySpec {
+    /// Roughness length for momentum, m (field docs for the defaults).
+    pub fn roughness_m(&self) -> f64 {
+        self.roughness_length_m.unwrap_or(match self.kind {
+            SurfaceKind::Canopy => 0.123 * self.canopy_height_m.unwrap_or(0.0),
+            SurfaceKind::BareSoil => 0.005,
+            SurfaceKind::Water => 0.0002,
+        })
+    }
+
+    /// Displacement height, m (2/3 of the canopy height; 0 otherwise).
+    pub fn displacement_m(&self) -> f64 {
+        match self.kind {
+            SurfaceKind::Canopy => 2.0 / 3.0 * self.canopy_height_m.unwrap_or(0.0),
+            _ => 0.0,
+        }
+    }
+
+    /// Measurement height above the ground, m.
+    pub fn measurement_m(&self) -> f64 {
+        self.measurement_height_m
+            .unwrap_or(self.canopy_height_m.unwrap_or(0.0) + 2.0)
+    }
+
+    /// Whether the canopy is a skin layer over the slab (field docs).
+    pub fn has_skin(&self) -> bool {
+        self.kind == SurfaceKind::Canopy && self.skin.unwrap_or(true)
+    }
+
+    /// Whether the canopy is high vegetation (trees).
+    pub fn is_high(&self) -> bool {
+        self.canopy_height_m.unwrap_or(0.0) > HIGH_VEGETATION_M
+    }
+
+    /// Shortwave limit of the light response, W m⁻² (Noilhan & Planton 1989:
+    /// 30 crops, 100 forest).
+    pub fn shortwave_limit(&self) -> f64 {
+        self.shortwave_limit_w_m2
+            .unwrap_or(if self.is_high() { 100.0 } else { 30.0 })
+    }
+
+    /// Canopy heat capacity, J m⁻² K⁻¹: leaves hold about 0.3 kg of water
+    /// per m² of leaf (≈ 1200 J m⁻² K⁻¹ per unit LAI with c_w = 4180), plus
+    /// stems and the air and litter within the canopy (2000).
+    pub fn canopy_capacity(&self) -> f64 {
+        self.canopy_heat_capacity_j_m2_k
+            .unwrap_or(1200.0 * self.leaf_area_index + 2000.0)
+    }
+
+    /// Canopy–soil conductance, W m⁻² K⁻¹ (ECMWF IFS Cy47r3 Part IV Table
+    /// 8.1: Λ = 10 low vegetation, 20 high vegetation).
+    pub fn skin_conductance(&self) -> f64 {
+        self.skin_conductance_w_m2_k
+            .unwrap_or(if self.is_high() { 20.0 } else { 10.0 })
+    }
+
+    /// Problems as `(field, message)`, the field relative to the block
+    /// (`canopy_height_m`); empty when valid.
+    pub fn problems(&self) -> Vec<(&'static str, String)> {
+        let mut p = Vec::new();
+        fn check(
+            p: &mut Vec<(&'static str, String)>,
+            field: &'static str,
+            v: f64,
+            ok: bool,
+            expected: &str,
+        ) {
+            if !(v.is_finite() && ok) {
+                p.push((field, format!("{v}: expected {expected}")));
+            }
+        }
+        if self.kind == SurfaceKind::Canopy {
+            match self.canopy_height_m {
+                Some(h) => check(&mut p, "canopy_height_m", h, h > 0.0, "a height > 0 m"),
+                None => p.push((
+                    "canopy_height_m",
+                    "missing: a canopy needs its height (m)".to_string(),
+                )),
+            }
+        } else if let Some(h) = self.canopy_height_m {
+            check(&mut p, "canopy_height_m", h, h >= 0.0, "a height ≥ 0 m");
+        }
+        if let Some(z0) = self.roughness_length_m {
+            check(&mut p, "roughness_length_m", z0, z0 > 0.0, "a length > 0 m");
+        }
+        if let Some(z) = self.measurement_height_m {
+            check(&mut p, "measurement_height_m", z, z > 0.0, "a height > 0 m");
+        }
+        let (z, d, z0) = (
+            self.measurement_m(),
+            self.displacement_m(),
+            self.roughness_m(),
+        );
+        if z.is_finite() && z0.is_finite() && z0 > 0.0 && z0 >= z - d {
+            p.push((
+                "roughness_length_m",
+                format!(
+                    "{z0} m is not below the measurement height above the displacement height \
+                     ({} m); the log wind profile needs z₀ < z − d",
+                    z - d
+                ),
+            ));
+        }
+        let lai = self.leaf_area_index;
+        check(
+            &mut p,
+            "leaf_area_index",
+            lai,
+            lai >= 0.0 && lai <= 15.0,
+            "0..=15 m²/m²",
+        );
+        if self.kind == SurfaceKind::Canopy && lai == 0.0 {
+            p.push((
+                "leaf_area_index",
+                "0: a canopy needs leaves (use kind \"bare_soil\" for soil)".to_string(),
+            ));
+        }
+        let (rmin, rmax) = (
+            self.min_stomatal_resistance_s_m,
+            self.max_stomatal_resistance_s_m,
+        );
+        check(
+            &mut p,
+            "min_stomatal_resistance_s_m",
+            rmin,
+            rmin >= 0.0,
+            "a resistance ≥ 0 s/m",
+        );
+        check(
+            &mut p,
+            "max_stomatal_resistance_s_m",
+            rmax,
+            rmax > rmin,
+            "a resistance above min_stomatal_resistance_s_m",
+        );
+        if let Some(s) = self.shortwave_limit_w_m2 {
+            check(&mut p, "shortwave_limit_w_m2", s, s > 0.0, "> 0 W/m²");
+        }
+        let g = self.vpd_sensitivity_per_pa;
+        check(&mut p, "vpd_sensitivity_per_pa", g, g >= 0.0, "≥ 0 per Pa");
+        for (field, v) in [
+            ("soil_moisture_m3_m3", self.soil_moisture_m3_m3),
+            ("wilting_point_m3_m3", self.wilting_point_m3_m3),
+            ("field_capacity_m3_m3", self.field_capacity_m3_m3),
+        ] {
+            check(
+                &mut p,
+                field,
+                v,
+                (0.0..=1.0).contains(&v),
+                "a fraction in 0..=1",
+            );
+        }
+        check(
+            &mut p,
+            "field_capacity_m3_m3",
+            self.field_capacity_m3_m3,
+            self.field_capacity_m3_m3 > self.wilting_point_m3_m3,
+            "above wilting_point_m3_m3",
+        );
+        if let Some(c) = self.canopy_heat_capacity_j_m2_k {
+            check(
+                &mut p,
+                "canopy_heat_capacity_j_m2_k",
+                c,
+                c > 0.0,
+                "> 0 J/(m²·K)",
+            );
+        }
+        if let Some(c) = self.skin_conductance_w_m2_k {
+            check(
+                &mut p,
+                "skin_conductance_w_m2_k",
+                c,
+                c > 0.0,
+                "> 0 W/(m²·K)",
+            );
+        }
+        p
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> SurfaceEnergySpec {
+        serde_json::from_str(s).unwrap()
+    }
+
+    #[test]
+    fn defaults_follow_the_kind() {
+        let g = parse(r#"{"kind": "canopy", "canopy_height_m": 0.12, "leaf_area_index": 2.9}"#);
+        assert!(g.problems().is_empty(), "{:?}", g.problems());
+        assert!((g.roughness_m() - 0.01476).abs() < 1e-9);
+        assert!((g.measurement_m() - 2.12).abs() < 1e-12);
+        assert_eq!(g.skin_conductance(), 10.0);
+        let w = parse(r#"{"kind": "water"}"#);
+        assert!(w.problems().is_empty());
+        assert_eq!(w.roughness_m(), 0.0002);
+    }
+
+    #[test]
+    fn bad_values_name_their_field() {
+        let fields = |s: &str| -> Vec<&'static str> {
+            parse(s).problems().into_iter().map(|(f, _)| f).collect()
+        };
+        assert!(fields(r#"{"kind": "canopy", "leaf_area_index": 2}"#).contains(&"canopy_height_m"));
+        assert!(
+            fields(r#"{"kind": "canopy", "canopy_height_m": 1, "leaf_area_index": -1}"#)
+                .contains(&"leaf_area_index")
+        );
+        assert!(
+            fields(r#"{"kind": "water", "min_stomatal_resistance_s_m": -5}"#)
+                .contains(&"min_stomatal_resistance_s_m")
+        );
+        assert!(
+            fields(r#"{"kind": "bare_soil", "roughness_length_m": 3, "measurement_height_m": 2}"#)
+                .contains(&"roughness_length_m")
+        );
+        assert!(
+            serde_json::from_str::<SurfaceEnergySpec>(r#"{"kind": "lava"}"#).is_err(),
+            "unknown kind"
+        );
+    }
+}
