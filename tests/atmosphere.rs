@@ -618,3 +618,268 @@ mod table {
         }
     }
 }
+
+/// Issue 17: the AFGL model atmospheres in the built-in model, the
+/// directional sky, and the published values they are checked against.
+mod standard {
+    use super::*;
+    use irsig::atmosphere::{
+        Atmosphere, BuiltinAtmosphere, BuiltinParams, PathGeometry, Profile, SkyConditions,
+        SurfaceMet,
+    };
+
+    fn model(p: Profile, met: Option<SurfaceMet>) -> BuiltinAtmosphere {
+        BuiltinAtmosphere::with_params(
+            met.unwrap_or_else(|| SurfaceMet::of_profile(p, 0.0)),
+            BuiltinParams {
+                profile: Some(p),
+                ..BuiltinParams::default()
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn profiles_by_name_and_by_site() {
+        for p in Profile::ALL {
+            assert_eq!(Profile::from_name(p.name()).unwrap(), p);
+        }
+        let e = Profile::from_name("arctic").unwrap_err().to_string();
+        assert!(
+            e.contains("`arctic`") && Profile::ALL.iter().all(|p| e.contains(p.name())),
+            "{e}"
+        );
+        assert_eq!(Profile::for_site(5.0, 1), Profile::Tropical);
+        assert_eq!(Profile::for_site(-15.0, 7), Profile::Tropical);
+        assert_eq!(Profile::for_site(45.0, 7), Profile::MidLatitudeSummer);
+        assert_eq!(Profile::for_site(45.0, 1), Profile::MidLatitudeWinter);
+        assert_eq!(Profile::for_site(-45.0, 1), Profile::MidLatitudeSummer);
+        assert_eq!(Profile::for_site(65.0, 6), Profile::SubArcticSummer);
+        assert_eq!(Profile::for_site(65.0, 12), Profile::SubArcticWinter);
+    }
+
+    #[test]
+    fn water_and_ozone_columns_match_modtran_model_atmospheres() {
+        // Column water vapour (g/cm²) of MODTRAN's six model atmospheres
+        // (the MODTRAN user's manual; tape7.LWIRSun's header gives the
+        // tropical 4.114728), and the AFGL ozone columns in atm-cm
+        // (Anderson et al. 1986: tropical 0.277 — tape7 0.000594 g/cm² —,
+        // US Standard 0.343). The model integrates the tabulated profiles
+        // from the ground to 50 km.
+        for (p, w) in [
+            (Profile::Tropical, 4.11),
+            (Profile::MidLatitudeSummer, 2.92),
+            (Profile::MidLatitudeWinter, 0.85),
+            (Profile::SubArcticSummer, 2.08),
+            (Profile::SubArcticWinter, 0.42),
+            (Profile::UsStandard, 1.42),
+        ] {
+            let a = model(p, None);
+            let got = a.water_column_g_cm2();
+            println!("{p}: water column {got:.3} g/cm² (MODTRAN {w})");
+            assert!(rel(got, w) < 0.05, "{p}: {got} g/cm², expected {w}");
+        }
+        for (p, o3) in [(Profile::Tropical, 0.277), (Profile::UsStandard, 0.343)] {
+            let a = model(p, None);
+            let n = 5000;
+            let dz = 50_000.0 / n as f64;
+            let g_cm2: f64 = (0..n)
+                .map(|i| a.state((i as f64 + 0.5) * dz).o3_g_m3 * dz * 1e-4)
+                .sum();
+            // 1 atm-cm of O₃ = 2.687e19 molecules/cm² = 2.142e-3 g/cm².
+            let atm_cm = g_cm2 / 2.142e-3;
+            println!("{p}: ozone column {atm_cm:.3} atm-cm (AFGL {o3})");
+            assert!(rel(atm_cm, o3) < 0.1, "{p}: {atm_cm} atm-cm");
+        }
+    }
+
+    #[test]
+    fn weather_blends_into_the_lowest_two_kilometres_only() {
+        let p = Profile::MidLatitudeSummer;
+        let own = model(p, None);
+        // The profile's own surface air: the profile exactly, at every height.
+        for z in [0.0, 500.0, 1500.0, 5000.0, 20_000.0] {
+            let (s, l) = (own.state(z), p.level(z));
+            assert!((s.temperature_k - l.temperature_k).abs() < 1e-9, "{z}");
+            assert!(rel(s.pressure_pa, l.pressure_pa) < 1e-12, "{z}");
+            let x = s.water_pa / s.pressure_pa * 1e6;
+            assert!(rel(x, l.h2o_ppmv) < 1e-9, "{z}: {x} ppmv vs {}", l.h2o_ppmv);
+        }
+        // A warmer, drier afternoon: changed near the ground, not above 2 km.
+        let met = SurfaceMet {
+            air_temperature_k: 303.0,
+            relative_humidity: 0.3,
+            pressure_pa: 100_000.0,
+            ground_altitude_m: 0.0,
+        };
+        let hot = model(p, Some(met));
+        let g = hot.state(0.0);
+        assert!((g.temperature_k - 303.0).abs() < 1e-9);
+        assert!(rel(g.pressure_pa, 100_000.0) < 1e-12);
+        let rh = g.water_pa / irsig::atmosphere::builtin::saturation_vapour_pressure_pa(303.0);
+        assert!((rh - 0.3).abs() < 1e-9, "{rh}");
+        let mid = hot.state(1000.0);
+        assert!(
+            (mid.temperature_k - (p.level(1000.0).temperature_k + 0.5 * (303.0 - 294.2))).abs()
+                < 1e-9
+        );
+        for z in [2000.0, 3000.0, 10_000.0] {
+            let (s, l) = (hot.state(z), p.level(z));
+            assert!((s.temperature_k - l.temperature_k).abs() < 1e-9, "{z}");
+            let x = s.water_pa / s.pressure_pa * 1e6;
+            assert!(rel(x, l.h2o_ppmv) < 1e-9, "{z}");
+        }
+    }
+
+    #[test]
+    fn isothermal_path_radiance_is_one_minus_tau_times_planck() {
+        // A horizontal path at the ground of the analytic profile is
+        // isothermal: L_u = (1 − τ)·B(T) at every wavelength (Schwarzschild).
+        let a = BuiltinAtmosphere::new(SurfaceMet {
+            air_temperature_k: 290.0,
+            relative_humidity: 0.7,
+            pressure_pa: 101_325.0,
+            ground_altitude_m: 0.0,
+        })
+        .unwrap();
+        let band = Band::flat(3.0, 14.0, 0.05).unwrap();
+        let p = a.path(0.0, 0.0, 3000.0, band.grid()).unwrap();
+        let planck = irsig::radiometry::Planck::default();
+        for ((&l, &t), &lu) in band
+            .wavelengths_um()
+            .iter()
+            .zip(&p.transmittance)
+            .zip(&p.path_radiance)
+        {
+            let want = (1.0 - t) * planck.radiance(l, 290.0);
+            assert!(
+                (lu - want).abs() <= 1e-9 * planck.radiance(l, 290.0),
+                "{l} µm: {lu} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn sky_rises_from_zenith_to_horizon_toward_the_air_blackbody() {
+        let band = Band::flat(8.0, 12.0, 0.02).unwrap();
+        for p in Profile::ALL {
+            let a = Atmosphere::standard(p, 0.0).unwrap();
+            let t_air = p.level(0.0).temperature_k;
+            let sky = SkyConditions {
+                air_temperature_k: t_air,
+                sky_longwave_w_m2: f64::NAN,
+            };
+            let b_air = band.blackbody_radiance(t_air);
+            let mut last = 0.0;
+            for z in [0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0, 88.0, 89.0] {
+                let l = band.integrate(&a.sky_radiance_toward(&sky, z, band.grid()).unwrap());
+                assert!(l > last, "{p}: sky at {z}° {l} not above {last}");
+                assert!(l < b_air, "{p}: sky at {z}° {l} above B(T_air) {b_air}");
+                last = l;
+            }
+            println!("{p}: 8–12 µm sky at 89° = {:.3} B(T_air)", last / b_air);
+            // 0.80 for the dry sub-arctic winter (0.42 g/cm², a surface inversion).
+            assert!(
+                last > 0.75 * b_air,
+                "{p}: horizon sky {last} vs B(T_air) {b_air}"
+            );
+        }
+    }
+
+    /// MODTRAN tape7 band values: (band-mean τ, ∫ L_u dλ).
+    fn tape7_band(file: &str, band: &Band) -> (f64, f64) {
+        let t = Tape7::read(util::shared_data("modtran").join(file)).unwrap();
+        let g = band.grid();
+        let (wl, tau) = t.transmittance_um();
+        let tau = band.mean(&g.resample_mean(&wl, &tau, 0.02).unwrap());
+        let (wl, lu) = t.path_radiance_um().unwrap();
+        (
+            tau,
+            band.integrate(&g.resample_mean(&wl, &lu, 0.02).unwrap()),
+        )
+    }
+
+    #[test]
+    #[ignore = "needs ../shared/data"]
+    fn tropical_zenith_compares_with_modtran() {
+        // tape7.LWIRSun / tape7.MWIRSun: MODTRAN, tropical model atmosphere,
+        // looking up from the ground at zenith (23 km rural aerosol, which
+        // the built-in model lacks). The built-in model on the same AFGL
+        // tropical profile, without the weather: 8–12 µm within 10 % in τ
+        // and in the zenith sky radiance (the issue's goal). 3.5–4.5 µm is
+        // printed and held within 35 % (the goal is 15 %; see
+        // docs/physics/atmosphere.md for what the model still lacks there).
+        let a = Atmosphere::standard(Profile::Tropical, 0.0).unwrap();
+        let sky = SkyConditions {
+            air_temperature_k: 299.7,
+            sky_longwave_w_m2: f64::NAN,
+        };
+        for (file, lo, hi, tol_tau, tol_l) in [
+            ("tape7.LWIRSun", 8.0, 12.0, 0.10, 0.10),
+            ("tape7.MWIRSun", 3.5, 4.5, 0.35, 0.35),
+        ] {
+            let band = Band::flat(lo, hi, 0.005).unwrap();
+            let (tau_m, lu_m) = tape7_band(file, &band);
+            let p = a.look_up(&sky, 0.0, band.grid()).unwrap();
+            let (tau_b, lu_b) = (
+                band.mean(&p.transmittance),
+                band.integrate(&p.path_radiance),
+            );
+            println!(
+                "{lo}–{hi} µm zenith: MODTRAN τ̄ {tau_m:.3} L {lu_m:.3}; built-in τ̄ {tau_b:.3} \
+                 L {lu_b:.3} ({:+.1} %, {:+.1} %)",
+                100.0 * (tau_b / tau_m - 1.0),
+                100.0 * (lu_b / lu_m - 1.0)
+            );
+            assert!(rel(tau_b, tau_m) < tol_tau, "{file}: τ {tau_b} vs {tau_m}");
+            assert!(rel(lu_b, lu_m) < tol_l, "{file}: L {lu_b} vs {lu_m}");
+        }
+    }
+
+    #[test]
+    fn look_up_and_paths_for_any_geometry() {
+        let band = Band::flat(8.0, 12.0, 0.05).unwrap();
+        let a = Atmosphere::standard(Profile::UsStandard, 0.0).unwrap();
+        let sky = SkyConditions {
+            air_temperature_k: 288.2,
+            sky_longwave_w_m2: f64::NAN,
+        };
+        // Looking up: the path radiance is the sky radiance toward that zenith.
+        let up = a.look_up(&sky, 30.0, band.grid()).unwrap();
+        assert_eq!(
+            up.path_radiance,
+            a.sky_radiance_toward(&sky, 30.0, band.grid()).unwrap()
+        );
+        assert!(a.look_up(&sky, 95.0, band.grid()).is_err());
+        // A rooftop at 30 m seen from 1 km is a shorter, thinner path than
+        // the ground at the same zenith.
+        let path = |ht: f64| {
+            let g = PathGeometry {
+                sensor_altitude_m: 1000.0,
+                target_altitude_m: ht,
+                range_m: (1000.0 - ht) / 30f64.to_radians().cos(),
+            };
+            let p = a.path(&g, band.grid()).unwrap();
+            (
+                band.mean(&p.transmittance),
+                band.integrate(&p.path_radiance),
+            )
+        };
+        let (t0, l0) = path(0.0);
+        let (t30, l30) = path(30.0);
+        assert!(t30 > t0 && l30 < l0, "{t30} {l30} vs {t0} {l0}");
+        // The vacuum: τ = 1 and no path radiance on any path.
+        let p = Atmosphere::None
+            .path(
+                &PathGeometry {
+                    sensor_altitude_m: 1000.0,
+                    target_altitude_m: 0.0,
+                    range_m: 1200.0,
+                },
+                band.grid(),
+            )
+            .unwrap();
+        assert!(p.transmittance.iter().all(|&t| t == 1.0));
+        assert!(p.path_radiance.iter().all(|&l| l == 0.0));
+    }
+}

@@ -479,6 +479,43 @@ const CASES: &[Case] = &[
         args: &["compare", "@/a.exr", "@/b.exr"],
         expect: &["a.exr"],
     },
+    // ---- irsig atmosphere (issue 17)
+    Case {
+        name: "atmosphere: unknown profile lists the valid ones",
+        files: &[],
+        args: &["atmosphere", "--profile", "arctic", "--band", "8-12"],
+        expect: &["--profile", "arctic", "tropical", "mid-latitude-summer", "us-standard"],
+    },
+    Case {
+        name: "atmosphere: zenith outside 0-180",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--zenith", "190"],
+        expect: &["--zenith", "0–180"],
+    },
+    Case {
+        name: "atmosphere: looking up below the horizon",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--look", "up", "--zenith", "120"],
+        expect: &["--zenith", "below 90"],
+    },
+    Case {
+        name: "atmosphere: negative altitude",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--target-altitude", "-3"],
+        expect: &["--target-altitude", "≥ 0"],
+    },
+    Case {
+        name: "atmosphere: negative range",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--range", "-10"],
+        expect: &["--range", "≥ 0"],
+    },
+    Case {
+        name: "atmosphere: band outside the model",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "1-2"],
+        expect: &["--band", "3–16 µm"],
+    },
     // ---- command line values
     Case {
         name: "cli: unknown subcommand value",
@@ -627,4 +664,60 @@ fn closed_stdout_is_not_an_error() {
         assert!(out.status.success(), "{args:?}: {:?} {stderr}", out.status);
         assert!(stderr.is_empty(), "{args:?}: {stderr}");
     }
+}
+
+/// Issue 17: `irsig atmosphere --json` prints exactly the transmittance and
+/// the path radiance; looking up, the path radiance is the sky radiance.
+#[test]
+fn atmosphere_json_has_the_issue_keys() {
+    let run = |args: &[&str]| -> serde_json::Value {
+        let out = Command::new(irsig_bin()).args(args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let up = run(&[
+        "atmosphere",
+        "--profile",
+        "mid-latitude-summer",
+        "--band",
+        "8-14",
+        "--look",
+        "up",
+        "--zenith",
+        "0",
+        "--json",
+    ]);
+    let keys: Vec<&String> = up.as_object().unwrap().keys().collect();
+    assert_eq!(keys, ["path_radiance_w_m2_sr", "transmittance"]);
+    let (tau, l) = (
+        up["transmittance"].as_f64().unwrap(),
+        up["path_radiance_w_m2_sr"].as_f64().unwrap(),
+    );
+    assert!(
+        (0.3..0.8).contains(&tau) && (5.0..40.0).contains(&l),
+        "{up}"
+    );
+    let down = run(&[
+        "atmosphere",
+        "--profile",
+        "us-standard",
+        "--band",
+        "8-12",
+        "--sensor-altitude",
+        "1000",
+        "--target-altitude",
+        "0",
+        "--zenith",
+        "30",
+        "--json",
+    ]);
+    let (td, ld) = (
+        down["transmittance"].as_f64().unwrap(),
+        down["path_radiance_w_m2_sr"].as_f64().unwrap(),
+    );
+    assert!(td > tau && td < 1.0 && ld > 0.0 && ld < l, "{down}");
 }

@@ -1,6 +1,10 @@
 //! The built-in atmosphere: needs nothing external.
 //!
-//! **Profile.** Temperature: the US Standard Atmosphere 1976 (NOAA/NASA/USAF,
+//! **Profile.** Either one of the six AFGL model atmospheres
+//! ([`super::profile`], [`BuiltinParams::profile`]) with the surface weather
+//! blended into its lowest [`SURFACE_BLEND_DEPTH_M`]
+//! (see [`BuiltinAtmosphere::state`]), or the analytic profile:
+//! temperature the US Standard Atmosphere 1976 (NOAA/NASA/USAF,
 //! NOAA-S/T 76-1562, table I) shifted by ΔT = T_air − T_US76(z_ground); the
 //! shift applies in full up to 11 km and tapers linearly to zero at 20 km.
 //! Pressure: p(z) = p_s·exp(−(z − z_g)/H), H = 8 km. Water vapour: surface
@@ -32,11 +36,14 @@
 //!    self-broadening b and exponent n.
 //!    The water rotational band (> 16 µm) is not modelled: its far wing in
 //!    the window is part of the continuum above.
-//! 3. Not modelled: ozone (9.6 µm, stratospheric — matters only on paths to
-//!    space), N₂ continuum near 4 µm, CO/N₂O/CH₄ lines, aerosols and
-//!    scattering. Expect band transmittances within ~0.1 of MODTRAN for
-//!    clear, humid near-ground paths (see tests/atmosphere.rs, which compares
-//!    with tape7.LWIRSun).
+//!    Further bands: O₃ 9.6 µm (AFGL profiles only) and N₂O 4.5 µm (see
+//!    [`BANDS`] for parameters and sources).
+//! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
+//!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
+//! 4. Not modelled: CO/CH₄/HDO lines, the 3–5 µm water continuum beyond
+//!    Roberts' exponential term, aerosols and scattering. On the AFGL
+//!    tropical profile the zenith path is within 7 % of MODTRAN in 8–12 µm
+//!    and 31 % too transparent in 3.5–4.5 µm (docs/physics/atmosphere.md).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
@@ -53,6 +60,7 @@
 //! longwave E_sky/π.
 
 use super::PathSpectra;
+use super::profile::Profile;
 use crate::radiometry::{Planck, SpectralGrid};
 use crate::weather::WeatherRecord;
 use crate::{Error, Result};
@@ -91,6 +99,26 @@ pub fn saturation_vapour_pressure_pa(t_k: f64) -> f64 {
 const R_GAS: f64 = 8.314_462_618; // J/(mol K)
 const M_H2O_G_MOL: f64 = 18.015;
 const M_CO2_G_MOL: f64 = 44.01;
+const M_O3_G_MOL: f64 = 48.00;
+const M_N2O_G_MOL: f64 = 44.01;
+/// N₂O volume mixing ratio, ppmv (well mixed; the AFGL profiles' 0.32 in
+/// the troposphere).
+const N2O_PPMV: f64 = 0.32;
+/// N₂ volume mixing ratio of dry air.
+const N2_FRACTION: f64 = 0.7808;
+/// Integrated absorption of the N₂ collision-induced fundamental band,
+/// cm⁻² amagat⁻² (Lafferty, Solodov, Weber, Olson & Hartmann 1996, Appl.
+/// Opt. 35, 5911: 3.467·10⁻⁴ at 293 K, nearly independent of temperature).
+const N2_CIA_INTEGRAL: f64 = 3.467e-4;
+/// Centre of the N₂ fundamental, cm⁻¹.
+const N2_CIA_CENTRE_CM: f64 = 2330.0;
+/// Width ω of the exponential profile `(S/ω)·exp(−2|ν − ν₀|/ω)` of the N₂
+/// band, cm⁻¹: a peak of 1.5·10⁻⁶ cm⁻¹ amagat⁻² (Lafferty et al. 1996,
+/// fig. 3), so that the band spans ~2150–2600 cm⁻¹ as measured.
+const N2_CIA_WIDTH_CM: f64 = 231.0;
+/// Depth over which the weather's surface conditions fade into the model
+/// profile, m (the order of a daytime boundary layer).
+pub const SURFACE_BLEND_DEPTH_M: f64 = 2000.0;
 const ATM_PA: f64 = 101_325.0;
 const PRESSURE_SCALE_HEIGHT_M: f64 = 8000.0;
 /// Top of the model atmosphere, m.
@@ -121,6 +149,19 @@ impl SurfaceMet {
             ground_altitude_m,
         }
     }
+
+    /// The surface air of `profile` itself at `ground_altitude_m` (no
+    /// weather: the profile unscaled).
+    pub fn of_profile(profile: Profile, ground_altitude_m: f64) -> Self {
+        let l = profile.level(ground_altitude_m);
+        let e = l.h2o_ppmv * 1e-6 * l.pressure_pa;
+        SurfaceMet {
+            air_temperature_k: l.temperature_k,
+            relative_humidity: (e / saturation_vapour_pressure_pa(l.temperature_k)).min(1.0),
+            pressure_pa: l.pressure_pa,
+            ground_altitude_m,
+        }
+    }
 }
 
 /// Tunable parameters of the built-in model (defaults as documented above).
@@ -134,6 +175,10 @@ pub struct BuiltinParams {
     pub max_segment_m: f64,
     /// Largest altitude change of a segment, m.
     pub max_segment_rise_m: f64,
+    /// The AFGL model atmosphere above the surface ([`Profile`]); `None`:
+    /// the analytic profile (US 1976 temperatures, exponential water
+    /// vapour with [`BuiltinParams::water_scale_height_m`], no ozone).
+    pub profile: Option<Profile>,
 }
 
 impl Default for BuiltinParams {
@@ -143,6 +188,7 @@ impl Default for BuiltinParams {
             co2_ppmv: 420.0,
             max_segment_m: 1000.0,
             max_segment_rise_m: 250.0,
+            profile: None,
         }
     }
 }
@@ -168,6 +214,10 @@ pub struct AirState {
     pub water_pa: f64,
     /// CO₂ density, g/m³.
     pub co2_g_m3: f64,
+    /// Ozone density, g/m³.
+    pub o3_g_m3: f64,
+    /// Nitrous oxide density, g/m³.
+    pub n2o_g_m3: f64,
 }
 
 /// An Edwards exponential wide band.
@@ -183,7 +233,9 @@ struct WideBand {
     n: f64,
 }
 
-const BANDS: [WideBand; 3] = [
+/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, CO₂ 4.3 µm, O₃ 9.6 µm,
+/// N₂O 4.5 µm.
+const BANDS: [WideBand; 5] = [
     WideBand {
         nu_cm: 1600.0,
         head: false,
@@ -210,6 +262,34 @@ const BANDS: [WideBand; 3] = [
         beta0: 0.24723,
         water: false,
         n: 0.8,
+    },
+    // O₃ 9.6 µm (ν₃ at 1042 cm⁻¹): band strength 376 cm⁻² atm⁻¹ at STP
+    // = 17.6 cm⁻¹/(g m⁻²), bandwidth parameter 30 cm⁻¹ at stratospheric
+    // temperatures (ω₀ = 30/√2.2), mean line spacing 0.1 cm⁻¹ and air
+    // half-width 0.08 cm⁻¹/atm at 296 K (Vardavas & Taylor, *Radiation and
+    // Climate*, 2007, § 4.7; half-width: Hoell et al. 1982, Opt. Eng. 21,
+    // 213548), so β = πγ/d = 2.51 at 296 K and 1 atm, β₀ = 2.51·√2.96.
+    WideBand {
+        nu_cm: 1042.0,
+        head: false,
+        alpha: 17.6,
+        omega0: 20.2,
+        beta0: 4.32,
+        water: false,
+        n: 1.0,
+    },
+    // N₂O 4.5 µm (ν₃ at 2224 cm⁻¹): band strength 1.0·10⁻¹⁷ cm⁻¹/(molecule
+    // cm⁻²) (HITRAN; Toth 1991, Appl. Opt. 30, 5289) = 13.7 cm⁻¹/(g m⁻²);
+    // width, overlap and pressure exponent those of the CO₂ 15 µm band
+    // above (a linear triatomic with nearly the same rotational constant).
+    WideBand {
+        nu_cm: 2224.0,
+        head: false,
+        alpha: 13.7,
+        omega0: 12.7,
+        beta0: 0.06157,
+        water: false,
+        n: 0.7,
     },
 ];
 
@@ -254,6 +334,19 @@ fn malkmus(x: f64, beta: f64) -> f64 {
     }
     let beta = beta.max(1e-12);
     (-(0.5 * beta) * ((1.0 + 4.0 * x / beta).sqrt() - 1.0)).exp()
+}
+
+/// N₂ collision-induced absorption coefficient, cm⁻¹ amagat⁻², at
+/// wavenumber `nu` (cm⁻¹): the fundamental band as an exponential profile
+/// of the measured integral (see [`N2_CIA_INTEGRAL`]).
+#[inline]
+fn n2_cia(nu: f64) -> f64 {
+    let x = 2.0 * (nu - N2_CIA_CENTRE_CM).abs() / N2_CIA_WIDTH_CM;
+    if x > 40.0 {
+        0.0
+    } else {
+        N2_CIA_INTEGRAL / N2_CIA_WIDTH_CM * (-x).exp()
+    }
 }
 
 /// Roberts et al. (1976) self-continuum coefficient, (g cm⁻²)⁻¹ atm⁻¹.
@@ -320,11 +413,31 @@ impl BuiltinAtmosphere {
 
     /// Precipitable water of the vertical column above the ground, g/cm².
     pub fn water_column_g_cm2(&self) -> f64 {
-        self.state(self.met.ground_altitude_m).water_g_m3 * self.params.water_scale_height_m * 1e-4
+        if self.params.profile.is_none() {
+            return self.state(self.met.ground_altitude_m).water_g_m3
+                * self.params.water_scale_height_m
+                * 1e-4;
+        }
+        // Midpoint rule over 10 m layers to the top of the model.
+        let z0 = self.met.ground_altitude_m;
+        let n = ((TOP_OF_ATMOSPHERE_M - z0) / 10.0).ceil() as usize;
+        let dz = (TOP_OF_ATMOSPHERE_M - z0) / n as f64;
+        (0..n)
+            .map(|i| self.state(z0 + (i as f64 + 0.5) * dz).water_g_m3 * dz)
+            .sum::<f64>()
+            * 1e-4
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &BuiltinParams {
+        &self.params
     }
 
     /// The air at altitude `z_m` (m above sea level).
     pub fn state(&self, z_m: f64) -> AirState {
+        if let Some(profile) = self.params.profile {
+            return self.profile_state(profile, z_m);
+        }
         let m = &self.met;
         let dz = z_m - m.ground_altitude_m;
         let shift = m.air_temperature_k - us76_temperature_k(m.ground_altitude_m);
@@ -342,6 +455,41 @@ impl BuiltinAtmosphere {
             water_g_m3: rho,
             water_pa: e,
             co2_g_m3: co2,
+            o3_g_m3: 0.0,
+            n2o_g_m3: N2O_PPMV * 1e-6 * p * M_N2O_G_MOL / (R_GAS * t),
+        }
+    }
+
+    /// [`BuiltinAtmosphere::state`] on an AFGL profile: the profile's air
+    /// with the surface conditions blended in over the lowest
+    /// [`SURFACE_BLEND_DEPTH_M`] — temperature shifted by
+    /// ΔT = T_air − T_profile(z_g) and the water-vapour mixing ratio scaled
+    /// by x_w(weather)/x_w(profile at z_g), both by a weight falling
+    /// linearly from 1 at the ground to 0 at the blend depth; pressure
+    /// scaled everywhere by p_s/p_profile(z_g) (the column hydrostatically
+    /// heavier or lighter).
+    fn profile_state(&self, profile: Profile, z_m: f64) -> AirState {
+        let m = &self.met;
+        let g = profile.level(m.ground_altitude_m);
+        let l = profile.level(z_m);
+        let w = (1.0 - (z_m - m.ground_altitude_m) / SURFACE_BLEND_DEPTH_M).clamp(0.0, 1.0);
+        let t = l.temperature_k + (m.air_temperature_k - g.temperature_k) * w;
+        let p = l.pressure_pa * m.pressure_pa / g.pressure_pa;
+        let x_met = m.relative_humidity * saturation_vapour_pressure_pa(m.air_temperature_k)
+            / m.pressure_pa;
+        let x_prof = g.h2o_ppmv * 1e-6;
+        let scale = if x_prof > 0.0 { x_met / x_prof } else { 1.0 };
+        let x_w = l.h2o_ppmv * 1e-6 * (1.0 + (scale - 1.0) * w);
+        let e = (x_w * p).min(0.5 * p);
+        let mol_m3 = p / (R_GAS * t);
+        AirState {
+            temperature_k: t,
+            pressure_pa: p,
+            water_g_m3: e / (R_GAS * t) * M_H2O_G_MOL,
+            water_pa: e,
+            co2_g_m3: self.params.co2_ppmv * 1e-6 * mol_m3 * M_CO2_G_MOL,
+            o3_g_m3: l.o3_ppmv * 1e-6 * mol_m3 * M_O3_G_MOL,
+            n2o_g_m3: N2O_PPMV * 1e-6 * mol_m3 * M_N2O_G_MOL,
         }
     }
 
@@ -391,8 +539,8 @@ impl BuiltinAtmosphere {
         };
         let nu: Vec<f64> = wl.iter().map(|l| 1e4 / l).collect();
         let mut cont = vec![0.0; n];
-        let mut x = vec![[0.0f64; 3]; n];
-        let mut xb = vec![[0.0f64; 3]; n];
+        let mut x = vec![[0.0f64; BANDS.len()]; n];
+        let mut xb = vec![[0.0f64; BANDS.len()]; n];
         // Fixed segment boundaries k·step from the sensor, so a longer path
         // shares all the segments of a shorter one (exact monotonicity).
         let mut s0 = 0.0;
@@ -406,12 +554,21 @@ impl BuiltinAtmosphere {
             let e_atm = st.water_pa / ATM_PA;
             let p_atm = st.pressure_pa / ATM_PA;
             let broad = e_atm + 0.002 * (p_atm - e_atm);
-            let amounts = [st.water_g_m3 * ds, st.co2_g_m3 * ds, st.co2_g_m3 * ds];
-            let betas = [BANDS[0].beta(&st), BANDS[1].beta(&st), BANDS[2].beta(&st)];
+            let amounts = [
+                st.water_g_m3 * ds,
+                st.co2_g_m3 * ds,
+                st.co2_g_m3 * ds,
+                st.o3_g_m3 * ds,
+                st.n2o_g_m3 * ds,
+            ];
+            let betas = BANDS.each_ref().map(|b| b.beta(&st));
+            // N₂ density in amagat (number density / Loschmidt's at 273.15 K, 1 atm).
+            let n2 = N2_FRACTION * (st.pressure_pa - st.water_pa) / ATM_PA * 273.15 / t;
+            let n2_path = n2 * n2 * ds * 100.0;
             for i in 0..n {
-                cont[i] += continuum_cs(nu[i], t) * u_w_cm2 * broad;
+                cont[i] += continuum_cs(nu[i], t) * u_w_cm2 * broad + n2_cia(nu[i]) * n2_path;
                 let mut t_lines = 1.0;
-                for b in 0..3 {
+                for b in 0..BANDS.len() {
                     let ku = BANDS[b].kbar(nu[i], t) * amounts[b];
                     x[i][b] += ku;
                     xb[i][b] += ku * betas[b];
@@ -447,38 +604,64 @@ impl BuiltinAtmosphere {
 
     /// Sky radiance (E_ds + E_de)/π on `grid`, W·m⁻²·sr⁻¹·µm⁻¹, scaled to
     /// the broadband sky longwave `sky_longwave_w_m2` (unscaled where that is
-    /// not finite and positive). See the module docs.
+    /// not finite and positive): the sky toward the diffusivity zenith
+    /// ([`BuiltinAtmosphere::sky_radiance_toward`]). See the module docs.
     pub fn sky_radiance(&self, sky_longwave_w_m2: f64, grid: &SpectralGrid) -> Result<Vec<f64>> {
-        let shape = |g: &SpectralGrid| -> Result<Vec<f64>> {
-            let p = self.path_to_space(DIFFUSIVITY_ZENITH_DEG, g)?;
-            Ok(g.wavelengths_um()
-                .iter()
-                .zip(p.path_radiance)
-                .map(|(&l, lu)| {
-                    if l > 16.0 {
-                        self.planck.radiance(l, self.met.air_temperature_k)
-                    } else {
-                        lu
-                    }
-                })
-                .collect())
-        };
-        let mut out = shape(grid)?;
-        if sky_longwave_w_m2.is_finite() && sky_longwave_w_m2 > 0.0 {
-            // Broadband integral of the shape: 3–16 µm from the model at
-            // 0.02 µm, 16 µm–∞ a blackbody at the air temperature.
-            let g = SpectralGrid::uniform(3.0, 16.0, 0.02)?;
-            let model = g.integrate(&shape(&g)?);
-            let t = self.met.air_temperature_k;
-            let sigma_t4_pi = crate::radiometry::Constants::CODATA_2018.stefan_boltzmann_w_m2_k4()
-                * t.powi(4)
-                / std::f64::consts::PI;
-            let below16 = SpectralGrid::uniform(0.5, 16.0, 0.005)?;
-            let bb_below = below16.integrate(&below16.blackbody(&self.planck, t));
-            let total = model + (sigma_t4_pi - bb_below);
-            let scale = sky_longwave_w_m2 / std::f64::consts::PI / total;
-            out.iter_mut().for_each(|v| *v *= scale);
-        }
+        self.sky_radiance_toward(sky_longwave_w_m2, DIFFUSIVITY_ZENITH_DEG, grid)
+    }
+
+    /// The sky radiance arriving from zenith angle `zenith_deg` (< 90°):
+    /// the path radiance from the ground to space in that direction, a
+    /// blackbody at the air temperature beyond 16 µm, times the broadband
+    /// scale of [`BuiltinAtmosphere::sky_scale`] (one factor for every
+    /// direction, so the angular shape is the model's).
+    pub fn sky_radiance_toward(
+        &self,
+        sky_longwave_w_m2: f64,
+        zenith_deg: f64,
+        grid: &SpectralGrid,
+    ) -> Result<Vec<f64>> {
+        let mut out = self.sky_shape(zenith_deg, grid)?;
+        let scale = self.sky_scale(sky_longwave_w_m2)?;
+        out.iter_mut().for_each(|v| *v *= scale);
         Ok(out)
+    }
+
+    /// The unscaled sky radiance toward `zenith_deg` on `grid`.
+    fn sky_shape(&self, zenith_deg: f64, g: &SpectralGrid) -> Result<Vec<f64>> {
+        let p = self.path_to_space(zenith_deg, g)?;
+        Ok(g.wavelengths_um()
+            .iter()
+            .zip(p.path_radiance)
+            .map(|(&l, lu)| {
+                if l > 16.0 {
+                    self.planck.radiance(l, self.met.air_temperature_k)
+                } else {
+                    lu
+                }
+            })
+            .collect())
+    }
+
+    /// The factor that makes the model's isotropic-equivalent sky (the sky
+    /// at the diffusivity zenith, 52.96°) integrate over 3–∞ µm to the
+    /// weather's E_sky/π; 1 where `sky_longwave_w_m2` is not finite and
+    /// positive.
+    pub fn sky_scale(&self, sky_longwave_w_m2: f64) -> Result<f64> {
+        if !(sky_longwave_w_m2.is_finite() && sky_longwave_w_m2 > 0.0) {
+            return Ok(1.0);
+        }
+        // Broadband integral of the shape: 3–16 µm from the model at
+        // 0.02 µm, 16 µm–∞ a blackbody at the air temperature.
+        let g = SpectralGrid::uniform(3.0, 16.0, 0.02)?;
+        let model = g.integrate(&self.sky_shape(DIFFUSIVITY_ZENITH_DEG, &g)?);
+        let t = self.met.air_temperature_k;
+        let sigma_t4_pi = crate::radiometry::Constants::CODATA_2018.stefan_boltzmann_w_m2_k4()
+            * t.powi(4)
+            / std::f64::consts::PI;
+        let below16 = SpectralGrid::uniform(0.5, 16.0, 0.005)?;
+        let bb_below = below16.integrate(&below16.blackbody(&self.planck, t));
+        let total = model + (sigma_t4_pi - bb_below);
+        Ok(sky_longwave_w_m2 / std::f64::consts::PI / total)
     }
 }

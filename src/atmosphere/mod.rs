@@ -4,8 +4,14 @@
 //!
 //! - [`Atmosphere`] is the closed set of models the render integrator calls:
 //!   `None` (vacuum), [`BuiltinAtmosphere`] (needs nothing external; see
-//!   [`builtin`] for the model and its sources) and [`Tape7Lut`] (a table of
-//!   MODTRAN runs, see [`lut`]).
+//!   [`builtin`] for the model and its sources, on the analytic profile or
+//!   one of the six AFGL model atmospheres of [`profile`]) and [`Tape7Lut`]
+//!   (a table of MODTRAN runs, see [`lut`]).
+//! - The sky depends on direction: [`Atmosphere::sky_radiance_toward`]
+//!   (what a ray leaving the scene sees), [`Atmosphere::sky_radiance`] (the
+//!   isotropic equivalent a diffuse surface reflects), and
+//!   [`Atmosphere::look_up`] (τ to space with the sky radiance, as
+//!   `irsig atmosphere --look up` prints it).
 //! - [`tape7`]: the MODTRAN tape7 reader (radiance and transmittance modes).
 //! - [`PathTable`]: path spectra tabulated over view zenith and range for one
 //!   sensor position — what a renderer should look up per hit (the built-in
@@ -20,11 +26,13 @@
 
 pub mod builtin;
 pub mod lut;
+pub mod profile;
 pub mod table;
 pub mod tape7;
 
 pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 pub use lut::{Tape7Lut, Tape7Run};
+pub use profile::{Profile, ProfileLevel};
 pub use table::PathTable;
 pub use tape7::{Tape7, Tape7Column, Tape7Mode};
 
@@ -106,7 +114,138 @@ fn grey_sky(sky: &SkyConditions, grid: &SpectralGrid) -> Result<Vec<f64>> {
         .collect())
 }
 
+/// Most view zenith of a look up through the flat-earth model, degrees: the
+/// horizon itself has an infinite path (a round earth would give ~38 air
+/// masses; 89° gives 57).
+pub const MAX_SKY_ZENITH_DEG: f64 = 89.0;
+
 impl Atmosphere {
+    /// The built-in model on the AFGL `profile` for a weather record at a
+    /// site altitude (the record's surface conditions blended into the
+    /// profile's lowest layers, see [`BuiltinAtmosphere::state`]).
+    pub fn builtin_profile(
+        profile: Profile,
+        weather: &crate::weather::WeatherRecord,
+        ground_altitude_m: f64,
+    ) -> Result<Self> {
+        Ok(Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+            SurfaceMet::from_weather(weather, ground_altitude_m),
+            BuiltinParams {
+                profile: Some(profile),
+                ..BuiltinParams::default()
+            },
+        )?))
+    }
+
+    /// The built-in model on the AFGL `profile` as tabulated (no weather),
+    /// for a ground at `ground_altitude_m`.
+    pub fn standard(profile: Profile, ground_altitude_m: f64) -> Result<Self> {
+        Ok(Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+            SurfaceMet::of_profile(profile, ground_altitude_m),
+            BuiltinParams {
+                profile: Some(profile),
+                ..BuiltinParams::default()
+            },
+        )?))
+    }
+
+    /// The wavelengths the model covers, µm: the built-in model's
+    /// absorbers are modelled over 3–16 µm (beyond, the sky is a blackbody
+    /// at the air temperature); the vacuum and tape7 tables (whose runs say
+    /// their own coverage when resampled) have no fixed range.
+    pub fn spectral_range_um(&self) -> Option<(f64, f64)> {
+        match self {
+            Atmosphere::Builtin(_) => Some((3.0, 16.0)),
+            _ => None,
+        }
+    }
+
+    /// Looking up from the ground at `zenith_deg` (0 ≤ zenith < 90°,
+    /// clamped to [`MAX_SKY_ZENITH_DEG`]): the transmittance to space and
+    /// the sky radiance arriving from that direction
+    /// ([`Atmosphere::sky_radiance_toward`]).
+    pub fn look_up(
+        &self,
+        sky: &SkyConditions,
+        zenith_deg: f64,
+        grid: &SpectralGrid,
+    ) -> Result<PathSpectra> {
+        if !(0.0..90.0).contains(&zenith_deg) {
+            return Err(Error::invalid(
+                "zenith_deg",
+                format!("looking up needs 0 ≤ zenith < 90°, got {zenith_deg}"),
+            ));
+        }
+        let z = zenith_deg.min(MAX_SKY_ZENITH_DEG);
+        let transmittance = match self {
+            Atmosphere::None => vec![1.0; grid.len()],
+            Atmosphere::Builtin(b) => b.path_to_space(z, grid)?.transmittance,
+            Atmosphere::Tape7Lut(l) if !l.sky_runs.is_empty() => l.sky(z, grid)?.transmittance,
+            Atmosphere::Tape7Lut(_) => vec![1.0; grid.len()],
+        };
+        Ok(PathSpectra {
+            transmittance,
+            path_radiance: self.sky_radiance_toward(sky, z, grid)?,
+        })
+    }
+
+    /// Sky radiance arriving at the ground from zenith angle `zenith_deg`
+    /// (0 ≤ zenith < 90°, clamped to [`MAX_SKY_ZENITH_DEG`]),
+    /// W·m⁻²·sr⁻¹·µm⁻¹: the built-in model's path radiance from the ground
+    /// to space in that direction (a blackbody at the air temperature beyond
+    /// 16 µm), with the same broadband scale to the weather's sky longwave
+    /// as [`Atmosphere::sky_radiance`]; the tape7 table's sky runs
+    /// interpolated in zenith; the grey sky (isotropic) with no atmosphere
+    /// or no sky runs.
+    pub fn sky_radiance_toward(
+        &self,
+        sky: &SkyConditions,
+        zenith_deg: f64,
+        grid: &SpectralGrid,
+    ) -> Result<Vec<f64>> {
+        if !(zenith_deg.is_finite() && zenith_deg >= 0.0) {
+            return Err(Error::invalid(
+                "zenith_deg",
+                format!("expected a zenith ≥ 0°, got {zenith_deg}"),
+            ));
+        }
+        let z = zenith_deg.min(MAX_SKY_ZENITH_DEG);
+        match self {
+            Atmosphere::None => grey_sky(sky, grid),
+            Atmosphere::Builtin(b) => b.sky_radiance_toward(sky.sky_longwave_w_m2, z, grid),
+            Atmosphere::Tape7Lut(l) if !l.sky_runs.is_empty() => Ok(l.sky(z, grid)?.path_radiance),
+            Atmosphere::Tape7Lut(_) => grey_sky(sky, grid),
+        }
+    }
+
+    /// [`Atmosphere::sky_radiance_toward`] for each of `zeniths_deg` (the
+    /// built-in model's broadband scale computed once).
+    pub fn sky_radiances_toward(
+        &self,
+        sky: &SkyConditions,
+        zeniths_deg: &[f64],
+        grid: &SpectralGrid,
+    ) -> Result<Vec<Vec<f64>>> {
+        match self {
+            Atmosphere::Builtin(b) => {
+                let scale = b.sky_scale(sky.sky_longwave_w_m2)?;
+                zeniths_deg
+                    .iter()
+                    .map(|&z| {
+                        let mut v =
+                            b.sky_radiance_toward(f64::NAN, z.min(MAX_SKY_ZENITH_DEG), grid)?;
+                        v.iter_mut().for_each(|x| *x *= scale);
+                        Ok(v)
+                    })
+                    .collect()
+            }
+            _ => zeniths_deg
+                .iter()
+                .map(|&z| self.sky_radiance_toward(sky, z, grid))
+                .collect(),
+        }
+    }
+
     /// The built-in model for a weather record at a site altitude.
     pub fn builtin(
         weather: &crate::weather::WeatherRecord,

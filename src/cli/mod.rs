@@ -22,6 +22,7 @@ macro_rules! outln {
 }
 
 mod args;
+mod atmosphere;
 mod bench;
 mod calibrate;
 mod compare;
@@ -72,6 +73,8 @@ enum Command {
     Thermal(thermal::Args),
     /// Planck band radiance and its inverse (brightness temperature).
     Radiance(radiance::Args),
+    /// Atmospheric transmittance and path (or sky) radiance of one path.
+    Atmosphere(atmosphere::Args),
     /// Compare a synthetic image with truth imagery or point measurements.
     Compare(compare::Args),
     /// Sensitivity of temperatures and radiances to input parameters.
@@ -102,6 +105,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Sun(a) => sun::run(a),
         Command::Thermal(a) => thermal::run(a),
         Command::Radiance(a) => radiance::run(a),
+        Command::Atmosphere(a) => atmosphere::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Sensitivity(a) => sensitivity::run(a),
         Command::Calibrate(a) => calibrate::run(a),

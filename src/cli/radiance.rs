@@ -34,7 +34,7 @@ pub struct Args {
 }
 
 /// Parse `LO-HI` (µm).
-fn parse_band(s: &str) -> anyhow::Result<(f64, f64)> {
+pub(super) fn parse_band(s: &str) -> anyhow::Result<(f64, f64)> {
     let bad = || anyhow::anyhow!("--band: expected `LO-HI` in µm (e.g. `8-14`), got `{s}`");
     let (a, b) = s.split_once('-').ok_or_else(bad)?;
     let lo: f64 = a.trim().parse().map_err(|_| bad())?;
@@ -80,7 +80,7 @@ fn band(args: &Args) -> anyhow::Result<Band> {
 }
 
 /// The response restricted to [lo, hi] (interpolated at the cut points).
-fn clip(resp: &SpectralResponse, lo: f64, hi: f64) -> anyhow::Result<SpectralResponse> {
+pub(super) fn clip(resp: &SpectralResponse, lo: f64, hi: f64) -> anyhow::Result<SpectralResponse> {
     let mut wl = vec![lo];
     let mut r = vec![resp.at(lo)];
     for (&l, &v) in resp.wavelengths_um().iter().zip(resp.response()) {

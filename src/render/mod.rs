@@ -40,7 +40,7 @@ use serde::Deserialize;
 pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
 pub use shade::{
     Conditions, FastMiss, FastScratch, SceneOptics, ShadeOptions, Shader, Sky, SunInput,
-    SurfaceState, TruthOut,
+    SurfaceState, TruthOut, clear_sky_dni_w_m2, surface_solar_spectrum,
 };
 
 use crate::output::write_image_set;

@@ -29,7 +29,7 @@ use super::scene_thermal::FacetTracers;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
-use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, SurfaceMet, Tape7Lut};
+use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, Profile, SurfaceMet, Tape7Lut};
 use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
 use crate::scene::Scene;
@@ -38,19 +38,34 @@ use crate::trace::{self, Backend, Tracer, Watertight};
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
 
-/// The scene file's `atmosphere` section.
+/// The scene file's `atmosphere` section: a name (`"none"`, `"builtin"`,
+/// `"standard"`, or an AFGL profile name such as `"tropical"`) or an object
+/// with a `model` tag. Absent: [`AtmosphereConfig::Standard`] with the
+/// profile chosen by the site and month ([`AtmosphereConfig::default`]).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(try_from = "serde_json::Value")]
 pub enum AtmosphereConfig {
     /// No atmosphere between scene and sensor; a grey sky at the air
-    /// temperature with the weather's downwelling longwave (the default).
+    /// temperature with the weather's downwelling longwave (`"none"`).
     None,
-    /// The built-in layered model driven by the weather at the image time.
+    /// The built-in layered model on its analytic profile (US 1976
+    /// temperatures, exponential water vapour, no ozone), driven by the
+    /// weather at the image time (`{"model": "builtin"}`).
     Builtin {
         /// CO₂ volume mixing ratio, ppmv (default 420).
         co2_ppmv: Option<f64>,
         /// Water-vapour scale height, m (default 2000).
         water_scale_height_m: Option<f64>,
+    },
+    /// The built-in layered model on an AFGL model atmosphere, the weather
+    /// at the image time blended into its lowest layers
+    /// (`{"model": "standard", "profile": NAME}`; the default).
+    Standard {
+        /// The profile; `None`: chosen by the site's latitude and the month
+        /// ([`Profile::for_site`]).
+        profile: Option<Profile>,
+        /// CO₂ volume mixing ratio, ppmv (default 420).
+        co2_ppmv: Option<f64>,
     },
     /// A table of MODTRAN tape7 runs, listed in an index JSON file (relative
     /// to the scene file).
@@ -58,6 +73,81 @@ pub enum AtmosphereConfig {
         /// The index file.
         index: PathBuf,
     },
+}
+
+impl Default for AtmosphereConfig {
+    /// The built-in model on the AFGL profile of the site and month.
+    fn default() -> Self {
+        AtmosphereConfig::Standard {
+            profile: None,
+            co2_ppmv: None,
+        }
+    }
+}
+
+/// The object form of [`AtmosphereConfig`] as written.
+#[derive(Deserialize)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+enum AtmosphereObject {
+    None,
+    Builtin {
+        co2_ppmv: Option<f64>,
+        water_scale_height_m: Option<f64>,
+    },
+    Standard {
+        profile: Option<String>,
+        co2_ppmv: Option<f64>,
+    },
+    Tape7 {
+        index: PathBuf,
+    },
+}
+
+impl TryFrom<serde_json::Value> for AtmosphereConfig {
+    type Error = String;
+    fn try_from(v: serde_json::Value) -> std::result::Result<Self, String> {
+        let profile = |name: &str| Profile::from_name(name).map_err(|e| e.to_string());
+        if let serde_json::Value::String(name) = &v {
+            return Ok(match name.as_str() {
+                "none" => AtmosphereConfig::None,
+                "builtin" => AtmosphereConfig::Builtin {
+                    co2_ppmv: None,
+                    water_scale_height_m: None,
+                },
+                "standard" => AtmosphereConfig::default(),
+                other => AtmosphereConfig::Standard {
+                    profile: Some(profile(other).map_err(|_| {
+                        format!(
+                            "unknown atmosphere `{other}`: expected \"none\", \"builtin\", \
+                             \"standard\" or a profile ({})",
+                            Profile::ALL.map(Profile::name).join(", ")
+                        )
+                    })?),
+                    co2_ppmv: None,
+                },
+            });
+        }
+        Ok(
+            match serde_json::from_value::<AtmosphereObject>(v).map_err(|e| e.to_string())? {
+                AtmosphereObject::None => AtmosphereConfig::None,
+                AtmosphereObject::Builtin {
+                    co2_ppmv,
+                    water_scale_height_m,
+                } => AtmosphereConfig::Builtin {
+                    co2_ppmv,
+                    water_scale_height_m,
+                },
+                AtmosphereObject::Standard {
+                    profile: p,
+                    co2_ppmv,
+                } => AtmosphereConfig::Standard {
+                    profile: p.as_deref().map(profile).transpose()?,
+                    co2_ppmv,
+                },
+                AtmosphereObject::Tape7 { index } => AtmosphereConfig::Tape7 { index },
+            },
+        )
+    }
 }
 
 /// Options of a render run.
@@ -234,11 +324,12 @@ impl Session {
         let file = Location::file(scene_path);
         let config = RenderConfig::from_json(scene.render.as_ref(), &file)?;
         let atmosphere = match &scene.atmosphere {
-            None => AtmosphereConfig::None,
+            None => AtmosphereConfig::default(),
             Some(v) => parse_at(
                 v,
                 &file.clone().with_field("atmosphere"),
-                "{\"model\": \"none\"}, {\"model\": \"builtin\"} or {\"model\": \"tape7\", \"index\": FILE}",
+                "\"none\", a profile name, {\"model\": \"none\"}, {\"model\": \"builtin\"}, \
+                 {\"model\": \"standard\", \"profile\": NAME} or {\"model\": \"tape7\", \"index\": FILE}",
             )?,
         };
         let base = scene_path.parent().unwrap_or(Path::new(".")).to_path_buf();
@@ -337,6 +428,23 @@ impl Session {
                 }
                 if let Some(w) = water_scale_height_m {
                     p.water_scale_height_m = *w;
+                }
+                Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+                    SurfaceMet::from_weather(record, self.scene.site.altitude_m),
+                    p,
+                )?)
+            }
+            AtmosphereConfig::Standard { profile, co2_ppmv } => {
+                let profile = profile.unwrap_or_else(|| {
+                    use chrono::Datelike;
+                    Profile::for_site(self.scene.site.latitude_deg, record.time.month())
+                });
+                let mut p = crate::atmosphere::BuiltinParams {
+                    profile: Some(profile),
+                    ..Default::default()
+                };
+                if let Some(c) = co2_ppmv {
+                    p.co2_ppmv = *c;
                 }
                 Atmosphere::Builtin(BuiltinAtmosphere::with_params(
                     SurfaceMet::from_weather(record, self.scene.site.altitude_m),

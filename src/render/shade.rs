@@ -23,9 +23,13 @@
 //! past it, both take the diffuse environment `F·L_sky + (1 − F)·B(T_bg)`.
 //! The solar glint (a delta in the mirror direction) is left out.
 //!
-//! Rays that leave the scene see the sky radiance when they point above the
-//! horizon (`dir.z ≥ 0`) and the ground beyond the scene (a blackbody at
-//! [`Conditions::ground_temperature_k`]) when they point below it.
+//! Rays that leave the scene see the sky radiance arriving from their own
+//! direction when they point above the horizon (`dir.z ≥ 0`;
+//! [`crate::atmosphere::Atmosphere::sky_radiance_toward`] on [`SKY_NODES`]
+//! values of cos θ, linear between them) and the ground beyond the scene (a
+//! blackbody at [`Conditions::ground_temperature_k`]) when they point below
+//! it. `L_sky` in the diffuse term above is the isotropic-equivalent sky
+//! ([`crate::atmosphere::Atmosphere::sky_radiance`]).
 //!
 //! Units: wavelength µm, spectral radiance W·m⁻²·sr⁻¹·µm⁻¹, spectral
 //! irradiance W·m⁻²·µm⁻¹, band radiance ∫ R L dλ in W·m⁻²·sr⁻¹.
@@ -62,6 +66,29 @@ pub const PLANCK_TABLE_STEP_K: f64 = 0.05;
 const PLANCK_TABLE_MAX_NODES: usize = 16384;
 /// Angle rows of the emissivity tables (0°, 1°, …, 90°).
 const ANGLE_ROWS: usize = 91;
+/// Nodes of the directional sky table: cos θ from cos 89° (the horizon,
+/// [`crate::atmosphere::MAX_SKY_ZENITH_DEG`]) to 1, quadratically spaced
+/// (denser toward the horizon, where the sky radiance changes fastest).
+const SKY_NODES: usize = 24;
+
+/// cos θ of sky node `k`.
+fn sky_node_cos(k: usize) -> f64 {
+    let mu0 = crate::atmosphere::MAX_SKY_ZENITH_DEG.to_radians().cos();
+    let s = k as f64 / (SKY_NODES - 1) as f64;
+    mu0 + (1.0 - mu0) * s * s
+}
+
+/// The sky nodes bracketing a direction with vertical component `dz` of a
+/// vector of length `len`: `(k, f)` with the direction at fraction `f` from
+/// node `k` to node `k + 1`.
+#[inline]
+fn sky_node(dz: f64, len: f64) -> (usize, f64) {
+    let mu0 = crate::atmosphere::MAX_SKY_ZENITH_DEG.to_radians().cos();
+    let mu = if len > 0.0 { dz / len } else { 1.0 };
+    let s = ((mu - mu0).max(0.0) / (1.0 - mu0)).min(1.0).sqrt() * (SKY_NODES - 1) as f64;
+    let k = (s as usize).min(SKY_NODES - 2);
+    (k, s - k as f64)
+}
 
 /// Sky radiance model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,7 +109,7 @@ pub struct SunInput {
     /// Unit east-north-up vector toward the sun.
     pub direction: Vec3,
     /// Direct normal irradiance at the surface, W/m² (broadband; distributed
-    /// over wavelength as a 5772 K blackbody, see [`solar_spectrum`]).
+    /// over wavelength by [`surface_solar_spectrum`]).
     pub direct_normal_w_m2: f64,
 }
 
@@ -209,14 +236,66 @@ pub fn solar_spectrum(planck: &Planck, wavelengths_um: &[f64], dni_w_m2: f64) ->
         .collect()
 }
 
+/// Clear-sky direct normal irradiance at the ground for the sun at
+/// `zenith_deg`, W/m²: Meinel & Meinel (1976), *Applied Solar Energy*,
+/// I_D = S₀·0.7^(AM^0.678), AM = 1/cos z (S₀ the solar constant of
+/// [`crate::radiometry::equation::SOLAR_CONSTANT_W_M2`]); 0 at or below the horizon.
+pub fn clear_sky_dni_w_m2(zenith_deg: f64) -> f64 {
+    if !(zenith_deg.is_finite() && zenith_deg < 90.0) {
+        return 0.0;
+    }
+    let am = 1.0 / zenith_deg.max(0.0).to_radians().cos();
+    crate::radiometry::equation::SOLAR_CONSTANT_W_M2 * 0.7f64.powf(am.powf(0.678))
+}
+
+/// Solar spectral irradiance at the ground on a surface normal to the sun,
+/// W·m⁻²·µm⁻¹, on `grid`. With no atmosphere, the weather's broadband DNI
+/// spread as a 5772 K blackbody ([`solar_spectrum`]). With one, the
+/// top-of-atmosphere spectrum ([`crate::radiometry::solar_irradiance_toa`],
+/// 1 AU) times the atmosphere's τ₁(λ) along the sun's path
+/// ([`Atmosphere::solar_transmittance`]: no energy inside the absorption
+/// bands) times the weather's attenuation beyond a clear sky,
+/// c = min(1, DNI / DNI_clear) ([`clear_sky_dni_w_m2`]: clouds and haze,
+/// taken as grey; at most the clear sky, since near the horizon a measured
+/// DNI over a small modelled clear-sky DNI would otherwise multiply the
+/// spectrum without bound).
+pub fn surface_solar_spectrum(
+    atmosphere: &Atmosphere,
+    planck: &Planck,
+    sun: &SunInput,
+    grid: &crate::radiometry::SpectralGrid,
+) -> crate::Result<Vec<f64>> {
+    let wl = grid.wavelengths_um();
+    if matches!(atmosphere, Atmosphere::None) {
+        return Ok(solar_spectrum(planck, wl, sun.direct_normal_w_m2));
+    }
+    let d = sun.direction.normalize_or_zero();
+    let zenith = (d.z as f64).clamp(-1.0, 1.0).acos().to_degrees();
+    let clear = clear_sky_dni_w_m2(zenith);
+    if clear <= 0.0 || sun.direct_normal_w_m2 <= 0.0 {
+        return Ok(vec![0.0; wl.len()]);
+    }
+    let c = (sun.direct_normal_w_m2 / clear).min(1.0);
+    let tau = atmosphere.solar_transmittance(zenith, grid)?;
+    Ok(crate::radiometry::solar_irradiance_toa(grid, 1.0)
+        .into_iter()
+        .zip(tau)
+        .map(|(e, t)| e * t * c)
+        .collect())
+}
+
 /// One band's precomputed tables.
 #[derive(Debug, Clone)]
 struct BandTables {
     band: Band,
     /// Offset of this band's wavelengths in the concatenated spectrum.
     start: usize,
-    /// Sky spectral radiance.
+    /// Sky spectral radiance of the isotropic-equivalent sky (the reflected
+    /// sky of a diffuse surface).
     sky: Vec<f64>,
+    /// Sky spectral radiance arriving from each of the [`SKY_NODES`]
+    /// directions ([`sky_node_cos`]): what a ray leaving the scene sees.
+    sky_dir: Vec<Vec<f64>>,
     /// Ground-beyond-the-scene spectral radiance.
     ground: Vec<f64>,
     /// Solar spectral irradiance at the surface, normal to the sun.
@@ -253,15 +332,25 @@ struct FastBand {
     sun: Vec<f32>,
     /// Per material: `ANGLE_ROWS × len` emissivities.
     eps: Vec<Vec<f32>>,
-    /// Band radiance of a ray leaving the scene upward (sky) and downward
-    /// (ground beyond), W·m⁻²·sr⁻¹.
-    miss_sky: f64,
+    /// Band radiance of a ray leaving the scene upward, per sky node
+    /// ([`sky_node_cos`]), and downward (ground beyond), W·m⁻²·sr⁻¹.
+    miss_sky: Vec<f64>,
     miss_ground: f64,
     /// Per material: when its emissivity is the same at every wavelength
     /// of the band (at each angle row), the `ANGLE_ROWS` values.
     grey: Vec<Option<Vec<f64>>>,
     /// Band integrals with the plain weights (no path).
     plain: Integrals,
+}
+
+impl FastBand {
+    /// The band radiance of the sky at fraction `f` from node `k` to node
+    /// `k + 1` (see [`sky_node`]).
+    #[inline]
+    fn miss_sky_at(&self, k: usize, f: f64) -> f64 {
+        let (a, b) = (self.miss_sky[k], self.miss_sky[k + 1]);
+        a + f * (b - a)
+    }
 }
 
 /// Band integrals `Σ_λ q(λ)·X(λ)` of one band for one weighting `q`
@@ -819,19 +908,34 @@ impl<'a> Shader<'a> {
         let mut wavelengths = Vec::new();
         for band in bands {
             let wl = band.wavelengths_um();
-            let sky = match &conditions.sky {
-                Sky::Blackbody { temperature_k } => wl
-                    .iter()
-                    .map(|&l| planck.radiance(l, *temperature_k))
-                    .collect(),
-                Sky::Atmosphere(c) => conditions.atmosphere.sky_radiance(c, band.grid())?,
+            let (sky, sky_dir) = match &conditions.sky {
+                Sky::Blackbody { temperature_k } => {
+                    let sky: Vec<f64> = wl
+                        .iter()
+                        .map(|&l| planck.radiance(l, *temperature_k))
+                        .collect();
+                    (sky.clone(), vec![sky; SKY_NODES])
+                }
+                Sky::Atmosphere(c) => {
+                    let zeniths: Vec<f64> = (0..SKY_NODES)
+                        .map(|k| sky_node_cos(k).clamp(-1.0, 1.0).acos().to_degrees())
+                        .collect();
+                    (
+                        conditions.atmosphere.sky_radiance(c, band.grid())?,
+                        conditions
+                            .atmosphere
+                            .sky_radiances_toward(c, &zeniths, band.grid())?,
+                    )
+                }
             };
             let ground = wl
                 .iter()
                 .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
                 .collect();
             let sun = match conditions.sun {
-                Some(s) if s.direction.z > 0.0 => solar_spectrum(&planck, wl, s.direct_normal_w_m2),
+                Some(s) if s.direction.z > 0.0 => {
+                    surface_solar_spectrum(&conditions.atmosphere, &planck, &s, band.grid())?
+                }
                 _ => vec![0.0; wl.len()],
             };
             let eps = emissivities
@@ -848,6 +952,7 @@ impl<'a> Shader<'a> {
                 band: band.clone(),
                 start: wavelengths.len(),
                 sky,
+                sky_dir,
                 ground,
                 sun,
                 eps,
@@ -921,7 +1026,7 @@ impl<'a> Shader<'a> {
                     sky: pad(&t.sky),
                     sun: pad(&t.sun),
                     eps: t.eps.iter().map(|e| pad(e)).collect(),
-                    miss_sky: t.band.integrate(&t.sky),
+                    miss_sky: t.sky_dir.iter().map(|v| t.band.integrate(v)).collect(),
                     miss_ground: t.band.integrate(&t.ground),
                 }
             })
@@ -1038,9 +1143,10 @@ impl<'a> Shader<'a> {
     /// a primary ray that leaves the scene: the sky above the horizon, the
     /// ground beyond below it (no path, as [`Shader::shade_primary`]).
     pub fn fast_miss(&self, ray: &Ray, out: &mut [f32]) {
+        let (k, f) = sky_node(ray.dir.z as f64, ray.dir.length() as f64);
         for (o, fb) in out.iter_mut().zip(&self.fast) {
             *o = if ray.dir.z >= 0.0 {
-                fb.miss_sky
+                fb.miss_sky_at(k, f)
             } else {
                 fb.miss_ground
             } as f32;
@@ -1130,8 +1236,13 @@ impl<'a> Shader<'a> {
             let centre = i == next;
             let Some(h) = hit else {
                 let up = ray.dir.z >= 0.0;
+                let (k, f) = sky_node(ray.dir.z as f64, ray.dir.length() as f64);
                 for (b, fb) in self.fast.iter().enumerate() {
-                    out[b * n + i] = if up { fb.miss_sky } else { fb.miss_ground } as f32;
+                    out[b * n + i] = if up {
+                        fb.miss_sky_at(k, f)
+                    } else {
+                        fb.miss_ground
+                    } as f32;
                 }
                 if let (true, Some(t)) = (centre, &mut truth) {
                     block.push(t, col, super::MISS_TRUTH);
@@ -1591,11 +1702,21 @@ impl<'a> Shader<'a> {
         }
     }
 
-    /// Spectral radiance of a ray leaving the scene.
+    /// Spectral radiance of a ray leaving the scene: the sky arriving from
+    /// its direction (interpolated linearly in cos θ between the sky
+    /// nodes) above the horizon, the ground beyond below it.
     pub fn miss_into(&self, dir: Vec3, out: &mut [f64]) {
+        let (k, f) = sky_node(dir.z as f64, dir.length() as f64);
         for t in &self.bands {
-            let src = if dir.z >= 0.0 { &t.sky } else { &t.ground };
-            out[t.start..t.start + src.len()].copy_from_slice(src);
+            let o = &mut out[t.start..t.start + t.ground.len()];
+            if dir.z >= 0.0 {
+                let (a, b) = (&t.sky_dir[k], &t.sky_dir[k + 1]);
+                for ((o, &a), &b) in o.iter_mut().zip(a).zip(b) {
+                    *o = a + f * (b - a);
+                }
+            } else {
+                o.copy_from_slice(&t.ground);
+            }
         }
     }
 

@@ -66,9 +66,10 @@ pub struct SceneFile {
     /// Sensors (frame cameras, line scanners), read by the sensor stage.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sensors: Vec<Map<String, Value>>,
-    /// Atmosphere settings, read by the atmosphere stage.
+    /// Atmosphere settings, read by the atmosphere stage (an object, or a
+    /// name such as `"none"`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub atmosphere: Option<Map<String, Value>>,
+    pub atmosphere: Option<Value>,
     /// Render settings, read by the renderer.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub render: Option<Map<String, Value>>,

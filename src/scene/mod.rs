@@ -649,7 +649,7 @@ impl Loader {
             instance_object,
             facet_offsets,
             sensors: f.sensors.into_iter().map(Value::Object).collect(),
-            atmosphere: f.atmosphere.map(Value::Object),
+            atmosphere: f.atmosphere,
             render: f.render.map(Value::Object),
             warnings,
         })

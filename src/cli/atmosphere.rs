@@ -1,0 +1,269 @@
+//! `irsig atmosphere`: the transmittance and path radiance a render uses,
+//! for one path and band — looking up (the sky) or between a sensor and a
+//! target.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use irsig::atmosphere::{Atmosphere, PathGeometry, Profile, SkyConditions};
+use irsig::radiometry::{Band, DEFAULT_STEP_UM};
+
+use super::args::{parse_site, parse_time};
+use super::radiance::{clip, parse_band};
+
+/// Which way the path looks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Look {
+    /// From the ground to space: τ to space and the sky radiance.
+    Up,
+    /// From the sensor down to the target.
+    Down,
+}
+
+/// Arguments of `irsig atmosphere`.
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("model").required(true).multiple(true).args(["profile", "weather", "tape7_index"])))]
+pub struct Args {
+    /// AFGL model atmosphere: tropical, mid-latitude-summer,
+    /// mid-latitude-winter, sub-arctic-summer, sub-arctic-winter,
+    /// us-standard. With --weather, the profile under the weather (default:
+    /// chosen by the site's latitude and the month).
+    #[arg(long, value_name = "NAME")]
+    pub profile: Option<String>,
+    /// Weather file: its record at --time drives the built-in model as in a
+    /// render (surface air blended into the profile, sky scaled to the
+    /// record's sky longwave).
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "time",
+        conflicts_with = "tape7_index"
+    )]
+    pub weather: Option<PathBuf>,
+    /// Time of the weather record (RFC 3339).
+    #[arg(long, value_name = "RFC3339", requires = "weather")]
+    pub time: Option<String>,
+    /// Site `LAT,LON[,ALT]` for a weather file that carries none.
+    #[arg(long, value_name = "LAT,LON[,ALT]", requires = "weather")]
+    pub site: Option<String>,
+    /// A MODTRAN tape7 table (index JSON, see docs/formats.md).
+    #[arg(long, value_name = "FILE", conflicts_with = "profile")]
+    pub tape7_index: Option<PathBuf>,
+    /// Spectral band in µm, `LO-HI`; with --response, the response is cut to it.
+    #[arg(long, value_name = "LO-HI")]
+    pub band: Option<String>,
+    /// Relative spectral response CSV (`wavelength_um, response` per line).
+    #[arg(long, value_name = "FILE")]
+    pub response: Option<PathBuf>,
+    /// Largest spectral step of the integration grid, µm.
+    #[arg(long, value_name = "UM", default_value_t = DEFAULT_STEP_UM)]
+    pub step: f64,
+    /// `up`: ground to space; `down`: sensor to target.
+    #[arg(long, value_enum, default_value_t = Look::Down)]
+    pub look: Look,
+    /// Zenith angle, degrees (0–180): looking up, of the line of sight;
+    /// looking down, of the direction from the target to the sensor.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub zenith: f64,
+    /// Sensor altitude above the ground, m.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 1000.0,
+        allow_negative_numbers = true
+    )]
+    pub sensor_altitude: f64,
+    /// Target altitude above the ground, m.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub target_altitude: f64,
+    /// Slant range, m (needed for a horizontal path; otherwise from the
+    /// altitudes and the zenith).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    pub range: Option<f64>,
+    /// Print JSON: `{"transmittance": …, "path_radiance_w_m2_sr": …}`.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The band of `args`.
+fn band(args: &Args) -> anyhow::Result<Band> {
+    let range = args.band.as_deref().map(parse_band).transpose()?;
+    anyhow::ensure!(
+        args.step.is_finite() && args.step > 0.0,
+        "--step: expected a positive step in µm, got {}",
+        args.step
+    );
+    Ok(match (&args.response, range) {
+        (None, None) => anyhow::bail!("give --band LO-HI (µm), --response FILE, or both"),
+        (None, Some((lo, hi))) => Band::flat(lo, hi, args.step)?,
+        (Some(path), range) => {
+            let resp = irsig::radiometry::read_response_csv(path)?;
+            let resp = match range {
+                None => resp,
+                Some((lo, hi)) => clip(&resp, lo, hi).with_context(|| {
+                    format!("--band {lo}-{hi} with response {}", path.display())
+                })?,
+            };
+            Band::from_response(&resp, args.step)?
+        }
+    })
+}
+
+/// The atmosphere, the sky conditions and the ground altitude (m above
+/// sea level) the arguments describe.
+fn model(args: &Args) -> anyhow::Result<(Atmosphere, SkyConditions, f64, String)> {
+    let profile = args
+        .profile
+        .as_deref()
+        .map(Profile::from_name)
+        .transpose()
+        .context("--profile")?;
+    if let Some(index) = &args.tape7_index {
+        let a = Atmosphere::tape7_index(index).context("--tape7-index")?;
+        let sky = SkyConditions {
+            air_temperature_k: 288.15,
+            sky_longwave_w_m2: f64::NAN,
+        };
+        return Ok((a, sky, 0.0, format!("tape7 table {}", index.display())));
+    }
+    if let Some(file) = &args.weather {
+        let time = parse_time("--time", args.time.as_deref().unwrap_or_default())?;
+        let mut opts = irsig::weather::LoadOptions::default();
+        if let Some(s) = &args.site {
+            opts = opts.with_site(parse_site(s)?);
+        }
+        let history = irsig::weather::load_with(file, &opts)
+            .with_context(|| format!("--weather {}", file.display()))?;
+        let site = *history.site().context(
+            "--weather: the file carries no site: give --site LAT,LON[,ALT] (the profile \
+             is chosen by latitude, the ground altitude is the site's)",
+        )?;
+        let rec = history.at(time).context("--time")?;
+        let profile = profile.unwrap_or_else(|| {
+            use chrono::Datelike;
+            Profile::for_site(site.latitude_deg, rec.time.month())
+        });
+        let a = Atmosphere::builtin_profile(profile, &rec, site.altitude_m)?;
+        let sky = SkyConditions {
+            air_temperature_k: rec.air_temperature_k,
+            sky_longwave_w_m2: rec.sky_longwave_w_m2,
+        };
+        return Ok((
+            a,
+            sky,
+            site.altitude_m,
+            format!("{profile} under {}", file.display()),
+        ));
+    }
+    let profile = profile.context("give --profile, --weather or --tape7-index")?;
+    let a = Atmosphere::standard(profile, 0.0)?;
+    let t = profile.level(0.0).temperature_k;
+    let sky = SkyConditions {
+        air_temperature_k: t,
+        sky_longwave_w_m2: f64::NAN,
+    };
+    Ok((a, sky, 0.0, profile.to_string()))
+}
+
+/// Run `irsig atmosphere`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.zenith.is_finite() && (0.0..=180.0).contains(&args.zenith),
+        "--zenith: expected 0–180°, got {}",
+        args.zenith
+    );
+    for (flag, v) in [
+        ("--sensor-altitude", args.sensor_altitude),
+        ("--target-altitude", args.target_altitude),
+    ] {
+        anyhow::ensure!(
+            v.is_finite() && v >= 0.0,
+            "{flag}: expected an altitude ≥ 0 m above the ground, got {v}"
+        );
+    }
+    if let Some(r) = args.range {
+        anyhow::ensure!(
+            r.is_finite() && r >= 0.0,
+            "--range: expected a range ≥ 0 m, got {r}"
+        );
+    }
+    let band = band(&args)?;
+    let (atmos, sky, ground_m, what) = model(&args)?;
+    let wl = band.wavelengths_um();
+    let (lo, hi) = (wl[0], wl[wl.len() - 1]);
+    if let Some((a, b)) = atmos.spectral_range_um() {
+        anyhow::ensure!(
+            lo >= a - 1e-9 && hi <= b + 1e-9,
+            "--band: {lo}–{hi} µm is outside the built-in model's spectral range {a}–{b} µm"
+        );
+    }
+    let (p, geometry) = match args.look {
+        Look::Up => {
+            anyhow::ensure!(
+                args.zenith < 90.0,
+                "--zenith: looking up needs a zenith below 90°, got {}",
+                args.zenith
+            );
+            let p = atmos.look_up(&sky, args.zenith, band.grid())?;
+            (p, format!("looking up at zenith {}°", args.zenith))
+        }
+        Look::Down => {
+            let (hs, ht) = (args.sensor_altitude, args.target_altitude);
+            let cos = args.zenith.to_radians().cos();
+            let range = match args.range {
+                Some(r) => r,
+                None => {
+                    anyhow::ensure!(
+                        cos.abs() > 1e-9,
+                        "--range: a horizontal path (zenith 90°) needs --range"
+                    );
+                    let r = (hs - ht) / cos;
+                    anyhow::ensure!(
+                        r >= 0.0,
+                        "--zenith: at {}° the sensor ({hs} m) cannot be {} the target ({ht} m)",
+                        args.zenith,
+                        if hs > ht { "above" } else { "below" }
+                    );
+                    r
+                }
+            };
+            let g = PathGeometry {
+                sensor_altitude_m: ground_m + hs,
+                target_altitude_m: ground_m + ht,
+                range_m: range,
+            };
+            let p = atmos.path(&g, band.grid())?;
+            (
+                p,
+                format!("sensor {hs} m, target {ht} m above the ground, range {range:.1} m"),
+            )
+        }
+    };
+    let tau = band.mean(&p.transmittance);
+    let lu = band.integrate(&p.path_radiance);
+    if args.json {
+        outln!(
+            "{}",
+            serde_json::json!({ "transmittance": tau, "path_radiance_w_m2_sr": lu })
+        );
+    } else {
+        outln!("{what}, band {lo}–{hi} µm, {geometry}:");
+        outln!("  band-mean transmittance {tau:.4}");
+        let bt = band
+            .brightness_temperature(lu)
+            .map(|t| format!(" (brightness temperature {t:.2} K)"))
+            .unwrap_or_default();
+        outln!("  path radiance {lu:.4} W/m²/sr{bt}");
+    }
+    Ok(())
+}
