@@ -466,18 +466,27 @@ fn decode(bytes: Vec<u8>, path: &Path) -> Result<String> {
         Ok(s) => return Ok(s),
         Err(e) => e.into_bytes(),
     };
+    // Only files that announce themselves as EPW (`LOCATION,`) or TMY3 (the date column
+    // on line 2) have free-text header lines; other bytes are not guessed at.
+    let header_text = bytes.starts_with(b"LOCATION,")
+        || bytes
+            .split(|&b| b == b'\n')
+            .nth(1)
+            .is_some_and(|l| l.starts_with(b"Date (MM/DD/YYYY)"));
     let mut out = String::with_capacity(bytes.len());
     for (i, line) in bytes.split_inclusive(|&b| b == b'\n').enumerate() {
         match std::str::from_utf8(line) {
             Ok(s) => out.push_str(s),
-            Err(_) if i < FREE_TEXT_HEADER_LINES => out.extend(line.iter().map(|&b| char::from(b))),
+            Err(_) if header_text && i < FREE_TEXT_HEADER_LINES => {
+                out.extend(line.iter().map(|&b| char::from(b)))
+            }
             Err(e) => {
                 let col = e.valid_up_to();
                 return Err(Error::parse(
                     Location::file(path).at_line(i + 1),
                     format!(
                         "byte 0x{:02X} at column {} is not UTF-8 text (Latin-1 is accepted only \
-                         in the first {FREE_TEXT_HEADER_LINES} header lines); save the file as UTF-8",
+                         in the header lines of EPW and TMY3 files); save the file as UTF-8",
                         line[col],
                         col + 1
                     ),
