@@ -119,36 +119,66 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     p
 }
 
-/// Two curves; the angular table selects curve 1 up to 59°, blends to curve 2
-/// (index 1.5 at 60°) and uses curve 2 beyond. The curves are resampled on
-/// the union of their wavelengths.
+/// The 91 lines after the count are angular weights (DIRSIG ".ems" documentation; real
+/// files fall off toward grazing): emissivity(λ, θ) = weight(θ) × curve(λ). Two curves
+/// (texture variants) → their mean, resampled on the union of their wavelengths.
 #[test]
-fn ems_two_curves_angular_blend() {
+fn ems_angular_weights_and_two_curves_mean() {
     let d = tempfile::tempdir().unwrap();
     let mut t = String::from("2\n");
     for a in 0..=90 {
-        let c = if a < 60 {
+        let w = if a < 60 {
             1.0
         } else if a == 60 {
-            1.5
+            0.5
         } else {
-            2.0
+            0.0
         };
-        t.push_str(&format!("{c:.1}\n"));
+        t.push_str(&format!("{w:.1}\n"));
     }
-    t.push_str("CURVE_BEGIN\n 8.0 0.90\n12.0 0.98\nCURVE_BEGIN\n 8.0 0.80\n10.0 0.80\n12.0 0.90\n");
+    t.push_str(
+        "CURVE_BEGIN\t\n 8.0\t0.90\n12.0\t0.98\nCURVE_BEGIN\n 8.0 0.80\n10.0 0.80\n12.0 0.90\n",
+    );
     let p = write(d.path(), "two.ems", &t);
     let c = dirsig::read_ems(&p).unwrap();
     assert_eq!(c.wavelengths_um, vec![8.0, 10.0, 12.0]);
     assert_eq!(c.angles_deg.len(), 91);
     assert!(c.problems().is_empty());
-    // Curve 1 resampled at 10 µm: 0.94.
-    assert!(close(c.emissivity[0][1], 0.94, 1e-12));
-    assert!(close(c.at(10.0, 30.0), 0.94, 1e-12));
-    assert!(close(c.at(10.0, 60.0), 0.5 * (0.94 + 0.80), 1e-12));
-    assert!(close(c.at(12.0, 90.0), 0.90, 1e-12));
-    // Between 59° (curve 1) and 60° (blend): linear in angle.
-    assert!(close(c.at(8.0, 59.5), 0.5 * (0.90 + 0.85), 1e-12));
+    // Curve 1 resampled at 10 µm: 0.94; the mean with curve 2: 0.87.
+    assert!(close(c.emissivity[0][1], 0.87, 1e-12));
+    assert!(close(c.at(10.0, 30.0), 0.87, 1e-12));
+    assert!(close(c.at(8.0, 0.0), 0.85, 1e-12));
+    assert!(close(c.at(10.0, 60.0), 0.5 * 0.87, 1e-12));
+    assert!(close(c.at(12.0, 90.0), 0.0, 1e-12));
+    // Between 59° (weight 1) and 60° (0.5): linear in angle.
+    assert!(close(c.at(8.0, 59.5), 0.75 * 0.85, 1e-12));
+}
+
+/// The old format (real files `muddy_water.ems`, `grass_texture.ems`): each curve after
+/// a line holding its 0-based index, as `wavenumber(cm⁻¹) emissivity` pairs, decreasing;
+/// read as µm = 10⁴/ν, increasing.
+#[test]
+fn ems_old_wavenumber_format_with_index_lines() {
+    let d = tempfile::tempdir().unwrap();
+    let mut t = String::from("2\n");
+    for _ in 0..=90 {
+        t.push_str("1.000000\n");
+    }
+    t.push_str("0\n2000 0.90\n1000 0.95\n500 0.97\n1\n2000 0.80\n1000 0.85\n500 0.87\n");
+    let p = write(d.path(), "old.ems", &t);
+    let c = dirsig::read_ems(&p).unwrap();
+    assert_eq!(c.wavelengths_um, vec![5.0, 10.0, 20.0]);
+    assert!(c.angles_deg.is_empty());
+    let e = &c.emissivity[0];
+    assert!(close(e[0], 0.85, 1e-12) && close(e[1], 0.90, 1e-12) && close(e[2], 0.92, 1e-12));
+    // Wavenumbers that increase are an error naming the line.
+    let bad = t.replace("1000 0.95", "3000 0.95");
+    let p = write(d.path(), "up.ems", &bad);
+    let e = dirsig::read_ems(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("up.ems:line 95") && e.contains("decrease"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -177,7 +207,7 @@ fn ems_errors_name_line() {
     let p = write(d.path(), "idx.ems", &t);
     let e = dirsig::read_ems(&p).unwrap_err().to_string();
     assert!(
-        e.contains("idx.ems:line 2") && e.contains("outside 1..=1"),
+        e.contains("idx.ems:line 2") && e.contains("outside 0..=1"),
         "{e}"
     );
 }
@@ -225,12 +255,17 @@ fn mat_errors_name_line_and_key() {
         "{e}"
     );
 
+    // An unsupported solver no longer fails the library (issue 20): the entry is left
+    // out with a warning naming file, line and solver.
     let bad = MAT_OK.replace("= Therm", "= ExternalFile");
     let p = write(d.path(), "solver.mat", &bad);
-    let e = MaterialDb::load(&p).unwrap_err().to_string();
+    let db = MaterialDb::load(&p).unwrap();
+    assert!(db.get("Steel plate").is_none());
+    assert_eq!(db.warnings.len(), 1);
+    let w = &db.warnings[0];
     assert!(
-        e.contains("solver.mat:line 5") && e.contains("not supported"),
-        "{e}"
+        w.contains("solver.mat:line 5") && w.contains("ExternalFile") && w.contains("not loaded"),
+        "{w}"
     );
 
     let bad = MAT_OK.trim_end().trim_end_matches('}');
@@ -429,5 +464,101 @@ fn emissivity_from_csv_and_inline() {
     assert!(
         e.contains("db2.json:line 7") && e.contains("nope.csv"),
         "{e}"
+    );
+}
+
+/// Issue 20: tolerant libraries. A label ID, a `Null` solver, a `DataDriven` solver and
+/// an entry with no solver: the Therm entries load, the others are left out with a
+/// warning each naming file and line.
+#[test]
+fn mat_label_ids_and_non_therm_solvers() {
+    let d = tempfile::tempdir().unwrap();
+    let label = MAT_OK
+        .replace("ID = 7", "ID = Gidder_mat")
+        .replace("Steel plate", "Gidder");
+    let null = "MATERIAL_ENTRY {\n    ID = 100\n    NAME = Nothing\n    TEMP_SOLVER_NAME = Null\n    TEMP_SOLVER {\n    }\n}\n";
+    let data = "MATERIAL_ENTRY {\n    ID = 12\n    NAME = Hot\n    TEMP_SOLVER_NAME = DataDriven\n    TEMP_SOLVER {\n        TEMPERATURE = 1500\n    }\n}\n";
+    let none = "MATERIAL_ENTRY {\n    ID = 13\n    NAME = Ideal\n}\n";
+    let text = format!("{MAT_OK}{label}{null}{data}{none}");
+    let p = write(d.path(), "lib.mat", &text);
+    let db = MaterialDb::load(&p).unwrap();
+    let names: Vec<&str> = db.materials().iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["Steel plate", "Gidder"]);
+    // The label gets the next number after the file's numeric IDs (7, 100, 12, 13).
+    assert_eq!(db.get("Gidder").unwrap().id, 101);
+    let i = db.index_of("Gidder").unwrap();
+    assert!(matches!(db.source(i), Some(MaterialSource::Text(t)) if t.contains("ID `Gidder_mat`")));
+    assert_eq!(db.warnings.len(), 3, "{:#?}", db.warnings);
+    assert!(db.warnings[0].contains("lib.mat:line 34") && db.warnings[0].contains("`Null`"));
+    assert!(db.warnings[1].contains("`DataDriven` (TEMPERATURE = 1500)"));
+    assert!(db.warnings[1].contains("fixed_temperature_k"));
+    assert!(
+        db.warnings[2].contains("lib.mat:line 46")
+            && db.warnings[2].contains("no temperature solver")
+    );
+}
+
+/// Every real `.mat` and `.ems` file in `../shared/data/dirsig` loads (issue 20).
+#[test]
+#[ignore = "needs ../shared/data"]
+fn real_dirsig_material_files_load() {
+    let dir = shared_data("dirsig");
+    let mut files = Vec::new();
+    let mut stack = vec![dir.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "mat" || x == "ems") {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    assert!(files.len() >= 20, "{files:?}");
+    for f in &files {
+        if f.extension().is_some_and(|x| x == "mat") {
+            let db = MaterialDb::load(f).unwrap_or_else(|e| panic!("{e}"));
+            for m in db.materials() {
+                assert!(m.problems().is_empty(), "{}: {}", f.display(), m.name);
+            }
+        } else {
+            let c = dirsig::read_ems(f).unwrap_or_else(|e| panic!("{e}"));
+            assert!(c.problems().is_empty(), "{}", f.display());
+        }
+    }
+    // Old format with a grazing fall-off: muddy_water (0.944559 at 1°, 0 at 89–90°).
+    let ra = dir.join("rendered-ai/packages/dirsig_pkg/dirsig_pkg/materials");
+    let c = dirsig::read_ems(&ra.join("emissivity/muddy_water.ems")).unwrap();
+    assert_eq!(c.angles_deg.len(), 91);
+    assert_eq!(c.wavelengths_um.len(), 396);
+    assert!(close(c.wavelengths_um[0], 1e4 / 39850.0, 1e-12));
+    assert!(close(*c.wavelengths_um.last().unwrap(), 1e4 / 350.0, 1e-9));
+    assert!(close(c.at(10.0, 90.0), 0.0, 1e-12));
+    // 43 texture curves → their mean.
+    let c = dirsig::read_ems(&ra.join("emissivity/grass_texture.ems")).unwrap();
+    assert_eq!(c.wavelengths_um.len(), 396);
+    // anadirsig.mat: ID 100 has a Null solver, and its three Therm entries THICKNESS = 0
+    // (no slab equivalent): the library loads, each entry left out with a warning that
+    // names its line (it used to be rejected as a whole over the Null entry).
+    let db = MaterialDb::load(&ra.join("anadirsig.mat")).unwrap();
+    // (plus one for `emissivity/grass_dirt.ems`, which the set lacks)
+    assert_eq!(db.warnings.len(), 5, "{:#?}", db.warnings);
+    assert!(db.warnings.iter().any(|w| w.contains("grass_dirt.ems")));
+    assert!(db.warnings[0].contains("anadirsig.mat:line 11") && db.warnings[0].contains("`Null`"));
+    assert!(
+        db.warnings[1].contains("anadirsig.mat:line 38")
+            && db.warnings[1].contains("THICKNESS = 0")
+    );
+    // hypersonic.mat: a label ID with a DataDriven solver.
+    let hyp = dir.join(
+        "protoDIRSIG/manifold_config_repo/scenes/tahoe/geometry/bundles/hypersonic/hypersonic.mat",
+    );
+    let db = MaterialDb::load(&hyp).unwrap();
+    assert!(
+        db.warnings
+            .iter()
+            .any(|w| w.contains("DataDriven") && w.contains("1500"))
     );
 }

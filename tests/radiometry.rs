@@ -314,6 +314,56 @@ mod cli {
         ]);
         assert!(!ok);
     }
+
+    /// Issue 20: a real response file (Landsat-8 TIRS band 10 has −0.00001 at its tails)
+    /// loads with small negative values set to zero and a warning; below −1 % of the peak
+    /// a negative value stays an error naming the line.
+    #[test]
+    fn response_small_negative_values_clamp_with_warning() {
+        use irsig::radiometry::parse_response_csv;
+        let text = "# TIRS B10-like\nwavelength_um,response\n10.0,-0.00001\n10.5,0.5\n11.0,1.0\n11.5,0.6\n12.0,-1e-5\n";
+        let r = parse_response_csv(text, "b10.csv").unwrap();
+        assert_eq!(r.response(), &[0.0, 0.5, 1.0, 0.6, 0.0]);
+        assert_eq!(r.warnings().len(), 1);
+        let w = &r.warnings()[0];
+        assert!(
+            w.contains("b10.csv:line 3")
+                && w.contains("2 small negative")
+                && w.contains("set to zero"),
+            "{w}"
+        );
+        // −1 % of the peak is still noise; −2 % is not.
+        let ok = parse_response_csv("10,-0.01\n11,1\n12,0\n", "a.csv").unwrap();
+        assert_eq!(ok.response()[0], 0.0);
+        let e = parse_response_csv("10,0\n11,1\n12,-0.02\n", "b.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("b.csv:line 3") && e.contains("≥ 0") && e.contains("-2.000%"),
+            "{e}"
+        );
+        // A clean file has no warnings; the CLI prints them as `warning:` lines.
+        assert!(
+            parse_response_csv("10,0\n11,1\n", "c.csv")
+                .unwrap()
+                .warnings()
+                .is_empty()
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("b10.csv");
+        std::fs::write(&f, text).unwrap();
+        let (ok, _, err) = run(&[
+            "radiance",
+            "--response",
+            f.to_str().unwrap(),
+            "--temperature",
+            "300",
+        ]);
+        assert!(
+            ok && err.contains("warning:") && err.contains("b10.csv:line 3"),
+            "{err}"
+        );
+    }
 }
 
 mod emissivity {

@@ -185,6 +185,120 @@ fn small_scene(dir: &Path, text: &str) -> std::path::PathBuf {
     write(&sd, "scene.json", text)
 }
 
+/// Issue 20: a Y-up OBJ (a 1 × 2 × 1 ft post, tall along y, as modelling tools export)
+/// stands upright with `up_axis: "y"`, in metres with `unit: "ft"`; the front-facing
+/// winding survives (the volume stays positive). `up_axis`/`unit` on a non-OBJ shape and
+/// unknown values are errors naming the field.
+#[test]
+fn obj_up_axis_and_unit_per_shape() {
+    // A closed box 1 × 2 × 1 (x, y, z), faces counter-clockwise from outside.
+    const POST: &str = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    let d = tempfile::tempdir().unwrap();
+    let scene = |shape: &str| {
+        SMALL.replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+            &format!(
+                r#"{{"name": "thing", "shapes": [{{"part": "glass", {}],"#,
+                &shape[1..]
+            ),
+        )
+    };
+    let p = small_scene(d.path(), SMALL);
+    write(&d.path().join("s/geo"), "post.obj", POST);
+    let extent = |shape: &str| {
+        write(&d.path().join("s"), "scene.json", &scene(shape));
+        let s = Scene::load(&p).unwrap();
+        let m = &s.geometry.meshes[s.objects[2].mesh];
+        let (lo, hi) = m.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        (lo, hi, signed_volume(&m.positions, &m.indices))
+    };
+    let (lo, hi, v) = extent(r#"{"obj": "geo/post.obj"}"#);
+    assert_eq!((lo, hi), (Vec3::ZERO, Vec3::new(1.0, 2.0, 1.0)));
+    assert!((v - 2.0).abs() < 1e-5, "{v}");
+    // Y up: the post's 2 ft length is now height (z), its depth runs to −y.
+    let (lo, hi, v) = extent(r#"{"obj": "geo/post.obj", "up_axis": "y", "unit": "ft"}"#);
+    let ft = 0.3048f32;
+    assert!(
+        (lo - Vec3::new(0.0, -ft, 0.0)).abs().max_element() < 1e-6,
+        "{lo}"
+    );
+    assert!(
+        (hi - Vec3::new(ft, 0.0, 2.0 * ft)).abs().max_element() < 1e-6,
+        "{hi}"
+    );
+    assert!((v - 2.0 * 0.3048f64.powi(3)).abs() < 1e-6, "{v}");
+    // Every unit, Z up stated.
+    for (unit, m) in [("m", 1.0), ("cm", 0.01), ("mm", 0.001), ("in", 0.0254)] {
+        let (_, hi, _) = extent(&format!(
+            r#"{{"obj": "geo/post.obj", "up_axis": "z", "unit": "{unit}"}}"#
+        ));
+        assert!((hi.y - 2.0 * m as f32).abs() < 1e-7, "{unit}: {hi}");
+    }
+    // Errors.
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"box": {"size": [1, 1, 1]}, "up_axis": "y"}"#),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("shapes[0].up_axis") && e.contains("obj"), "{e}");
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"obj": "geo/post.obj", "unit": "yd"}"#),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("scene.json") && e.contains("yd"), "{e}");
+}
+
+/// Issue 20: DIRSIG's OBJ convention `usemtl <ID>` maps a face group to the `.mat` entry
+/// with that ID when no material has the group's name.
+#[test]
+fn obj_usemtl_dirsig_id_maps_to_mat_entry() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let sd = d.path().join("s");
+    write(
+        &sd,
+        "lib.mat",
+        "MATERIAL_ENTRY {\n  ID = 19\n  NAME = Steel plate\n  TEMP_SOLVER_NAME = Therm\n  TEMP_SOLVER {\n    SPECIFIC_HEAT = 0.1\n    MASS_DENSITY = 7.8\n    THERMAL_CONDUCTIVITY = 430\n    SOLAR_ABSORPTION = 0.5\n    THERMAL_EMISSIVITY = 0.8\n    EXPOSED_AREA = 1\n    THICKNESS = 0.5\n  }\n}\n",
+    );
+    write(
+        &sd.join("geo"),
+        "ids.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl 19\nf 1 2 3\n",
+    );
+    let scene = SMALL
+        .replace(
+            r#""materials": ["../materials.json"],"#,
+            r#""materials": ["../materials.json", "lib.mat"],"#,
+        )
+        .replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],
+     "parts": [{"name": "glass", "material": "glass", "fixed_temperature_k": 300}],
+     "material": "concrete"}"#,
+            r#"{"name": "thing", "shapes": [{"obj": "geo/ids.obj"}]}"#,
+        );
+    assert!(scene.contains("ids.obj") && scene.contains("lib.mat"));
+    write(&sd, "scene.json", &scene);
+    let s = Scene::load(&p).unwrap();
+    let parts = s.facet_parts();
+    let last = *parts.last().unwrap() as usize;
+    assert_eq!(s.part_material(last).name, "Steel plate");
+    // An ID nothing has stays an error naming the group.
+    write(
+        &sd.join("geo"),
+        "ids.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl 77\nf 1 2 3\n",
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("`77`"), "{e}");
+}
+
 /// `heights_csv` gives the same terrain as inline `heights`: comments,
 /// blank lines, whitespace or comma separators, quoted cells; a bad cell
 /// names the file and line.
@@ -571,6 +685,54 @@ fn scene_dirsig_wth_weather_starts_at_the_scene_start() {
 
 /// Issue 3/8: glTF import — node transforms (translation, scale, a
 /// mirroring scale), Y-up to Z-up, strips, grouping by material name; the
+/// Issue 20: a Draco- or meshopt-compressed glTF names the extension it requires
+/// (it used to fail validation with "Missing data (and 3 more problems)").
+#[test]
+fn gltf_unsupported_required_extensions_are_named() {
+    use irsig::scene::load_gltf;
+    let d = tempfile::tempdir().unwrap();
+    let (doc, bin) = gltf_doc();
+    let mut draco = doc.clone();
+    draco["extensionsUsed"] = serde_json::json!([
+        "KHR_draco_mesh_compression",
+        "KHR_materials_emissive_strength"
+    ]);
+    draco["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    // As a Draco exporter writes it: the accessors lose their buffer views.
+    draco["accessors"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("bufferView");
+    draco["meshes"][0]["primitives"][0]["extensions"] = serde_json::json!({
+        "KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}
+    });
+    let f = write(d.path(), "draco.gltf", &gltf_embedded(draco, &bin));
+    let e = load_gltf(&f).unwrap_err().to_string();
+    assert!(
+        e.contains("draco.gltf")
+            && e.contains("extensionsRequired")
+            && e.contains("`KHR_draco_mesh_compression` (Draco-compressed geometry)")
+            && e.contains("KHR_materials_emissive_strength")
+            && !e.contains("Missing data"),
+        "{e}"
+    );
+    let mut meshopt = doc.clone();
+    meshopt["extensionsUsed"] = serde_json::json!(["EXT_meshopt_compression"]);
+    meshopt["extensionsRequired"] = serde_json::json!(["EXT_meshopt_compression"]);
+    let f = d.path().join("meshopt.glb");
+    std::fs::write(&f, glb(&meshopt, &bin)).unwrap();
+    let e = load_gltf(&f).unwrap_err().to_string();
+    assert!(
+        e.contains("meshopt.glb") && e.contains("`EXT_meshopt_compression` (meshoptimizer"),
+        "{e}"
+    );
+    // Extensions used but not required leave the file readable.
+    let mut used = doc.clone();
+    used["extensionsUsed"] = serde_json::json!(["KHR_materials_emissive_strength"]);
+    let f = write(d.path(), "used.gltf", &gltf_embedded(used, &bin));
+    assert!(load_gltf(&f).is_ok());
+}
+
 /// `.gltf` (data URI), `.glb` and external-buffer forms give the same
 /// triangles.
 #[test]

@@ -1263,6 +1263,89 @@ fn surface_balance_with_latent_heat_closes_every_step() {
     );
 }
 
+/// Issue 20: `irsig thermal` run from any folder finds the stock material library (built
+/// in, not `scenes/materials.json` under the working directory), reads a typical-year
+/// EPW (months from different years) with the year of `--time`, and `--year` replaces it.
+#[test]
+fn cli_thermal_stock_library_and_typical_year_epw() {
+    let dir = tempfile::tempdir().unwrap();
+    let fixture =
+        std::fs::read_to_string(repo_path("tests/data/weather/rochester_sample.epw")).unwrap();
+    let mut epw: String = fixture.lines().take(8).map(|l| format!("{l}\n")).collect();
+    // 30 June from 2001, 1 July from 1994: a typical year.
+    for (y, m, d) in [(2001, 6, 30), (1994, 7, 1)] {
+        for h in 1..=24 {
+            let sun = if (7..=18).contains(&h) { 500 } else { 0 };
+            epw += &format!(
+                "{y},{m},{d},{h},60,?9?9?9?9E0?9?9?9?9?9?9?9?9?9?9?9?9?9?9?9*9*9?9?9?9,20.0,10.0,52,99800,0,1321,330,{sun},{},{},0,0,0,0,200,1.5,2,1,16.1,77777,9,999999999,25,0.1,0,88,0.0,0.0,0.0\n",
+                sun / 2,
+                sun / 2
+            );
+        }
+    }
+    let w = dir.path().join("tmy.epw");
+    std::fs::write(&w, epw).unwrap();
+    let run_in = |extra: &[&str]| {
+        let mut args = vec![
+            "thermal",
+            "--material",
+            "asphalt",
+            "--weather",
+            w.to_str().unwrap(),
+            "--csv",
+        ];
+        args.extend_from_slice(extra);
+        Command::new(irsig_bin())
+            .args(&args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let out = run_in(&["--time", "2025-07-01T12:00:00-05:00"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Hour-ending 01:00 on 30 June is placed at 00:30; the run ends at the --time.
+    assert!(
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("2025-06-30T00:30:00-05:00,"),
+        "{text}"
+    );
+    assert!(
+        text.lines()
+            .last()
+            .unwrap()
+            .starts_with("2025-07-01T12:00:00-05:00,"),
+        "{text}"
+    );
+    // --year replaces every row's year (and then --time must lie in that year).
+    let out = run_in(&["--time", "2024-07-01T12:00:00-05:00", "--year", "2024"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("2024-06-30T00:30:00-05:00,"));
+    // A name the stock library lacks: the error lists what it has.
+    let out = Command::new(irsig_bin())
+        .args(["thermal", "--material", "unobtainium", "--weather"])
+        .arg(&w)
+        .args(["--time", "2025-07-01T12:00:00-05:00"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("stock library") && err.contains("asphalt"),
+        "{err}"
+    );
+}
+
 /// A stock material of `scenes/materials.json` as slab properties.
 fn stock(name: &str) -> SlabProperties {
     let m = irsig::analysis::facet::find_material(

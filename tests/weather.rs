@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use chrono::{DateTime, FixedOffset, TimeDelta};
 use irsig::sun::{self, Site};
-use irsig::weather::{self, Format, LoadOptions, WeatherHistory, WeatherRecord, physics};
+use irsig::weather::{self, Format, LoadOptions, Timing, WeatherHistory, WeatherRecord, physics};
 
 use crate::util;
 
@@ -202,13 +202,19 @@ fn epw_fixture_reads_site_times_and_fills_longwave() {
         (43.12, -77.68, 169.0)
     );
     assert_eq!(h.records().len(), 6);
-    // Hour 5 is hour-ending 05:00 local standard time (UTC−5).
-    assert_eq!(h.start(), t("1990-06-21T05:00:00-05:00"));
-    assert_eq!(h.end(), t("1990-06-21T10:00:00-05:00"));
-    let r = &h.records()[3]; // hour 8: 18.0 °C, 12.0 °C, 68 %, 99700 Pa, IR 9999, OSC 3
-    assert!(close(r.air_temperature_k, 291.15, 1e-9));
+    assert_eq!(h.timing(), Timing::SolarMeanEnding { interval_s: 3600 });
+    // Hour 5 is hour-ending 05:00 local standard time (UTC−5); its solar values are the
+    // mean of 04:00–05:00, so the record is placed at 04:30 (issue 16 item 3).
+    assert_eq!(h.start(), t("1990-06-21T04:30:00-05:00"));
+    assert_eq!(h.end(), t("1990-06-21T09:30:00-05:00"));
+    // Hour 7 (16.7 °C, 12.0 °C, 74 %, 99 700 Pa, 220° 2.1 m/s, 3/2 tenths) and hour 8
+    // (18.0 °C, 12.0 °C, 68 %, 99 700 Pa, 230° 2.6 m/s, 4/3 tenths, IR 9999): the
+    // readings at the stamps are interpolated to 07:30, the irradiances are hour 8's.
+    let r = &h.records()[3];
+    assert_eq!(r.time, t("1990-06-21T07:30:00-05:00"));
+    assert!(close(r.air_temperature_k, 290.5, 1e-9));
     assert!(close(r.dew_point_k, 285.15, 1e-9));
-    assert!(close(r.relative_humidity, 0.68, 1e-12));
+    assert!(close(r.relative_humidity, 0.71, 1e-12));
     assert!(close(r.pressure_pa, 99_700.0, 1e-9));
     assert_eq!(
         (
@@ -218,14 +224,18 @@ fn epw_fixture_reads_site_times_and_fills_longwave() {
         ),
         (402.0, 655.0, 88.0)
     );
-    assert_eq!((r.wind_direction_deg, r.wind_speed_m_s), (230.0, 2.6));
-    assert!(close(r.total_sky_cover, 0.4, 1e-12) && close(r.opaque_sky_cover, 0.3, 1e-12));
+    assert!(close(r.wind_direction_deg, 225.0, 1e-9) && close(r.wind_speed_m_s, 2.35, 1e-12));
+    assert!(close(r.total_sky_cover, 0.35, 1e-12) && close(r.opaque_sky_cover, 0.25, 1e-12));
+    // Clark & Allen at the mid-interval readings.
+    let lw = physics::clark_allen_sky_longwave_w_m2(290.5, 285.15, 0.25);
     assert!(
-        close(r.sky_longwave_w_m2, 348.680, 1e-3),
+        close(r.sky_longwave_w_m2, lw, 1e-9),
         "{}",
         r.sky_longwave_w_m2
     );
     assert_eq!(h.filled(3), &["sky_longwave_w_m2"]);
+    // The first record has no earlier stamp: it keeps its own readings (hour 5: 14.4 °C).
+    assert!(close(h.records()[0].air_temperature_k, 287.55, 1e-9));
     assert_eq!(h.records()[2].sky_longwave_w_m2, 340.0);
     assert!(h.filled(2).is_empty());
 }
@@ -323,10 +333,23 @@ fn tmy3_fixture_reads_and_splits_missing_beam_by_erbs() {
         (s.latitude_deg, s.longitude_deg, s.altitude_m),
         (43.117, -77.683, 169.0)
     );
-    assert_eq!(h.start(), t("1988-06-21T11:00:00-05:00"));
+    // Hour-ending 11:00 holds the mean of 10:00–11:00: placed at 10:30.
+    assert_eq!(h.start(), t("1988-06-21T10:30:00-05:00"));
+    // The first record keeps its readings (no earlier stamp): 11:00's row as written.
+    let r0 = &h.records()[0];
     let r = &h.records()[1]; // 12:00: 23.9 °C, 12.8 °C, 50 %, 996 mbar, 250°, 4.6 m/s
-    assert!(close(r.air_temperature_k, 297.05, 1e-9));
-    assert!(close(r.pressure_pa, 99_600.0, 1e-9));
+    assert_eq!(r.time, t("1988-06-21T11:30:00-05:00"));
+    // Readings at 11:30: halfway between the 11:00 and 12:00 rows.
+    assert!(close(
+        r.air_temperature_k,
+        0.5 * (r0.air_temperature_k + 297.05),
+        1e-9
+    ));
+    assert!(close(
+        r.pressure_pa,
+        0.5 * (r0.pressure_pa + 99_600.0),
+        1e-9
+    ));
     assert_eq!(
         (
             r.global_horizontal_w_m2,
@@ -335,9 +358,10 @@ fn tmy3_fixture_reads_and_splits_missing_beam_by_erbs() {
         ),
         (842.0, 768.0, 157.0)
     );
-    assert!(close(r.total_sky_cover, 0.3, 1e-12) && close(r.opaque_sky_cover, 0.2, 1e-12));
-    // 13:00 has DNI and DHI −9900 (missing): Erbs split of GHI 760 with the Sun at 12:30 LST.
+    // 13:00 has DNI and DHI −9900 (missing): Erbs split of GHI 760 with the Sun at 12:30 LST,
+    // the record's own (mid-interval) time.
     let r = &h.records()[2];
+    assert_eq!(r.time, t("1988-06-21T12:30:00-05:00"));
     let p = sun::position_standard(&s, t("1988-06-21T12:30:00-05:00")).unwrap();
     let (dni, dhi) = physics::erbs_split(760.0, p.apparent_zenith_deg, p.distance_au);
     assert!(close(r.direct_normal_w_m2, dni, 1e-9) && close(r.diffuse_horizontal_w_m2, dhi, 1e-9));
@@ -345,8 +369,12 @@ fn tmy3_fixture_reads_and_splits_missing_beam_by_erbs() {
     assert!((0.6..0.75).contains(&kt), "k_t {kt}");
     assert!(close(dhi, 760.0 * physics::erbs_diffuse_fraction(kt), 1e-6));
     assert!(h.filled(2).contains(&"direct_normal_w_m2"));
-    // Sky longwave filled by Clark & Allen with the opaque cover (4 tenths).
-    let lw = physics::clark_allen_sky_longwave_w_m2(r.air_temperature_k, r.dew_point_k, 0.4);
+    // Sky longwave filled by Clark & Allen with the mid-interval readings.
+    let lw = physics::clark_allen_sky_longwave_w_m2(
+        r.air_temperature_k,
+        r.dew_point_k,
+        r.opaque_sky_cover,
+    );
     assert!(close(r.sky_longwave_w_m2, lw, 1e-9));
 }
 
@@ -698,15 +726,16 @@ fn cli_weather_show_json_shape() {
     got.sort_unstable();
     expected.sort_unstable();
     assert_eq!(got, expected);
-    assert_eq!(recs[3]["time"], "1990-06-21T08:00:00-05:00");
+    // Hour-ending 08:00, placed at mid-interval (see epw_fixture_reads_…).
+    assert_eq!(recs[3]["time"], "1990-06-21T07:30:00-05:00");
     assert!(close(
         recs[3]["sky_longwave_w_m2"].as_f64().unwrap(),
-        348.680,
+        physics::clark_allen_sky_longwave_w_m2(290.5, 285.15, 0.25),
         1e-3
     ));
     assert!(close(
         recs[3]["opaque_sky_cover"].as_f64().unwrap(),
-        0.3,
+        0.25,
         1e-12
     ));
 }
@@ -751,8 +780,8 @@ fn cli_weather_show_wth_needs_start() {
 fn epw_year_override_and_mixed_years_hint() {
     let path = util::repo_path("tests/data/weather/rochester_sample.epw");
     let h = weather::load_with(&path, &LoadOptions::default().with_year(2025)).unwrap();
-    assert_eq!(h.start(), t("2025-06-21T05:00:00-05:00"));
-    // The history's own site gives the Sun: Rochester, 21 June 10:00 EST, Sun up in the south-east.
+    assert_eq!(h.start(), t("2025-06-21T04:30:00-05:00"));
+    // The history's own site gives the Sun: Rochester, 21 June 09:30 EST, Sun up in the south-east.
     let p = h.sun_position(h.end()).unwrap();
     assert!(p.is_up() && (90.0..180.0).contains(&p.azimuth_deg), "{p:?}");
     // A typical-year file whose years go backwards: the error names the line and suggests --year.
@@ -777,14 +806,17 @@ fn tmy3_real_file_reads_and_closes_irradiance() {
         (36.1, -79.95, 273.0)
     );
     assert_eq!(h.records().len(), 24);
-    assert_eq!(h.start(), t("1989-06-21T01:00:00-05:00"));
-    assert_eq!(h.end(), t("1989-06-22T00:00:00-05:00"));
+    // Hour-ending rows placed at mid-interval.
+    assert_eq!(h.start(), t("1989-06-21T00:30:00-05:00"));
+    assert_eq!(h.end(), t("1989-06-21T23:30:00-05:00"));
     // `06/21/1989,12:00,…,702,…,395,…,324,…,6,A,7,6,A,7,25.0,A,7,21.1,A,7,79,A,7,990,A,7,260,A,7,2.6,…`
+    // `06/21/1989,11:00,…,7,A,7,7,A,7,24.4,A,7,21.1,A,7,82,A,7,990,A,7,230,A,7,4.1,…`
+    // The 12:00 row is placed at 11:30 with readings halfway from the 11:00 row's.
     let r = &h.records()[11];
-    assert_eq!(r.time, t("1989-06-21T12:00:00-05:00"));
-    assert!(close(r.air_temperature_k, 298.15, 1e-9) && close(r.dew_point_k, 294.25, 1e-9));
-    assert!(close(r.relative_humidity, 0.79, 1e-12) && close(r.pressure_pa, 99_000.0, 1e-9));
-    assert_eq!((r.wind_direction_deg, r.wind_speed_m_s), (260.0, 2.6));
+    assert_eq!(r.time, t("1989-06-21T11:30:00-05:00"));
+    assert!(close(r.air_temperature_k, 297.85, 1e-9) && close(r.dew_point_k, 294.25, 1e-9));
+    assert!(close(r.relative_humidity, 0.805, 1e-12) && close(r.pressure_pa, 99_000.0, 1e-9));
+    assert!(close(r.wind_direction_deg, 245.0, 1e-9) && close(r.wind_speed_m_s, 3.35, 1e-12));
     assert_eq!(
         (
             r.global_horizontal_w_m2,
@@ -793,12 +825,13 @@ fn tmy3_real_file_reads_and_closes_irradiance() {
         ),
         (702.0, 395.0, 324.0)
     );
-    assert!(close(r.opaque_sky_cover, 0.6, 1e-12));
-    let lw = physics::clark_allen_sky_longwave_w_m2(298.15, 294.25, 0.6);
+    assert!(close(r.opaque_sky_cover, 0.65, 1e-12));
+    let lw = physics::clark_allen_sky_longwave_w_m2(297.85, 294.25, 0.65);
     assert!(close(r.sky_longwave_w_m2, lw, 1e-9));
     assert_eq!(h.filled(11), &["sky_longwave_w_m2"]);
-    // Hour-ending means: the measured components close on GHI with the Sun at mid-hour
-    // (GHI = DHI + DNI cos z), far better than with the Sun at the stamped hour end.
+    // Hour-ending means: the measured components close on GHI with the Sun at mid-hour,
+    // the record's placed time (GHI = DHI + DNI cos z), far better than with the Sun at
+    // the stamped hour end.
     let (mut err_mid, mut err_end) = (0.0, 0.0);
     for r in h
         .records()
@@ -812,11 +845,211 @@ fn tmy3_real_file_reads_and_closes_irradiance() {
                 - r.global_horizontal_w_m2)
                 .abs()
         };
-        err_mid += closure(r.time - TimeDelta::minutes(30));
-        err_end += closure(r.time);
+        err_mid += closure(r.time);
+        err_end += closure(r.time + TimeDelta::minutes(30));
     }
     eprintln!(
         "TMY3 closure |DHI + DNI cos z − GHI| summed: mid-hour {err_mid:.0}, hour end {err_end:.0} W/m²"
     );
     assert!(err_mid < 0.1 * err_end, "{err_mid} {err_end}");
+}
+
+// ---------------------------------------------------------------- typical years (issue 20)
+
+/// EPW text: the Rochester fixture's header, then hourly rows (hour-ending 1..24) for
+/// each `(year, month, day)`, air temperature = day of month °C so rows can be told apart.
+fn epw_days(days: &[(i32, u32, u32)]) -> String {
+    let fixture =
+        std::fs::read_to_string(util::repo_path("tests/data/weather/rochester_sample.epw"))
+            .unwrap();
+    let mut out: String = fixture.lines().take(8).map(|l| format!("{l}\n")).collect();
+    for &(y, m, d) in days {
+        for h in 1..=24 {
+            out.push_str(&format!(
+                "{y},{m},{d},{h},60,?9?9?9?9E0?9?9?9?9?9?9?9?9?9?9?9?9?9?9?9*9*9?9?9?9,{d}.0,-5.0,50,99800,0,1321,300,0,0,0,0,0,0,0,200,1.5,2,1,16.1,77777,9,999999999,25,0.1,0,88,0.0,0.0,0.0\n"
+            ));
+        }
+    }
+    out
+}
+
+/// A typical-year EPW (February from 2003, March from 1999: months from different years)
+/// reads without a year when the image time's year is given, and 29 February follows that
+/// year: repeated from 28 February in 2024, absent in 2025.
+#[test]
+fn typical_year_epw_takes_the_image_year_and_handles_29_february() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = epw_days(&[(2003, 2, 27), (2003, 2, 28), (1999, 3, 1), (1999, 3, 2)]);
+    let p = write_tmp(&dir, "tmy.epw", &text);
+    // Without a year: an error naming the line where the year jumps, saying what to give.
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("tmy.epw:line 57") && e.contains("typical-year") && e.contains("2003"),
+        "{e}"
+    );
+    // 2025, a common year: 96 rows, 28 Feb 24:00 then 1 Mar 01:00 (placed at mid-hour).
+    let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2025)).unwrap();
+    assert_eq!(h.records().len(), 96);
+    assert_eq!(h.start(), t("2025-02-27T00:30:00-05:00"));
+    assert_eq!(h.end(), t("2025-03-02T23:30:00-05:00"));
+    let r = h.at(t("2025-03-01T12:30:00-05:00")).unwrap();
+    assert!(close(r.air_temperature_k, 274.15, 1e-9), "{r:?}");
+    // 2024, a leap year: 28 February's 24 rows repeated as 29 February.
+    let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2024)).unwrap();
+    assert_eq!(h.records().len(), 120);
+    let r = h.at(t("2024-02-29T12:30:00-05:00")).unwrap();
+    assert!(close(r.air_temperature_k, 301.15, 1e-9), "{r:?}");
+    assert_eq!(h.end(), t("2024-03-02T23:30:00-05:00"));
+    // An explicit year wins over the image year.
+    let h = weather::load_with(
+        &p,
+        &LoadOptions::default()
+            .with_typical_year(2024)
+            .with_year(2021),
+    )
+    .unwrap();
+    assert_eq!(h.start(), t("2021-02-27T00:30:00-05:00"));
+    // A file whose February comes from a leap year (2004) has 29 February rows: kept in a
+    // leap year, dropped in a common one.
+    let text = epw_days(&[(2004, 2, 28), (2004, 2, 29), (1999, 3, 1)]);
+    let p = write_tmp(&dir, "leap.epw", &text);
+    let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2025)).unwrap();
+    assert_eq!(h.records().len(), 48);
+    let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2028)).unwrap();
+    assert_eq!(h.records().len(), 72);
+    // A file in time order keeps its own years (the image year applies to typical years only).
+    let text = epw_days(&[(2019, 12, 31), (2020, 1, 1)]);
+    let p = write_tmp(&dir, "actual.epw", &text);
+    let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2025)).unwrap();
+    assert_eq!(h.start(), t("2019-12-31T00:30:00-05:00"));
+}
+
+/// TMY3 rows from different years, as NSRDB ships them, read as one year.
+#[test]
+fn typical_year_tmy3_takes_the_image_year() {
+    let text =
+        std::fs::read_to_string(util::repo_path("tests/data/weather/723170TYA_jun21.csv")).unwrap();
+    // 30 June from 1989 and 1 July from 1977, as NSRDB picks months.
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.by_ref().take(2).collect();
+    let rows: Vec<&str> = lines.collect();
+    let mut mixed = head.join("\n") + "\n";
+    for r in &rows {
+        mixed += &(r.replace("06/21/1989", "06/30/1989") + "\n");
+    }
+    for r in &rows {
+        mixed += &(r.replace("06/21/1989", "07/01/1977") + "\n");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_tmp(&dir, "tmy3.csv", &mixed);
+    assert!(
+        weather::load(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("typical-year")
+    );
+    let h = weather::load_with(&p, &LoadOptions::default().with_typical_year(2025)).unwrap();
+    assert_eq!(h.start(), t("2025-06-30T00:30:00-05:00"));
+    assert_eq!(h.end(), t("2025-07-01T23:30:00-05:00"));
+    assert_eq!(h.records().len(), 48);
+}
+
+/// Latin-1 bytes (Windows-1252 `é`, 0xE9) in EPW header lines are read as Latin-1; in a
+/// data row they are an error naming the line and column.
+#[test]
+fn epw_latin1_header_bytes_are_accepted() {
+    let text = std::fs::read_to_string(util::repo_path("tests/data/weather/rochester_sample.epw"))
+        .unwrap();
+    let mut bytes = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let mut l = line.as_bytes().to_vec();
+        if i == 0 {
+            l = line
+                .replacen("Rochester", "Rochester Montr\u{1}al", 1)
+                .into_bytes();
+        } else if i == 5 {
+            l = line.replacen("irsig", "irsig caf\u{1}", 1).into_bytes();
+        }
+        for b in &mut l {
+            if *b == 1 {
+                *b = 0xE9;
+            }
+        }
+        bytes.extend(l);
+        bytes.push(b'\n');
+    }
+    assert!(std::str::from_utf8(&bytes).is_err());
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("latin1.epw");
+    std::fs::write(&p, &bytes).unwrap();
+    let h = weather::load(&p).unwrap();
+    assert_eq!(
+        h.records(),
+        weather::load(&util::repo_path("tests/data/weather/rochester_sample.epw"))
+            .unwrap()
+            .records()
+    );
+    // In a data row: an error naming line and column.
+    let mut bad = bytes.clone();
+    let row = bad
+        .split(|&b| b == b'\n')
+        .take(9)
+        .map(|l| l.len() + 1)
+        .sum::<usize>();
+    bad[row + 2] = 0xE9;
+    std::fs::write(&p, &bad).unwrap();
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("latin1.epw:line 10") && e.contains("0xE9"),
+        "{e}"
+    );
+}
+
+// ---------------------------------------------------------------- timing (issue 16 item 3)
+
+/// irsig CSV/JSON declare their timing per file: instant by default; `interval-mean N min`
+/// places every record N/2 minutes before its stamp (all fields are means).
+#[test]
+fn irsig_timing_setting_places_interval_means_mid_interval() {
+    let h = sample_history();
+    let mut buf = Vec::new();
+    weather::write_csv(&h, &["timing: interval-mean 60 min"], &mut buf).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_tmp(&dir, "mean.csv", std::str::from_utf8(&buf).unwrap());
+    let back = weather::load(&p).unwrap();
+    assert_eq!(back.timing(), Timing::MeanEnding { interval_s: 3600 });
+    for (a, b) in h.records().iter().zip(back.records()) {
+        assert_eq!(b.time, a.time - TimeDelta::minutes(30));
+        assert!(close(a.air_temperature_k, b.air_temperature_k, 1e-3));
+        assert!(close(a.direct_normal_w_m2, b.direct_normal_w_m2, 1e-2));
+    }
+    // Default: instant.
+    let mut buf = Vec::new();
+    weather::write_csv(&h, &[], &mut buf).unwrap();
+    let p = write_tmp(&dir, "inst.csv", std::str::from_utf8(&buf).unwrap());
+    let back = weather::load(&p).unwrap();
+    assert_eq!(back.timing(), Timing::Instant);
+    assert_eq!(back.start(), h.start());
+    // JSON: the same setting as a key.
+    let json = r#"{"site": null, "timing": "interval-mean 15 min", "records": [
+        {"time": "2025-06-21T12:00:00-04:00", "air_temperature_k": 300, "dew_point_k": 290,
+         "wind_speed_m_s": 2, "direct_normal_w_m2": 0, "diffuse_horizontal_w_m2": 0,
+         "global_horizontal_w_m2": 0},
+        {"time": "2025-06-21T12:15:00-04:00", "air_temperature_k": 301, "dew_point_k": 290,
+         "wind_speed_m_s": 2, "direct_normal_w_m2": 0, "diffuse_horizontal_w_m2": 0,
+         "global_horizontal_w_m2": 0}]}"#;
+    let p = write_tmp(&dir, "w.json", json);
+    let back = weather::load(&p).unwrap();
+    assert_eq!(back.start(), t("2025-06-21T11:52:30-04:00"));
+    // A bad setting names the file, line and field.
+    let p = write_tmp(
+        &dir,
+        "bad.csv",
+        "# timing: hourly\ntime,air_temperature_k\n",
+    );
+    let e = weather::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.csv:line 1") && e.contains("timing") && e.contains("interval-mean"),
+        "{e}"
+    );
 }

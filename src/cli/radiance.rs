@@ -64,6 +64,9 @@ fn band(args: &Args) -> anyhow::Result<Band> {
         (None, Some((lo, hi))) => Band::flat(lo, hi, args.step)?,
         (Some(path), range) => {
             let resp = irsig::radiometry::read_response_csv(path)?;
+            for w in resp.warnings() {
+                eprintln!("warning: {w}");
+            }
             let resp = match range {
                 None => resp,
                 Some((lo, hi)) => clip(&resp, lo, hi).with_context(|| {

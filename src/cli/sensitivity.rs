@@ -65,6 +65,10 @@ pub struct FacetArgs {
     /// Local date and time of hour 0 of a DIRSIG .wth file (RFC 3339).
     #[arg(long, value_name = "RFC3339")]
     pub start: Option<String>,
+    /// Replace the year of every EPW/TMY3 row. A typical-year file (months
+    /// from different years) takes the year of the run's last time without it.
+    #[arg(long, value_name = "YEAR")]
+    pub year: Option<i32>,
     /// Back boundary, overriding the material's exposed area:
     /// insulated | exposed | ground | building.
     #[arg(long, value_name = "KIND")]
@@ -107,14 +111,19 @@ impl FacetArgs {
     pub(crate) fn site(&self) -> anyhow::Result<Option<Site>> {
         self.site.as_deref().map(parse_site).transpose()
     }
-    /// Weather load options: --site and --start.
-    pub(crate) fn load_options(&self) -> anyhow::Result<LoadOptions> {
+    /// Weather load options: --site, --start and --year; a typical-year EPW/TMY3
+    /// file takes `until`'s year (the run's last time) without --year.
+    pub(crate) fn load_options(&self, until: DateTime<FixedOffset>) -> anyhow::Result<LoadOptions> {
         let mut opts = LoadOptions::default();
         if let Some(s) = self.site()? {
             opts = opts.with_site(s);
         }
         if let Some(s) = &self.start {
             opts = opts.with_start(parse_time("--start", s)?);
+        }
+        opts = opts.with_typical_year(chrono::Datelike::year(&until));
+        if let Some(y) = self.year {
+            opts = opts.with_year(y);
         }
         Ok(opts)
     }
@@ -140,9 +149,10 @@ pub struct ThermalArgs {
     /// Material: a name in --materials, a material file, or FILE#NAME.
     #[arg(long, value_name = "NAME|FILE", requires = "thermal")]
     pub material: Option<String>,
-    /// Material database for --material NAME.
-    #[arg(long, value_name = "FILE", default_value = "scenes/materials.json")]
-    pub materials: PathBuf,
+    /// Material database for --material NAME (default: the stock library,
+    /// built into irsig).
+    #[arg(long, value_name = "FILE")]
+    pub materials: Option<PathBuf>,
     /// Weather file (irsig CSV/JSON, EPW, TMY3, DIRSIG .wth).
     #[arg(long, value_name = "FILE", requires = "thermal")]
     pub weather: Option<PathBuf>,
@@ -155,7 +165,7 @@ impl ThermalArgs {
             .material
             .as_deref()
             .context("--thermal needs --material NAME|FILE")?;
-        facet::find_material(spec, &self.materials).for_flags(FACET_FLAGS)
+        super::thermal::find_material(spec, self.materials.as_deref()).for_flags(FACET_FLAGS)
     }
 }
 
@@ -178,7 +188,7 @@ pub(crate) fn setup_thermal(
         .as_ref()
         .context("--thermal needs --weather FILE")?;
     let site = f.site()?;
-    let history = weather::load_with(wpath, &f.load_options()?)?;
+    let history = weather::load_with(wpath, &f.load_options(until)?)?;
     let site = site.or(history.site().copied()).with_context(|| {
         format!(
             "{}: the weather file names no site; give --site LAT,LON,ALT",

@@ -22,9 +22,10 @@ pub struct Args {
     /// FILE#NAME for one material of a file.
     #[arg(long, value_name = "NAME|FILE")]
     pub material: String,
-    /// Material database for --material NAME.
-    #[arg(long, value_name = "FILE", default_value = "scenes/materials.json")]
-    pub materials: PathBuf,
+    /// Material database for --material NAME (default: the stock library,
+    /// built into irsig).
+    #[arg(long, value_name = "FILE")]
+    pub materials: Option<PathBuf>,
     /// Weather file: irsig CSV/JSON, EPW, TMY3 CSV or DIRSIG .wth.
     #[arg(long, value_name = "FILE")]
     pub weather: PathBuf,
@@ -47,13 +48,44 @@ pub struct Args {
     pub csv: bool,
 }
 
+/// `--material NAME|FILE|FILE#NAME` with `--materials FILE`, or, without it, a NAME from
+/// the stock library built into irsig (not a path relative to the working directory).
+pub(crate) fn find_material(
+    spec: &str,
+    db: Option<&std::path::Path>,
+) -> irsig::Result<irsig::material::Material> {
+    match db {
+        Some(db) => facet::find_material(spec, db),
+        None if spec.contains('#') || std::path::Path::new(spec).is_file() => {
+            facet::find_material(spec, std::path::Path::new(""))
+        }
+        None => {
+            let stock = irsig::material::stock::stock()?;
+            stock.get(spec).cloned().ok_or_else(|| {
+                irsig::Error::invalid(
+                    "material",
+                    format!(
+                        "no material named `{spec}` in the stock library (or no such file); it has: {}",
+                        stock
+                            .materials()
+                            .iter()
+                            .map(|m| m.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })
+        }
+    }
+}
+
 /// Run `irsig thermal`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let time = parse_time("--time", &args.time)?;
     let f = &args.facet;
     let site = f.site()?;
-    let mut material = facet::find_material(&args.material, &args.materials).for_flags(FLAGS)?;
-    let history = weather::load_with(&args.weather, &f.load_options()?)?;
+    let mut material = find_material(&args.material, args.materials.as_deref()).for_flags(FLAGS)?;
+    let history = weather::load_with(&args.weather, &f.load_options(time)?)?;
     let site = site.or(history.site().copied()).ok_or_else(|| {
         anyhow::anyhow!(
             "{}: the weather file names no site; give one with --site LAT,LON,ALT",

@@ -90,7 +90,15 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
     if let Some(y) = a.year {
         opts = opts.with_year(y);
     }
-    let h = weather::load_with(&a.file, &opts)?;
+    let h = weather::load_with(&a.file, &opts).map_err(|e| {
+        let hint = e.to_string().contains("typical-year") && a.year.is_none();
+        let e = anyhow::Error::from(e);
+        if hint {
+            e.context("give the year to apply with --year YEAR")
+        } else {
+            e
+        }
+    })?;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     if a.json {
         serde_json::to_writer(&mut out, &show_json(&h))?;

@@ -148,12 +148,18 @@ pub struct MaterialEntry {
 /// naming the file, line and JSON path).
 pub fn load_json_all(path: &Path) -> std::result::Result<MaterialDb, Vec<Error>> {
     let text = std::fs::read_to_string(path).map_err(|e| vec![Error::io(path, e)])?;
-    let file: MaterialFile = serde_json::from_str(&text)
+    load_json_str_all(&text, path)
+}
+
+/// As [`load_json_all`] for text in memory; `path` names it in messages and is the
+/// folder emissivity files are relative to.
+pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<MaterialDb, Vec<Error>> {
+    let file: MaterialFile = serde_json::from_str(text)
         .map_err(|e| vec![crate::scene::jsonloc::serde_error(path, &e)])?;
     let base = path.parent().unwrap_or(Path::new("."));
     let lines = std::cell::OnceCell::new();
     let at = |field: String| {
-        let l = lines.get_or_init(|| JsonLines::new(&text));
+        let l = lines.get_or_init(|| JsonLines::new(text));
         let mut loc = Location::file(path);
         if let Some(n) = l.line(&field) {
             loc = loc.at_line(n);

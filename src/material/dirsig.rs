@@ -3,9 +3,13 @@
 //!
 //! # `.mat`
 //! `MATERIAL_ENTRY { … }` blocks of `KEY = VALUE` lines and nested
-//! `NAME { … }` blocks. irsig reads `ID`, `NAME`, `DOUBLE_SIDED`,
-//! `TEMP_SOLVER_NAME` (must be `Therm`), the `TEMP_SOLVER` block and
-//! `SURFACE_PROPERTIES/EMISSIVITY_PROP` (`FILENAME`, `SPECULAR_FRACTION`).
+//! `NAME { … }` blocks. irsig reads `ID` (a number, or a label such as
+//! `Gidder_mat`, DIRSIG ≥ 4.7, which gets the next number after the file's numeric
+//! IDs), `NAME`, `DOUBLE_SIDED`, `TEMP_SOLVER_NAME`, the `TEMP_SOLVER` block and
+//! `SURFACE_PROPERTIES/EMISSIVITY_PROP` (`FILENAME`, `SPECULAR_FRACTION`). Entries
+//! whose solver is not `Therm` (`Null`, `DataDriven`, …) or that have none are left
+//! out with a warning in [`MaterialDb::warnings`]: a library loads for the entries a
+//! scene uses.
 //! Other keys (editor colour, radiometry solver settings) are ignored. `#`
 //! starts a comment only at the start of a line (names contain it).
 //!
@@ -30,15 +34,22 @@
 //! [`MaterialDb::warnings`].
 //!
 //! # `.ems`
-//! Line 1: the number of curves N. Then 91 lines, one per view zenith angle
-//! 0°, 1°, …, 90°: irsig reads each as a 1-based (possibly fractional) curve
-//! index — the curve that applies at that angle, interpolating linearly
-//! between curves for fractional values. (With N = 1, as in `gray.ems`, every
-//! line is `1.0` and the curve applies at every angle; the interpretation
-//! only matters for N > 1.) Then N blocks `CURVE_BEGIN` followed by
-//! `wavelength_µm emissivity` pairs. An angle-independent file becomes a
-//! single-row [`EmissivityCurve`] (`angles_deg` empty); otherwise 91 rows at
-//! 0..=90°, every curve resampled on the union of their wavelengths.
+//! (DIRSIG documentation "Emissivity file (.ems)"; `../shared/data/dirsig/FORMAT_NOTES.md`.)
+//! Line 1: the number of curves N. Then 91 angular weights, one per view zenith angle
+//! 0°, 1°, …, 90°, each 0..=1: the emissivity at that angle is the weight times the
+//! spectral curve (real files fall off toward grazing: `muddy_water.ems` 0.456 at 80°,
+//! 0 at 89°). Then N curves in either form:
+//!
+//! - new: a `CURVE_BEGIN` line, then `wavelength_µm emissivity` pairs (blanks or tabs),
+//!   wavelengths increasing, any sampling;
+//! - old: a line holding the curve's 0-based index (`0`, `1`, …), then
+//!   `wavenumber_cm⁻¹ emissivity` pairs, wavenumbers decreasing (39850 → 350 cm⁻¹ in
+//!   real files), turned to µm by λ = 10⁴/ν.
+//!
+//! Several curves are DIRSIG's "texture" variants of one material (spectral variety
+//! within a surface); irsig has no emissivity texture and uses their mean, every curve
+//! resampled on the union of their wavelengths. A file whose weights are all 1 becomes
+//! a single-row [`EmissivityCurve`] (`angles_deg` empty); otherwise 91 rows at 0..=90°.
 //!
 //! Takes DIRSIG files; gives [`Material`]s in SI units and
 //! [`EmissivityCurve`]s (curves resampled by [`crate::math::interp1d`]).
@@ -165,6 +176,11 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             "no `MATERIAL_ENTRY { … }` block found: not a DIRSIG4 material file?",
         ));
     }
+    let mut next_label_id = entries
+        .iter()
+        .filter_map(|b| b.get("ID").and_then(|(v, _)| v.parse::<u32>().ok()))
+        .max()
+        .unwrap_or(0);
     for b in entries {
         let loc = |key: &str, line: usize| Location::file(path).at_line(line).with_field(key);
         let req = |blk: &Block, key: &str| -> Result<(String, usize)> {
@@ -185,12 +201,21 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
                 .ok_or_else(|| Error::parse(loc(key, l), format!("expected a number, found `{v}`")))
         };
         let (id_s, id_line) = req(b, "ID")?;
-        let id: u32 = id_s.parse().map_err(|_| {
-            Error::parse(
-                loc("ID", id_line),
-                format!("expected a non-negative integer id, found `{id_s}`"),
-            )
-        })?;
+        // A label ID (`ID = Gidder_mat`, DIRSIG ≥ 4.7) gets the next number after the
+        // file's numeric IDs; the label stays in the material's source.
+        let (id, label) = match id_s.parse::<u32>() {
+            Ok(id) => (id, None),
+            Err(_) if !id_s.is_empty() && !id_s.contains(char::is_whitespace) => {
+                next_label_id += 1;
+                (next_label_id, Some(id_s.clone()))
+            }
+            Err(_) => {
+                return Err(Error::parse(
+                    loc("ID", id_line),
+                    format!("expected an integer or a label without blanks, found `{id_s}`"),
+                ));
+            }
+        };
         let (name, _) = req(b, "NAME")?;
         let double_sided = match b.get("DOUBLE_SIDED") {
             None => false,
@@ -201,14 +226,39 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
                 )
             })?,
         };
-        let (solver, sl) = req(b, "TEMP_SOLVER_NAME")?;
-        if !solver.eq_ignore_ascii_case("Therm") {
-            return Err(Error::parse(
-                loc("TEMP_SOLVER_NAME", sl),
-                format!(
-                    "material `{name}`: temperature solver `{solver}` is not supported (expected `Therm`)"
-                ),
-            ));
+        // Only THERM maps onto irsig's slab model. Other solvers (Null, DataDriven, …)
+        // and entries without one are left out with a warning, so that a library is
+        // usable for the entries a scene needs; a surface naming a left-out material is
+        // an error there (no material of that name).
+        let solver = b.get("TEMP_SOLVER_NAME");
+        if !solver.is_some_and(|(v, _)| v.eq_ignore_ascii_case("Therm")) {
+            let line = solver.map_or(b.line, |(_, l)| l);
+            let why = match solver {
+                None => "has no temperature solver (TEMP_SOLVER_NAME)".to_string(),
+                Some((v, _)) if v.eq_ignore_ascii_case("DataDriven") => {
+                    let t = b
+                        .child("TEMP_SOLVER")
+                        .and_then(|ts| ts.get("TEMPERATURE"))
+                        .map_or(String::new(), |(t, _)| format!(" (TEMPERATURE = {t})"));
+                    format!(
+                        "uses temperature solver `DataDriven`{t}, which irsig does not import; \
+                         give the parts that use it `fixed_temperature_k`"
+                    )
+                }
+                Some((v, _)) => {
+                    format!("uses temperature solver `{v}`; irsig imports `Therm` only")
+                }
+            };
+            db.warnings.push(
+                Error::parse(
+                    loc("TEMP_SOLVER_NAME", line),
+                    format!(
+                        "material `{name}` (ID {id_s}) {why}: not loaded (a surface that uses it is an error)"
+                    ),
+                )
+                .to_string(),
+            );
+            continue;
         }
         let ts = b.child("TEMP_SOLVER").ok_or_else(|| {
             Error::parse(
@@ -273,6 +323,24 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             double_sided,
             surface_energy: None,
         };
+        // Real libraries hold THERM entries with THICKNESS = 0 (anadirsig.mat: water,
+        // grass) whose meaning in THERM is not documented; irsig's slab cannot represent
+        // them, so such entries are left out with a warning.
+        let odd = [("THICKNESS", m.thickness_m <= 0.0, "≤ 0")];
+        if let Some((key, _, what)) = odd.iter().find(|o| o.1) {
+            let (v, line) = ts.get(key).unwrap_or(("", b.line));
+            db.warnings.push(
+                Error::parse(
+                    loc(key, line),
+                    format!(
+                        "material `{name}` (ID {id_s}): {key} = {v} ({what}) has no equivalent in \
+                         irsig's slab model: not loaded (a surface that uses it is an error)"
+                    ),
+                )
+                .to_string(),
+            );
+            continue;
+        }
         if let Some((field, msg)) = m.problems().into_iter().next() {
             let key = match field.as_str() {
                 "specific_heat_j_kg_k" => "SPECIFIC_HEAT",
@@ -300,9 +368,10 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
         db.insert(
             m,
             Some(super::MaterialSource::Text(format!(
-                "DIRSIG4 material file {}, line {} (THERM units converted to SI)",
+                "DIRSIG4 material file {}, line {}{} (THERM units converted to SI)",
                 path.display(),
-                b.line
+                b.line,
+                label.map_or(String::new(), |l| format!(", ID `{l}`"))
             ))),
             path,
         )?;
@@ -341,7 +410,7 @@ pub fn read_ems(path: &Path) -> Result<EmissivityCurve> {
                 format!("expected the number of curves (an integer ≥ 1), found `{first}`"),
             )
         })?;
-    let mut angular = Vec::with_capacity(91);
+    let mut weights = Vec::with_capacity(91);
     for k in 0..91 {
         let (n, l) = lines.next().ok_or_else(|| {
             Error::parse(
@@ -349,56 +418,93 @@ pub fn read_ems(path: &Path) -> Result<EmissivityCurve> {
                 format!("expected 91 angular lines (0..=90°), file ends after {k}"),
             )
         })?;
-        let c: f64 = l.parse().map_err(|_| {
+        let w: f64 = l.parse().map_err(|_| {
             Error::parse(
                 at(n),
-                format!("angular line for {k}°: expected a curve index, found `{l}`"),
+                format!("angular weight for {k}°: expected a number 0..=1, found `{l}`"),
             )
         })?;
-        if !(1.0..=count as f64).contains(&c) {
+        if !(0.0..=1.0).contains(&w) {
             return Err(Error::parse(
                 at(n),
-                format!("angular line for {k}°: curve index {c} outside 1..={count}"),
+                format!("angular weight for {k}°: {w} is outside 0..=1"),
             ));
         }
-        angular.push(c);
+        weights.push(w);
     }
-    let mut curves: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+    // Curves: `CURVE_BEGIN` then `µm emissivity` pairs (new format), or a line holding the
+    // curve's 0-based index then `cm⁻¹ emissivity` pairs (old format).
+    struct Curve {
+        wavenumber: bool,
+        line: usize,
+        x: Vec<f64>,
+        y: Vec<f64>,
+    }
+    let mut curves: Vec<Curve> = Vec::new();
     for (n, l) in lines {
         if l.eq_ignore_ascii_case("CURVE_BEGIN") {
-            curves.push((Vec::new(), Vec::new()));
+            curves.push(Curve {
+                wavenumber: false,
+                line: n,
+                x: Vec::new(),
+                y: Vec::new(),
+            });
             continue;
         }
         if l.eq_ignore_ascii_case("CURVE_END") {
             continue;
         }
-        let cur = curves
-            .last_mut()
-            .ok_or_else(|| Error::parse(at(n), format!("expected `CURVE_BEGIN`, found `{l}`")))?;
-        let v: Vec<f64> = l
-            .split_whitespace()
+        let fields: Vec<&str> = l.split_whitespace().collect();
+        if fields.len() == 1 && fields[0].parse::<usize>().ok() == Some(curves.len()) {
+            curves.push(Curve {
+                wavenumber: true,
+                line: n,
+                x: Vec::new(),
+                y: Vec::new(),
+            });
+            continue;
+        }
+        let cur = curves.last_mut().ok_or_else(|| {
+            Error::parse(
+                at(n),
+                format!("expected `CURVE_BEGIN` or the curve index `0`, found `{l}`"),
+            )
+        })?;
+        let unit = if cur.wavenumber {
+            "wavenumber cm⁻¹"
+        } else {
+            "wavelength µm"
+        };
+        let v: Vec<f64> = fields
+            .iter()
             .map(|s| s.parse::<f64>())
             .collect::<std::result::Result<_, _>>()
             .map_err(|_| {
-                Error::parse(
-                    at(n),
-                    format!("expected `wavelength_um emissivity`, found `{l}`"),
-                )
+                Error::parse(at(n), format!("expected `{unit} emissivity`, found `{l}`"))
             })?;
         if v.len() != 2 {
             return Err(Error::parse(
                 at(n),
-                format!(
-                    "expected 2 numbers (wavelength µm, emissivity), found {}",
-                    v.len()
-                ),
+                format!("expected 2 numbers ({unit}, emissivity), found {}", v.len()),
             ));
         }
-        if let Some(&prev) = cur.0.last() {
-            if v[0] <= prev {
+        if !(v[0].is_finite() && v[0] > 0.0) {
+            return Err(Error::parse(at(n), format!("{unit} {} must be > 0", v[0])));
+        }
+        if let Some(&prev) = cur.x.last() {
+            let ordered = if cur.wavenumber {
+                v[0] < prev
+            } else {
+                v[0] > prev
+            };
+            if !ordered {
                 return Err(Error::parse(
                     at(n),
-                    "wavelengths must increase within a curve",
+                    if cur.wavenumber {
+                        "wavenumbers must decrease within a curve (old format: 39850 → 350 cm⁻¹)"
+                    } else {
+                        "wavelengths must increase within a curve"
+                    },
                 ));
             }
         }
@@ -408,51 +514,53 @@ pub fn read_ems(path: &Path) -> Result<EmissivityCurve> {
                 format!("emissivity {} outside 0..=1", v[1]),
             ));
         }
-        cur.0.push(v[0]);
-        cur.1.push(v[1]);
+        cur.x.push(v[0]);
+        cur.y.push(v[1]);
     }
     if curves.len() != count {
         return Err(Error::parse(
             Location::file(path),
             format!(
-                "header says {count} curve(s), found {} `CURVE_BEGIN` block(s)",
+                "header says {count} curve(s), found {} (each begins with `CURVE_BEGIN` or its 0-based index)",
                 curves.len()
             ),
         ));
     }
-    if let Some(i) = curves.iter().position(|c| c.0.is_empty()) {
-        return Err(Error::parse(
-            Location::file(path),
-            format!("curve {} has no points", i + 1),
-        ));
+    if let Some(c) = curves.iter().find(|c| c.x.is_empty()) {
+        return Err(Error::parse(at(c.line), "this curve has no points"));
     }
-    // Union wavelength grid.
+    // Old-format curves to µm, increasing: λ = 10⁴ / ν.
+    let curves: Vec<(Vec<f64>, Vec<f64>)> = curves
+        .into_iter()
+        .map(|c| {
+            if c.wavenumber {
+                // ν decreasing → λ increasing.
+                (c.x.iter().map(|nu| 1e4 / nu).collect(), c.y)
+            } else {
+                (c.x, c.y)
+            }
+        })
+        .collect();
+    // Union wavelength grid; several curves (texture variants) → their mean.
     let mut wl: Vec<f64> = curves.iter().flat_map(|c| c.0.iter().copied()).collect();
     wl.sort_by(f64::total_cmp);
     wl.dedup();
-    let resampled: Vec<Vec<f64>> = curves
+    let mean: Vec<f64> = wl
         .iter()
-        .map(|(x, y)| wl.iter().map(|&w| interp1d(x, y, w)).collect())
+        .map(|&w| curves.iter().map(|(x, y)| interp1d(x, y, w)).sum::<f64>() / count as f64)
         .collect();
-    let row_for = |c: f64| -> Vec<f64> {
-        let lo = (c.floor() as usize).clamp(1, count) - 1;
-        let hi = (c.ceil() as usize).clamp(1, count) - 1;
-        let t = c - c.floor();
-        resampled[lo]
-            .iter()
-            .zip(&resampled[hi])
-            .map(|(a, b)| (1.0 - t) * a + t * b)
-            .collect()
-    };
-    if angular.iter().all(|&c| c == angular[0]) {
+    if weights.iter().all(|&w| w == 1.0) {
         Ok(EmissivityCurve {
-            emissivity: vec![row_for(angular[0])],
+            emissivity: vec![mean],
             wavelengths_um: wl,
             angles_deg: vec![],
         })
     } else {
         Ok(EmissivityCurve {
-            emissivity: angular.iter().map(|&c| row_for(c)).collect(),
+            emissivity: weights
+                .iter()
+                .map(|&a| mean.iter().map(|e| a * e).collect())
+                .collect(),
             wavelengths_um: wl,
             angles_deg: (0..=90).map(f64::from).collect(),
         })

@@ -35,6 +35,7 @@
 
 pub mod db;
 pub mod dirsig;
+pub mod stock;
 pub mod surface;
 
 use std::collections::HashMap;

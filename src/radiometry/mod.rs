@@ -33,4 +33,6 @@ pub use equation::{
     solar_irradiance_toa,
 };
 pub use planck::{Constants, Planck, planck_radiance};
-pub use response::{SpectralResponse, read_response_csv};
+pub use response::{
+    NEGATIVE_RESPONSE_TOLERANCE, SpectralResponse, parse_response_csv, read_response_csv,
+};

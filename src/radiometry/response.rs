@@ -4,7 +4,10 @@
 //! be commas, semicolons, tabs or spaces; a header line (any first data line
 //! whose first field is not a number) is optional; `#` starts a comment;
 //! blank lines are ignored. Wavelengths in µm, strictly increasing; responses
-//! finite and ≥ 0, not all zero. Any further columns are an error (they would
+//! finite, not all zero, and ≥ 0 — except that small negative values, down to
+//! −1 % of the curve's peak (measurement noise in published curves: the
+//! Landsat-8 TIRS band 10 file has −0.00001), are set to zero with a warning
+//! ([`SpectralResponse::warnings`]); below that they are an error. Any further columns are an error (they would
 //! be silently misread otherwise). Between points the response is linear;
 //! outside the first/last point it is zero.
 //!
@@ -24,7 +27,11 @@ use crate::{Error, Location, Result};
 pub struct SpectralResponse {
     wavelengths_um: Vec<f64>,
     response: Vec<f64>,
+    warnings: Vec<String>,
 }
+
+/// Negative responses down to this fraction of the peak are noise, set to zero.
+pub const NEGATIVE_RESPONSE_TOLERANCE: f64 = 0.01;
 
 impl SpectralResponse {
     /// A response from pairs; validates as the CSV reader does.
@@ -65,7 +72,14 @@ impl SpectralResponse {
         Ok(SpectralResponse {
             wavelengths_um,
             response,
+            warnings: Vec::new(),
         })
+    }
+
+    /// What reading the file changed (small negative values set to zero), each naming
+    /// the file and line; empty for a curve built in memory.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// The wavelengths, µm.
@@ -98,6 +112,7 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
     let path = path.as_ref();
     let mut wl = Vec::new();
     let mut resp = Vec::new();
+    let mut lines = Vec::new();
     let mut seen_data_or_header = false;
     for row in textio::rows(text, Comments::Trailing) {
         let (lineno, line) = (row.line, row.text);
@@ -151,7 +166,7 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
                 ));
             }
         }
-        if !(r.is_finite() && r >= 0.0) {
+        if !r.is_finite() {
             return Err(Error::parse(
                 loc().with_field("response"),
                 format!("expected a finite response ≥ 0, found {r}"),
@@ -159,6 +174,52 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
         }
         wl.push(l);
         resp.push(r);
+        lines.push(lineno);
+    }
+    let peak = resp.iter().copied().fold(0.0, f64::max);
+    let mut warnings = Vec::new();
+    let mut clamped: Vec<usize> = Vec::new();
+    for (i, r) in resp.iter_mut().enumerate() {
+        if *r >= 0.0 {
+            continue;
+        }
+        if peak > 0.0 && *r >= -NEGATIVE_RESPONSE_TOLERANCE * peak {
+            clamped.push(i);
+            *r = 0.0;
+        } else {
+            return Err(Error::parse(
+                Location::file(path)
+                    .at_line(lines[i])
+                    .with_field("response"),
+                if peak > 0.0 {
+                    format!(
+                        "expected a response ≥ 0, found {r}: values down to −{}% of the peak \
+                         ({peak}) are taken for noise and set to zero, this one is {:.3}% of it",
+                        NEGATIVE_RESPONSE_TOLERANCE * 100.0,
+                        *r / peak * 100.0
+                    )
+                } else {
+                    format!("expected a response ≥ 0, found {r} (and no positive value)")
+                },
+            ));
+        }
+    }
+    if let (Some(&first), Some(&last)) = (clamped.first(), clamped.last()) {
+        warnings.push(
+            Error::parse(
+                Location::file(path)
+                    .at_line(lines[first])
+                    .with_field("response"),
+                format!(
+                    "{} small negative response value(s) (within −{}% of the peak {peak}; lines {}..={}) set to zero",
+                    clamped.len(),
+                    NEGATIVE_RESPONSE_TOLERANCE * 100.0,
+                    lines[first],
+                    lines[last]
+                ),
+            )
+            .to_string(),
+        );
     }
     if wl.len() < 2 {
         return Err(Error::parse(
@@ -172,5 +233,7 @@ pub fn parse_response_csv(text: &str, path: impl AsRef<Path>) -> Result<Spectral
             "the response is zero at every wavelength",
         ));
     }
-    SpectralResponse::new(wl, resp)
+    let mut curve = SpectralResponse::new(wl, resp)?;
+    curve.warnings = warnings;
+    Ok(curve)
 }

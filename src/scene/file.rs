@@ -196,6 +196,16 @@ pub struct ShapeSpec {
     /// `usemtl` names, else the `o`/`g` names.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obj: Option<String>,
+    /// The up axis of the `obj` file: `"z"` (the default; irsig's east-north-up) or
+    /// `"y"` (what most modelling tools export), turned to Z-up as glTF is:
+    /// (x, y, z) → (x, −z, y).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up_axis: Option<UpAxis>,
+    /// The length unit of the `obj` file's coordinates: `"m"` (the default), `"cm"`,
+    /// `"mm"`, `"ft"` or `"in"` (international foot and inch); applied before the
+    /// shape's `transform`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<LengthUnit>,
     /// A glTF 2.0 file, `.gltf` or `.glb` (relative to the scene file): the
     /// triangles of the default scene's meshes placed by their nodes, Y-up
     /// turned to Z-up; groups are the glTF material names, else the mesh
@@ -223,6 +233,49 @@ pub struct ShapeSpec {
     /// A gable roof.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gable_roof: Option<GableRoofSpec>,
+}
+
+/// The up axis of a mesh file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum UpAxis {
+    /// Y up (turned to irsig's Z up).
+    Y,
+    /// Z up (as irsig).
+    Z,
+}
+
+/// A length unit of mesh coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum LengthUnit {
+    /// Metre.
+    #[serde(rename = "m")]
+    Metre,
+    /// Centimetre.
+    #[serde(rename = "cm")]
+    Centimetre,
+    /// Millimetre.
+    #[serde(rename = "mm")]
+    Millimetre,
+    /// International foot, 0.3048 m.
+    #[serde(rename = "ft")]
+    Foot,
+    /// International inch, 0.0254 m.
+    #[serde(rename = "in")]
+    Inch,
+}
+
+impl LengthUnit {
+    /// Metres per unit (exact by definition).
+    pub fn metres(self) -> f64 {
+        match self {
+            LengthUnit::Metre => 1.0,
+            LengthUnit::Centimetre => 0.01,
+            LengthUnit::Millimetre => 0.001,
+            LengthUnit::Foot => 0.3048,
+            LengthUnit::Inch => 0.0254,
+        }
+    }
 }
 
 fn yes() -> bool {

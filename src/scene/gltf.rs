@@ -38,6 +38,52 @@ pub fn load_gltf(path: &Path) -> Result<Vec<ObjGroup>> {
     load_gltf_slice(&data, path, path.parent())
 }
 
+/// Extensions a file may require: none is read by irsig, so a required one is an error
+/// naming it (before validation, whose messages — "Missing data" for a Draco-compressed
+/// accessor without a buffer view — would not say why). Known ones get their purpose.
+fn check_required_extensions(required: &[String], used: &[String], path: &Path) -> Result<()> {
+    let what = |name: &str| match name {
+        "KHR_draco_mesh_compression" => " (Draco-compressed geometry)",
+        "EXT_meshopt_compression" | "KHR_meshopt_compression" => {
+            " (meshoptimizer-compressed buffers)"
+        }
+        "KHR_mesh_quantization" => " (quantized vertex attributes)",
+        "EXT_mesh_gpu_instancing" => " (GPU instancing)",
+        "KHR_texture_basisu" | "EXT_texture_webp" => " (compressed textures)",
+        _ => "",
+    };
+    if required.is_empty() {
+        return Ok(());
+    }
+    let names: Vec<String> = required
+        .iter()
+        .map(|n| format!("`{n}`{}", what(n)))
+        .collect();
+    let also_used: Vec<&String> = used.iter().filter(|u| !required.contains(u)).collect();
+    Err(Error::parse(
+        Location::file(path).with_field("extensionsRequired"),
+        format!(
+            "the file requires glTF extension{} {}, which irsig does not read; re-export it \
+             without compression or quantization (e.g. Blender's glTF exporter with \
+             \"Compression\" off){}",
+            if names.len() > 1 { "s" } else { "" },
+            names.join(", "),
+            if also_used.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " (it also uses {}, which are optional)",
+                    also_used
+                        .iter()
+                        .map(|u| format!("`{u}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }
+        ),
+    ))
+}
+
 /// Load glTF/GLB bytes; `path` names the file in errors, `base` is the
 /// folder external buffer URIs are relative to (`None`: external buffers
 /// are an error).
@@ -84,6 +130,7 @@ pub fn load_gltf_slice(data: &[u8], path: &Path, base: Option<&Path>) -> Result<
     // The crate's validation indexes the accessors by each primitive's
     // POSITION unchecked (a panic when out of range): check that first.
     let root = document.into_json();
+    check_required_extensions(&root.extensions_required, &root.extensions_used, path)?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (k, prim) in mesh.primitives.iter().enumerate() {
             let positions =

@@ -441,6 +441,10 @@ impl Loader {
             if let Some(y) = w.year {
                 opts = opts.with_year(y);
             }
+            if let Some(t) = time {
+                // A typical-year EPW/TMY3 file takes the image time's year.
+                opts = opts.with_typical_year(chrono::Datelike::year(&t));
+            }
             let mut ok = true;
             if let Some(st) = &w.start {
                 match crate::sun::parse_time(st) {
@@ -463,10 +467,22 @@ impl Loader {
                     Ok(h) => {
                         if let Some(t) = time {
                             if t < h.start() || t > h.end() {
+                                let hint = if matches!(
+                                    h.format(),
+                                    Some(
+                                        crate::weather::Format::Epw | crate::weather::Format::Tmy3
+                                    )
+                                ) && w.year.is_none()
+                                {
+                                    " (for a typical-year file written with one year, set \
+                                     `weather.year` to the image time's year)"
+                                } else {
+                                    ""
+                                };
                                 self.err(
                                     "weather.file",
                                     format!(
-                                        "the weather history covers {} .. {}, not the image time {}",
+                                        "the weather history covers {} .. {}, not the image time {}{hint}",
                                         h.start().to_rfc3339(),
                                         h.end().to_rfc3339(),
                                         t.to_rfc3339()
@@ -600,6 +616,16 @@ impl Loader {
                     &format!("sensors[{i}]"),
                     "a sensor needs a `type` string (`frame` or `line_scanner`)",
                 );
+            }
+            // Response files read with changes (small negative values set to zero) warn
+            // here; their errors are the sensor's, reported when it is built.
+            let bands = s.get("bands").and_then(Value::as_array);
+            for b in bands.into_iter().flatten() {
+                if let Some(f) = b.get("response").and_then(Value::as_str) {
+                    if let Ok(r) = crate::radiometry::read_response_csv(self.resolve(f)) {
+                        self.warnings.extend(r.warnings().iter().cloned());
+                    }
+                }
             }
         }
         if !self.errors.is_empty() {
@@ -749,6 +775,21 @@ impl Loader {
             None::<GroupedMesh>
         };
         let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
+        if s.obj.is_none() && (s.up_axis.is_some() || s.unit.is_some()) {
+            let field = if s.up_axis.is_some() {
+                "up_axis"
+            } else {
+                "unit"
+            };
+            return bad(
+                self,
+                field,
+                format!(
+                    "`{field}` applies to `obj` shapes only (glTF is Y-up in metres by \
+                     definition; primitives are in metres, Z up)"
+                ),
+            );
+        }
         let mesh_file = match (&s.obj, &s.gltf) {
             (Some(p), _) => Some((p, "obj", load_obj as fn(&Path) -> Result<Vec<ObjGroup>>)),
             (None, Some(p)) => Some((p, "gltf", load_gltf as fn(&Path) -> Result<Vec<ObjGroup>>)),
@@ -767,6 +808,15 @@ impl Loader {
                         for t in g.mesh.indices {
                             m.indices.push(t.map(|i| i + base));
                             m.group_of.push(gi);
+                        }
+                    }
+                    let metres = s.unit.map_or(1.0, file::LengthUnit::metres) as f32;
+                    let y_up = s.up_axis == Some(file::UpAxis::Y);
+                    for p in &mut m.positions {
+                        *p *= metres;
+                        if y_up {
+                            // A proper rotation (+90° about x): faces keep their winding.
+                            *p = Vec3::new(p.x, -p.z, p.y);
                         }
                     }
                     Some(m)
@@ -1090,7 +1140,23 @@ impl Loader {
                     Some(m) => (m.clone(), format!("{at}.material")),
                     None => (g.clone(), format!("{at}.shapes")),
                 };
-                match db.index_of(&name) {
+                // DIRSIG's OBJ convention: `usemtl <ID>` names a `.mat` ID (a number;
+                // a label ID is usually also the NAME). Used when no material has the
+                // group's name and exactly one has that ID.
+                let by_id = || {
+                    let id: u32 = g.trim().parse().ok()?;
+                    let mut hits = db
+                        .materials()
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, m)| m.id == id);
+                    let (i, _) = hits.next()?;
+                    hits.next().is_none().then_some(i)
+                };
+                let found = db
+                    .index_of(&name)
+                    .or_else(|| if o.material.is_none() { by_id() } else { None });
+                match found {
                     Some(m) => Some(Part {
                         name: g.clone(),
                         object,

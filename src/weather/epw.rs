@@ -23,11 +23,12 @@
 
 use std::path::Path;
 
-use chrono::{FixedOffset, NaiveDate, TimeDelta, TimeZone};
+use chrono::{DateTime, FixedOffset};
 
-use super::LoadOptions;
+use super::calendar::{self, Stamp};
 use super::fill::{Parsed, RawRecord};
 use super::text::number;
+use super::{LoadOptions, Timing};
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
 use crate::textio;
@@ -126,7 +127,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     }
     let interval_min = 60.0 / per_hour;
 
-    let mut records = Vec::new();
+    let mut rows = Vec::new();
     for (i, line) in lines.iter().enumerate().skip(8) {
         if line.trim().is_empty() {
             continue;
@@ -149,14 +150,19 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
             let v = val(k)?;
             Ok(if v >= missing { None } else { Some(v) })
         };
-        let year = options.year.map_or_else(|| val(0).map(|y| y as i32), Ok)?;
-        let (month, day, hour, minute) = (val(1)?, val(2)?, val(3)?, val(4)?);
-        let date = NaiveDate::from_ymd_opt(year, month as u32, day as u32).ok_or_else(|| {
-            Error::parse(
-                loc.clone().with_field("day"),
-                format!("{year}-{month}-{day} is not a date"),
-            )
-        })?;
+        let (year, month, day, hour, minute) = (val(0)?, val(1)?, val(2)?, val(3)?, val(4)?);
+        if !(1.0..=12.0).contains(&month) || month.fract() != 0.0 {
+            return Err(Error::parse(
+                loc.with_field("month"),
+                format!("month {month}: expected an integer 1..12"),
+            ));
+        }
+        if !(1.0..=31.0).contains(&day) || day.fract() != 0.0 {
+            return Err(Error::parse(
+                loc.with_field("day"),
+                format!("day {day}: expected an integer 1..31"),
+            ));
+        }
         if !(1.0..=24.0).contains(&hour) || hour.fract() != 0.0 {
             return Err(Error::parse(
                 loc.with_field("hour"),
@@ -169,12 +175,13 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         } else {
             hour * 60.0
         };
-        let midnight = offset
-            .from_local_datetime(&date.and_hms_opt(0, 0, 0).unwrap_or_default())
-            .single()
-            .ok_or_else(|| Error::parse(loc.clone(), "local midnight is not representable"))?;
-        let time = midnight + TimeDelta::seconds((minutes * 60.0).round() as i64);
-        let mut r = RawRecord::new(loc.clone(), time);
+        let stamp = Stamp {
+            year: year as i32,
+            month: month as u32,
+            day: day as u32,
+            minutes: minutes.round() as i64,
+        };
+        let mut r = RawRecord::new(loc.clone(), DateTime::default());
         r.air_temperature_k = opt(6, 99.9)?.map(|c| c + 273.15);
         r.dew_point_k = opt(7, 99.9)?.map(|c| c + 273.15);
         r.relative_humidity = opt(8, 999.0)?.map(|p| p / 100.0);
@@ -187,11 +194,13 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         r.wind_speed_m_s = opt(21, 999.0)?;
         r.total_sky_cover = opt(22, 99.0)?.map(|t| t / 10.0);
         r.opaque_sky_cover = opt(23, 99.0)?.map(|t| t / 10.0);
-        records.push(r);
+        rows.push((stamp, r));
     }
     Ok(Parsed {
-        records,
+        records: calendar::place(rows, offset, options)?,
         site: Some(site),
-        irradiance_offset: TimeDelta::seconds((-interval_min * 30.0).round() as i64),
+        timing: Timing::SolarMeanEnding {
+            interval_s: (interval_min * 60.0).round() as u32,
+        },
     })
 }

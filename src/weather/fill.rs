@@ -7,7 +7,7 @@ use std::path::Path;
 use chrono::{DateTime, FixedOffset, TimeDelta};
 
 use super::physics;
-use super::{Format, WeatherHistory, WeatherRecord, check_times};
+use super::{Format, Timing, WeatherHistory, WeatherRecord, check_times};
 use crate::error::{Error, Location, Result};
 use crate::sun::{self, Site};
 
@@ -58,9 +58,8 @@ pub(crate) struct Parsed {
     pub records: Vec<RawRecord>,
     /// The file's own site, if it declares one.
     pub site: Option<Site>,
-    /// Offset from a record's time to the instant its irradiance represents (−30 min for
-    /// hour-ending hourly means such as EPW/TMY3; zero for instantaneous values).
-    pub irradiance_offset: TimeDelta,
+    /// How the values relate to the stamps in `records[i].time`.
+    pub timing: Timing,
 }
 
 /// Valid range and description of each field (SI).
@@ -175,21 +174,21 @@ pub(crate) fn complete(
     .map_err(|e| match (format, e) {
         (Format::Epw | Format::Tmy3, Error::Parse { location, message }) => Error::parse(
             location,
-            format!(
-                "{message} (typical-year files mix years: give one year with LoadOptions::year / --year)"
-            ),
+            format!("{message} (a typical-year file needs one year applied)"),
         ),
         (_, e) => e,
     })?;
+    let timing = parsed.timing;
+    let records = place_at_represented_instants(parsed.records, timing);
 
-    let mut out = Vec::with_capacity(parsed.records.len());
-    let mut filled_all = Vec::with_capacity(parsed.records.len());
+    let mut out = Vec::with_capacity(records.len());
+    let mut filled_all = Vec::with_capacity(records.len());
     let mut last_pressure: Option<f64> = None;
     let mut last_wind_dir: Option<f64> = None;
     let mut last_total: Option<f64> = None;
     let mut last_opaque: Option<f64> = None;
 
-    for raw in &parsed.records {
+    for raw in &records {
         let loc = &raw.loc;
         // Range checks of what the file gave.
         let given = [
@@ -310,7 +309,7 @@ pub(crate) fn complete(
                     ),
                 )
             })?;
-            let t = raw.time + parsed.irradiance_offset;
+            let t = raw.time;
             sun::position_standard(&s, t).map_err(|e| {
                 Error::parse(
                     loc.clone(),
@@ -395,5 +394,54 @@ pub(crate) fn complete(
         out.push(rec);
         filled_all.push(filled);
     }
-    Ok(WeatherHistory::from_parts(out, site, filled_all, format))
+    Ok(WeatherHistory::from_parts(
+        out, site, filled_all, format, timing,
+    ))
+}
+
+/// Move records from their stamps to the instants their values represent
+/// ([`Timing`]): interval means to mid-interval; for [`Timing::SolarMeanEnding`] the
+/// readings at the stamps (air, humidity, pressure, wind, sky cover) are interpolated
+/// linearly to the mid-interval from the previous stamp, where that is exactly one
+/// interval earlier and both have the value (else the record keeps its own).
+fn place_at_represented_instants(mut records: Vec<RawRecord>, timing: Timing) -> Vec<RawRecord> {
+    let shift = timing.placement();
+    if shift.is_zero() {
+        return records;
+    }
+    if let Timing::SolarMeanEnding { interval_s } = timing {
+        let interval = TimeDelta::seconds(i64::from(interval_s));
+        let mean = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => Some(0.5 * (a + b)),
+            (_, b) => b,
+        };
+        for i in (1..records.len()).rev() {
+            let (head, tail) = records.split_at_mut(i);
+            let (a, b) = (&head[i - 1], &mut tail[0]);
+            if b.time - a.time != interval {
+                continue;
+            }
+            b.air_temperature_k = mean(a.air_temperature_k, b.air_temperature_k);
+            b.dew_point_k = mean(a.dew_point_k, b.dew_point_k);
+            b.relative_humidity = mean(a.relative_humidity, b.relative_humidity);
+            b.pressure_pa = mean(a.pressure_pa, b.pressure_pa);
+            b.wind_speed_m_s = mean(a.wind_speed_m_s, b.wind_speed_m_s);
+            b.total_sky_cover = mean(a.total_sky_cover, b.total_sky_cover);
+            b.opaque_sky_cover = mean(a.opaque_sky_cover, b.opaque_sky_cover);
+            if let (Some(da), Some(db)) = (a.wind_direction_deg, b.wind_direction_deg) {
+                // Halfway along the shorter arc.
+                let mut d = db - da;
+                if d > 180.0 {
+                    d -= 360.0;
+                } else if d < -180.0 {
+                    d += 360.0;
+                }
+                b.wind_direction_deg = Some((da + 0.5 * d).rem_euclid(360.0));
+            }
+        }
+    }
+    for r in &mut records {
+        r.time += shift;
+    }
+    records
 }

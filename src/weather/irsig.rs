@@ -1,12 +1,16 @@
 //! irsig's own weather formats: CSV and JSON, SI units, RFC 3339 times.
 //!
 //! CSV: lines starting with `#` are comments; a comment
-//! `# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170` declares the site.
+//! `# site: latitude_deg=43.16 longitude_deg=-77.61 altitude_m=170` declares the site, and
+//! `# timing: instant` (the default) or `# timing: interval-mean 60 min` how the values
+//! relate to their times ([`super::Timing`]: readings at the time, or means over the
+//! interval ending at it).
 //! The header names the columns (any order, any subset of [`CSV_HEADER`] that includes
 //! `time`); an empty cell is a missing value, filled as documented in [`crate::weather`].
 //! Cells may be quoted (RFC 4180, as spreadsheets write them).
 //!
 //! JSON: `{"site": {"latitude_deg":…, "longitude_deg":…, "altitude_m":…} | null,
+//! "timing": "instant" | "interval-mean 60 min" (optional, default instant),
 //! "records": [{"time": "RFC 3339", "air_temperature_k": …, …}]}` with the same field
 //! names; absent or `null` fields are missing values.
 //!
@@ -22,7 +26,7 @@ use serde::Deserialize;
 
 use super::fill::{Parsed, RawRecord};
 use super::text::opt_number;
-use super::{WeatherHistory, WeatherRecord};
+use super::{Timing, WeatherHistory, WeatherRecord};
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
 use crate::textio;
@@ -60,6 +64,7 @@ fn set_field(r: &mut RawRecord, name: &str, v: Option<f64>) {
 pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
     let known: Vec<&str> = CSV_HEADER.split(',').collect();
     let mut site = None;
+    let mut timing = Timing::Instant;
     let mut header: Option<Vec<String>> = None;
     let mut records = Vec::new();
     let mut csv = textio::Splitter::new();
@@ -72,6 +77,10 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
         if let Some(c) = line.strip_prefix('#') {
             if let Some(rest) = c.trim_start().strip_prefix("site:") {
                 site = Some(parse_site_comment(rest, &loc)?);
+            } else if let Some(rest) = c.trim_start().strip_prefix("timing:") {
+                timing = rest
+                    .parse()
+                    .map_err(|e: String| Error::parse(loc.with_field("timing"), e))?;
             }
             continue;
         }
@@ -145,7 +154,7 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
     Ok(Parsed {
         records,
         site,
-        irradiance_offset: chrono::TimeDelta::zero(),
+        timing,
     })
 }
 
@@ -154,6 +163,8 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
 struct JsonFile {
     #[serde(default)]
     site: Option<Site>,
+    #[serde(default)]
+    timing: Option<String>,
     records: Vec<JsonRecord>,
 }
 
@@ -186,6 +197,12 @@ pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
         s.validate()
             .map_err(|e| Error::parse(Location::file(path).with_field("site"), e.to_string()))?;
     }
+    let timing = match &f.timing {
+        None => Timing::Instant,
+        Some(t) => t
+            .parse()
+            .map_err(|e: String| Error::parse(Location::file(path).with_field("timing"), e))?,
+    };
     let mut records = Vec::with_capacity(f.records.len());
     for (i, j) in f.records.into_iter().enumerate() {
         let loc = Location::file(path).with_field(format!("records[{i}]"));
@@ -211,7 +228,7 @@ pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
     Ok(Parsed {
         records,
         site: f.site,
-        irradiance_offset: chrono::TimeDelta::zero(),
+        timing,
     })
 }
 

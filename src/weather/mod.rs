@@ -31,6 +31,7 @@ use crate::error::{Error, Location, Result};
 use crate::math::lerp;
 use crate::sun::Site;
 
+mod calendar;
 mod epw;
 mod fill;
 pub mod flux;
@@ -90,6 +91,86 @@ pub enum Format {
     DirsigWth,
 }
 
+/// How a file's values relate to their time stamps (each format declares it; irsig CSV
+/// and JSON files may say so, see [`crate::weather`]'s `timing` setting).
+///
+/// A history holds every record at the instant its values represent: values that are
+/// means over an interval are placed at the interval's middle, so the thermal model,
+/// the direct/diffuse split and the renderer all take the Sun of that same instant
+/// (the mid-interval Sun) with the interval's mean irradiance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub enum Timing {
+    /// Every value is a reading at its stamp (irsig CSV/JSON by default, DIRSIG `.wth`).
+    Instant,
+    /// Every value is the mean over the `interval_s` seconds ending at the stamp (irsig
+    /// CSV/JSON with `timing: interval-mean N min`). Records are placed `interval_s / 2`
+    /// before their stamps.
+    MeanEnding {
+        /// The interval, s.
+        interval_s: u32,
+    },
+    /// Solar and sky longwave irradiance are means (Wh/m² totals) over the `interval_s`
+    /// seconds ending at the stamp; air temperature, humidity, pressure, wind and sky
+    /// cover are readings at the stamp (EPW data dictionary; TMY3 manual §4). Records are
+    /// placed at mid-interval, the readings interpolated linearly there from the stamps
+    /// around it (the first record keeps its own).
+    SolarMeanEnding {
+        /// The interval, s.
+        interval_s: u32,
+    },
+}
+
+impl Timing {
+    /// Offset from a stamp to the instant its record is placed at (zero or −interval/2).
+    pub fn placement(self) -> TimeDelta {
+        match self {
+            Timing::Instant => TimeDelta::zero(),
+            Timing::MeanEnding { interval_s } | Timing::SolarMeanEnding { interval_s } => {
+                -TimeDelta::milliseconds(i64::from(interval_s) * 500)
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for Timing {
+    type Err = String;
+    /// `instant`, or `interval-mean N min` (also `N h`, `N s`): the mean over the
+    /// interval ending at the stamp.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let t = s.trim();
+        if t == "instant" {
+            return Ok(Timing::Instant);
+        }
+        let expected = "expected `instant` or `interval-mean N min` (the mean over the N minutes ending at the stamp; also `N h`, `N s`)";
+        let Some(rest) = t.strip_prefix("interval-mean") else {
+            return Err(format!("timing `{t}`: {expected}"));
+        };
+        let rest = rest.trim();
+        let (num, unit) = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .map_or((rest, ""), |k| (&rest[..k], rest[k..].trim()));
+        let n: f64 = num
+            .parse()
+            .map_err(|_| format!("timing `{t}`: {expected}"))?;
+        let scale = match unit {
+            "s" => 1.0,
+            "min" | "m" => 60.0,
+            "h" => 3600.0,
+            _ => return Err(format!("timing `{t}`: unit `{unit}`; {expected}")),
+        };
+        let secs = n * scale;
+        if !(1.0..=86_400.0).contains(&secs) || secs.fract() != 0.0 {
+            return Err(format!(
+                "timing `{t}`: the interval must be a whole number of seconds from 1 s to 24 h"
+            ));
+        }
+        Ok(Timing::MeanEnding {
+            interval_s: secs as u32,
+        })
+    }
+}
+
 /// Options for formats that lack information the scene provides.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct LoadOptions {
@@ -99,8 +180,12 @@ pub struct LoadOptions {
     /// The site, for files that carry none (`.wth`, irsig CSV/JSON without one). Needed
     /// where an irradiance split must be computed. A file's own site takes precedence.
     pub site: Option<Site>,
-    /// Replace the year of every EPW/TMY3 row (typical-year files mix years).
+    /// Replace the year of every EPW/TMY3 row, whether or not the file is a typical year.
     pub year: Option<i32>,
+    /// The year given to an EPW/TMY3 typical-year file (months from different years;
+    /// see `calendar`) when [`LoadOptions::year`] is not set: a scene gives its image
+    /// time's year. Files whose rows are in time order keep their own years.
+    pub typical_year: Option<i32>,
 }
 
 impl LoadOptions {
@@ -119,6 +204,11 @@ impl LoadOptions {
         self.year = Some(year);
         self
     }
+    /// Options giving the year of a typical-year EPW/TMY3 file.
+    pub fn with_typical_year(mut self, year: i32) -> Self {
+        self.typical_year = Some(year);
+        self
+    }
 }
 
 /// A weather history: records in strictly increasing time, SI units, linearly
@@ -129,6 +219,7 @@ pub struct WeatherHistory {
     site: Option<Site>,
     filled: Vec<Vec<&'static str>>,
     format: Option<Format>,
+    timing: Timing,
 }
 
 impl WeatherHistory {
@@ -154,6 +245,7 @@ impl WeatherHistory {
             site,
             filled: vec![Vec::new(); n],
             format: None,
+            timing: Timing::Instant,
         })
     }
 
@@ -162,13 +254,21 @@ impl WeatherHistory {
         site: Option<Site>,
         filled: Vec<Vec<&'static str>>,
         format: Format,
+        timing: Timing,
     ) -> WeatherHistory {
         WeatherHistory {
             records,
             site,
             filled,
             format: Some(format),
+            timing,
         }
+    }
+
+    /// How the file's values relate to its stamps ([`Timing::Instant`] when built in
+    /// memory). The records are already placed at the instants they represent.
+    pub fn timing(&self) -> Timing {
+        self.timing
     }
 
     /// The records, in increasing time.
@@ -343,9 +443,58 @@ pub fn load(path: &Path) -> Result<WeatherHistory> {
 /// # Errors
 /// As [`load`]; for `.wth` without `options.start`, an error saying the scene must give it.
 pub fn load_with(path: &Path, options: &LoadOptions) -> Result<WeatherHistory> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = decode(bytes, path)?;
     let format = detect_format(path, &text)?;
     load_str(&text, path, format, options)
+}
+
+/// Lines at the top of a file that may hold free text (station names, comments): EPW's
+/// eight header lines, TMY3's two.
+const FREE_TEXT_HEADER_LINES: usize = 8;
+
+/// The file's text: UTF-8, or, where the only bytes that are not UTF-8 lie in the
+/// free-text header lines (EPW LOCATION…COMMENTS 2, a TMY3 station name), those lines
+/// read as Latin-1 (ISO 8859-1: each byte is the code point of the same value), which is
+/// how such files are written on Windows (`Montréal` as byte 0xE9).
+///
+/// # Errors
+/// [`Error::Parse`] naming the line and column of the first byte that is not UTF-8 in a
+/// data line.
+fn decode(bytes: Vec<u8>, path: &Path) -> Result<String> {
+    let bytes = match String::from_utf8(bytes) {
+        Ok(s) => return Ok(s),
+        Err(e) => e.into_bytes(),
+    };
+    // Only files that announce themselves as EPW (`LOCATION,`) or TMY3 (the date column
+    // on line 2) have free-text header lines; other bytes are not guessed at.
+    let header_text = bytes.starts_with(b"LOCATION,")
+        || bytes
+            .split(|&b| b == b'\n')
+            .nth(1)
+            .is_some_and(|l| l.starts_with(b"Date (MM/DD/YYYY)"));
+    let mut out = String::with_capacity(bytes.len());
+    for (i, line) in bytes.split_inclusive(|&b| b == b'\n').enumerate() {
+        match std::str::from_utf8(line) {
+            Ok(s) => out.push_str(s),
+            Err(_) if header_text && i < FREE_TEXT_HEADER_LINES => {
+                out.extend(line.iter().map(|&b| char::from(b)))
+            }
+            Err(e) => {
+                let col = e.valid_up_to();
+                return Err(Error::parse(
+                    Location::file(path).at_line(i + 1),
+                    format!(
+                        "byte 0x{:02X} at column {} is not UTF-8 text (Latin-1 is accepted only \
+                         in the header lines of EPW and TMY3 files); save the file as UTF-8",
+                        line[col],
+                        col + 1
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Parse weather text already in memory; `path` is used in messages only.

@@ -14,11 +14,12 @@
 
 use std::path::Path;
 
-use chrono::{FixedOffset, NaiveDate, TimeDelta, TimeZone};
+use chrono::{DateTime, FixedOffset};
 
-use super::LoadOptions;
+use super::calendar::{self, Stamp};
 use super::fill::{Parsed, RawRecord};
 use super::text::number;
+use super::{LoadOptions, Timing};
 use crate::error::{Error, Location, Result};
 use crate::sun::Site;
 use crate::textio;
@@ -109,7 +110,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         }
     }
 
-    let mut records = Vec::new();
+    let mut rows = Vec::new();
     for (i, line) in lines {
         if line.trim().is_empty() {
             continue;
@@ -128,22 +129,20 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         }
         let dloc = loc.clone().with_field(DATE);
         let date_s = f[date_i].trim();
-        let mut dp = date_s.split('/');
-        let (mo, da, yr) = (dp.next(), dp.next(), dp.next());
-        let date = match (mo, da, yr) {
-            (Some(mo), Some(da), Some(yr)) => {
-                let year = match options.year {
-                    Some(y) => Some(y),
-                    None => yr.trim().parse().ok(),
-                };
-                match (mo.trim().parse(), da.trim().parse(), year) {
-                    (Ok(mo), Ok(da), Some(y)) => NaiveDate::from_ymd_opt(y, mo, da),
-                    _ => None,
-                }
+        let mut dp = date_s.split('/').map(|p| p.trim().parse::<u32>().ok());
+        let (month, day, year) = match (dp.next(), dp.next(), dp.next(), dp.next()) {
+            (Some(Some(mo)), Some(Some(da)), Some(Some(yr)), None)
+                if (1..=12).contains(&mo) && (1..=31).contains(&da) =>
+            {
+                (mo, da, yr)
             }
-            _ => None,
-        }
-        .ok_or_else(|| Error::parse(dloc, format!("`{date_s}` is not a MM/DD/YYYY date")))?;
+            _ => {
+                return Err(Error::parse(
+                    dloc,
+                    format!("`{date_s}` is not a MM/DD/YYYY date"),
+                ));
+            }
+        };
         let time_s = f[time_i].trim();
         let hm = time_s
             .split_once(':')
@@ -155,11 +154,12 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
                     format!("`{time_s}` is not HH:MM (01:00..24:00, hour-ending)"),
                 )
             })?;
-        let midnight = offset
-            .from_local_datetime(&date.and_hms_opt(0, 0, 0).unwrap_or_default())
-            .single()
-            .ok_or_else(|| Error::parse(loc.clone(), "local midnight is not representable"))?;
-        let time = midnight + TimeDelta::minutes(hm.0 * 60 + hm.1);
+        let stamp = Stamp {
+            year: year as i32,
+            month,
+            day,
+            minutes: hm.0 * 60 + hm.1,
+        };
         let get = |k: usize| -> Result<Option<f64>> {
             let Some(j) = idx[k] else { return Ok(None) };
             let s = f[j].trim();
@@ -169,7 +169,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
             let v = number(s, &loc.clone().with_field(COLUMNS[k].0), COLUMNS[k].0)?;
             Ok(if v <= MISSING { None } else { Some(v) })
         };
-        let mut r = RawRecord::new(loc.clone(), time);
+        let mut r = RawRecord::new(loc.clone(), DateTime::default());
         r.global_horizontal_w_m2 = get(0)?;
         r.direct_normal_w_m2 = get(1)?;
         r.diffuse_horizontal_w_m2 = get(2)?;
@@ -181,11 +181,11 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         r.pressure_pa = get(8)?.map(|p| p * 100.0);
         r.wind_direction_deg = get(9)?;
         r.wind_speed_m_s = get(10)?;
-        records.push(r);
+        rows.push((stamp, r));
     }
     Ok(Parsed {
-        records,
+        records: calendar::place(rows, offset, options)?,
         site: Some(site),
-        irradiance_offset: TimeDelta::minutes(-30),
+        timing: Timing::SolarMeanEnding { interval_s: 3600 },
     })
 }

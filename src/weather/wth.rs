@@ -32,9 +32,9 @@ use std::path::Path;
 
 use chrono::TimeDelta;
 
-use super::LoadOptions;
 use super::fill::{Parsed, RawRecord};
 use super::text::number;
+use super::{LoadOptions, Timing};
 use crate::error::{Error, Location, Result};
 
 /// W/m² per Langley/hour.
@@ -171,6 +171,6 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     Ok(Parsed {
         records,
         site: None,
-        irradiance_offset: TimeDelta::zero(),
+        timing: Timing::Instant,
     })
 }
