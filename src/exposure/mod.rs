@@ -85,6 +85,10 @@ pub struct ExposureParams {
     pub batch_facets: usize,
     /// Seed of the stratified jitter.
     pub seed: u64,
+    /// Solar history traced at every `solar_stride`-th step and refined
+    /// where a sample point's visibility changes ([`solar_history`]);
+    /// 1 traces every step (default 1).
+    pub solar_stride: u32,
 }
 
 impl Default for ExposureParams {
@@ -95,6 +99,7 @@ impl Default for ExposureParams {
             offset_rel: 1e-5,
             batch_facets: 512,
             seed: 0x1A5E_5EED,
+            solar_stride: 1,
         }
     }
 }
@@ -182,7 +187,13 @@ pub fn compute_exposure<T: Tracer + ?Sized>(
         params.offset_rel,
     );
     let t1 = Instant::now();
-    let (solar, solar_rays) = solar_history(tracer, &facets, sun_dirs, params.batch_facets);
+    let (solar, solar_rays) = solar_history(
+        tracer,
+        &facets,
+        sun_dirs,
+        params.batch_facets,
+        params.solar_stride,
+    );
     let t2 = Instant::now();
     let (sky, sky_rays) = sky_view(
         tracer,
@@ -221,6 +232,12 @@ fn validate_params(p: &ExposureParams) -> Result<()> {
                 "expected a small positive number (e.g. 1e-5), got {}",
                 p.offset_rel
             ),
+        ));
+    }
+    if !(1..=96).contains(&p.solar_stride) {
+        return Err(Error::invalid(
+            "solar_stride",
+            format!("expected 1 to 96 steps, got {}", p.solar_stride),
         ));
     }
     match p.sky {
