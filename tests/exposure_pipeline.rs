@@ -227,3 +227,26 @@ fn an_image_time_alone_equals_it_in_a_series() {
         within.surface_temperature_k(2)
     );
 }
+
+/// The scene's `render` section sets the hemisphere sampling (default
+/// stratified, 64 rays); a bad value names the file and the field.
+#[test]
+fn render_section_sets_the_sky_sampling() {
+    use irsig::Location;
+    use irsig::render::RenderConfig;
+    let file = Location::file("scene.json");
+    let c = RenderConfig::from_json(None, &file).unwrap();
+    assert_eq!(c.sky_sampling, SkySampling::Stratified { samples: 64 });
+    let v = serde_json::json!({"sky_sampling": "dirsig", "facet_samples": 2});
+    let c = RenderConfig::from_json(Some(&v), &file).unwrap();
+    assert_eq!(c.sky_sampling, SkySampling::DIRSIG);
+    assert_eq!(c.facet_samples, 2);
+    let v = serde_json::json!({"sky_sampling": "hexagons"});
+    let e = RenderConfig::from_json(Some(&v), &file)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("scene.json") && e.contains("render") && e.contains("stratified:N"),
+        "{e}"
+    );
+}

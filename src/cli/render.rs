@@ -59,6 +59,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Vec::new(),
     };
     let tile = args.tile.as_deref().map(parse_tile).transpose()?;
+    if let Some(n) = args.facet_samples {
+        anyhow::ensure!(
+            (1..=16).contains(&n),
+            "--facet-samples: {n} is out of range (expected 1 to 16)"
+        );
+    }
     let t0 = std::time::Instant::now();
     let scene = irsig::scene::Scene::load(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
@@ -68,10 +74,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut session = Session::from_scene(scene, args.backend, t0)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     if let Some(n) = args.facet_samples {
-        anyhow::ensure!(
-            (1..=16).contains(&n),
-            "--facet-samples: {n} is out of range (expected 1 to 16)"
-        );
         session.config.facet_samples = n;
     }
     if let Some(s) = args.sky_sampling {

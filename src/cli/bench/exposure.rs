@@ -5,7 +5,9 @@
 //! The reference traces the sun at every step of the history window and
 //! the sky with many stratified rays (`--reference`). Accuracy is the share
 //! of (facet, step) sun fractions that differ from the reference, and the
-//! RMS and mean error of the shape factor F over facets.
+//! RMS and mean error of the shape factor F over facets, and the RMS and
+//! largest error of the surface temperatures at the scene's time that the
+//! thermal solve makes of them (the render's thermal settings).
 
 use std::io::Write;
 use std::path::Path;
@@ -18,6 +20,8 @@ use irsig::exposure::{
 };
 use irsig::render::scene_thermal::FacetThermalSetup;
 use irsig::scene::Scene;
+use irsig::thermal::Forcing;
+use irsig::thermal::scene::{ThermalParams, solve_facet_temperatures};
 use irsig::trace::{self, Backend, Watertight};
 
 /// One setting's line of the report.
@@ -47,7 +51,30 @@ pub fn run(
     let sun = sun_directions(&scene.site, &times)?;
     let setup = FacetThermalSetup::from_scene(&scene)?;
     let tracer = trace::build_with(&scene.geometry, backend, Watertight::No)?;
+    let exact = trace::build(&scene.geometry, backend)?;
     let geo = &scene.geometry;
+    let records = times
+        .iter()
+        .map(|&t| weather.at(t))
+        .collect::<irsig::Result<Vec<_>>>()?;
+    let forcing = Forcing::from_records(&records)?;
+    let last = times.len() - 1;
+    // The surface temperatures at the scene's time from an exposure, as a
+    // render solves them (ground facets found once, on the reference).
+    let mut ground_setup: Option<FacetThermalSetup> = None;
+    let mut temperatures = |e: &Exposure| -> anyhow::Result<Vec<f32>> {
+        let s = ground_setup
+            .get_or_insert_with(|| setup.with_ground(&setup.ground_facets(&*exact, &e.facets)));
+        let mut t = solve_facet_temperatures(
+            e,
+            &s.kinds,
+            &s.props,
+            &forcing,
+            &[last],
+            &ThermalParams::default(),
+        )?;
+        Ok(t.surface_temperature_k.remove(0))
+    };
     let n = geo.facet_count();
     let time_it = |p: &ExposureParams| -> anyhow::Result<(Exposure, f64)> {
         let mut best: Option<(Exposure, f64)> = None;
@@ -76,6 +103,7 @@ pub fn run(
         ..ExposureParams::default()
     };
     let (r, rs) = time_it(&reference_params)?;
+    let tr = temperatures(&r)?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -93,7 +121,7 @@ pub fn run(
     )?;
     writeln!(
         out,
-        "{:<34} {:>9} {:>9} {:>8} {:>11} {:>13} {:>10} {:>10}",
+        "{:<26} {:>9} {:>9} {:>8} {:>11} {:>12} {:>8} {:>10} {:>8} {:>8}",
         "setting",
         "solar Mr",
         "sky Mr",
@@ -101,7 +129,9 @@ pub fn run(
         "facets/s",
         "sun differs",
         "F rms",
-        "F mean err"
+        "F mean err",
+        "T rms K",
+        "T max K"
     )?;
     for l in &lines {
         let e = &l.exposure;
@@ -118,9 +148,16 @@ pub fn run(
             se += d * d;
             me += d;
         }
+        let t = temperatures(e)?;
+        let (mut ts, mut tm) = (0.0f64, 0.0f64);
+        for (a, b) in t.iter().zip(&tr) {
+            let d = (*a - *b) as f64;
+            ts += d * d;
+            tm = tm.max(d.abs());
+        }
         writeln!(
             out,
-            "{:<34} {:>9.2} {:>9.2} {:>8.3} {:>11.0} {:>12.4}% {:>10.4} {:>10.4}",
+            "{:<26} {:>9.2} {:>9.2} {:>8.3} {:>11.0} {:>11.4}% {:>8.4} {:>10.4} {:>8.3} {:>8.2}",
             l.name,
             e.stats.solar_rays as f64 * 1e-6,
             e.stats.sky_rays as f64 * 1e-6,
@@ -128,7 +165,9 @@ pub fn run(
             n as f64 / l.seconds.max(1e-9),
             100.0 * differ as f64 / day.max(1) as f64,
             (se / n.max(1) as f64).sqrt(),
-            me / n.max(1) as f64
+            me / n.max(1) as f64,
+            (ts / n.max(1) as f64).sqrt(),
+            tm
         )?;
     }
     writeln!(

@@ -144,8 +144,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let mut settings = Vec::new();
             for item in a.settings.split(',') {
                 let (sky, stride) = item.split_once('@').unwrap_or((item, "1"));
-                let sky: irsig::exposure::SkySampling =
-                    sky.parse().with_context(|| format!("--settings: `{item}`"))?;
+                let sky: irsig::exposure::SkySampling = sky
+                    .parse()
+                    .with_context(|| format!("--settings: `{item}`"))?;
                 let stride: u32 = stride
                     .parse()
                     .with_context(|| format!("--settings: `{item}`: bad stride"))?;
