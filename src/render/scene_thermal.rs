@@ -536,8 +536,7 @@ fn solve_windows(
             inputs.records = w.len();
             inputs.sun_fraction = &sun;
             inputs.cos_incidence = &cos;
-            let records: Vec<WeatherRecord> =
-                w.iter().map(|&r| history.records[r].clone()).collect();
+            let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
             let forcing = Forcing::from_records(&records)?;
             solve_facet_temperatures(
                 inputs,
