@@ -121,11 +121,13 @@ pub fn run(
     )?;
     writeln!(
         out,
-        "{:<26} {:>9} {:>9} {:>8} {:>11} {:>12} {:>8} {:>10} {:>8} {:>8}",
+        "{:<26} {:>9} {:>9} {:>8} {:>8} {:>8} {:>11} {:>12} {:>8} {:>10} {:>8} {:>8}",
         "setting",
         "solar Mr",
         "sky Mr",
         "time s",
+        "solar s",
+        "sky s",
         "facets/s",
         "sun differs",
         "F rms",
@@ -157,11 +159,13 @@ pub fn run(
         }
         writeln!(
             out,
-            "{:<26} {:>9.2} {:>9.2} {:>8.3} {:>11.0} {:>11.4}% {:>8.4} {:>10.4} {:>8.3} {:>8.2}",
+            "{:<26} {:>9.2} {:>9.2} {:>8.3} {:>8.3} {:>8.3} {:>11.0} {:>11.4}% {:>8.4} {:>10.4} {:>8.3} {:>8.2}",
             l.name,
             e.stats.solar_rays as f64 * 1e-6,
             e.stats.sky_rays as f64 * 1e-6,
             l.seconds,
+            e.stats.solar.as_secs_f64(),
+            e.stats.sky.as_secs_f64(),
             n as f64 / l.seconds.max(1e-9),
             100.0 * differ as f64 / day.max(1) as f64,
             (se / n.max(1) as f64).sqrt(),
