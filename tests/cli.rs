@@ -524,6 +524,18 @@ const CASES: &[Case] = &[
         expect: &["frobnicate"],
     },
     Case {
+        name: "cli: render --sky-sampling of an unknown kind",
+        files: &[],
+        args: &["render", "@/scene.json", "-o", "@/out", "--sky-sampling", "hexagons"],
+        expect: &["--sky-sampling", "hexagons", "stratified:N"],
+    },
+    Case {
+        name: "cli: render --facet-samples 0",
+        files: &[],
+        args: &["render", "@/scene.json", "-o", "@/out", "--facet-samples", "0"],
+        expect: &["--facet-samples", "1 to 16"],
+    },
+    Case {
         name: "cli: --threads 0",
         files: &[],
         args: &["--threads", "0", "sun", "--lat", "43", "--lon", "-77", "--time", "2025-06-21T12:00:00Z"],

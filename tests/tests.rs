@@ -9,6 +9,7 @@ mod atmosphere;
 mod backends;
 mod cli;
 mod exposure;
+mod exposure_pipeline;
 mod flux;
 mod fuzz_smoke;
 mod material;

@@ -36,6 +36,17 @@ pub struct Args {
     /// Render only this sensor (repeatable). Default: all.
     #[arg(long = "sensor", value_name = "NAME")]
     pub sensors: Vec<String>,
+    /// Sample points per facet edge for the per-facet sun and sky rays (n²
+    /// points per facet, 1 to 16); overrides the scene's
+    /// `render.facet_samples` [default: the scene's, else 1].
+    #[arg(long, value_name = "N")]
+    pub facet_samples: Option<u32>,
+    /// Hemisphere sampling of each facet's sky view: `stratified:N` (N
+    /// rays per face), `dirsig` (DIRSIG's 15°×30° grid, 72 rays) or
+    /// `grid:DZxDA` (degrees); overrides the scene's `render.sky_sampling`
+    /// [default: the scene's, else stratified:64].
+    #[arg(long, value_name = "SPEC")]
+    pub sky_sampling: Option<irsig::exposure::SkySampling>,
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -48,6 +59,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Vec::new(),
     };
     let tile = args.tile.as_deref().map(parse_tile).transpose()?;
+    if let Some(n) = args.facet_samples {
+        anyhow::ensure!(
+            (1..=16).contains(&n),
+            "--facet-samples: {n} is out of range (expected 1 to 16)"
+        );
+    }
     let t0 = std::time::Instant::now();
     let scene = irsig::scene::Scene::load(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
@@ -56,6 +73,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let mut session = Session::from_scene(scene, args.backend, t0)
         .with_context(|| format!("loading {}", args.scene.display()))?;
+    if let Some(n) = args.facet_samples {
+        session.config.facet_samples = n;
+    }
+    if let Some(s) = args.sky_sampling {
+        session.config.sky_sampling = s;
+    }
     let options = RunOptions {
         backend: args.backend,
         times,

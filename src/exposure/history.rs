@@ -29,8 +29,11 @@ impl Default for HistoryWindow {
     }
 }
 
-/// Record times of the history: from `first image − length` by the step up
-/// to the last image time, with every image time inserted exactly.
+/// Record times of the history: the grid of multiples of the step (counted
+/// from the Unix epoch, so that it does not depend on the image times) from
+/// `first image − length` up to the last image time, with every image time
+/// inserted exactly. Each image time's own window ([`image_window`]) is
+/// then the same whether it is rendered alone or in a series.
 ///
 /// # Errors
 /// [`Error::Invalid`] when there is no image time, the window is not
@@ -71,12 +74,9 @@ pub fn history_times(
             ),
         ));
     }
-    let step = weather
-        .step()
-        .min(window.max_step)
-        .max(TimeDelta::seconds(1));
+    let step = history_step(weather, window);
     let mut times = Vec::new();
-    let mut t = start;
+    let mut t = align_up(start, step);
     while t < last {
         times.push(t);
         t += step;
@@ -86,6 +86,61 @@ pub fn history_times(
     // Merge times closer than a second (an image time on the grid).
     times.dedup_by(|b, a| (*b - *a).abs() < TimeDelta::seconds(1));
     Ok(times)
+}
+
+/// The step of the history grid: the weather's own step, capped at
+/// `window.max_step`, at least a second.
+pub fn history_step(weather: &WeatherHistory, window: &HistoryWindow) -> TimeDelta {
+    weather
+        .step()
+        .min(window.max_step)
+        .max(TimeDelta::seconds(1))
+}
+
+/// The first multiple of `step` since the Unix epoch at or after `t` (in
+/// `t`'s offset).
+fn align_up(t: DateTime<FixedOffset>, step: TimeDelta) -> DateTime<FixedOffset> {
+    let (ms, step_ms) = (t.timestamp_millis(), step.num_milliseconds().max(1));
+    let up = ms.div_euclid(step_ms) * step_ms
+        + if ms.rem_euclid(step_ms) > 0 {
+            step_ms
+        } else {
+            0
+        };
+    t + TimeDelta::milliseconds(up - ms)
+}
+
+/// The records (indices into `times`, from [`history_times`] with grid
+/// step `step`, [`history_step`]) of the window of image time `image`: the
+/// grid times within `length` before it, and `image` itself last. Other image times that fall between
+/// grid times are left out, so the window — and with it the thermal
+/// solution at `image` — does not depend on which other times share the
+/// history.
+pub fn image_window(
+    times: &[DateTime<FixedOffset>],
+    image: DateTime<FixedOffset>,
+    images: &[DateTime<FixedOffset>],
+    length: TimeDelta,
+    step: TimeDelta,
+) -> Vec<usize> {
+    let start = image - length;
+    let close =
+        |a: DateTime<FixedOffset>, b: DateTime<FixedOffset>| (a - b).abs() < TimeDelta::seconds(1);
+    // A grid time is one that is not an inserted image time, or an image
+    // time that lies on the grid.
+    let step_ms = step.num_milliseconds().max(1);
+    let on_grid = |t: DateTime<FixedOffset>| t.timestamp_millis().rem_euclid(step_ms) == 0;
+    times
+        .iter()
+        .enumerate()
+        .filter(|&(_, &t)| {
+            if close(t, image) {
+                return true;
+            }
+            t >= start && t < image && (on_grid(t) || !images.iter().any(|&i| close(i, t)))
+        })
+        .map(|(i, _)| i)
+        .collect()
 }
 
 /// Unit east-north-up vectors toward the sun's apparent position at each

@@ -29,7 +29,9 @@
 //!   the tracers on the exposure stage's own rays (`irsig bench trace`).
 //! - [`compute_exposure`] runs all of it and times it ([`Exposure`]).
 //! - [`history_times`] / [`sun_directions`]: the record times of the
-//!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min) and the
+//!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min, on a grid
+//!   anchored to the epoch; [`image_window`]: one image time's own records)
+//!   and the
 //!   sun's direction at each, computed once for the scene (NREL SPA).
 //!
 //! Rays go through any [`Tracer`] (Embree or obvhs) in batches of
@@ -60,7 +62,7 @@ use glam::Vec3;
 
 pub use crate::geometry::BackgroundEntry;
 pub use facets::FacetSamples;
-pub use history::{HistoryWindow, history_times, sun_directions};
+pub use history::{HistoryWindow, history_step, history_times, image_window, sun_directions};
 pub use sky::{RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view};
 pub use solar::{RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_rays};
 
@@ -73,7 +75,8 @@ use crate::{Error, Result};
 pub struct ExposureParams {
     /// Sample points per facet edge `n`: `n²` points per facet (default 2).
     pub samples_per_edge: u32,
-    /// Hemisphere sampling for the shape factor (default DIRSIG's grid).
+    /// Hemisphere sampling for the shape factor (default stratified, 64
+    /// rays per face: [`SkySampling::default`]).
     pub sky: SkySampling,
     /// Ray-origin lift off the facet plane, relative to the scene's
     /// coordinate scale (default 1e-5: 1 cm for a 1 km scene).
@@ -82,16 +85,21 @@ pub struct ExposureParams {
     pub batch_facets: usize,
     /// Seed of the stratified jitter.
     pub seed: u64,
+    /// Solar history traced at every `solar_stride`-th step and refined
+    /// where a sample point's visibility changes ([`solar_history`]);
+    /// 1 traces every step (default 1).
+    pub solar_stride: u32,
 }
 
 impl Default for ExposureParams {
     fn default() -> Self {
         ExposureParams {
             samples_per_edge: 2,
-            sky: SkySampling::DIRSIG,
+            sky: SkySampling::default(),
             offset_rel: 1e-5,
             batch_facets: 512,
             seed: 0x1A5E_5EED,
+            solar_stride: 1,
         }
     }
 }
@@ -179,7 +187,13 @@ pub fn compute_exposure<T: Tracer + ?Sized>(
         params.offset_rel,
     );
     let t1 = Instant::now();
-    let (solar, solar_rays) = solar_history(tracer, &facets, sun_dirs, params.batch_facets);
+    let (solar, solar_rays) = solar_history(
+        tracer,
+        &facets,
+        sun_dirs,
+        params.batch_facets,
+        params.solar_stride,
+    );
     let t2 = Instant::now();
     let (sky, sky_rays) = sky_view(
         tracer,
@@ -218,6 +232,12 @@ fn validate_params(p: &ExposureParams) -> Result<()> {
                 "expected a small positive number (e.g. 1e-5), got {}",
                 p.offset_rel
             ),
+        ));
+    }
+    if !(1..=96).contains(&p.solar_stride) {
+        return Err(Error::invalid(
+            "solar_stride",
+            format!("expected 1 to 96 steps, got {}", p.solar_stride),
         ));
     }
     match p.sky {

@@ -108,12 +108,28 @@ pub fn stratified_side(samples: u32) -> u32 {
 /// jitter in `[0, 1)`.
 pub fn stratified_cosine(samples: u32, mut rng: impl FnMut() -> f32) -> Vec<HemiSample> {
     let m = stratified_side(samples);
+    let jitter: Vec<(f32, f32)> = (0..m * m).map(|_| (rng(), rng())).collect();
+    rotated_cosine(m, &jitter, (0.0, 0.0))
+}
+
+/// The `m × m` stratified cosine-weighted directions of
+/// [`stratified_cosine`] with the sample of stratum `k` (row-major, zenith
+/// rows) at offset `frac(jitter[k] + shift)` inside it: a fixed jittered
+/// pattern under a Cranley–Patterson rotation by `shift` (Cranley &
+/// Patterson 1976, SIAM J. Numer. Anal. 13(6):904–914). For any fixed
+/// `jitter` and a shift uniform on `[0, 1)²` every stratum's sample is
+/// uniform in it, so the estimate is unbiased; with the shifts of
+/// neighbouring facets taken from a low-discrepancy sequence
+/// ([`r2_shift`]) their errors partly cancel, so that an area's mean
+/// converges faster than its facets' independent errors would.
+pub fn rotated_cosine(m: u32, jitter: &[(f32, f32)], shift: (f32, f32)) -> Vec<HemiSample> {
     let w = 1.0 / (m * m) as f32;
     let mut out = Vec::with_capacity((m * m) as usize);
     for i in 0..m {
         for j in 0..m {
-            let u1 = ((i as f32 + rng()) / m as f32).min(1.0 - f32::EPSILON);
-            let u2 = (j as f32 + rng()) / m as f32;
+            let (a, b) = jitter[(i * m + j) as usize];
+            let u1 = ((i as f32 + (a + shift.0).fract()) / m as f32).min(1.0 - f32::EPSILON);
+            let u2 = (j as f32 + (b + shift.1).fract()) / m as f32;
             let sin_t = u1.sqrt();
             let cos_t = (1.0 - u1).sqrt();
             let phi = std::f32::consts::TAU * u2;
@@ -124,6 +140,19 @@ pub fn stratified_cosine(samples: u32, mut rng: impl FnMut() -> f32) -> Vec<Hemi
         }
     }
     out
+}
+
+/// Point `index` of the R2 sequence, the two-dimensional Kronecker sequence
+/// of the plastic number `g` (`g³ = g + 1`): `frac(0.5 + index·(1/g, 1/g²))`
+/// (M. Roberts, "The unreasonable effectiveness of quasirandom sequences",
+/// 2018). Any run of consecutive indices covers `[0, 1)²` evenly; used as
+/// the per-facet rotation of the hemisphere pattern ([`rotated_cosine`]).
+pub fn r2_shift(index: u64) -> (f32, f32) {
+    const G: f64 = 1.324_717_957_244_746;
+    let (a1, a2) = (1.0 / G, 1.0 / (G * G));
+    // Reduce the index first so that f64 keeps the fractional part.
+    let k = (index % (1 << 40)) as f64;
+    ((0.5 + k * a1).fract() as f32, (0.5 + k * a2).fract() as f32)
 }
 
 /// The jitter stream of one facet face for [`stratified_cosine`]: ChaCha8

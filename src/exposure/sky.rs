@@ -11,7 +11,9 @@ use rand::Rng;
 use rayon::prelude::*;
 
 use super::FacetSamples;
-use super::sampling::{HemiSample, dirsig_grid, jitter_rng, stratified_cosine};
+use super::sampling::{
+    HemiSample, dirsig_grid, jitter_rng, r2_shift, rotated_cosine, stratified_side,
+};
 use crate::geometry::{BackgroundEntry, SceneGeometry};
 use crate::trace::{Coherence, Hit, Ray, Tracer};
 
@@ -30,8 +32,12 @@ pub enum SkySampling {
         azimuth_step_deg: f32,
     },
     /// Stratified cosine-weighted sampling: `m × m` jittered strata with
-    /// `m = ⌈√samples⌉` rounded up to even; jitter seeded per facet, so the
-    /// result is reproducible.
+    /// `m = ⌈√samples⌉` rounded up to even. The strata's jitter is drawn
+    /// once from the seed and rotated per facet by the facet's point of a
+    /// low-discrepancy sequence ([`super::sampling::rotated_cosine`]): every
+    /// facet's estimate is unbiased, neighbouring facets' errors partly
+    /// cancel, no direction is favoured across the scene (no azimuthal
+    /// star), and the result is reproducible.
     Stratified {
         /// Requested number of rays per facet face.
         samples: u32,
@@ -39,15 +45,25 @@ pub enum SkySampling {
 }
 
 impl SkySampling {
-    /// The fixed directions of a [`SkySampling::Grid`] (empty for
-    /// stratified sampling, whose directions are drawn per face).
-    fn fixed_grid(self) -> Vec<HemiSample> {
+    /// What every face's pattern is made from: the fixed directions of a
+    /// [`SkySampling::Grid`], or the fixed jitter of the strata of
+    /// [`SkySampling::Stratified`] (drawn once from `seed`).
+    fn base(self, seed: u64) -> Base {
         match self {
             SkySampling::Grid {
                 zenith_step_deg,
                 azimuth_step_deg,
-            } => dirsig_grid(zenith_step_deg, azimuth_step_deg),
-            SkySampling::Stratified { .. } => Vec::new(),
+            } => Base::Grid(dirsig_grid(zenith_step_deg, azimuth_step_deg)),
+            SkySampling::Stratified { samples } => {
+                let m = stratified_side(samples);
+                let mut rng = jitter_rng(seed, u64::MAX);
+                Base::Stratified(
+                    m,
+                    (0..m * m)
+                        .map(|_| (rng.random::<f32>(), rng.random::<f32>()))
+                        .collect(),
+                )
+            }
         }
     }
 
@@ -115,8 +131,20 @@ impl std::str::FromStr for SkySampling {
 }
 
 impl Default for SkySampling {
+    /// Stratified, 64 rays per face (8 × 8 strata): fewer rays than DIRSIG's
+    /// 72-ray grid, and no azimuthal star around tall objects.
     fn default() -> Self {
-        SkySampling::DIRSIG
+        SkySampling::Stratified { samples: 64 }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for SkySampling {
+    /// From the text of [`std::str::FromStr`] (`stratified:64`, `dirsig`,
+    /// `grid:15x30`).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse()
+            .map_err(|e: crate::Error| serde::de::Error::custom(e))
     }
 }
 
@@ -203,13 +231,25 @@ impl SkyView {
     }
 }
 
-/// Hemisphere pattern of one facet face (local frame).
-fn pattern(sampling: SkySampling, grid: &[HemiSample], seed: u64, key: u64) -> Vec<HemiSample> {
-    match sampling {
-        SkySampling::Grid { .. } => grid.to_vec(),
-        SkySampling::Stratified { samples } => {
-            let mut rng = jitter_rng(seed, key);
-            stratified_cosine(samples, || rng.random::<f32>())
+/// The scene-wide part of a sampling pattern ([`SkySampling::base`]).
+enum Base {
+    /// The grid's directions, the same for every face.
+    Grid(Vec<HemiSample>),
+    /// Strata per side and each stratum's jitter.
+    Stratified(u32, Vec<(f32, f32)>),
+}
+
+/// Hemisphere pattern of one facet face (local frame): the grid, or the
+/// strata's fixed jitter rotated by the face's point of the R2 sequence
+/// (front face of facet `f`: point `f`; back face: the same, shifted by
+/// half a stratum both ways).
+fn pattern(base: &Base, facet: usize, back: bool) -> Vec<HemiSample> {
+    match base {
+        Base::Grid(g) => g.clone(),
+        Base::Stratified(m, jitter) => {
+            let (a, b) = r2_shift(facet as u64);
+            let h = if back { 0.5 } else { 0.0 };
+            rotated_cosine(*m, jitter, (a + h, b + h))
         }
     }
 }
@@ -232,16 +272,9 @@ pub fn sky_rays(
     seed: u64,
     rays: &mut Vec<Ray>,
 ) {
-    let grid = sampling.fixed_grid();
+    let base = sampling.base(seed);
     let (mut weights, mut ranges) = (Vec::new(), Vec::new());
-    lay_out_rays(
-        facets,
-        range,
-        (sampling, &grid, seed),
-        rays,
-        &mut weights,
-        &mut ranges,
-    );
+    lay_out_rays(facets, range, &base, rays, &mut weights, &mut ranges);
 }
 
 /// The rays of [`sky_rays`], each ray's weight in `weights` and the
@@ -249,7 +282,7 @@ pub fn sky_rays(
 fn lay_out_rays(
     facets: &FacetSamples,
     range: std::ops::Range<usize>,
-    (sampling, grid, seed): (SkySampling, &[HemiSample], u64),
+    base: &Base,
     rays: &mut Vec<Ray>,
     weights: &mut Vec<f32>,
     ranges: &mut Vec<usize>,
@@ -265,7 +298,7 @@ fn lay_out_rays(
         let scale = 1.0 / sides.len() as f32;
         for (si, &side) in sides.iter().enumerate() {
             let lift = facets.normal[f] * (side * facets.offset_m);
-            let pat = pattern(sampling, grid, seed, (f as u64) << 1 | si as u64);
+            let pat = pattern(base, f, si == 1);
             for (k, h) in pat.iter().enumerate() {
                 let dir = facets.to_world(f, h.dir, side);
                 rays.push(Ray::new(pts[k % pts.len()] + lift, dir));
@@ -290,7 +323,7 @@ pub fn sky_view<T: Tracer + ?Sized>(
 ) -> (SkyView, u64) {
     let n = facets.len();
     let batch = batch_facets.max(1);
-    let grid = sampling.fixed_grid();
+    let base = sampling.base(seed);
     let face_rays = sampling.rays_per_face();
     let chunks: Vec<(SkyView, u64)> = (0..n.div_ceil(batch))
         .into_par_iter()
@@ -300,14 +333,7 @@ pub fn sky_view<T: Tracer + ?Sized>(
             let mut weights = Vec::new();
             // Range of rays of each facet.
             let mut ranges = Vec::with_capacity(f1 - f0 + 1);
-            lay_out_rays(
-                facets,
-                f0..f1,
-                (sampling, &grid, seed),
-                &mut rays,
-                &mut weights,
-                &mut ranges,
-            );
+            lay_out_rays(facets, f0..f1, &base, &mut rays, &mut weights, &mut ranges);
             let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
             tracer.intersect(&rays, RAY_COHERENCE, &mut hits);
             let mut out = SkyView {

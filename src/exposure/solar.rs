@@ -115,39 +115,34 @@ fn lay_out_rays(
 /// horizon). Facets go through the tracer `batch_facets` at a time, batches
 /// in parallel; each ray's answer depends only on its facet and step, so
 /// the result is the same for any number of threads.
+///
+/// `stride` > 1 traces coarse steps first: in each run of consecutive steps
+/// with the sun in front of the facet, every `stride`-th step and the run's
+/// last. Where a sample point's two neighbouring coarse steps agree (lit at
+/// both, or shaded at both) the steps between them take that answer; where
+/// they differ, every step between them is traced. A shadow that comes and
+/// goes between two coarse steps is missed (`irsig bench exposure` measures
+/// how often); `stride` 1 traces every step.
 pub fn solar_history<T: Tracer + ?Sized>(
     tracer: &T,
     facets: &FacetSamples,
     sun_dirs: &[Vec3],
     batch_facets: usize,
+    stride: u32,
 ) -> (SolarHistory, u64) {
     let steps = sun_dirs.len();
     let n = facets.len();
     let batch = batch_facets.max(1);
+    let stride = stride.max(1) as usize;
     let chunks: Vec<(Vec<f32>, Vec<f32>, u64)> = (0..n.div_ceil(batch))
         .into_par_iter()
         .map(|c| {
             let (f0, f1) = (c * batch, ((c + 1) * batch).min(n));
-            let mut frac = vec![0.0f32; (f1 - f0) * steps];
-            let mut cosi = vec![0.0f32; (f1 - f0) * steps];
-            let mut rays = Vec::new();
-            // (slot in frac, number of rays) for each traced (facet, step).
-            let mut slots: Vec<(u32, u32)> = Vec::new();
-            lay_out_rays(facets, f0..f1, sun_dirs, &mut rays, |slot, c, m| {
-                cosi[slot] = c.abs().min(1.0);
-                if let Some(m) = m {
-                    slots.push((slot as u32, m));
-                }
-            });
-            let mut occ = vec![false; rays.len()];
-            tracer.occluded(&rays, RAY_COHERENCE, &mut occ);
-            let mut k = 0usize;
-            for &(slot, m) in &slots {
-                let lit = occ[k..k + m as usize].iter().filter(|&&o| !o).count();
-                frac[slot as usize] = lit as f32 / m as f32;
-                k += m as usize;
+            if stride == 1 {
+                exhaustive_batch(tracer, facets, sun_dirs, f0..f1)
+            } else {
+                refined_batch(tracer, facets, sun_dirs, f0..f1, stride)
             }
-            (frac, cosi, rays.len() as u64)
         })
         .collect();
     let mut out = SolarHistory {
@@ -162,4 +157,180 @@ pub fn solar_history<T: Tracer + ?Sized>(
         rays += r;
     }
     (out, rays)
+}
+
+/// One batch of [`solar_history`] with every step traced.
+fn exhaustive_batch<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    sun_dirs: &[Vec3],
+    range: Range<usize>,
+) -> (Vec<f32>, Vec<f32>, u64) {
+    let steps = sun_dirs.len();
+    let nf = range.len();
+    let mut frac = vec![0.0f32; nf * steps];
+    let mut cosi = vec![0.0f32; nf * steps];
+    let mut rays = Vec::new();
+    // (slot in frac, number of rays) for each traced (facet, step).
+    let mut slots: Vec<(u32, u32)> = Vec::new();
+    lay_out_rays(facets, range, sun_dirs, &mut rays, |slot, c, m| {
+        cosi[slot] = c.abs().min(1.0);
+        if let Some(m) = m {
+            slots.push((slot as u32, m));
+        }
+    });
+    let mut occ = vec![false; rays.len()];
+    tracer.occluded(&rays, RAY_COHERENCE, &mut occ);
+    let mut k = 0usize;
+    for &(slot, m) in &slots {
+        let lit = occ[k..k + m as usize].iter().filter(|&&o| !o).count();
+        frac[slot as usize] = lit as f32 / m as f32;
+        k += m as usize;
+    }
+    (frac, cosi, rays.len() as u64)
+}
+
+/// Per (facet, step, point) of a refined batch: not traced yet.
+const UNKNOWN: u8 = 0;
+/// Lit (the ray reached the sky).
+const LIT: u8 = 1;
+/// Shaded.
+const SHADED: u8 = 2;
+
+/// One batch of [`solar_history`] with coarse steps refined where a sample
+/// point's visibility changes.
+fn refined_batch<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    sun_dirs: &[Vec3],
+    range: Range<usize>,
+    stride: usize,
+) -> (Vec<f32>, Vec<f32>, u64) {
+    let steps = sun_dirs.len();
+    let (nf, f0, m) = (range.len(), range.start, facets.per_facet);
+    let mut cosi = vec![0.0f32; nf * steps];
+    // Per (facet, step): the side the sun is on (0: no ray), and whether
+    // the step is a coarse one.
+    let mut side = vec![0i8; nf * steps];
+    let mut coarse = vec![false; nf * steps];
+    for f in range.clone() {
+        let i = f - f0;
+        for (s, &dir) in sun_dirs.iter().enumerate() {
+            if dir.z <= 0.0 {
+                continue;
+            }
+            let c = facets.normal[f].dot(dir);
+            if facets.double_sided[f] || c >= 0.0 {
+                cosi[i * steps + s] = c.abs().min(1.0);
+            }
+            side[i * steps + s] = if c == 0.0 {
+                0
+            } else if facets.double_sided[f] {
+                c.signum() as i8
+            } else if c > 0.0 {
+                1
+            } else {
+                0
+            };
+        }
+        // Runs of consecutive steps with rays from one side: their first,
+        // every stride-th and last steps are coarse.
+        let side = &side[i * steps..(i + 1) * steps];
+        let mut s = 0;
+        while s < steps {
+            let sd = side[s];
+            if sd == 0 {
+                s += 1;
+                continue;
+            }
+            let a = s;
+            while s + 1 < steps && side[s + 1] == sd {
+                s += 1;
+            }
+            for t in (a..=s).step_by(stride) {
+                coarse[i * steps + t] = true;
+            }
+            coarse[i * steps + s] = true;
+            s += 1;
+        }
+    }
+    let mut state = vec![UNKNOWN; nf * steps * m];
+    let mut total = 0u64;
+    // Traces the points of the (facet, step) slots `want` says, step by
+    // step (one step's rays are parallel), and records their answers.
+    let trace = |want: &dyn Fn(usize, usize) -> bool, state: &mut [u8]| {
+        let mut rays = Vec::new();
+        let mut idx = Vec::new();
+        for (s, &dir) in sun_dirs.iter().enumerate() {
+            for i in 0..nf {
+                let slot = i * steps + s;
+                if side[slot] == 0 {
+                    continue;
+                }
+                let f = f0 + i;
+                let lift = facets.normal[f] * (side[slot] as f32 * facets.offset_m);
+                for (p, &pt) in facets.facet_points(f).iter().enumerate() {
+                    if want(slot, p) {
+                        rays.push(Ray::new(pt + lift, dir));
+                        idx.push(slot * m + p);
+                    }
+                }
+            }
+        }
+        let mut occ = vec![false; rays.len()];
+        tracer.occluded(&rays, RAY_COHERENCE, &mut occ);
+        for (&k, &o) in idx.iter().zip(&occ) {
+            state[k] = if o { SHADED } else { LIT };
+        }
+        rays.len() as u64
+    };
+    total += trace(&|slot, _| coarse[slot], &mut state);
+    // Between two coarse steps of a run that disagree: trace every step.
+    let mut need = vec![false; nf * steps * m];
+    for i in 0..nf {
+        for p in 0..m {
+            let mut prev: Option<usize> = None;
+            for s in 0..steps {
+                let slot = i * steps + s;
+                if side[slot] == 0 {
+                    prev = None;
+                    continue;
+                }
+                if !coarse[slot] {
+                    continue;
+                }
+                if let Some(a) = prev
+                    && state[(i * steps + a) * m + p] != state[slot * m + p]
+                {
+                    for t in a + 1..s {
+                        need[(i * steps + t) * m + p] = true;
+                    }
+                }
+                prev = Some(s);
+            }
+        }
+    }
+    total += trace(&|slot, p| need[slot * m + p], &mut state);
+    // The rest take the answer of the coarse step after them.
+    let mut lit = vec![0u32; nf * steps];
+    for i in 0..nf {
+        for p in 0..m {
+            let mut next = UNKNOWN;
+            for s in (0..steps).rev() {
+                let k = (i * steps + s) * m + p;
+                if side[i * steps + s] == 0 {
+                    next = UNKNOWN;
+                    continue;
+                }
+                if state[k] == UNKNOWN {
+                    state[k] = next;
+                } else {
+                    next = state[k];
+                }
+                lit[i * steps + s] += (state[k] == LIT) as u32;
+            }
+        }
+    }
+    let frac = lit.iter().map(|&l| l as f32 / m as f32).collect();
+    (frac, cosi, total)
 }

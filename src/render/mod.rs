@@ -76,6 +76,11 @@ pub struct RenderConfig {
     /// Sample points per facet edge for the solar and sky rays (default 1).
     #[serde(default = "default_facet_samples")]
     pub facet_samples: u32,
+    /// Hemisphere sampling of the shape factor and background: text as
+    /// [`crate::exposure::SkySampling`]'s `FromStr` (`stratified:N`,
+    /// `dirsig`, `grid:DZxDA`); default `stratified:64`.
+    #[serde(default)]
+    pub sky_sampling: crate::exposure::SkySampling,
 }
 
 impl Default for RenderConfig {
@@ -85,6 +90,7 @@ impl Default for RenderConfig {
             spectral_step_um: default_spectral_step_um(),
             sky_temperature_k: None,
             facet_samples: default_facet_samples(),
+            sky_sampling: crate::exposure::SkySampling::default(),
         }
     }
 }
@@ -100,7 +106,7 @@ impl RenderConfig {
             Error::parse(
                 location.clone().with_field("render"),
                 format!(
-                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples"
+                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling"
                 ),
             )
         })?;

@@ -22,15 +22,16 @@ use chrono::{DateTime, FixedOffset, TimeDelta};
 use rayon::prelude::*;
 
 use crate::exposure::{
-    Exposure, ExposureParams, FacetSamples, HistoryWindow, compute_exposure, history_times,
-    sun_directions,
+    Exposure, ExposureParams, FacetSamples, HistoryWindow, compute_exposure, history_step,
+    history_times, image_window, sun_directions,
 };
 use crate::geometry::SceneGeometry;
 use crate::progress::{NoProgress, Progress};
 use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
-    FacetThermal, SceneInputs, SceneTemperatures, ThermalParams, solve_facet_temperatures,
+    FacetThermal, PassStats, SceneInputs, SceneTemperatures, ThermalParams,
+    solve_facet_temperatures,
 };
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};
 use crate::trace::{Coherence, Ray, Tracer};
@@ -401,14 +402,7 @@ pub fn solve_scene_temperatures_observed<'a>(
     };
     let t2 = Instant::now();
     progress.item("thermal solve");
-    let temperatures = solve_facet_temperatures(
-        &exposure,
-        &setup.kinds,
-        &setup.props,
-        &history.forcing,
-        &history.image_records,
-        &params.thermal,
-    )?;
+    let temperatures = solve_windows(&exposure, &setup, &history, &params.thermal)?;
     let t3 = Instant::now();
     progress.advance(exposure.facets.len() as u64);
     Ok(SceneThermal {
@@ -440,6 +434,8 @@ struct History {
     sun: Vec<glam::Vec3>,
     /// Record of each image time.
     image_records: Vec<usize>,
+    /// Each image time's own window: its records, itself last.
+    windows: Vec<Vec<usize>>,
 }
 
 impl History {
@@ -467,13 +463,123 @@ impl History {
                     .expect("image times are on the grid")
             })
             .collect();
+        let step = history_step(weather, window);
+        let windows = image_times
+            .iter()
+            .map(|&t| image_window(&times, t, image_times, window.length, step))
+            .collect();
         Ok(History {
             times,
             records,
             forcing,
             sun,
             image_records,
+            windows,
         })
+    }
+}
+
+/// Stage 4: the thermal passes, over each image time's own window
+/// ([`image_window`]), so that the temperatures at an image time do not
+/// depend on the other times of a series (the slab model spins up on the
+/// window's first day, and the linearised solve's references are taken over
+/// the window). Image times with the same window share one solve; a single
+/// image time whose window is the whole history solves on the exposure as
+/// it is. Returns the temperatures with `image_records` indexing the whole
+/// history, and the passes' statistics summed over the windows.
+///
+/// # Errors
+/// As [`solve_facet_temperatures`].
+fn solve_windows(
+    exposure: &Exposure,
+    setup: &FacetThermalSetup,
+    history: &History,
+    params: &ThermalParams,
+) -> Result<SceneTemperatures> {
+    let all = history.times.len();
+    let mut out = SceneTemperatures {
+        image_records: history.image_records.clone(),
+        surface_temperature_k: vec![Vec::new(); history.windows.len()],
+        passes: Vec::new(),
+    };
+    let mut solved: Vec<(&[usize], Vec<f32>)> = Vec::new();
+    for (i, w) in history.windows.iter().enumerate() {
+        if let Some((_, t)) = solved.iter().find(|(v, _)| *v == w.as_slice()) {
+            out.surface_temperature_k[i] = t.clone();
+            continue;
+        }
+        let last = w.len() - 1;
+        let r = if w.len() == all {
+            solve_facet_temperatures(
+                exposure,
+                &setup.kinds,
+                &setup.props,
+                &history.forcing,
+                &[last],
+                params,
+            )?
+        } else {
+            let n = exposure.facets.len();
+            let steps = exposure.solar.steps;
+            let gather = |v: &[f32]| -> Vec<f32> {
+                let mut o = Vec::with_capacity(n * w.len());
+                for f in 0..n {
+                    o.extend(w.iter().map(|&r| v[f * steps + r]));
+                }
+                o
+            };
+            let (sun, cos) = (
+                gather(&exposure.solar.sun_fraction),
+                gather(&exposure.solar.cos_incidence),
+            );
+            let mut inputs = SceneInputs::from(exposure);
+            inputs.records = w.len();
+            inputs.sun_fraction = &sun;
+            inputs.cos_incidence = &cos;
+            let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
+            let forcing = Forcing::from_records(&records)?;
+            solve_facet_temperatures(
+                inputs,
+                &setup.kinds,
+                &setup.props,
+                &forcing,
+                &[last],
+                params,
+            )?
+        };
+        let t = r
+            .surface_temperature_k
+            .into_iter()
+            .next()
+            .unwrap_or_default();
+        add_passes(&mut out.passes, &r.passes);
+        out.surface_temperature_k[i] = t.clone();
+        solved.push((w.as_slice(), t));
+    }
+    Ok(out)
+}
+
+/// Adds one window's pass statistics to the run's (work and time summed,
+/// the worst convergence kept).
+fn add_passes(total: &mut Vec<PassStats>, passes: &[PassStats]) {
+    if total.is_empty() {
+        total.extend_from_slice(passes);
+        return;
+    }
+    for (t, p) in total.iter_mut().zip(passes) {
+        t.solved_facets += p.solved_facets;
+        t.classes += p.classes;
+        t.reused_facets += p.reused_facets;
+        t.setup += p.setup;
+        t.solve += p.solve;
+        t.max_spinup_change_k = t.max_spinup_change_k.max(p.max_spinup_change_k);
+        t.max_change_from_previous_pass_k = match (
+            t.max_change_from_previous_pass_k,
+            p.max_change_from_previous_pass_k,
+        ) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
     }
 }
 

@@ -533,6 +533,9 @@ impl Session {
         h.write(time.to_rfc3339().as_bytes());
         h.write(&seed.to_le_bytes());
         h.write(self.backend.as_str().as_bytes());
+        // The render settings as used (the command line may override the
+        // scene file's).
+        h.write(format!("{:?}", self.config).as_bytes());
         TileInfo {
             version: 1,
             scene_hash: format!("{:016x}", h.finish()),
@@ -777,6 +780,7 @@ fn scene_thermal(
     let scene = &session.scene;
     let mut params = SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;
+    params.exposure.sky = session.config.sky_sampling;
     let solved = solve_scene_observed(tracers, scene, times, &params, progress)?;
     let n = scene.geometry.facet_count();
     let shape = solved.shape_factor().to_vec();

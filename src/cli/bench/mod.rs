@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use super::args::FlagContext;
 use trace::{TileShape, TraceBenchOptions, trace_bench};
 
+mod exposure;
 mod modes;
 mod trace;
 
@@ -43,6 +44,35 @@ enum What {
     /// default choice by coherence (packets for camera rows, the stream or
     /// single rays for scattered rays), Mrays/s per ray class.
     Modes(TraceArgs),
+    /// The per-facet rays of a render (solar history, sky view) under
+    /// several sampling settings: rays, time, facets/s and accuracy against
+    /// an exhaustive reference (the sun at every step, many sky rays).
+    Exposure(ExposureArgs),
+}
+
+/// Arguments of `irsig bench exposure`.
+#[derive(Debug, clap::Args)]
+struct ExposureArgs {
+    /// Scene file (JSON).
+    #[arg(value_name = "SCENE.json", default_value = "scenes/town/scene.json")]
+    scene: PathBuf,
+    /// Ray-tracing backend: embree, embree-single or obvhs.
+    #[arg(long, default_value = "embree", value_name = "NAME")]
+    backend: Backend,
+    /// Timed rounds per setting; the best counts.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    rounds: usize,
+    /// Sky sampling of the reference.
+    #[arg(long, value_name = "SPEC", default_value = "stratified:1024")]
+    reference: irsig::exposure::SkySampling,
+    /// Settings to compare, each SKY@STRIDE (sky sampling, solar stride),
+    /// comma-separated.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "dirsig@1,stratified:64@1,stratified:64@2,stratified:64@4,stratified:36@4"
+    )]
+    settings: String,
 }
 
 /// Arguments of `irsig bench render`.
@@ -108,6 +138,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         What::Modes(a) => {
             let (geom, opts) = scene_and_options(&a)?;
             modes::run(&geom, &opts)
+        }
+        What::Exposure(a) => {
+            anyhow::ensure!(a.rounds > 0, "--rounds must be at least 1");
+            let mut settings = Vec::new();
+            for item in a.settings.split(',') {
+                let (sky, stride) = item.split_once('@').unwrap_or((item, "1"));
+                let sky: irsig::exposure::SkySampling = sky
+                    .parse()
+                    .with_context(|| format!("--settings: `{item}`"))?;
+                let stride: u32 = stride
+                    .parse()
+                    .with_context(|| format!("--settings: `{item}`: bad stride"))?;
+                settings.push((
+                    item.to_string(),
+                    irsig::exposure::ExposureParams {
+                        sky,
+                        solar_stride: stride,
+                        ..Default::default()
+                    },
+                ));
+            }
+            exposure::run(&a.scene, a.backend, a.rounds, a.reference, &settings)
         }
     }
 }
