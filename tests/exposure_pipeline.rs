@@ -26,6 +26,7 @@ fn asphalt() -> SlabProperties {
         thermal_emissivity: 0.95,
         self_power_w_m2: 0.0,
         back: BackBoundary::GROUND,
+        surface: None,
     }
 }
 

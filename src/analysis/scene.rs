@@ -402,6 +402,7 @@ impl SceneStudy {
             &dirs,
             &ExposureParams {
                 samples_per_edge: session.config.facet_samples,
+                sky: session.config.sky_sampling,
                 ..ExposureParams::default()
             },
         )?;
