@@ -106,8 +106,22 @@ impl Default for LinearizedParams {
 /// [`thermal::linear::latent_curvature`]) and references that lie closer to
 /// their members: a third of the width. Together they keep the checked
 /// accuracy (RMS < 0.01 K, max < 0.05 K; `tests/scene_thermal.rs`
-/// measured RMS 0.001 K, max 0.008 K); either alone does not.
+/// measured RMS 0.002 K, max 0.023 K); either alone does not. Facets near
+/// their reference skip the second order ([`NEAR_REFERENCE_K`]).
 pub const LATENT_BIN_SCALE: f32 = 1.0 / 3.0;
+
+/// A facet of an evaporating property set whose first-order change at the
+/// probes (first and last image records, daily mean) lies within this of
+/// its reference's, K, and whose background adds less than
+/// [`SMALL_BACKGROUND_W_M2`] to its sources, skips the second order: the
+/// neglected curvature grows with the square of the distance, and at
+/// 0.25 K it is below 0.01 W m⁻² (`g_v·d²e°/dT²·Δ²/2` with 2 W m⁻² K⁻²).
+pub const NEAR_REFERENCE_K: f32 = 0.25;
+
+/// Largest background source `c·σ(T_bg⁴ − T_air⁴)` at any record of a
+/// facet that may skip the second order ([`NEAR_REFERENCE_K`]), W m⁻²
+/// (about 0.25 K of change at a total surface conductance of 20 W m⁻² K⁻¹).
+pub const SMALL_BACKGROUND_W_M2: f32 = 5.0;
 
 /// Facets per work item of the parallel loops.
 const CHUNK: usize = 256;
@@ -175,6 +189,7 @@ pub(super) fn solve(
         groups: &groups,
         refs: &refs,
         ref_of: &bins.of_facet,
+        near: &bins.near,
         slots: Slots::new(inputs, kinds, passes),
         image_records,
         second_order: lp.second_order,
@@ -544,6 +559,9 @@ struct Bins {
     reference: Vec<usize>,
     /// Bin of each facet (`u32::MAX` for fixed facets).
     of_facet: Vec<u32>,
+    /// Whether a facet's first-order change at the probes lies within
+    /// [`NEAR_REFERENCE_K`] of its reference's (false for fixed facets).
+    near: Vec<bool>,
 }
 
 impl Bins {
@@ -596,6 +614,7 @@ impl Bins {
         // The reference of each bin: the member closest to its centroid.
         let mut reference = Vec::new();
         let mut of_facet = vec![u32::MAX; n];
+        let mut near = vec![false; n];
         for (b, members) in keyed.chunk_by(|a, b| a.0 == b.0).enumerate() {
             let m = members.len() as f32;
             let c = members.iter().fold([0.0f32; 3], |a, &(_, i)| {
@@ -603,20 +622,22 @@ impl Bins {
                 [a[0] + x[0] / m, a[1] + x[1] / m, a[2] + x[2] / m]
             });
             let dist = |x: &[f32; 3]| (0..3).map(|i| (x[i] - c[i]).powi(2)).sum::<f32>();
-            let best = members
+            let (best, xb) = members
                 .iter()
                 .map(|&(_, i)| features[i as usize])
                 .min_by(|a, b| dist(&a.1).total_cmp(&dist(&b.1)).then(a.0.cmp(&b.0)))
-                .expect("non-empty bin")
-                .0;
+                .expect("non-empty bin");
             reference.push(best);
             for &(_, i) in members {
-                of_facet[features[i as usize].0] = b as u32;
+                let (f, x) = features[i as usize];
+                of_facet[f] = b as u32;
+                near[f] = (0..3).all(|j| (x[j] - xb[j]).abs() <= NEAR_REFERENCE_K);
             }
         }
         Bins {
             reference,
             of_facet,
+            near,
         }
     }
 }

@@ -71,6 +71,8 @@ pub(super) struct PassPlan<'a> {
     pub refs: &'a [Reference],
     /// Reference (bin) of each facet.
     pub ref_of: &'a [u32],
+    /// Whether each facet lies near its reference (`Bins::near`).
+    pub near: &'a [bool],
     pub slots: Slots,
     pub image_records: &'a [usize],
     /// Add the second-order correction in the last pass.
@@ -181,11 +183,18 @@ impl PassPlan<'_> {
         }
         let rep = &self.refs[self.ref_of[f] as usize];
         let has_slot = self.slots.of_facet[f] != u32::MAX;
-        // The second order: asked for, or always for a surface that
-        // evaporates (the curvature of e°(T) is not negligible).
-        let second = pass.second || (pass.last && !rep.front.latent.is_empty());
-        let full = second || (!pass.last && has_slot);
         let bgc = self.background_term(pass, f, s);
+        // The second order: asked for, or for a surface that evaporates (the
+        // curvature of e°(T) is not negligible) unless the facet lies near
+        // its reference and its background is small.
+        let small_background = bgc.is_none_or(|(cf, cb)| {
+            let c = cf.abs().max(cb.abs());
+            s.bg.iter()
+                .all(|e| (c * e).abs() < super::SMALL_BACKGROUND_W_M2)
+        });
+        let second = pass.second
+            || (pass.last && !rep.front.latent.is_empty() && !(self.near[f] && small_background));
+        let full = second || (!pass.last && has_slot);
         if !full && let Some(base) = pass.base {
             self.image_from_base(rep, base, f, bgc, s, o);
             return;
