@@ -146,6 +146,7 @@ fn weather(hours: usize) -> impl Strategy<Value = Vec<WeatherRecord>> {
                     sky_longwave_w_m2: lw,
                     total_sky_cover: cover,
                     opaque_sky_cover: cover,
+                    precipitation_mm: 0.0,
                 }
             })
             .collect()

@@ -395,6 +395,7 @@ fn sample_history() -> WeatherHistory {
         sky_longwave_w_m2: 330.0,
         total_sky_cover: 0.2,
         opaque_sky_cover: 0.1,
+        precipitation_mm: 0.0,
     };
     WeatherHistory::new(
         vec![

@@ -75,7 +75,7 @@ pub use linear::{
     Linearization, SourceHistory, SourceModel, background_coefficients, linearize, linearize_with,
     source_history, source_history_into, source_history_with,
 };
-pub use surface::{Exchange, LandSurface, Skin};
+pub use surface::{Exchange, LandSurface, Skin, WetStore};
 
 /// Angular frequency of the diurnal cycle, rad/s.
 pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
@@ -382,6 +382,9 @@ pub struct Forcing {
     pub pressure_pa: Vec<f64>,
     /// Global-horizontal solar irradiance, W m⁻².
     pub global_horizontal_w_m2: Vec<f64>,
+    /// Liquid precipitation over the interval ending at each record, mm
+    /// (wets surfaces: [`surface::WetStore`]).
+    pub precipitation_mm: Vec<f64>,
     /// Height of the wind measurement above the ground, m (default
     /// [`WIND_HEIGHT_M`]).
     pub wind_height_m: f64,
@@ -430,6 +433,7 @@ impl Forcing {
                 .collect(),
             pressure_pa: records.iter().map(|r| r.pressure_pa).collect(),
             global_horizontal_w_m2: records.iter().map(|r| r.global_horizontal_w_m2).collect(),
+            precipitation_mm: records.iter().map(|r| r.precipitation_mm).collect(),
             wind_height_m: WIND_HEIGHT_M,
             air_height_m: AIR_HEIGHT_M,
         };
@@ -466,6 +470,7 @@ impl Forcing {
             ],
             pressure_pa: vec![101_325.0; n],
             global_horizontal_w_m2: vec![direct_normal_w_m2 + diffuse_horizontal_w_m2; n],
+            precipitation_mm: vec![0.0; n],
             wind_height_m: WIND_HEIGHT_M,
             air_height_m: AIR_HEIGHT_M,
         }
@@ -483,6 +488,7 @@ impl Forcing {
             &mut self.vapour_pressure_pa,
             &mut self.pressure_pa,
             &mut self.global_horizontal_w_m2,
+            &mut self.precipitation_mm,
         ] {
             v.truncate(n);
         }
@@ -522,7 +528,7 @@ impl Forcing {
                 "the weather history is empty; at least one record is needed",
             ));
         }
-        let cols: [(&str, &Vec<f64>, f64, &str); 8] = [
+        let cols: [(&str, &Vec<f64>, f64, &str); 9] = [
             ("air_temperature_k", &self.air_temperature_k, 1.0, "K, > 0"),
             ("wind_speed_m_s", &self.wind_speed_m_s, 0.0, "m/s, ≥ 0"),
             (
@@ -550,6 +556,7 @@ impl Forcing {
                 "Pa, ≥ 0",
             ),
             ("pressure_pa", &self.pressure_pa, 0.0, "Pa, ≥ 0"),
+            ("precipitation_mm", &self.precipitation_mm, 0.0, "mm, ≥ 0"),
             (
                 "global_horizontal_w_m2",
                 &self.global_horizontal_w_m2,

@@ -194,6 +194,16 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         r.wind_speed_m_s = opt(21, 999.0)?;
         r.total_sky_cover = opt(22, 99.0)?.map(|t| t / 10.0);
         r.opaque_sky_cover = opt(23, 99.0)?.map(|t| t / 10.0);
+        // Liquid precipitation depth, mm (field 34; older files end before it;
+        // 999 or empty is missing).
+        const PRECIP: &str = "liquid precipitation depth (mm)";
+        r.precipitation_mm = match f.get(33).map(|c| c.trim()) {
+            None | Some("") => None,
+            Some(_) => {
+                let v = number(&f[33], &loc.clone().with_field(PRECIP), PRECIP)?;
+                (v < 999.0 && v > 0.0).then_some(v)
+            }
+        };
         rows.push((stamp, r));
     }
     Ok(Parsed {

@@ -29,6 +29,7 @@ pub(crate) struct RawRecord {
     pub sky_longwave_w_m2: Option<f64>,
     pub total_sky_cover: Option<f64>,
     pub opaque_sky_cover: Option<f64>,
+    pub precipitation_mm: Option<f64>,
 }
 
 impl RawRecord {
@@ -48,6 +49,7 @@ impl RawRecord {
             sky_longwave_w_m2: None,
             total_sky_cover: None,
             opaque_sky_cover: None,
+            precipitation_mm: None,
         }
     }
 }
@@ -76,6 +78,7 @@ pub(crate) const RANGES: &[(&str, f64, f64, &str)] = &[
     ("sky_longwave_w_m2", 0.0, 1000.0, "W/m²"),
     ("total_sky_cover", 0.0, 1.0, "(fraction)"),
     ("opaque_sky_cover", 0.0, 1.0, "(fraction)"),
+    ("precipitation_mm", 0.0, 500.0, "mm"),
 ];
 
 fn check_value(field: &'static str, v: f64) -> std::result::Result<(), (&'static str, String)> {
@@ -121,6 +124,7 @@ pub(crate) fn check_record(r: &WeatherRecord) -> std::result::Result<(), (&'stat
         ("sky_longwave_w_m2", r.sky_longwave_w_m2),
         ("total_sky_cover", r.total_sky_cover),
         ("opaque_sky_cover", r.opaque_sky_cover),
+        ("precipitation_mm", r.precipitation_mm),
     ];
     for (f, v) in fields {
         check_value(f, v)?;
@@ -204,6 +208,7 @@ pub(crate) fn complete(
             ("sky_longwave_w_m2", raw.sky_longwave_w_m2),
             ("total_sky_cover", raw.total_sky_cover),
             ("opaque_sky_cover", raw.opaque_sky_cover),
+            ("precipitation_mm", raw.precipitation_mm),
         ];
         for (f, v) in given {
             if let Some(v) = v {
@@ -384,6 +389,7 @@ pub(crate) fn complete(
             sky_longwave_w_m2: sky,
             total_sky_cover: total,
             opaque_sky_cover: opaque,
+            precipitation_mm: raw.precipitation_mm.unwrap_or(0.0),
         };
         check_record(&rec).map_err(|(f, m)| {
             err_at(

@@ -573,6 +573,7 @@ impl FluxDataset {
                 // longwave, which these files measure. EnergyPlus' default.
                 total_sky_cover: 0.5,
                 opaque_sky_cover: 0.5,
+                precipitation_mm: r.precipitation_mm.unwrap_or(0.0).max(0.0),
             });
         }
         let history = WeatherHistory::new(out, Some(site))

@@ -57,12 +57,17 @@ fn set_field(r: &mut RawRecord, name: &str, v: Option<f64>) {
         "sky_longwave_w_m2" => r.sky_longwave_w_m2 = v,
         "total_sky_cover" => r.total_sky_cover = v,
         "opaque_sky_cover" => r.opaque_sky_cover = v,
+        "precipitation_mm" => r.precipitation_mm = v,
         _ => {}
     }
 }
 
 pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
-    let known: Vec<&str> = CSV_HEADER.split(',').collect();
+    // The columns of `CSV_HEADER`, and the optional `precipitation_mm`.
+    let known: Vec<&str> = CSV_HEADER
+        .split(',')
+        .chain(std::iter::once("precipitation_mm"))
+        .collect();
     let mut site = None;
     let mut timing = Timing::Instant;
     let mut header: Option<Vec<String>> = None;
@@ -184,6 +189,8 @@ struct JsonRecord {
     sky_longwave_w_m2: Option<f64>,
     total_sky_cover: Option<f64>,
     opaque_sky_cover: Option<f64>,
+    #[serde(default)]
+    precipitation_mm: Option<f64>,
 }
 
 pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
@@ -223,6 +230,7 @@ pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
         r.sky_longwave_w_m2 = j.sky_longwave_w_m2;
         r.total_sky_cover = j.total_sky_cover;
         r.opaque_sky_cover = j.opaque_sky_cover;
+        r.precipitation_mm = j.precipitation_mm;
         records.push(r);
     }
     Ok(Parsed {
@@ -272,9 +280,23 @@ pub fn write_csv(
         )?;
     }
     let mut out = csv::Writer::from_writer(w);
-    out.write_record(CSV_HEADER.split(','))?;
+    // `precipitation_mm` only when the history has some, so that a dry
+    // history writes the columns of `CSV_HEADER` alone.
+    let rain = history.records().iter().any(|r| r.precipitation_mm > 0.0);
+    let mut header: Vec<&str> = CSV_HEADER.split(',').collect();
+    if rain {
+        header.push("precipitation_mm");
+    }
+    out.write_record(&header)?;
     for r in history.records() {
-        out.write_record(csv_row(r))?;
+        let row = csv_row(r);
+        if rain {
+            let mut row = row.to_vec();
+            row.push(format!("{:.2}", r.precipitation_mm));
+            out.write_record(row)?;
+        } else {
+            out.write_record(row)?;
+        }
     }
     out.flush()
 }

@@ -73,6 +73,11 @@ pub struct WeatherRecord {
     pub total_sky_cover: f64,
     /// Opaque sky cover, fraction 0–1.
     pub opaque_sky_cover: f64,
+    /// Liquid precipitation since the previous record, mm (0 where the file
+    /// gives none; EPW field 34, irsig CSV/JSON `precipitation_mm`,
+    /// flux-tower rain). It wets surfaces (`irsig::thermal::surface`).
+    #[serde(default)]
+    pub precipitation_mm: f64,
 }
 
 /// The weather file formats irsig reads.
@@ -394,6 +399,8 @@ fn interpolate(
         sky_longwave_w_m2: lerp(a.sky_longwave_w_m2, b.sky_longwave_w_m2, w),
         total_sky_cover: lerp(a.total_sky_cover, b.total_sky_cover, w),
         opaque_sky_cover: lerp(a.opaque_sky_cover, b.opaque_sky_cover, w),
+        // An amount over the interval ending at `b`: the part of it up to `t`.
+        precipitation_mm: w * b.precipitation_mm,
     }
 }
 

@@ -227,6 +227,7 @@ pub fn town_history() -> Result<(WeatherHistory, Vec<String>)> {
             sky_longwave_w_m2: sky,
             total_sky_cover: total,
             opaque_sky_cover: n,
+            precipitation_mm: 0.0,
         });
     }
     let comments = vec![
