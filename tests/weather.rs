@@ -1054,3 +1054,37 @@ fn irsig_timing_setting_places_interval_means_mid_interval() {
         "{e}"
     );
 }
+
+/// Rain: EPW field 34 (liquid precipitation depth, mm) is read into
+/// `precipitation_mm` (999 = missing = none), and the irsig CSV carries an
+/// optional `precipitation_mm` column that `write_csv` writes only when a
+/// history has rain, reading back to the same values.
+#[test]
+fn precipitation_from_epw_and_through_irsig_csv() {
+    let text = std::fs::read_to_string(util::repo_path("tests/data/weather/rochester_sample.epw"))
+        .unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    // Row at line 11: 2.5 mm of rain in its hour (field 34 of 35).
+    let mut f: Vec<String> = lines[10].split(',').map(str::to_string).collect();
+    f[33] = "2.5".into();
+    lines[10] = f.join(",");
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_tmp(&dir, "rain.epw", &lines.join("\n"));
+    let h = weather::load(&p).unwrap();
+    let rain: Vec<f64> = h.records().iter().map(|r| r.precipitation_mm).collect();
+    assert_eq!(rain.iter().filter(|&&v| v > 0.0).count(), 1, "{rain:?}");
+    assert_eq!(rain.iter().sum::<f64>(), 2.5);
+    // Through irsig CSV and back.
+    let mut w = Vec::new();
+    weather::write_csv(&h, &[], &mut w).unwrap();
+    let csv = String::from_utf8(w).unwrap();
+    assert!(csv.contains(",precipitation_mm"), "{csv}");
+    let back = weather::load(&write_tmp(&dir, "rain.csv", &csv)).unwrap();
+    let again: Vec<f64> = back.records().iter().map(|r| r.precipitation_mm).collect();
+    assert_eq!(again, rain);
+    // A dry history writes the plain header.
+    let dry = weather::load(&util::repo_path("tests/data/weather/rochester_sample.epw")).unwrap();
+    let mut w = Vec::new();
+    weather::write_csv(&dry, &[], &mut w).unwrap();
+    assert!(!String::from_utf8(w).unwrap().contains("precipitation"));
+}
