@@ -261,8 +261,8 @@ pub const RAY_COHERENCE: Coherence = Coherence::Incoherent;
 /// Appends to `rays` the hemisphere rays that [`sky_view`] traces for the
 /// facets `range` (one of its batches), in its order: facet by facet, front
 /// face then (double-sided facets) back face, the face's pattern
-/// ([`SkySampling::rays_per_face`] rays: DIRSIG's 72-direction grid by
-/// default) with ray `k` from sample point `k mod n²`, lifted off the plane.
+/// ([`SkySampling::rays_per_face`] rays: 64 stratified by default, 72 on
+/// DIRSIG's grid) with ray `k` from sample point `k mod n²`, lifted off the plane.
 /// Trace them with [`RAY_COHERENCE`]. `irsig bench trace` uses this to
 /// time the tracers on the exposure stage's own hemisphere rays.
 pub fn sky_rays(

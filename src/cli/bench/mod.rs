@@ -219,7 +219,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "primary: {}x{} camera, {}; shadow: solar-history rays, 4 steps; hemisphere: 72-direction sky-view grid; both from facet sample points in batches of 512 facets; diffuse: random",
+        "primary: {}x{} camera, {}; shadow: solar-history rays, 4 steps; hemisphere: the default sky-view sampling (stratified, 64 per face); both from facet sample points in batches of 512 facets; diffuse: random",
         info.camera.0,
         info.camera.1,
         match a.tile {

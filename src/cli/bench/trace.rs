@@ -17,8 +17,9 @@
 //!   over four history steps, batch by batch of 512 facets, with
 //!   [`exposure::SOLAR_RAY_COHERENCE`];
 //! * **hemisphere** — the exposure stage's sky-view rays
-//!   ([`exposure::sky_rays`]): DIRSIG's 72-direction grid from each sample
-//!   point, with [`exposure::SKY_RAY_COHERENCE`];
+//!   ([`exposure::sky_rays`]): the default sky sampling (stratified, 64
+//!   rays per face) from each sample point, with
+//!   [`exposure::SKY_RAY_COHERENCE`];
 //! * **diffuse** — closest-hit rays from random surface points in
 //!   cosine-weighted directions, unrelated ray to ray
 //!   ([`Coherence::Scattered`]).
