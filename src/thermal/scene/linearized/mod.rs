@@ -98,18 +98,15 @@ impl Default for LinearizedParams {
     }
 }
 
-/// Bin width of a property set that evaporates, relative to
-/// [`LinearizedParams::bin_k`]. The latent term's `e°(T)` curves far more
-/// than the emission's `T⁴` (at 300 K, `g_v·d²e°/dT² ≈ 2 W m⁻² K⁻²` for a
-/// transpiring canopy against `6εσT² ≈ 0.03`), so such a property set
-/// always gets the second-order correction (with the latent curvature,
-/// [`thermal::linear::latent_curvature`]) and references that lie closer to
-/// their members: a third of the width. Together they keep the checked
-/// accuracy (RMS < 0.01 K, max < 0.05 K; `tests/scene_thermal.rs`
-/// measured RMS 0.002 K, max 0.023 K); either alone does not. Facets near
-/// their reference skip the second order ([`NEAR_REFERENCE_K`]).
-pub const LATENT_BIN_SCALE: f32 = 1.0 / 3.0;
-
+/// The curvature of the latent term's `e°(T)` is far larger than the
+/// emission's `T⁴` (at 300 K, `g_v·d²e°/dT² ≈ 2 W m⁻² K⁻²` for a transpiring
+/// canopy against `6εσT² ≈ 0.03`), so the facets of a property set that
+/// evaporates get the second-order correction with the latent curvature
+/// ([`thermal::linear::latent_curvature`]), unless they lie near their
+/// reference ([`NEAR_REFERENCE_K`]). This keeps the checked accuracy (RMS <
+/// 0.01 K, max < 0.05 K; `tests/scene_thermal.rs` measured RMS 0.002 K,
+/// max 0.015 K); the first order alone does not.
+///
 /// A facet of an evaporating property set whose first-order change at the
 /// probes (first and last image records, daily mean) lies within this of
 /// its reference's, K, and whose background adds less than
@@ -218,6 +215,7 @@ pub(super) fn solve(
             reused_facets: 0,
             setup: if p == 0 { setup } else { Duration::ZERO },
             solve: t0.elapsed(),
+
             max_spinup_change_k: max_spin,
             max_change_from_previous_pass_k: prev_image
                 .as_ref()
@@ -382,9 +380,6 @@ struct Groups<'a> {
     of_props: Vec<u32>,
     /// Source model per group.
     models: Vec<SourceModel>,
-    /// Bin width of each group relative to [`LinearizedParams::bin_k`]:
-    /// [`LATENT_BIN_SCALE`] for a group that evaporates, 1 otherwise.
-    bin_scale: Vec<f32>,
     /// `∂S/∂F` per group and record (f32).
     shape32: Vec<Vec<f32>>,
     /// `∂B/∂F_b` per group and record (f32).
@@ -426,17 +421,6 @@ impl<'a> Groups<'a> {
                 SourceModel::new(&props[i], forcing, &exchanges[i])
             })
             .collect();
-        let bin_scale = group_props
-            .iter()
-            .map(|p| {
-                let i = p.expect("every group has a property set");
-                if exchanges[i].has_latent() {
-                    LATENT_BIN_SCALE
-                } else {
-                    1.0
-                }
-            })
-            .collect();
         let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
         let shape32 = models
             .iter()
@@ -468,7 +452,6 @@ impl<'a> Groups<'a> {
             kinds,
             of_props,
             models,
-            bin_scale,
             shape32,
             back_shape32,
             sun32,
@@ -591,22 +574,18 @@ impl Bins {
                 },
             )
             .collect();
-        let w = |g: usize| bin_k * groups.bin_scale[g];
+        let w = bin_k;
         // Facets sorted by (group, bin key, facet): the bins in key order. The
         // key packed in a u128 (group, then the three bin indices with their
         // sign bit flipped, so unsigned order is signed order) beside the
         // facet's index in `features` (which is in facet order).
-        let flip = |k: f32, w: f32| ((k / w).round() as i32 as u32 ^ 0x8000_0000) as u128;
+        let flip = |k: f32| ((k / w).round() as i32 as u32 ^ 0x8000_0000) as u128;
         let mut keyed: Vec<(u128, u32)> = features
             .par_iter()
             .enumerate()
             .map(|(i, &(f, x))| {
-                let g = groups.of(f).expect("solved");
-                let w = w(g);
-                let key = ((g as u128) << 96)
-                    | (flip(x[0], w) << 64)
-                    | (flip(x[1], w) << 32)
-                    | flip(x[2], w);
+                let g = groups.of(f).expect("solved") as u128;
+                let key = (g << 96) | (flip(x[0]) << 64) | (flip(x[1]) << 32) | flip(x[2]);
                 (key, i as u32)
             })
             .collect();
