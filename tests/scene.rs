@@ -1044,3 +1044,137 @@ fn utc_offset_must_agree_with_the_image_time() {
         "{e}"
     );
 }
+
+/// Issue 21: a closed OBJ mesh whose faces wind clockwise from outside (normals inward)
+/// is a warning naming the object and the shape, from `Scene::load` and on stderr from
+/// `scene check` and `render`; `"flip_normals": true` turns it outward (positive volume,
+/// no warning); the key on a primitive is an error naming the field. An open mesh (the
+/// two-group OBJ) is not judged.
+#[test]
+fn inward_closed_mesh_is_warned_and_flip_normals_fixes_it() {
+    // The 1 × 2 × 1 box of `obj_up_axis_and_unit_per_shape` with every face reversed.
+    const INWARD: &str = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\n\
+f 1 2 3 4\nf 8 7 6 5\nf 5 6 2 1\nf 6 7 3 2\nf 7 8 4 3\nf 8 5 1 4\n";
+    let d = tempfile::tempdir().unwrap();
+    let scene = |shape: &str| {
+        SMALL.replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+            &format!(r#"{{"name": "thing", "shapes": [{shape}],"#),
+        )
+    };
+    let p = small_scene(d.path(), SMALL);
+    assert!(Scene::load(&p).unwrap().warnings.is_empty());
+    write(&d.path().join("s/geo"), "inward.obj", INWARD);
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"part": "glass", "obj": "geo/inward.obj"}"#),
+    );
+    let s = Scene::load(&p).unwrap();
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    let w = &s.warnings[0];
+    assert!(
+        w.contains("objects[2].shapes[0]")
+            && w.contains("object `thing`")
+            && w.contains("inward.obj")
+            && w.contains("volume -2.000 m³")
+            && w.contains("flip_normals"),
+        "{w}"
+    );
+    let m = &s.geometry.meshes[s.objects[2].mesh];
+    assert!((signed_volume(&m.positions, &m.indices) + 2.0).abs() < 1e-5);
+    // Both commands print it.
+    for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+        let mut c = std::process::Command::new(irsig_bin());
+        c.args(args);
+        if args[0] == "render" {
+            c.arg(d.path().join("out"));
+        }
+        let out = c.arg(&p).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.starts_with("warning: ") && err.contains("normals face inward"),
+            "{args:?}: {err}"
+        );
+    }
+    // Flipped: outward, silent.
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"part": "glass", "obj": "geo/inward.obj", "flip_normals": true}"#),
+    );
+    let s = Scene::load(&p).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.geometry.meshes[s.objects[2].mesh];
+    assert!((signed_volume(&m.positions, &m.indices) - 2.0).abs() < 1e-5);
+    // Not on primitives.
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"part": "glass", "box": {"size": [1, 1, 1]}, "flip_normals": true}"#),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("shapes[0].flip_normals") && e.contains("obj"),
+        "{e}"
+    );
+}
+
+/// Issue 21: an OBJ whose size is implausible for its `unit` — a 20 m tower written in
+/// millimetres read as metres (20 km), or a 3 m shed written in metres declared as
+/// millimetres (3 mm) — is a warning naming the object, the shape and `unit`; the same
+/// files with the right unit are silent.
+#[test]
+fn obj_extent_implausible_for_its_unit_is_warned() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let boxed = |x: f64, y: f64, z: f64| {
+        format!(
+            "v 0 0 0\nv {x} 0 0\nv {x} {y} 0\nv 0 {y} 0\nv 0 0 {z}\nv {x} 0 {z}\nv {x} {y} {z}\nv 0 {y} {z}\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n"
+        )
+    };
+    write(
+        &d.path().join("s/geo"),
+        "tower.obj",
+        &boxed(5000.0, 5000.0, 20000.0),
+    );
+    write(&d.path().join("s/geo"), "shed.obj", &boxed(3.0, 2.0, 2.5));
+    let warnings = |shape: &str| {
+        let text = SMALL.replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+            &format!(r#"{{"name": "thing", "shapes": [{shape}],"#),
+        );
+        write(&d.path().join("s"), "scene.json", &text);
+        Scene::load(&p).unwrap().warnings
+    };
+    let w = warnings(r#"{"part": "glass", "obj": "geo/tower.obj"}"#);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("objects[2].shapes[0]")
+            && w[0].contains("object `thing`")
+            && w[0].contains("spans 20.0 km")
+            && w[0].contains("`unit`"),
+        "{w:?}"
+    );
+    assert!(warnings(r#"{"part": "glass", "obj": "geo/tower.obj", "unit": "mm"}"#).is_empty());
+    let w = warnings(r#"{"part": "glass", "obj": "geo/shed.obj", "unit": "mm"}"#);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("spans only 3.0 mm") && w[0].contains("\"mm\""),
+        "{w:?}"
+    );
+    assert!(warnings(r#"{"part": "glass", "obj": "geo/shed.obj"}"#).is_empty());
+    // And on stderr from `scene check`.
+    warnings(r#"{"part": "glass", "obj": "geo/tower.obj"}"#);
+    let out = std::process::Command::new(irsig_bin())
+        .args(["scene", "check"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && err.starts_with("warning: ") && err.contains("spans 20.0 km"),
+        "{err}"
+    );
+}

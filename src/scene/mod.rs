@@ -135,6 +135,56 @@ pub struct Scene {
 /// the scene warns.
 pub const WEATHER_SITE_TOLERANCE_KM: f64 = 50.0;
 
+/// An OBJ shape larger than this (m, largest bounding-box side after
+/// `unit`) is warned about: likely millimetres or centimetres read as metres.
+pub const MESH_EXTENT_MAX_M: f64 = 5000.0;
+
+/// An OBJ file smaller than this (m, largest bounding-box side after
+/// `unit`) is warned about: likely metres read as millimetres, or a model in
+/// kilometres.
+pub const MESH_EXTENT_MIN_M: f64 = 0.05;
+
+/// The signed volume (m³) a triangle mesh encloses, by the divergence
+/// theorem (Σ p₀·(p₁×p₂)/6: positive when faces are counter-clockwise seen
+/// from outside), or `None` if the mesh is not closed: every edge, with
+/// vertices matched by position, must be shared by exactly two triangles.
+pub fn closed_signed_volume(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<f64> {
+    if indices.is_empty() {
+        return None;
+    }
+    // Weld by exact position: OBJ and glTF often repeat a vertex per face.
+    let mut id: HashMap<[u32; 3], u32> = HashMap::new();
+    let weld: Vec<u32> = positions
+        .iter()
+        .map(|p| {
+            let n = id.len() as u32;
+            *id.entry(p.to_array().map(f32::to_bits)).or_insert(n)
+        })
+        .collect();
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in indices {
+        let w = t.map(|i| weld[i as usize]);
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (w[k], w[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    if edges.is_empty() || edges.values().any(|&c| c != 2) {
+        return None;
+    }
+    let v: f64 = indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+            a.dot(b.cross(c))
+        })
+        .sum();
+    Some(v / 6.0)
+}
+
 /// What `irsig scene check` prints.
 #[derive(Debug, Clone, Serialize)]
 pub struct SceneSummary {
@@ -711,7 +761,7 @@ impl Loader {
         }
         for (j, s) in o.shapes.iter().enumerate() {
             let sat = format!("{at}.shapes[{j}]");
-            match self.shape_mesh(s, &sat) {
+            match self.shape_mesh(s, &sat, &o.name) {
                 Some(mut m) => {
                     if let Some(p) = &s.part {
                         m.groups = vec![p.clone()];
@@ -746,7 +796,74 @@ impl Loader {
         ok.then_some(out)
     }
 
-    fn shape_mesh(&mut self, s: &file::ShapeSpec, at: &str) -> Option<GroupedMesh> {
+    /// Warnings on a loaded `obj`/`gltf` shape (in metres, Z up, before
+    /// the shape's transform): a closed mesh whose normals mostly face
+    /// inward (negative enclosed volume), and an OBJ whose extent is
+    /// implausible for its unit (over [`MESH_EXTENT_MAX_M`], or under
+    /// [`MESH_EXTENT_MIN_M`] for a whole file).
+    fn check_mesh_file(
+        &mut self,
+        m: &GroupedMesh,
+        s: &file::ShapeSpec,
+        at: &str,
+        object: &str,
+        kind: &str,
+        path: &Path,
+    ) {
+        if let Some(v) = closed_signed_volume(&m.positions, &m.indices) {
+            if v < 0.0 {
+                let advice = if s.flip_normals {
+                    "remove `\"flip_normals\": true`"
+                } else {
+                    "add `\"flip_normals\": true` to the shape"
+                };
+                self.warn(
+                    at,
+                    format!(
+                        "object `{object}`: {} is a closed mesh whose normals face inward (enclosed \
+                         volume {v:.3} m³): its outside would be treated as inside (no sun, wrong \
+                         temperatures); {advice}",
+                        path.display()
+                    ),
+                );
+            }
+        }
+        if kind != "obj" || m.positions.is_empty() {
+            return;
+        }
+        let (lo, hi) = m.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let extent = f64::from((hi - lo).max_element());
+        let unit = s
+            .unit
+            .and_then(|u| serde_json::to_string(&u).ok())
+            .unwrap_or_else(|| "\"m\" (the default)".into());
+        if extent > MESH_EXTENT_MAX_M {
+            self.warn(
+                at,
+                format!(
+                    "object `{object}`: {} spans {:.1} km in unit {unit}: is it in another unit \
+                     (set the shape's `unit`: \"cm\", \"mm\", \"ft\", \"in\")?",
+                    path.display(),
+                    extent / 1000.0
+                ),
+            );
+        } else if extent < MESH_EXTENT_MIN_M {
+            self.warn(
+                at,
+                format!(
+                    "object `{object}`: {} spans only {:.1} mm in unit {unit}: is it in another \
+                     unit (set the shape's `unit`)?",
+                    path.display(),
+                    extent * 1000.0
+                ),
+            );
+        }
+    }
+
+    fn shape_mesh(&mut self, s: &file::ShapeSpec, at: &str, object: &str) -> Option<GroupedMesh> {
         let kinds = [
             ("obj", s.obj.is_some()),
             ("gltf", s.gltf.is_some()),
@@ -775,6 +892,14 @@ impl Loader {
             None::<GroupedMesh>
         };
         let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
+        if s.flip_normals && s.obj.is_none() && s.gltf.is_none() {
+            return bad(
+                self,
+                "flip_normals",
+                "`flip_normals` applies to `obj` and `gltf` shapes only (primitives face outward)"
+                    .into(),
+            );
+        }
         if s.obj.is_none() && (s.up_axis.is_some() || s.unit.is_some()) {
             let field = if s.up_axis.is_some() {
                 "up_axis"
@@ -819,6 +944,12 @@ impl Loader {
                             *p = Vec3::new(p.x, -p.z, p.y);
                         }
                     }
+                    if s.flip_normals {
+                        for t in &mut m.indices {
+                            t.swap(1, 2);
+                        }
+                    }
+                    self.check_mesh_file(&m, s, at, object, kind, &path);
                     Some(m)
                 }
                 Err(e) => bad(
