@@ -1178,3 +1178,65 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n"
         "{err}"
     );
 }
+
+/// Issue 21: a weather gap longer than 3 of the file's steps inside the 24 h history
+/// before the image time is a warning with the gap's start and end (the town's 15-min
+/// weather with 02:00–10:00 on the image day removed); a gap of exactly 3 steps inside
+/// the window, or a long one before it, is silent. `render` prints it too.
+#[test]
+fn weather_gaps_in_the_history_window_are_warned() {
+    let d = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo_path("scenes/town/weather.csv")).unwrap();
+    let without = |cut: &[(&str, &str)]| -> String {
+        text.lines()
+            .filter(|l| {
+                !cut.iter()
+                    .any(|(a, b)| l.starts_with("20") && *a < &l[..19] && &l[..19] < *b)
+            })
+            .map(|l| format!("{l}\n"))
+            .collect()
+    };
+    let with = SMALL.replace(
+        "\"materials\": [",
+        "\"weather\": {\"file\": \"w.csv\"},\n  \"materials\": [",
+    );
+    let p = small_scene(d.path(), &with);
+    let w_csv = p.parent().unwrap().join("w.csv");
+    // 45 min inside the window (12:00 → 12:45), 3 h before it: silent.
+    std::fs::write(
+        &w_csv,
+        without(&[
+            ("2025-06-21T12:00:00", "2025-06-21T12:45:00"),
+            ("2025-06-19T04:00:00", "2025-06-19T07:00:00"),
+        ]),
+    )
+    .unwrap();
+    let w = Scene::load(&p).unwrap().warnings;
+    assert!(w.is_empty(), "{w:?}");
+    // 8 h inside it.
+    std::fs::write(
+        &w_csv,
+        without(&[("2025-06-21T02:00:00", "2025-06-21T10:00:00")]),
+    )
+    .unwrap();
+    let w = Scene::load(&p).unwrap().warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("field `weather.file`")
+            && w[0].contains("from 2025-06-21T02:00:00-04:00 to 2025-06-21T10:00:00-04:00")
+            && w[0].contains("8.0 h")
+            && w[0].contains("0.25 h"),
+        "{w:?}"
+    );
+    let out = std::process::Command::new(irsig_bin())
+        .args(["render", "--quiet", "-o"])
+        .arg(d.path().join("out"))
+        .arg(&p)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with("warning: ") && err.contains("no weather records from"),
+        "{err}"
+    );
+}

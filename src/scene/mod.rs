@@ -185,6 +185,48 @@ pub fn closed_signed_volume(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<
     Some(v / 6.0)
 }
 
+/// The weather history before an image time that the thermal solve uses
+/// (the render's default history window, 24 h).
+pub const HISTORY_WINDOW: chrono::TimeDelta = chrono::TimeDelta::hours(24);
+
+/// Gaps in `h` longer than [`WEATHER_GAP_STEPS`] of its typical (median)
+/// step that overlap `from ..= to`, each described with its start and end
+/// times: the weather across them is interpolated linearly, which hides
+/// a missing afternoon's sun or a front.
+pub fn weather_gaps(
+    h: &WeatherHistory,
+    from: DateTime<FixedOffset>,
+    to: DateTime<FixedOffset>,
+) -> Vec<String> {
+    let r = h.records();
+    let mut steps: Vec<chrono::TimeDelta> = r.windows(2).map(|w| w[1].time - w[0].time).collect();
+    if steps.len() < 2 {
+        return Vec::new();
+    }
+    steps.sort();
+    let typical = steps[steps.len() / 2];
+    r.windows(2)
+        .filter(|w| {
+            let d = w[1].time - w[0].time;
+            d > typical * WEATHER_GAP_STEPS && w[0].time < to && w[1].time > from
+        })
+        .map(|w| {
+            let d = w[1].time - w[0].time;
+            format!(
+                "no weather records from {} to {} ({:.1} h, the file's step being {:.2} h) \
+                 inside the 24 h history before the image time; the gap is interpolated linearly",
+                w[0].time.to_rfc3339(),
+                w[1].time.to_rfc3339(),
+                d.num_seconds() as f64 / 3600.0,
+                typical.num_seconds() as f64 / 3600.0
+            )
+        })
+        .collect()
+}
+
+/// A weather gap longer than this many typical steps is warned about.
+pub const WEATHER_GAP_STEPS: i32 = 3;
+
 /// What `irsig scene check` prints.
 #[derive(Debug, Clone, Serialize)]
 pub struct SceneSummary {
@@ -541,6 +583,11 @@ impl Loader {
                             }
                         }
                         self.check_weather_site(&site, time, &p, &h);
+                        if let Some(t) = time {
+                            for g in weather_gaps(&h, t - HISTORY_WINDOW, t) {
+                                self.warn("weather.file", format!("{}: {g}", p.display()));
+                            }
+                        }
                         weather = Some(WeatherRef {
                             path: p,
                             history: h,
