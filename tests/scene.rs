@@ -1240,3 +1240,54 @@ fn weather_gaps_in_the_history_window_are_warned() {
         "{err}"
     );
 }
+
+/// Issue 21: an image larger than the available memory is an error before anything is
+/// allocated, naming `sensors[i].width` and the estimate in GiB (a 200000 × 200000 image
+/// used to abort with a backtrace); the estimate is width × height × oversample² ×
+/// (bands + truth layers) × 4 bytes, spread over `--tile` row bands.
+#[test]
+fn image_larger_than_memory_is_an_error_before_allocating() {
+    let d = tempfile::tempdir().unwrap();
+    let sensor = |w: u64| {
+        SMALL.replace(
+            r#""sensors": [{"type": "frame", "name": "cam", "width": 4}]"#,
+            &format!(
+                r#""sensors": [{{"type": "frame", "name": "cam", "width": {w}, "height": {w},
+                    "oversample": 2, "fov_deg": 30, "position": [0, -50, 20], "look_at": [0, 0, 0],
+                    "bands": [{{"name": "lwir", "response": [8, 12]}}]}}]"#
+            ),
+        )
+    };
+    let p = small_scene(d.path(), &sensor(1000));
+    let s = Scene::load(&p).unwrap();
+    // 1000² × 2² × (1 + 6) × 4 B = 112 MB.
+    let mb = 1_000_000u64;
+    assert!(irsig::scene::image_memory_errors(&s, 6, 1, 113 * mb).is_empty());
+    let e = irsig::scene::image_memory_errors(&s, 6, 1, 111 * mb);
+    assert_eq!(e.len(), 1);
+    let e = e[0].to_string();
+    assert!(
+        e.contains("field `sensors[0].width`") && e.contains("0.1 GiB") && e.contains("--tile"),
+        "{e}"
+    );
+    assert!(irsig::scene::image_memory_errors(&s, 6, 2, 57 * mb).is_empty());
+
+    let p = small_scene(d.path(), &sensor(200_000));
+    for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+        let mut c = std::process::Command::new(irsig_bin());
+        c.args(args);
+        if args[0] == "render" {
+            c.arg(d.path().join("out"));
+        }
+        let out = c.arg(&p).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("field `sensors[0].width`")
+                && err.contains("about 4172.3 GiB")
+                && !err.contains("panicked")
+                && !err.contains("memory allocation"),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -71,6 +71,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    // Before anything is allocated: an image that cannot fit in memory.
+    if let Some(e) = irsig::scene::image_memory_errors(
+        &scene,
+        irsig::render::TRUTH_LAYERS.len(),
+        tile.map_or(1, |(_, n)| n as usize),
+        irsig::scene::available_memory_bytes(),
+    )
+    .into_iter()
+    .next()
+    {
+        return Err(anyhow::Error::new(e))
+            .with_context(|| format!("loading {}", args.scene.display()));
+    }
     let mut session = Session::from_scene(scene, args.backend, t0)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     if let Some(n) = args.facet_samples {

@@ -81,6 +81,19 @@ fn check(file: &Path, json: bool) -> anyhow::Result<()> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    let errs = irsig::scene::image_memory_errors(
+        &scene,
+        irsig::render::TRUTH_LAYERS.len(),
+        1,
+        irsig::scene::available_memory_bytes(),
+    );
+    if !errs.is_empty() {
+        let mut err = std::io::stderr().lock();
+        for e in &errs {
+            writeln!(err, "{e}")?;
+        }
+        anyhow::bail!("{}: {} problem(s) found", file.display(), errs.len());
+    }
     let s = scene.summary();
     let mut out = std::io::stdout().lock();
     if json {

@@ -227,6 +227,75 @@ pub fn weather_gaps(
 /// A weather gap longer than this many typical steps is warned about.
 pub const WEATHER_GAP_STEPS: i32 = 3;
 
+/// Memory assumed available (bytes) where `/proc/meminfo` cannot be read:
+/// 16 GiB.
+pub const FALLBACK_MEMORY_BYTES: u64 = 16 << 30;
+
+/// Memory available for new allocations, bytes: `MemAvailable` of
+/// `/proc/meminfo` (Linux), else [`FALLBACK_MEMORY_BYTES`].
+pub fn available_memory_bytes() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("MemAvailable:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(FALLBACK_MEMORY_BYTES, |kb| kb * 1024)
+}
+
+/// Sensors whose image would not fit in `available` bytes, as errors naming
+/// the sensor's width field (`sensors[i].width`, or `samples_per_line` for a
+/// line scanner) and the estimate in GiB: width × height × oversample² ×
+/// (bands + `extra_layers`, the renderer's truth layers) × 4 bytes (f32),
+/// divided over `tiles` row bands
+/// (`render --tile K/N` holds one band at a time). Sensors without those
+/// keys are left to the sensor stage's own errors.
+pub fn image_memory_errors(
+    scene: &Scene,
+    extra_layers: usize,
+    tiles: usize,
+    available: u64,
+) -> Vec<Error> {
+    let lines = std::fs::read_to_string(&scene.path)
+        .ok()
+        .map(|t| jsonloc::JsonLines::new(&t));
+    let mut errors = Vec::new();
+    for (i, s) in scene.sensors.iter().enumerate() {
+        let num = |k: &str| s.get(k).and_then(Value::as_u64);
+        let (field, w, h) = match (num("width"), num("height")) {
+            (Some(w), Some(h)) => ("width", w, h),
+            _ => match (num("samples_per_line"), num("lines")) {
+                (Some(w), Some(h)) => ("samples_per_line", w, h),
+                _ => continue,
+            },
+        };
+        let os = num("oversample").unwrap_or(1) as f64;
+        let bands = s.get("bands").and_then(Value::as_array).map_or(1, Vec::len);
+        let layers = (bands + extra_layers) as f64;
+        let bytes = w as f64 * h as f64 * os * os * layers * 4.0 / tiles.max(1) as f64;
+        if bytes > available as f64 {
+            let field = format!("sensors[{i}].{field}");
+            let mut loc = Location::file(&scene.path);
+            if let Some(n) = lines.as_ref().and_then(|l| l.line(&field)) {
+                loc = loc.at_line(n);
+            }
+            let per = if tiles > 1 { " per tile" } else { "" };
+            errors.push(Error::parse(
+                loc.with_field(field),
+                format!(
+                    "the image needs about {:.1} GiB{per} ({w} × {h} pixels × {os}² samples × \
+                     {layers} layers × 4 bytes) but {:.1} GiB of memory is available: make it \
+                     smaller, or render it in row bands with `--tile K/N`",
+                    bytes / (1u64 << 30) as f64,
+                    available as f64 / (1u64 << 30) as f64
+                ),
+            ));
+        }
+    }
+    errors
+}
+
 /// What `irsig scene check` prints.
 #[derive(Debug, Clone, Serialize)]
 pub struct SceneSummary {
