@@ -1291,3 +1291,45 @@ fn image_larger_than_memory_is_an_error_before_allocating() {
         );
     }
 }
+
+/// Issue 21: a DIRSIG material whose emissivity file is missing is the same `warning:`
+/// from `render` as from `scene check` (it used to be shown by `scene check` only).
+#[test]
+fn missing_emissivity_file_is_warned_by_render_too() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    write(
+        &d.path().join("s"),
+        "lib.mat",
+        "MATERIAL_ENTRY {\n  ID = 19\n  NAME = Steel plate\n  TEMP_SOLVER_NAME = Therm\n  TEMP_SOLVER {\n    SPECIFIC_HEAT = 0.1\n    MASS_DENSITY = 7.8\n    THERMAL_CONDUCTIVITY = 430\n    SOLAR_ABSORPTION = 0.5\n    THERMAL_EMISSIVITY = 0.8\n    EXPOSED_AREA = 1\n    THICKNESS = 0.5\n  }\n  SURFACE_PROPERTIES {\n    EMISSIVITY_PROP_NAME = ClassicEmissivity\n    EMISSIVITY_PROP {\n      FILENAME = gone.ems\n    }\n  }\n}\n",
+    );
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &SMALL.replace(
+            r#""materials": ["../materials.json"],"#,
+            r#""materials": ["../materials.json", "lib.mat"],"#,
+        ),
+    );
+    let mut seen = Vec::new();
+    for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+        let mut c = std::process::Command::new(irsig_bin());
+        c.args(args);
+        if args[0] == "render" {
+            c.arg(d.path().join("out"));
+        }
+        let out = c.arg(&p).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        let w: Vec<String> = err
+            .lines()
+            .filter(|l| l.starts_with("warning: "))
+            .map(str::to_string)
+            .collect();
+        assert!(
+            w.len() == 1 && w[0].contains("lib.mat") && w[0].contains("`gone.ems` not found"),
+            "{args:?}: {err}"
+        );
+        seen.push(w);
+    }
+    assert_eq!(seen[0], seen[1]);
+}
