@@ -75,7 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(e) = irsig::scene::image_memory_errors(
         &scene,
         irsig::render::TRUTH_LAYERS.len(),
-        tile.map_or(1, |(_, n)| n as usize),
+        tile.map_or(1, |(_, n)| n),
         irsig::scene::available_memory_bytes(),
     )
     .into_iter()
