@@ -1333,3 +1333,73 @@ fn missing_emissivity_file_is_warned_by_render_too() {
     }
     assert_eq!(seen[0], seen[1]);
 }
+
+/// Issue 21: a camera that sees no scene geometry (looking up at the sky), or that sits
+/// inside a closed object (every ray meets the back of a face), is a `warning:` naming
+/// the sensor from `scene check` and `render`; the same camera looking at the scene
+/// from outside is silent.
+#[test]
+fn camera_seeing_nothing_or_inside_an_object_is_warned() {
+    const POST: &str = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    let d = tempfile::tempdir().unwrap();
+    let scene = |position: &str, look_at: &str| {
+        SMALL
+            .replace(
+                "\"materials\": [",
+                "\"weather\": {\"file\": \"w.csv\"},\n  \"materials\": [",
+            )
+            .replace(
+                r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+                r#"{"name": "post", "shapes": [{"part": "glass", "obj": "geo/post.obj", "transform": {"scale": 10}}],"#,
+            )
+            .replace(
+                r#""sensors": [{"type": "frame", "name": "cam", "width": 4}]"#,
+                &format!(
+                    r#""sensors": [{{"type": "frame", "name": "cam", "width": 4, "height": 4,
+                    "fov_deg": 30, "position": {position}, "look_at": {look_at},
+                    "bands": [{{"name": "lwir", "response": [8, 12]}}]}}]"#
+                ),
+            )
+    };
+    let p = small_scene(d.path(), SMALL);
+    std::fs::copy(
+        repo_path("scenes/town/weather.csv"),
+        p.parent().unwrap().join("w.csv"),
+    )
+    .unwrap();
+    write(&d.path().join("s/geo"), "post.obj", POST);
+    let run = |text: &str| -> Vec<String> {
+        write(&d.path().join("s"), "scene.json", text);
+        let mut all = Vec::new();
+        for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+            let mut c = std::process::Command::new(irsig_bin());
+            c.args(args);
+            if args[0] == "render" {
+                c.arg(d.path().join("out"));
+            }
+            let out = c.arg(&p).output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{args:?}: {err}");
+            let w: Vec<String> = err
+                .lines()
+                .filter(|l| l.starts_with("warning: "))
+                .map(str::to_string)
+                .collect();
+            all.push(w.join("\n"));
+        }
+        assert_eq!(all[0], all[1]);
+        all.swap_remove(0).lines().map(str::to_string).collect()
+    };
+    assert!(run(&scene("[0, -50, 20]", "[0, 0, 0]")).is_empty());
+    let w = run(&scene("[0, -50, 20]", "[0, -60, 100]"));
+    assert!(
+        w.len() == 1 && w[0].contains("sensor `cam` sees no scene geometry"),
+        "{w:?}"
+    );
+    let w = run(&scene("[5, 10, 5]", "[5, 30, 5]"));
+    assert!(
+        w.len() == 1 && w[0].contains("sensor `cam`") && w[0].contains("inside object `post`"),
+        "{w:?}"
+    );
+}
