@@ -1044,3 +1044,362 @@ fn utc_offset_must_agree_with_the_image_time() {
         "{e}"
     );
 }
+
+/// Issue 21: a closed OBJ mesh whose faces wind clockwise from outside (normals inward)
+/// is a warning naming the object and the shape, from `Scene::load` and on stderr from
+/// `scene check` and `render`; `"flip_normals": true` turns it outward (positive volume,
+/// no warning); the key on a primitive is an error naming the field. An open mesh (the
+/// two-group OBJ) is not judged.
+#[test]
+fn inward_closed_mesh_is_warned_and_flip_normals_fixes_it() {
+    // The 1 × 2 × 1 box of `obj_up_axis_and_unit_per_shape` with every face reversed.
+    const INWARD: &str = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\n\
+f 1 2 3 4\nf 8 7 6 5\nf 5 6 2 1\nf 6 7 3 2\nf 7 8 4 3\nf 8 5 1 4\n";
+    let d = tempfile::tempdir().unwrap();
+    let scene = |shape: &str| {
+        SMALL.replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+            &format!(r#"{{"name": "thing", "shapes": [{shape}],"#),
+        )
+    };
+    let p = small_scene(d.path(), SMALL);
+    assert!(Scene::load(&p).unwrap().warnings.is_empty());
+    write(&d.path().join("s/geo"), "inward.obj", INWARD);
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"part": "glass", "obj": "geo/inward.obj"}"#),
+    );
+    let s = Scene::load(&p).unwrap();
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    let w = &s.warnings[0];
+    assert!(
+        w.contains("objects[2].shapes[0]")
+            && w.contains("object `thing`")
+            && w.contains("inward.obj")
+            && w.contains("volume -2.000 m³")
+            && w.contains("flip_normals"),
+        "{w}"
+    );
+    let m = &s.geometry.meshes[s.objects[2].mesh];
+    assert!((signed_volume(&m.positions, &m.indices) + 2.0).abs() < 1e-5);
+    // Both commands print it.
+    for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+        let mut c = std::process::Command::new(irsig_bin());
+        c.args(args);
+        if args[0] == "render" {
+            c.arg(d.path().join("out"));
+        }
+        let out = c.arg(&p).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.starts_with("warning: ") && err.contains("normals face inward"),
+            "{args:?}: {err}"
+        );
+    }
+    // Flipped: outward, silent.
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"part": "glass", "obj": "geo/inward.obj", "flip_normals": true}"#),
+    );
+    let s = Scene::load(&p).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.geometry.meshes[s.objects[2].mesh];
+    assert!((signed_volume(&m.positions, &m.indices) - 2.0).abs() < 1e-5);
+    // Not on primitives.
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &scene(r#"{"part": "glass", "box": {"size": [1, 1, 1]}, "flip_normals": true}"#),
+    );
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("shapes[0].flip_normals") && e.contains("obj"),
+        "{e}"
+    );
+}
+
+/// Issue 21: an OBJ whose size is implausible for its `unit` — a 20 m tower written in
+/// millimetres read as metres (20 km), or a 3 m shed written in metres declared as
+/// millimetres (3 mm) — is a warning naming the object, the shape and `unit`; the same
+/// files with the right unit are silent.
+#[test]
+fn obj_extent_implausible_for_its_unit_is_warned() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    let boxed = |x: f64, y: f64, z: f64| {
+        format!(
+            "v 0 0 0\nv {x} 0 0\nv {x} {y} 0\nv 0 {y} 0\nv 0 0 {z}\nv {x} 0 {z}\nv {x} {y} {z}\nv 0 {y} {z}\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n"
+        )
+    };
+    write(
+        &d.path().join("s/geo"),
+        "tower.obj",
+        &boxed(5000.0, 5000.0, 20000.0),
+    );
+    write(&d.path().join("s/geo"), "shed.obj", &boxed(3.0, 2.0, 2.5));
+    let warnings = |shape: &str| {
+        let text = SMALL.replace(
+            r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+            &format!(r#"{{"name": "thing", "shapes": [{shape}],"#),
+        );
+        write(&d.path().join("s"), "scene.json", &text);
+        Scene::load(&p).unwrap().warnings
+    };
+    let w = warnings(r#"{"part": "glass", "obj": "geo/tower.obj"}"#);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("objects[2].shapes[0]")
+            && w[0].contains("object `thing`")
+            && w[0].contains("spans 20.0 km")
+            && w[0].contains("`unit`"),
+        "{w:?}"
+    );
+    assert!(warnings(r#"{"part": "glass", "obj": "geo/tower.obj", "unit": "mm"}"#).is_empty());
+    let w = warnings(r#"{"part": "glass", "obj": "geo/shed.obj", "unit": "mm"}"#);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("spans only 3.0 mm") && w[0].contains("\"mm\""),
+        "{w:?}"
+    );
+    assert!(warnings(r#"{"part": "glass", "obj": "geo/shed.obj"}"#).is_empty());
+    // And on stderr from `scene check`.
+    warnings(r#"{"part": "glass", "obj": "geo/tower.obj"}"#);
+    let out = std::process::Command::new(irsig_bin())
+        .args(["scene", "check"])
+        .arg(&p)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && err.starts_with("warning: ") && err.contains("spans 20.0 km"),
+        "{err}"
+    );
+}
+
+/// Issue 21: a weather gap longer than 3 of the file's steps inside the 24 h history
+/// before the image time is a warning with the gap's start and end (the town's 15-min
+/// weather with 02:00–10:00 on the image day removed); a gap of exactly 3 steps inside
+/// the window, or a long one before it, is silent. `render` prints it too.
+#[test]
+fn weather_gaps_in_the_history_window_are_warned() {
+    let d = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo_path("scenes/town/weather.csv")).unwrap();
+    let without = |cut: &[(&str, &str)]| -> String {
+        text.lines()
+            .filter(|l| {
+                !cut.iter()
+                    .any(|(a, b)| l.starts_with("20") && *a < &l[..19] && &l[..19] < *b)
+            })
+            .map(|l| format!("{l}\n"))
+            .collect()
+    };
+    let with = SMALL.replace(
+        "\"materials\": [",
+        "\"weather\": {\"file\": \"w.csv\"},\n  \"materials\": [",
+    );
+    let p = small_scene(d.path(), &with);
+    let w_csv = p.parent().unwrap().join("w.csv");
+    // 45 min inside the window (12:00 → 12:45), 3 h before it: silent.
+    std::fs::write(
+        &w_csv,
+        without(&[
+            ("2025-06-21T12:00:00", "2025-06-21T12:45:00"),
+            ("2025-06-19T04:00:00", "2025-06-19T07:00:00"),
+        ]),
+    )
+    .unwrap();
+    let w = Scene::load(&p).unwrap().warnings;
+    assert!(w.is_empty(), "{w:?}");
+    // 8 h inside it.
+    std::fs::write(
+        &w_csv,
+        without(&[("2025-06-21T02:00:00", "2025-06-21T10:00:00")]),
+    )
+    .unwrap();
+    let w = Scene::load(&p).unwrap().warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("field `weather.file`")
+            && w[0].contains("from 2025-06-21T02:00:00-04:00 to 2025-06-21T10:00:00-04:00")
+            && w[0].contains("8.0 h")
+            && w[0].contains("0.25 h"),
+        "{w:?}"
+    );
+    let out = std::process::Command::new(irsig_bin())
+        .args(["render", "--quiet", "-o"])
+        .arg(d.path().join("out"))
+        .arg(&p)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with("warning: ") && err.contains("no weather records from"),
+        "{err}"
+    );
+}
+
+/// Issue 21: an image larger than the available memory is an error before anything is
+/// allocated, naming `sensors[i].width` and the estimate in GiB (a 200000 × 200000 image
+/// used to abort with a backtrace); the estimate is width × height × oversample² ×
+/// (bands + truth layers) × 4 bytes, spread over `--tile` row bands.
+#[test]
+fn image_larger_than_memory_is_an_error_before_allocating() {
+    let d = tempfile::tempdir().unwrap();
+    let sensor = |w: u64| {
+        SMALL.replace(
+            r#""sensors": [{"type": "frame", "name": "cam", "width": 4}]"#,
+            &format!(
+                r#""sensors": [{{"type": "frame", "name": "cam", "width": {w}, "height": {w},
+                    "oversample": 2, "fov_deg": 30, "position": [0, -50, 20], "look_at": [0, 0, 0],
+                    "bands": [{{"name": "lwir", "response": [8, 12]}}]}}]"#
+            ),
+        )
+    };
+    let p = small_scene(d.path(), &sensor(1000));
+    let s = Scene::load(&p).unwrap();
+    // 1000² × 2² × (1 + 6) × 4 B = 112 MB.
+    let mb = 1_000_000u64;
+    assert!(irsig::scene::image_memory_errors(&s, 6, 1, 113 * mb).is_empty());
+    let e = irsig::scene::image_memory_errors(&s, 6, 1, 111 * mb);
+    assert_eq!(e.len(), 1);
+    let e = e[0].to_string();
+    assert!(
+        e.contains("field `sensors[0].width`") && e.contains("0.1 GiB") && e.contains("--tile"),
+        "{e}"
+    );
+    assert!(irsig::scene::image_memory_errors(&s, 6, 2, 57 * mb).is_empty());
+
+    let p = small_scene(d.path(), &sensor(200_000));
+    for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+        let mut c = std::process::Command::new(irsig_bin());
+        c.args(args);
+        if args[0] == "render" {
+            c.arg(d.path().join("out"));
+        }
+        let out = c.arg(&p).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("field `sensors[0].width`")
+                && err.contains("about 4172.3 GiB")
+                && !err.contains("panicked")
+                && !err.contains("memory allocation"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+/// Issue 21: a DIRSIG material whose emissivity file is missing is the same `warning:`
+/// from `render` as from `scene check` (it used to be shown by `scene check` only).
+#[test]
+fn missing_emissivity_file_is_warned_by_render_too() {
+    let d = tempfile::tempdir().unwrap();
+    let p = small_scene(d.path(), SMALL);
+    write(
+        &d.path().join("s"),
+        "lib.mat",
+        "MATERIAL_ENTRY {\n  ID = 19\n  NAME = Steel plate\n  TEMP_SOLVER_NAME = Therm\n  TEMP_SOLVER {\n    SPECIFIC_HEAT = 0.1\n    MASS_DENSITY = 7.8\n    THERMAL_CONDUCTIVITY = 430\n    SOLAR_ABSORPTION = 0.5\n    THERMAL_EMISSIVITY = 0.8\n    EXPOSED_AREA = 1\n    THICKNESS = 0.5\n  }\n  SURFACE_PROPERTIES {\n    EMISSIVITY_PROP_NAME = ClassicEmissivity\n    EMISSIVITY_PROP {\n      FILENAME = gone.ems\n    }\n  }\n}\n",
+    );
+    write(
+        &d.path().join("s"),
+        "scene.json",
+        &SMALL.replace(
+            r#""materials": ["../materials.json"],"#,
+            r#""materials": ["../materials.json", "lib.mat"],"#,
+        ),
+    );
+    let mut seen = Vec::new();
+    for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+        let mut c = std::process::Command::new(irsig_bin());
+        c.args(args);
+        if args[0] == "render" {
+            c.arg(d.path().join("out"));
+        }
+        let out = c.arg(&p).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        let w: Vec<String> = err
+            .lines()
+            .filter(|l| l.starts_with("warning: "))
+            .map(str::to_string)
+            .collect();
+        assert!(
+            w.len() == 1 && w[0].contains("lib.mat") && w[0].contains("`gone.ems` not found"),
+            "{args:?}: {err}"
+        );
+        seen.push(w);
+    }
+    assert_eq!(seen[0], seen[1]);
+}
+
+/// Issue 21: a camera that sees no scene geometry (looking up at the sky), or that sits
+/// inside a closed object (every ray meets the back of a face), is a `warning:` naming
+/// the sensor from `scene check` and `render`; the same camera looking at the scene
+/// from outside is silent.
+#[test]
+fn camera_seeing_nothing_or_inside_an_object_is_warned() {
+    const POST: &str = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nv 0 0 1\nv 1 0 1\nv 1 2 1\nv 0 2 1\n\
+f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    let d = tempfile::tempdir().unwrap();
+    let scene = |position: &str, look_at: &str| {
+        SMALL
+            .replace(
+                "\"materials\": [",
+                "\"weather\": {\"file\": \"w.csv\"},\n  \"materials\": [",
+            )
+            .replace(
+                r#"{"name": "thing", "shapes": [{"obj": "geo/two.obj"}],"#,
+                r#"{"name": "post", "shapes": [{"part": "glass", "obj": "geo/post.obj", "transform": {"scale": 10}}],"#,
+            )
+            .replace(
+                r#""sensors": [{"type": "frame", "name": "cam", "width": 4}]"#,
+                &format!(
+                    r#""sensors": [{{"type": "frame", "name": "cam", "width": 4, "height": 4,
+                    "fov_deg": 30, "position": {position}, "look_at": {look_at},
+                    "bands": [{{"name": "lwir", "response": [8, 12]}}]}}]"#
+                ),
+            )
+    };
+    let p = small_scene(d.path(), SMALL);
+    std::fs::copy(
+        repo_path("scenes/town/weather.csv"),
+        p.parent().unwrap().join("w.csv"),
+    )
+    .unwrap();
+    write(&d.path().join("s/geo"), "post.obj", POST);
+    let run = |text: &str| -> Vec<String> {
+        write(&d.path().join("s"), "scene.json", text);
+        let mut all = Vec::new();
+        for args in [&["scene", "check"][..], &["render", "--quiet", "-o"][..]] {
+            let mut c = std::process::Command::new(irsig_bin());
+            c.args(args);
+            if args[0] == "render" {
+                c.arg(d.path().join("out"));
+            }
+            let out = c.arg(&p).output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{args:?}: {err}");
+            let w: Vec<String> = err
+                .lines()
+                .filter(|l| l.starts_with("warning: "))
+                .map(str::to_string)
+                .collect();
+            all.push(w.join("\n"));
+        }
+        assert_eq!(all[0], all[1]);
+        all.swap_remove(0).lines().map(str::to_string).collect()
+    };
+    assert!(run(&scene("[0, -50, 20]", "[0, 0, 0]")).is_empty());
+    let w = run(&scene("[0, -50, 20]", "[0, -60, 100]"));
+    assert!(
+        w.len() == 1 && w[0].contains("sensor `cam` sees no scene geometry"),
+        "{w:?}"
+    );
+    let w = run(&scene("[5, 10, 5]", "[5, 30, 5]"));
+    assert!(
+        w.len() == 1 && w[0].contains("sensor `cam`") && w[0].contains("inside object `post`"),
+        "{w:?}"
+    );
+}

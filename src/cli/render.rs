@@ -71,8 +71,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    // Before anything is allocated: an image that cannot fit in memory.
+    if let Some(e) = irsig::scene::image_memory_errors(
+        &scene,
+        irsig::render::TRUTH_LAYERS.len(),
+        tile.map_or(1, |(_, n)| n),
+        irsig::scene::available_memory_bytes(),
+    )
+    .into_iter()
+    .next()
+    {
+        return Err(anyhow::Error::new(e))
+            .with_context(|| format!("loading {}", args.scene.display()));
+    }
     let mut session = Session::from_scene(scene, args.backend, t0)
         .with_context(|| format!("loading {}", args.scene.display()))?;
+    for w in super::scene::view_warnings(&session.scene, &session.sensors, session.tracer.as_ref())
+    {
+        eprintln!("warning: {w}");
+    }
     if let Some(n) = args.facet_samples {
         session.config.facet_samples = n;
     }

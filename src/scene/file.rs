@@ -206,6 +206,11 @@ pub struct ShapeSpec {
     /// shape's `transform`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unit: Option<LengthUnit>,
+    /// Reverse the winding of every face of the `obj` or `gltf` file (its
+    /// normals then face the other way): for a closed mesh exported with its
+    /// normals facing inward, which `irsig scene check` warns about.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub flip_normals: bool,
     /// A glTF 2.0 file, `.gltf` or `.glb` (relative to the scene file): the
     /// triangles of the default scene's meshes placed by their nodes, Y-up
     /// turned to Z-up; groups are the glTF material names, else the mesh

@@ -135,6 +135,167 @@ pub struct Scene {
 /// the scene warns.
 pub const WEATHER_SITE_TOLERANCE_KM: f64 = 50.0;
 
+/// An OBJ shape larger than this (m, largest bounding-box side after
+/// `unit`) is warned about: likely millimetres or centimetres read as metres.
+pub const MESH_EXTENT_MAX_M: f64 = 5000.0;
+
+/// An OBJ file smaller than this (m, largest bounding-box side after
+/// `unit`) is warned about: likely metres read as millimetres, or a model in
+/// kilometres.
+pub const MESH_EXTENT_MIN_M: f64 = 0.05;
+
+/// The signed volume (m³) a triangle mesh encloses, by the divergence
+/// theorem (Σ p₀·(p₁×p₂)/6: positive when faces are counter-clockwise seen
+/// from outside), or `None` if the mesh is not closed: every edge, with
+/// vertices matched by position, must be shared by exactly two triangles.
+pub fn closed_signed_volume(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<f64> {
+    if indices.is_empty() {
+        return None;
+    }
+    // Weld by exact position: OBJ and glTF often repeat a vertex per face.
+    let mut id: HashMap<[u32; 3], u32> = HashMap::new();
+    let weld: Vec<u32> = positions
+        .iter()
+        .map(|p| {
+            let n = id.len() as u32;
+            *id.entry(p.to_array().map(f32::to_bits)).or_insert(n)
+        })
+        .collect();
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in indices {
+        let w = t.map(|i| weld[i as usize]);
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (w[k], w[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    if edges.is_empty() || edges.values().any(|&c| c != 2) {
+        return None;
+    }
+    let v: f64 = indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+            a.dot(b.cross(c))
+        })
+        .sum();
+    Some(v / 6.0)
+}
+
+/// The weather history before an image time that the thermal solve uses
+/// (the render's default history window, 24 h).
+pub const HISTORY_WINDOW: chrono::TimeDelta = chrono::TimeDelta::hours(24);
+
+/// Gaps in `h` longer than [`WEATHER_GAP_STEPS`] of its typical (median)
+/// step that overlap `from ..= to`, each described with its start and end
+/// times: the weather across them is interpolated linearly, which hides
+/// a missing afternoon's sun or a front.
+pub fn weather_gaps(
+    h: &WeatherHistory,
+    from: DateTime<FixedOffset>,
+    to: DateTime<FixedOffset>,
+) -> Vec<String> {
+    let r = h.records();
+    let mut steps: Vec<chrono::TimeDelta> = r.windows(2).map(|w| w[1].time - w[0].time).collect();
+    if steps.len() < 2 {
+        return Vec::new();
+    }
+    steps.sort();
+    let typical = steps[steps.len() / 2];
+    r.windows(2)
+        .filter(|w| {
+            let d = w[1].time - w[0].time;
+            d > typical * WEATHER_GAP_STEPS && w[0].time < to && w[1].time > from
+        })
+        .map(|w| {
+            let d = w[1].time - w[0].time;
+            format!(
+                "no weather records from {} to {} ({:.1} h, the file's step being {:.2} h) \
+                 inside the 24 h history before the image time; the gap is interpolated linearly",
+                w[0].time.to_rfc3339(),
+                w[1].time.to_rfc3339(),
+                d.num_seconds() as f64 / 3600.0,
+                typical.num_seconds() as f64 / 3600.0
+            )
+        })
+        .collect()
+}
+
+/// A weather gap longer than this many typical steps is warned about.
+pub const WEATHER_GAP_STEPS: i32 = 3;
+
+/// Memory assumed available (bytes) where `/proc/meminfo` cannot be read:
+/// 16 GiB.
+pub const FALLBACK_MEMORY_BYTES: u64 = 16 << 30;
+
+/// Memory available for new allocations, bytes: `MemAvailable` of
+/// `/proc/meminfo` (Linux), else [`FALLBACK_MEMORY_BYTES`].
+pub fn available_memory_bytes() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("MemAvailable:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(FALLBACK_MEMORY_BYTES, |kb| kb * 1024)
+}
+
+/// Sensors whose image would not fit in `available` bytes, as errors naming
+/// the sensor's width field (`sensors[i].width`, or `samples_per_line` for a
+/// line scanner) and the estimate in GiB: width × height × oversample² ×
+/// (bands + `extra_layers`, the renderer's truth layers) × 4 bytes (f32),
+/// divided over `tiles` row bands
+/// (`render --tile K/N` holds one band at a time). Sensors without those
+/// keys are left to the sensor stage's own errors.
+pub fn image_memory_errors(
+    scene: &Scene,
+    extra_layers: usize,
+    tiles: usize,
+    available: u64,
+) -> Vec<Error> {
+    let lines = std::fs::read_to_string(&scene.path)
+        .ok()
+        .map(|t| jsonloc::JsonLines::new(&t));
+    let mut errors = Vec::new();
+    for (i, s) in scene.sensors.iter().enumerate() {
+        let num = |k: &str| s.get(k).and_then(Value::as_u64);
+        let (field, w, h) = match (num("width"), num("height")) {
+            (Some(w), Some(h)) => ("width", w, h),
+            _ => match (num("samples_per_line"), num("lines")) {
+                (Some(w), Some(h)) => ("samples_per_line", w, h),
+                _ => continue,
+            },
+        };
+        let os = num("oversample").unwrap_or(1) as f64;
+        let bands = s.get("bands").and_then(Value::as_array).map_or(1, Vec::len);
+        let layers = (bands + extra_layers) as f64;
+        let bytes = w as f64 * h as f64 * os * os * layers * 4.0 / tiles.max(1) as f64;
+        if bytes > available as f64 {
+            let field = format!("sensors[{i}].{field}");
+            let mut loc = Location::file(&scene.path);
+            if let Some(n) = lines.as_ref().and_then(|l| l.line(&field)) {
+                loc = loc.at_line(n);
+            }
+            let per = if tiles > 1 { " per tile" } else { "" };
+            errors.push(Error::parse(
+                loc.with_field(field),
+                format!(
+                    "the image needs about {:.1} GiB{per} ({w} × {h} pixels × {os}² samples × \
+                     {layers} layers × 4 bytes) but {:.1} GiB of memory is available: make it \
+                     smaller, or render it in row bands with `--tile K/N`",
+                    bytes / (1u64 << 30) as f64,
+                    available as f64 / (1u64 << 30) as f64
+                ),
+            ));
+        }
+    }
+    errors
+}
+
 /// What `irsig scene check` prints.
 #[derive(Debug, Clone, Serialize)]
 pub struct SceneSummary {
@@ -491,6 +652,11 @@ impl Loader {
                             }
                         }
                         self.check_weather_site(&site, time, &p, &h);
+                        if let Some(t) = time {
+                            for g in weather_gaps(&h, t - HISTORY_WINDOW, t) {
+                                self.warn("weather.file", format!("{}: {g}", p.display()));
+                            }
+                        }
                         weather = Some(WeatherRef {
                             path: p,
                             history: h,
@@ -711,7 +877,7 @@ impl Loader {
         }
         for (j, s) in o.shapes.iter().enumerate() {
             let sat = format!("{at}.shapes[{j}]");
-            match self.shape_mesh(s, &sat) {
+            match self.shape_mesh(s, &sat, &o.name) {
                 Some(mut m) => {
                     if let Some(p) = &s.part {
                         m.groups = vec![p.clone()];
@@ -746,7 +912,74 @@ impl Loader {
         ok.then_some(out)
     }
 
-    fn shape_mesh(&mut self, s: &file::ShapeSpec, at: &str) -> Option<GroupedMesh> {
+    /// Warnings on a loaded `obj`/`gltf` shape (in metres, Z up, before
+    /// the shape's transform): a closed mesh whose normals mostly face
+    /// inward (negative enclosed volume), and an OBJ whose extent is
+    /// implausible for its unit (over [`MESH_EXTENT_MAX_M`], or under
+    /// [`MESH_EXTENT_MIN_M`] for a whole file).
+    fn check_mesh_file(
+        &mut self,
+        m: &GroupedMesh,
+        s: &file::ShapeSpec,
+        at: &str,
+        object: &str,
+        kind: &str,
+        path: &Path,
+    ) {
+        if let Some(v) = closed_signed_volume(&m.positions, &m.indices) {
+            if v < 0.0 {
+                let advice = if s.flip_normals {
+                    "remove `\"flip_normals\": true`"
+                } else {
+                    "add `\"flip_normals\": true` to the shape"
+                };
+                self.warn(
+                    at,
+                    format!(
+                        "object `{object}`: {} is a closed mesh whose normals face inward (enclosed \
+                         volume {v:.3} m³): its outside would be treated as inside (no sun, wrong \
+                         temperatures); {advice}",
+                        path.display()
+                    ),
+                );
+            }
+        }
+        if kind != "obj" || m.positions.is_empty() {
+            return;
+        }
+        let (lo, hi) = m.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let extent = f64::from((hi - lo).max_element());
+        let unit = s
+            .unit
+            .and_then(|u| serde_json::to_string(&u).ok())
+            .unwrap_or_else(|| "\"m\" (the default)".into());
+        if extent > MESH_EXTENT_MAX_M {
+            self.warn(
+                at,
+                format!(
+                    "object `{object}`: {} spans {:.1} km in unit {unit}: is it in another unit \
+                     (set the shape's `unit`: \"cm\", \"mm\", \"ft\", \"in\")?",
+                    path.display(),
+                    extent / 1000.0
+                ),
+            );
+        } else if extent < MESH_EXTENT_MIN_M {
+            self.warn(
+                at,
+                format!(
+                    "object `{object}`: {} spans only {:.1} mm in unit {unit}: is it in another \
+                     unit (set the shape's `unit`)?",
+                    path.display(),
+                    extent * 1000.0
+                ),
+            );
+        }
+    }
+
+    fn shape_mesh(&mut self, s: &file::ShapeSpec, at: &str, object: &str) -> Option<GroupedMesh> {
         let kinds = [
             ("obj", s.obj.is_some()),
             ("gltf", s.gltf.is_some()),
@@ -775,6 +1008,14 @@ impl Loader {
             None::<GroupedMesh>
         };
         let segs = |n: Option<usize>, d: usize| n.unwrap_or(d);
+        if s.flip_normals && s.obj.is_none() && s.gltf.is_none() {
+            return bad(
+                self,
+                "flip_normals",
+                "`flip_normals` applies to `obj` and `gltf` shapes only (primitives face outward)"
+                    .into(),
+            );
+        }
         if s.obj.is_none() && (s.up_axis.is_some() || s.unit.is_some()) {
             let field = if s.up_axis.is_some() {
                 "up_axis"
@@ -819,6 +1060,12 @@ impl Loader {
                             *p = Vec3::new(p.x, -p.z, p.y);
                         }
                     }
+                    if s.flip_normals {
+                        for t in &mut m.indices {
+                            t.swap(1, 2);
+                        }
+                    }
+                    self.check_mesh_file(&m, s, at, object, kind, &path);
                     Some(m)
                 }
                 Err(e) => bad(
