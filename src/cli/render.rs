@@ -86,8 +86,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let mut session = Session::from_scene(scene, args.backend, t0)
         .with_context(|| format!("loading {}", args.scene.display()))?;
-    for w in super::scene::view_warnings(&session.scene, &session.sensors, session.tracer.as_ref())
-    {
+    for w in irsig::render::checks::view_warnings(
+        &session.scene,
+        &session.sensors,
+        session.tracer.as_ref(),
+    ) {
         eprintln!("warning: {w}");
     }
     if let Some(n) = args.facet_samples {

@@ -26,6 +26,7 @@
 //! image files. It must not know the command line (progress goes to a
 //! [`crate::progress::Progress`] observer, errors name fields).
 
+pub mod checks;
 pub mod image;
 pub mod path;
 pub mod scene_thermal;
