@@ -163,3 +163,84 @@ mod tests {
         assert_eq!(format!("{e:#}"), "other: bad");
     }
 }
+
+/// The spectral band options shared by `irsig radiance` and `irsig
+/// atmosphere`: `--band LO-HI`, `--response FILE`, `--step UM`.
+#[derive(Debug, clap::Args)]
+pub struct BandArgs {
+    /// Spectral band in µm, `LO-HI` (e.g. `8-14`). With `--response`, the
+    /// response is cut to this range; without it the response is flat.
+    #[arg(long, value_name = "LO-HI")]
+    pub band: Option<String>,
+    /// Relative spectral response CSV (`wavelength_um, response` per line).
+    #[arg(long, value_name = "FILE")]
+    pub response: Option<std::path::PathBuf>,
+    /// Largest spectral step of the integration grid, µm.
+    #[arg(long, value_name = "UM", default_value_t = irsig::radiometry::DEFAULT_STEP_UM)]
+    pub step: f64,
+}
+
+impl BandArgs {
+    /// The band the options describe (response warnings printed as
+    /// `warning:` lines).
+    pub fn band(&self) -> anyhow::Result<irsig::radiometry::Band> {
+        use irsig::radiometry::Band;
+        let range = self.band.as_deref().map(parse_band).transpose()?;
+        anyhow::ensure!(
+            self.step.is_finite() && self.step > 0.0,
+            "--step: expected a positive step in µm, got {}",
+            self.step
+        );
+        Ok(match (&self.response, range) {
+            (None, None) => anyhow::bail!("give --band LO-HI (µm), --response FILE, or both"),
+            (None, Some((lo, hi))) => Band::flat(lo, hi, self.step)?,
+            (Some(path), range) => {
+                let resp = irsig::radiometry::read_response_csv(path)?;
+                for w in resp.warnings() {
+                    eprintln!("warning: {w}");
+                }
+                let resp = match range {
+                    None => resp,
+                    Some((lo, hi)) => clip(&resp, lo, hi).with_context(|| {
+                        format!("--band {lo}-{hi} with response {}", path.display())
+                    })?,
+                };
+                Band::from_response(&resp, self.step)?
+            }
+        })
+    }
+}
+
+/// Parse `LO-HI` (µm).
+pub(crate) fn parse_band(s: &str) -> anyhow::Result<(f64, f64)> {
+    let bad = || anyhow::anyhow!("--band: expected `LO-HI` in µm (e.g. `8-14`), got `{s}`");
+    let (a, b) = s.split_once('-').ok_or_else(bad)?;
+    let lo: f64 = a.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = b.trim().parse().map_err(|_| bad())?;
+    anyhow::ensure!(
+        lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo,
+        "--band: expected 0 < LO < HI in µm, got `{s}`"
+    );
+    Ok((lo, hi))
+}
+
+/// The response restricted to [lo, hi] (interpolated at the cut points).
+fn clip(
+    resp: &irsig::radiometry::SpectralResponse,
+    lo: f64,
+    hi: f64,
+) -> anyhow::Result<irsig::radiometry::SpectralResponse> {
+    let mut wl = vec![lo];
+    let mut r = vec![resp.at(lo)];
+    for (&l, &v) in resp.wavelengths_um().iter().zip(resp.response()) {
+        if l > lo && l < hi {
+            wl.push(l);
+            r.push(v);
+        }
+    }
+    wl.push(hi);
+    r.push(resp.at(hi));
+    irsig::radiometry::SpectralResponse::new(wl, r).map_err(|e| {
+        anyhow::anyhow!("{e}: the response has no sensitivity inside the band {lo}–{hi} µm")
+    })
+}

@@ -6,10 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use irsig::atmosphere::{Atmosphere, PathGeometry, Profile, SkyConditions};
-use irsig::radiometry::{Band, DEFAULT_STEP_UM};
 
 use super::args::{parse_site, parse_time};
-use super::radiance::{clip, parse_band};
 
 /// Which way the path looks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -49,15 +47,9 @@ pub struct Args {
     /// A MODTRAN tape7 table (index JSON, see docs/formats.md).
     #[arg(long, value_name = "FILE", conflicts_with = "profile")]
     pub tape7_index: Option<PathBuf>,
-    /// Spectral band in µm, `LO-HI`; with --response, the response is cut to it.
-    #[arg(long, value_name = "LO-HI")]
-    pub band: Option<String>,
-    /// Relative spectral response CSV (`wavelength_um, response` per line).
-    #[arg(long, value_name = "FILE")]
-    pub response: Option<PathBuf>,
-    /// Largest spectral step of the integration grid, µm.
-    #[arg(long, value_name = "UM", default_value_t = DEFAULT_STEP_UM)]
-    pub step: f64,
+    /// The band.
+    #[command(flatten)]
+    pub band: super::args::BandArgs,
     /// `up`: ground to space; `down`: sensor to target.
     #[arg(long, value_enum, default_value_t = Look::Down)]
     pub look: Look,
@@ -93,30 +85,6 @@ pub struct Args {
     /// Print JSON: `{"transmittance": …, "path_radiance_w_m2_sr": …}`.
     #[arg(long)]
     pub json: bool,
-}
-
-/// The band of `args`.
-fn band(args: &Args) -> anyhow::Result<Band> {
-    let range = args.band.as_deref().map(parse_band).transpose()?;
-    anyhow::ensure!(
-        args.step.is_finite() && args.step > 0.0,
-        "--step: expected a positive step in µm, got {}",
-        args.step
-    );
-    Ok(match (&args.response, range) {
-        (None, None) => anyhow::bail!("give --band LO-HI (µm), --response FILE, or both"),
-        (None, Some((lo, hi))) => Band::flat(lo, hi, args.step)?,
-        (Some(path), range) => {
-            let resp = irsig::radiometry::read_response_csv(path)?;
-            let resp = match range {
-                None => resp,
-                Some((lo, hi)) => clip(&resp, lo, hi).with_context(|| {
-                    format!("--band {lo}-{hi} with response {}", path.display())
-                })?,
-            };
-            Band::from_response(&resp, args.step)?
-        }
-    })
 }
 
 /// The atmosphere, the sky conditions and the ground altitude (m above
@@ -197,7 +165,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--range: expected a range ≥ 0 m, got {r}"
         );
     }
-    let band = band(&args)?;
+    let band = args.band.band()?;
     let (atmos, sky, ground_m, what) = model(&args)?;
     let wl = band.wavelengths_um();
     let (lo, hi) = (wl[0], wl[wl.len() - 1]);
