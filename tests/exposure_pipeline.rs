@@ -3,6 +3,7 @@
 //! artefacts, and the same temperatures for an image time whatever other
 //! times are solved with it (issue 18).
 
+use crate::scene_thermal::asphalt;
 use chrono::{DateTime, FixedOffset};
 use glam::Vec3;
 use irsig::exposure::{ExposureParams, SkySampling};
@@ -11,24 +12,9 @@ use irsig::render::scene_thermal::{
     FacetThermalSetup, SceneThermal, SceneThermalParams, solve_scene_temperatures,
 };
 use irsig::thermal::scene::FacetThermal;
-use irsig::thermal::{BackBoundary, SlabProperties};
 use irsig::trace::{self, Backend};
 
 use crate::exposure::quad;
-
-fn asphalt() -> SlabProperties {
-    SlabProperties {
-        conductivity_w_m_k: 0.75,
-        density_kg_m3: 2100.0,
-        specific_heat_j_kg_k: 920.0,
-        thickness_m: 0.1,
-        solar_absorptivity: 0.9,
-        thermal_emissivity: 0.95,
-        self_power_w_m2: 0.0,
-        back: BackBoundary::GROUND,
-        surface: None,
-    }
-}
 
 /// An isolated tower — a `sides`-sided prism of radius `radius` and height
 /// `h` m on the origin, its walls facing out, with a roof — on a flat

@@ -415,12 +415,11 @@ struct StockResult {
 /// compared with the measured surface temperature and fluxes on the second
 /// half (model − measured).
 fn stock_on_site(name: &str, d: &FluxDataset) -> StockResult {
-    use irsig::analysis::facet::{FacetSpec, find_material, solve_free_facet};
+    use irsig::analysis::facet::{FacetSpec, solve_free_facet};
     use irsig::thermal::latent::psychrometrics::saturation_vapour_pressure_pa;
-    use irsig::thermal::{Exchange, Forcing, SlabProperties, SolveOptions};
+    use irsig::thermal::{Exchange, Forcing, SolveOptions};
 
-    let m = find_material(name, &util::repo_path("scenes/materials.json")).unwrap();
-    let props = SlabProperties::from_material(&m).unwrap();
+    let props = util::stock_props(name);
     let (history, _) = d.weather(0..d.len()).unwrap();
     let site = d.site().site();
     let (sol, _) = solve_free_facet(

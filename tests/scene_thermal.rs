@@ -39,7 +39,7 @@ fn clear_day(constant_air: bool) -> (Forcing, Vec<Vec3>) {
     (f, dirs)
 }
 
-fn asphalt() -> SlabProperties {
+pub(crate) fn asphalt() -> SlabProperties {
     SlabProperties {
         conductivity_w_m_k: 0.75,
         density_kg_m3: 2100.0,
@@ -529,13 +529,9 @@ fn linearized_solve_matches_the_per_facet_exact_solve() {
 /// so only the curvature of e°(T) and T⁴ is neglected.
 #[test]
 fn linearized_solve_matches_the_exact_solve_with_latent_heat() {
-    use irsig::analysis::facet::find_material;
     use irsig::thermal::scene::{LinearizedParams, ThermalMethod};
     let (geo, ds, kinds, mut props) = yard();
-    let stock = |name: &str| {
-        let m = find_material(name, &crate::util::repo_path("scenes/materials.json")).unwrap();
-        SlabProperties::from_material(&m).unwrap()
-    };
+    use crate::util::stock_props as stock;
     props[0] = stock("grass").with_back(BackBoundary::GROUND);
     props[1] = stock("water");
     props[3] = stock("deciduous_canopy");

@@ -1346,15 +1346,7 @@ fn cli_thermal_stock_library_and_typical_year_epw() {
     );
 }
 
-/// A stock material of `scenes/materials.json` as slab properties.
-fn stock(name: &str) -> SlabProperties {
-    let m = irsig::analysis::facet::find_material(
-        name,
-        &crate::util::repo_path("scenes/materials.json"),
-    )
-    .unwrap();
-    SlabProperties::from_material(&m).unwrap()
-}
+use crate::util::stock_props as stock;
 
 /// Surfaces that evaporate, on the synthetic clear days: the latent flux
 /// is positive by day and takes a large part of the absorbed sunlight; the

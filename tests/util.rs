@@ -151,3 +151,13 @@ pub fn glb(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     out.extend(bin);
     out
 }
+
+/// The slab properties of stock material `name` (the library built into
+/// irsig, `scenes/materials.json`).
+pub fn stock_props(name: &str) -> irsig::thermal::SlabProperties {
+    let db = irsig::material::stock::stock().unwrap();
+    let m = db
+        .get(name)
+        .unwrap_or_else(|| panic!("no stock material `{name}`"));
+    irsig::thermal::SlabProperties::from_material(m).unwrap()
+}
