@@ -919,15 +919,20 @@ fn the_registry_lists_every_parameter_and_the_list_is_a_params_file() {
 
 /// Root-mean-square difference of an `irsig thermal --csv` output and a
 /// `time,surface_temperature_k` series at the series' times.
-fn rmse_against_series(thermal_csv: &str, series: &[(String, f64)]) -> f64 {
-    let model: std::collections::HashMap<&str, f64> = thermal_csv
+/// `irsig thermal --csv` output as time → surface temperature.
+fn thermal_csv_by_time(thermal_csv: &str) -> std::collections::HashMap<&str, f64> {
+    thermal_csv
         .lines()
         .skip(1)
         .map(|l| {
             let (t, v) = l.split_once(',').unwrap();
             (t, v.parse::<f64>().unwrap())
         })
-        .collect();
+        .collect()
+}
+
+fn rmse_against_series(thermal_csv: &str, series: &[(String, f64)]) -> f64 {
+    let model = thermal_csv_by_time(thermal_csv);
     let ss: f64 = series
         .iter()
         .map(|(t, v)| (model[t.as_str()] - v).powi(2))
@@ -2108,14 +2113,7 @@ fn calibrated_crop_predicts_the_second_half_of_both_flux_sites() {
         let r: Vec<&std::ffi::OsStr> = args.iter().map(|s| s.as_os_str()).collect();
         let (ok, out, err) = run_irsig(&r);
         assert!(ok, "{err}");
-        let model: std::collections::HashMap<&str, f64> = out
-            .lines()
-            .skip(1)
-            .map(|l| {
-                let (t, v) = l.split_once(',').unwrap();
-                (t, v.parse::<f64>().unwrap())
-            })
-            .collect();
+        let model = thermal_csv_by_time(&out);
         let (m, t): (Vec<f64>, Vec<f64>) = truth_second
             .iter()
             .map(|(time, v)| (model[time.as_str()], *v))

@@ -187,13 +187,16 @@ impl PassPlan<'_> {
         // The second order: asked for, or for a surface that evaporates (the
         // curvature of e°(T) is not negligible) unless the facet lies near
         // its reference and its background is small.
-        let small_background = bgc.is_none_or(|(cf, cb)| {
-            let c = cf.abs().max(cb.abs());
-            s.bg.iter()
-                .all(|e| (c * e).abs() < super::SMALL_BACKGROUND_W_M2)
-        });
+        // (The background is scanned only where it decides.)
         let second = pass.second
-            || (pass.last && !rep.front.latent.is_empty() && !(self.near[f] && small_background));
+            || (pass.last
+                && !rep.front.latent.is_empty()
+                && !(self.near[f]
+                    && bgc.is_none_or(|(cf, cb)| {
+                        let c = cf.abs().max(cb.abs());
+                        s.bg.iter()
+                            .all(|e| (c * e).abs() < super::SMALL_BACKGROUND_W_M2)
+                    })));
         let full = second || (!pass.last && has_slot);
         if !full && let Some(base) = pass.base {
             self.image_from_base(rep, base, f, bgc, s, o);
