@@ -52,7 +52,7 @@ use crate::render::session::Session;
 use crate::render::{Conditions, ShadeOptions, Shader, Sky};
 use crate::thermal::scene::{FacetThermal, ThermalParams};
 use crate::thermal::{
-    self, BackBoundary, Background, FacetInputs, Forcing, SlabProperties, SolveOptions,
+    self, BackBoundary, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions,
 };
 use crate::trace::{Coherence, Hit, Ray};
 use crate::weather::WeatherRecord;
@@ -549,11 +549,29 @@ impl SceneStudy {
                     .map(|p| p.with_back(BackBoundary::GROUND))
             })
             .collect();
-        let prop = |f: usize| -> Result<&SlabProperties> {
+        // Each property set's exchange with the air, made once (as the
+        // scene solve does), not once per facet.
+        let exchanges = |ps: &[Option<SlabProperties>]| -> Result<Vec<Option<Exchange>>> {
+            ps.iter()
+                .map(|p| {
+                    p.as_ref()
+                        .map(|p| {
+                            p.validate()?;
+                            Exchange::new(p, &forcing)
+                        })
+                        .transpose()
+                })
+                .collect()
+        };
+        let (own_ex, ground_ex) = (exchanges(&props)?, exchanges(&ground_props)?);
+        let prop = |f: usize| -> Result<(&SlabProperties, &Exchange)> {
             let part = self.facet_part[f] as usize;
-            let own = props[part].as_ref();
+            let own = props[part].as_ref().zip(own_ex[part].as_ref());
             let p = if self.ground[f] {
-                ground_props[part].as_ref().or(own)
+                ground_props[part]
+                    .as_ref()
+                    .zip(ground_ex[part].as_ref())
+                    .or(own)
             } else {
                 own
             };
@@ -563,9 +581,11 @@ impl SceneStudy {
             .neighbours
             .par_iter()
             .map(|&f| {
-                let sol = thermal::solve(
-                    prop(f)?,
+                let (p, ex) = prop(f)?;
+                let sol = thermal::solve_with(
+                    p,
                     &forcing,
+                    ex,
                     &self.inputs(f, Background::Air),
                     &self.options,
                 )?;
@@ -618,9 +638,11 @@ impl SceneStudy {
                 } else {
                     Background::PerRecord(&bg)
                 };
-                let sol = thermal::solve(
-                    prop(f)?,
+                let (p, ex) = prop(f)?;
+                let sol = thermal::solve_with(
+                    p,
                     &forcing,
+                    ex,
                     &self.inputs(f, background),
                     &self.options,
                 )?;
