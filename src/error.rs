@@ -17,6 +17,8 @@ pub struct Location {
     pub path: Option<PathBuf>,
     /// 1-based line number.
     pub line: Option<usize>,
+    /// 1-based column (characters) on that line.
+    pub column: Option<usize>,
     /// Field name or JSON path (`objects[2].parts[0].material`).
     pub field: Option<String>,
 }
@@ -41,6 +43,12 @@ impl Location {
         self.line = Some(line);
         self
     }
+    /// The same location at a 1-based line and column.
+    pub fn at(mut self, line: usize, column: usize) -> Self {
+        self.line = Some(line);
+        self.column = Some(column);
+        self
+    }
     /// The same location with a field name / JSON path.
     pub fn with_field(mut self, field: impl Into<String>) -> Self {
         self.field = Some(field.into());
@@ -57,6 +65,9 @@ impl fmt::Display for Location {
         }
         if let Some(l) = self.line {
             write!(f, "{}line {l}", if wrote { ":" } else { "" })?;
+            if let Some(c) = self.column {
+                write!(f, ": column {c}")?;
+            }
             wrote = true;
         }
         if let Some(fl) = &self.field {

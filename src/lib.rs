@@ -78,6 +78,7 @@ pub mod radiometry;
 pub mod render;
 pub mod scene;
 pub mod sensor;
+pub mod suggest;
 pub mod sun;
 pub(crate) mod textio;
 pub mod thermal;

@@ -93,7 +93,8 @@ fn obj_errors_name_line() {
 
 use glam::Vec3;
 use irsig::geometry::{TriangleMesh, triangle_normal_area};
-use irsig::scene::{Scene, primitives, schema_json, town};
+use irsig::render::sections::schema_json;
+use irsig::scene::{Scene, primitives, town};
 
 use crate::util::{glb, gltf_doc, gltf_embedded, irsig_bin, repo_path};
 
@@ -463,10 +464,10 @@ fn scene_errors_collected_with_lines() {
         .collect();
     let has = |line: usize, field: &str, what: &str| {
         assert!(
-            errs.iter().any(
-                |e| e.contains(&format!("scene.json:line {line}: field `{field}`"))
-                    && e.contains(what)
-            ),
+            errs.iter()
+                .any(|e| e.contains(&format!("scene.json:line {line}: column "))
+                    && e.contains(&format!(": field `{field}`"))
+                    && e.contains(what)),
             "no error at line {line} `{field}` about {what}: {errs:#?}"
         )
     };
@@ -600,12 +601,64 @@ fn town_file_matches_generator_and_schema_is_current() {
     }
 }
 
+/// The schema describes every section: an editor using it accepts the
+/// bundled town and the documented section forms, and flags a misspelt key
+/// in `sensors`, `render` or `atmosphere` (draft 2020-12, checked with the
+/// `boon` validator).
+#[test]
+fn schema_describes_sensors_render_and_atmosphere() {
+    let schema: serde_json::Value = serde_json::from_str(&schema_json()).unwrap();
+    let mut compiler = boon::Compiler::new();
+    compiler.add_resource("urn:irsig-scene", schema).unwrap();
+    let mut schemas = boon::Schemas::new();
+    let id = compiler.compile("urn:irsig-scene", &mut schemas).unwrap();
+    let town = town::town_scene();
+    assert!(
+        schemas.validate(&town, id).is_ok(),
+        "the town must validate"
+    );
+    let with = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = town.clone();
+        edit(&mut v);
+        schemas.validate(&v, id).is_ok()
+    };
+    // Valid forms.
+    assert!(with(&|v| v["atmosphere"] = "tropical".into()));
+    assert!(with(
+        &|v| v["atmosphere"] =
+            serde_json::json!({"model": "standard", "profile": "sub-arctic-winter"})
+    ));
+    assert!(with(
+        &|v| v["atmosphere"] = serde_json::json!({"model": "tape7", "index": "t7/index.json"})
+    ));
+    assert!(with(
+        &|v| v["render"] = serde_json::json!({"max_bounces": 1, "sky_sampling": "dirsig"})
+    ));
+    // Misspelt keys and names.
+    assert!(!with(&|v| {
+        let s = v["sensors"][0].as_object_mut().unwrap();
+        let f = s.remove("focal_length_m").unwrap();
+        s.insert("focal_lenght_m".into(), f);
+    }));
+    assert!(!with(&|v| v["sensors"][0]["type"] = "fram".into()));
+    assert!(!with(
+        &|v| v["render"] = serde_json::json!({"max_bounce": 1})
+    ));
+    assert!(!with(
+        &|v| v["render"] = serde_json::json!({"sky_sampling": "stratified"})
+    ));
+    assert!(!with(&|v| v["atmosphere"] = "midlatitude_sumer".into()));
+    assert!(!with(
+        &|v| v["atmosphere"] = serde_json::json!({"model": "standard", "profile": "arctic"})
+    ));
+}
+
 #[test]
 fn cli_scene_check() {
     let d = tempfile::tempdir().unwrap();
     let p = small_scene(d.path(), SMALL);
     let out = std::process::Command::new(irsig_bin())
-        .args(["scene", "check", "--json"])
+        .args(["scene", "check", "--load-only", "--json"])
         .arg(&p)
         .output()
         .unwrap();
@@ -658,7 +711,7 @@ fn scene_weather_is_loaded_and_must_cover_the_image_time() {
     let p = small_scene(d.path(), &late);
     let e = Scene::load(&p).unwrap_err().to_string();
     assert!(
-        e.contains("line 4: field `weather.file`") && e.contains("not the image time"),
+        e.contains("line 4: column 15: field `weather.file`") && e.contains("not the image time"),
         "{e}"
     );
 }
@@ -922,7 +975,7 @@ fn suspicious_sites_and_weather_are_warned_about() {
     let w = Scene::load(&sign).unwrap().warnings;
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(
-        w[0].contains("line 4: field `weather.file`") && w[0].contains("10104 km"),
+        w[0].contains("line 4: column 15: field `weather.file`") && w[0].contains("10104 km"),
         "{w:?}"
     );
 
@@ -984,7 +1037,10 @@ fn cli_prints_scene_warnings_on_stderr() {
             "\"latitude_deg\": 0.7533, \"longitude_deg\": -1.3545",
         ),
     );
-    for args in [&["scene", "check"][..], &["scene", "check", "--json"][..]] {
+    for args in [
+        &["scene", "check", "--load-only"][..],
+        &["scene", "check", "--load-only", "--json"][..],
+    ] {
         let out = std::process::Command::new(irsig_bin())
             .args(args)
             .arg(&rad)
@@ -1040,7 +1096,9 @@ fn utc_offset_must_agree_with_the_image_time() {
     );
     let e = Scene::load(&p).unwrap_err().to_string();
     assert!(
-        e.contains("line 2: field `site.utc_offset_hours`") && e.contains("UTC-04:00"),
+        e.contains("line 2: column ")
+            && e.contains("field `site.utc_offset_hours`")
+            && e.contains("UTC-04:00"),
         "{e}"
     );
 }
@@ -1168,7 +1226,7 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n"
     // And on stderr from `scene check`.
     warnings(r#"{"part": "glass", "obj": "geo/tower.obj"}"#);
     let out = std::process::Command::new(irsig_bin())
-        .args(["scene", "check"])
+        .args(["scene", "check", "--load-only"])
         .arg(&p)
         .output()
         .unwrap();

@@ -7,6 +7,7 @@ mod util;
 mod analysis;
 mod atmosphere;
 mod backends;
+mod check_parity;
 mod cli;
 mod exposure;
 mod exposure_pipeline;

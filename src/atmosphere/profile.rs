@@ -95,8 +95,9 @@ impl Profile {
                 Error::invalid(
                     "profile",
                     format!(
-                        "unknown profile `{name}`: expected one of {}",
-                        valid.join(", ")
+                        "unknown profile `{name}`: expected one of {}{}",
+                        valid.join(", "),
+                        crate::suggest::hint(name, valid.iter().copied())
                     ),
                 )
             })

@@ -4,7 +4,8 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use irsig::scene::{Scene, schema_json, town};
+use irsig::render::sections::schema_json;
+use irsig::scene::{Scene, town};
 
 /// Arguments of `irsig scene`.
 #[derive(Debug, clap::Args)]
@@ -15,11 +16,24 @@ pub struct Args {
 
 #[derive(Debug, clap::Subcommand)]
 enum SceneCommand {
-    /// Load a scene (materials, geometry, weather reference) and print a
+    /// Load a scene and run every check `render` runs before its first
+    /// pixel (materials, geometry, weather, sensors and their response
+    /// files, `render` and `atmosphere` sections, weather coverage of the
+    /// thermal spin-up, image memory, what each sensor sees); print a
     /// summary, or every problem found (exit status 2).
     Check {
         /// The scene file (JSON).
         file: PathBuf,
+        /// Image times to check the weather coverage for, as `render
+        /// --times` takes them [default: the scene's time].
+        #[arg(long, value_name = "TIMES")]
+        times: Option<String>,
+        /// Check only what loading the scene needs (materials, geometry,
+        /// weather file), not what `render` needs (sensors, `render`,
+        /// `atmosphere`, weather over the spin-up): for scenes used only
+        /// by the thermal and analysis commands.
+        #[arg(long)]
+        load_only: bool,
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
@@ -49,7 +63,12 @@ fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
 /// Run `irsig scene`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     match args.command {
-        SceneCommand::Check { file, json } => check(&file, json),
+        SceneCommand::Check {
+            file,
+            times,
+            load_only,
+            json,
+        } => check(&file, times.as_deref(), load_only, json),
         SceneCommand::Schema { out } => {
             let s = schema_json();
             match out {
@@ -67,7 +86,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 }
 
-fn check(file: &Path, json: bool) -> anyhow::Result<()> {
+fn check(file: &Path, times: Option<&str>, load_only: bool, json: bool) -> anyhow::Result<()> {
+    let times = times
+        .map(super::args::parse_times)
+        .transpose()?
+        .unwrap_or_default();
     let scene = match Scene::check(file) {
         Ok(s) => s,
         Err(errs) => {
@@ -78,15 +101,25 @@ fn check(file: &Path, json: bool) -> anyhow::Result<()> {
             anyhow::bail!("{}: {} problem(s) found", file.display(), errs.len());
         }
     };
-    for w in scene.warnings.iter().chain(&check_view(&scene)) {
+    let view = if load_only {
+        Vec::new()
+    } else {
+        check_view(&scene)
+    };
+    for w in scene.warnings.iter().chain(&view) {
         eprintln!("warning: {w}");
     }
-    let errs = irsig::scene::image_memory_errors(
-        &scene,
-        irsig::render::TRUTH_LAYERS.len(),
-        1,
-        irsig::scene::available_memory_bytes(),
-    );
+    // What `render` checks before its first pixel, in the order it does.
+    let mut errs = Vec::new();
+    if !load_only {
+        errs = irsig::scene::image_memory_errors(
+            &scene,
+            irsig::render::TRUTH_LAYERS.len(),
+            1,
+            irsig::scene::available_memory_bytes(),
+        );
+        errs.extend(irsig::render::checks::render_problems(&scene, &times));
+    }
     if !errs.is_empty() {
         let mut err = std::io::stderr().lock();
         for e in &errs {

@@ -161,8 +161,8 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
     let at = |field: String| {
         let l = lines.get_or_init(|| JsonLines::new(text));
         let mut loc = Location::file(path);
-        if let Some(n) = l.line(&field) {
-            loc = loc.at_line(n);
+        if let Some((n, c)) = l.position(&field) {
+            loc = loc.at(n, c);
         }
         loc.with_field(field)
     };

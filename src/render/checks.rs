@@ -59,3 +59,75 @@ pub fn view_warnings(
     }
     out
 }
+
+/// The errors `render` would stop on before its first pixel, found without
+/// rendering, for `scene check`: the render sections
+/// ([`super::sections::parse`]: `render`, `atmosphere`, `sensors` and their
+/// response files), a missing weather history, image times whose thermal
+/// history window (the spin-up before the first image time,
+/// [`crate::exposure::HistoryWindow`]) the weather does not cover, the
+/// materials' thermal setup, and the atmosphere at each image time (a tape7
+/// index that cannot be read). `times`: the image times (empty: the
+/// scene's). Errors name the scene file and field; at most one per kind.
+pub fn render_problems(
+    scene: &Scene,
+    times: &[chrono::DateTime<chrono::FixedOffset>],
+) -> Vec<crate::Error> {
+    let lines = std::cell::OnceCell::new();
+    problems(scene, times)
+        .into_iter()
+        .map(|e| super::sections::locate(e, &scene.path, &lines))
+        .collect()
+}
+
+fn problems(scene: &Scene, times: &[chrono::DateTime<chrono::FixedOffset>]) -> Vec<crate::Error> {
+    use crate::{Error, Location};
+    let file = Location::file(&scene.path);
+    let mut errors = Vec::new();
+    let sections = super::sections::parse(scene)
+        .map_err(|e| errors.push(e))
+        .ok();
+    if let Err(e) = super::scene_thermal::FacetThermalSetup::from_scene(scene) {
+        errors.push(e);
+    }
+    let Some(weather) = &scene.weather else {
+        errors.push(Error::parse(
+            file.with_field("weather"),
+            "missing: a render needs a weather history (`\"weather\": {\"file\": …}`)",
+        ));
+        return errors;
+    };
+    let given = !times.is_empty();
+    let times = if given {
+        times.to_vec()
+    } else {
+        vec![scene.time]
+    };
+    let window = super::scene_thermal::SceneThermalParams::default().window;
+    if let Err(e) = crate::exposure::history_times(&weather.history, &times, &window) {
+        let message = match e {
+            Error::Invalid { message, .. } => message,
+            other => other.to_string(),
+        };
+        // The scene's `time`, or the image times the caller gave.
+        errors.push(if given {
+            Error::invalid("image times", message)
+        } else {
+            Error::parse(file.clone().with_field("time"), message)
+        });
+        return errors;
+    }
+    if let Some(s) = &sections {
+        for t in &times {
+            let made = weather
+                .history
+                .at(*t)
+                .and_then(|rec| super::session::atmosphere_at(&s.atmosphere, scene, &rec));
+            if let Err(e) = made {
+                errors.push(e);
+                break;
+            }
+        }
+    }
+    errors
+}

@@ -30,6 +30,7 @@ pub mod checks;
 pub mod image;
 pub mod path;
 pub mod scene_thermal;
+pub mod sections;
 pub mod session;
 pub mod shade;
 pub mod tile;
@@ -60,7 +61,7 @@ fn default_facet_samples() -> u32 {
 }
 
 /// The `render` section of a scene file (all fields optional).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RenderConfig {
     /// Most secondary bounces (specular reflection, transmission) per
@@ -81,7 +82,19 @@ pub struct RenderConfig {
     /// [`crate::exposure::SkySampling`]'s `FromStr` (`stratified:N`,
     /// `dirsig`, `grid:DZxDA`); default `stratified:64`.
     #[serde(default)]
+    #[schemars(schema_with = "sky_sampling_schema")]
     pub sky_sampling: crate::exposure::SkySampling,
+}
+
+/// `render.sky_sampling` as written: `stratified:N`, `dirsig` or
+/// `grid:DZxDA`.
+fn sky_sampling_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+    schemars::json_schema!({
+        "type": "string",
+        "pattern": "^(dirsig|stratified:[0-9]+|grid:[0-9.]+x[0-9.]+)$",
+        "default": "stratified:64",
+        "description": "Hemisphere sampling of each facet's sky view: `stratified:N` (N jittered rays per face), `dirsig` (DIRSIG's 15°×30° grid) or `grid:DZxDA` (degrees)."
+    })
 }
 
 impl Default for RenderConfig {
@@ -103,14 +116,13 @@ impl RenderConfig {
         let Some(v) = value else {
             return Ok(RenderConfig::default());
         };
-        let c: RenderConfig = serde_json::from_value(v.clone()).map_err(|e| {
-            Error::parse(
-                location.clone().with_field("render"),
-                format!(
-                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling"
-                ),
-            )
-        })?;
+        let c: RenderConfig = sections::typed(
+            v,
+            location,
+            "render",
+            "an object with max_bounces, spectral_step_um, sky_temperature_k, facet_samples, \
+             sky_sampling",
+        )?;
         let bad = |field: &str, msg: String| {
             Error::parse(location.clone().with_field(format!("render.{field}")), msg)
         };

@@ -28,12 +28,12 @@ use super::path::PathTables;
 use super::scene_thermal::FacetTracers;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
-use super::{Fnv, RenderConfig, sensor_bands, write_outputs};
+use super::{Fnv, RenderConfig, write_outputs};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, Profile, SurfaceMet, Tape7Lut};
 use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
 use crate::scene::Scene;
-use crate::sensor::{Sensor, SensorConfig};
+use crate::sensor::Sensor;
 use crate::trace::{self, Backend, Tracer, Watertight};
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
@@ -73,6 +73,47 @@ pub enum AtmosphereConfig {
         /// The index file.
         index: PathBuf,
     },
+}
+
+impl schemars::JsonSchema for AtmosphereConfig {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "AtmosphereConfig".into()
+    }
+    /// As [`AtmosphereConfig`]'s `TryFrom<Value>` reads it: a name, or an
+    /// object tagged by `model`.
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let names: Vec<&str> = ["none", "builtin", "standard"]
+            .into_iter()
+            .chain(Profile::ALL.map(Profile::name))
+            .collect();
+        let profiles: Vec<&str> = Profile::ALL.map(Profile::name).to_vec();
+        schemars::json_schema!({
+            "description": "The atmosphere between scene and sensor, and the sky. Absent: the built-in layered model on the AFGL profile of the site's latitude and the month.",
+            "oneOf": [
+                { "type": "string", "enum": names,
+                  "description": "`none`, `builtin`, `standard` (profile by site and month) or an AFGL profile name" },
+                { "type": "object", "additionalProperties": false, "required": ["model"],
+                  "properties": { "model": { "const": "none" } } },
+                { "type": "object", "additionalProperties": false, "required": ["model"],
+                  "properties": {
+                      "model": { "const": "builtin" },
+                      "co2_ppmv": { "type": "number", "description": "CO₂ volume mixing ratio, ppmv (default 420)" },
+                      "water_scale_height_m": { "type": "number", "description": "water-vapour scale height, m (default 2000)" }
+                  } },
+                { "type": "object", "additionalProperties": false, "required": ["model"],
+                  "properties": {
+                      "model": { "const": "standard" },
+                      "profile": { "type": "string", "enum": profiles },
+                      "co2_ppmv": { "type": "number", "description": "CO₂ volume mixing ratio, ppmv (default 420)" }
+                  } },
+                { "type": "object", "additionalProperties": false, "required": ["model", "index"],
+                  "properties": {
+                      "model": { "const": "tape7" },
+                      "index": { "type": "string", "description": "index JSON of MODTRAN tape7 runs, relative to the scene file" }
+                  } }
+            ]
+        })
+    }
 }
 
 impl Default for AtmosphereConfig {
@@ -117,10 +158,14 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                 "standard" => AtmosphereConfig::default(),
                 other => AtmosphereConfig::Standard {
                     profile: Some(profile(other).map_err(|_| {
+                        let names = ["none", "builtin", "standard"]
+                            .into_iter()
+                            .chain(Profile::ALL.map(Profile::name));
                         format!(
                             "unknown atmosphere `{other}`: expected \"none\", \"builtin\", \
-                             \"standard\" or a profile ({})",
-                            Profile::ALL.map(Profile::name).join(", ")
+                             \"standard\" or a profile ({}){}",
+                            Profile::ALL.map(Profile::name).join(", "),
+                            crate::suggest::hint(other, names)
                         )
                     })?),
                     co2_ppmv: None,
@@ -128,7 +173,9 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
             });
         }
         Ok(
-            match serde_json::from_value::<AtmosphereObject>(v).map_err(|e| e.to_string())? {
+            match serde_json::from_value::<AtmosphereObject>(v)
+                .map_err(|e| crate::suggest::with_suggestion(&e.to_string()))?
+            {
                 AtmosphereObject::None => AtmosphereConfig::None,
                 AtmosphereObject::Builtin {
                     co2_ppmv,
@@ -148,6 +195,55 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
             },
         )
     }
+}
+
+/// The atmosphere of `scene` under `config` at one image time, driven by
+/// the weather `record` (a tape7 table is read from its index file).
+pub(crate) fn atmosphere_at(
+    config: &AtmosphereConfig,
+    scene: &Scene,
+    record: &WeatherRecord,
+) -> Result<Atmosphere> {
+    Ok(match config {
+        AtmosphereConfig::None => Atmosphere::None,
+        AtmosphereConfig::Builtin {
+            co2_ppmv,
+            water_scale_height_m,
+        } => {
+            let mut p = crate::atmosphere::BuiltinParams::default();
+            if let Some(c) = co2_ppmv {
+                p.co2_ppmv = *c;
+            }
+            if let Some(w) = water_scale_height_m {
+                p.water_scale_height_m = *w;
+            }
+            Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+                SurfaceMet::from_weather(record, scene.site.altitude_m),
+                p,
+            )?)
+        }
+        AtmosphereConfig::Standard { profile, co2_ppmv } => {
+            let profile = profile.unwrap_or_else(|| {
+                use chrono::Datelike;
+                Profile::for_site(scene.site.latitude_deg, record.time.month())
+            });
+            let mut p = crate::atmosphere::BuiltinParams {
+                profile: Some(profile),
+                ..Default::default()
+            };
+            if let Some(c) = co2_ppmv {
+                p.co2_ppmv = *c;
+            }
+            Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+                SurfaceMet::from_weather(record, scene.site.altitude_m),
+                p,
+            )?)
+        }
+        AtmosphereConfig::Tape7 { index } => {
+            let base = scene.path.parent().unwrap_or(Path::new("."));
+            Atmosphere::Tape7Lut(Tape7Lut::read_index(base.join(index))?)
+        }
+    })
 }
 
 /// Options of a render run.
@@ -295,15 +391,6 @@ pub struct ThermalStates {
     pub timings: super::scene_thermal::SceneThermalTimings,
 }
 
-fn parse_at<T: for<'de> Deserialize<'de>>(
-    v: &serde_json::Value,
-    loc: &Location,
-    expected: &str,
-) -> Result<T> {
-    serde_json::from_value(v.clone())
-        .map_err(|e| Error::parse(loc.clone(), format!("{e}: expected {expected}")))
-}
-
 impl Session {
     /// Load `scene_path` and build the tracer with `backend`.
     pub fn open(scene_path: &Path, backend: Backend) -> Result<Session> {
@@ -322,42 +409,12 @@ impl Session {
         let scene_path = scene.path.clone();
         let scene_path = scene_path.as_path();
         let file = Location::file(scene_path);
-        let config = RenderConfig::from_json(scene.render.as_ref(), &file)?;
-        let atmosphere = match &scene.atmosphere {
-            None => AtmosphereConfig::default(),
-            Some(v) => parse_at(
-                v,
-                &file.clone().with_field("atmosphere"),
-                "\"none\", a profile name, {\"model\": \"none\"}, {\"model\": \"builtin\"}, \
-                 {\"model\": \"standard\", \"profile\": NAME} or {\"model\": \"tape7\", \"index\": FILE}",
-            )?,
-        };
-        let base = scene_path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        let mut sensors = Vec::new();
-        let mut bands = Vec::new();
-        for (i, v) in scene.sensors.iter().enumerate() {
-            let loc = file.clone().with_field(format!("sensors[{i}]"));
-            let c: SensorConfig = parse_at(
-                v,
-                &loc,
-                "a sensor with \"type\": \"frame\" or \"line_scanner\"",
-            )?;
-            let s = Sensor::from_config(&c, &loc)?;
-            if sensors.iter().any(|o: &Sensor| o.name == s.name) {
-                return Err(Error::parse(
-                    loc.with_field(format!("sensors[{i}].name")),
-                    format!("`{}` is used twice: expected unique sensor names", s.name),
-                ));
-            }
-            bands.push(sensor_bands(&s, &base, config.spectral_step_um, &loc)?);
-            sensors.push(s);
-        }
-        if sensors.is_empty() {
-            return Err(Error::parse(
-                file.clone().with_field("sensors"),
-                "no sensors: expected at least one frame camera or line scanner",
-            ));
-        }
+        let super::sections::Sections {
+            config,
+            atmosphere,
+            sensors,
+            bands,
+        } = super::sections::parse(&scene)?;
         let weather_ref = scene.weather.as_ref().ok_or_else(|| {
             Error::parse(
                 file.clone().with_field("weather"),
@@ -417,46 +474,7 @@ impl Session {
     /// The atmosphere at one image time (the scene's configuration driven
     /// by the weather `record`).
     pub(crate) fn atmosphere_at(&self, record: &WeatherRecord) -> Result<Atmosphere> {
-        Ok(match &self.atmosphere {
-            AtmosphereConfig::None => Atmosphere::None,
-            AtmosphereConfig::Builtin {
-                co2_ppmv,
-                water_scale_height_m,
-            } => {
-                let mut p = crate::atmosphere::BuiltinParams::default();
-                if let Some(c) = co2_ppmv {
-                    p.co2_ppmv = *c;
-                }
-                if let Some(w) = water_scale_height_m {
-                    p.water_scale_height_m = *w;
-                }
-                Atmosphere::Builtin(BuiltinAtmosphere::with_params(
-                    SurfaceMet::from_weather(record, self.scene.site.altitude_m),
-                    p,
-                )?)
-            }
-            AtmosphereConfig::Standard { profile, co2_ppmv } => {
-                let profile = profile.unwrap_or_else(|| {
-                    use chrono::Datelike;
-                    Profile::for_site(self.scene.site.latitude_deg, record.time.month())
-                });
-                let mut p = crate::atmosphere::BuiltinParams {
-                    profile: Some(profile),
-                    ..Default::default()
-                };
-                if let Some(c) = co2_ppmv {
-                    p.co2_ppmv = *c;
-                }
-                Atmosphere::Builtin(BuiltinAtmosphere::with_params(
-                    SurfaceMet::from_weather(record, self.scene.site.altitude_m),
-                    p,
-                )?)
-            }
-            AtmosphereConfig::Tape7 { index } => {
-                let base = self.scene.path.parent().unwrap_or(Path::new("."));
-                Atmosphere::Tape7Lut(Tape7Lut::read_index(base.join(index))?)
-            }
-        })
+        atmosphere_at(&self.atmosphere, &self.scene, record)
     }
 
     /// The thermal state of every facet at each of `times` (one exposure

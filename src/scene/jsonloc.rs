@@ -19,8 +19,8 @@ pub fn serde_error(path: &Path, e: &serde_json::Error) -> Error {
     let suffix = format!(" at line {} column {}", e.line(), e.column());
     let msg = msg.strip_suffix(&suffix).unwrap_or(&msg);
     Error::parse(
-        Location::file(path).at_line(e.line()),
-        format!("column {}: {msg}", e.column()),
+        Location::file(path).at(e.line(), e.column()),
+        crate::suggest::with_suggestion(msg),
     )
 }
 
@@ -30,7 +30,8 @@ pub fn serde_error(path: &Path, e: &serde_json::Error) -> Error {
 /// paths found before the problem.
 #[derive(Debug, Default, Clone)]
 pub struct JsonLines {
-    lines: HashMap<String, usize>,
+    /// Path → (1-based line, 1-based column in characters).
+    lines: HashMap<String, (usize, usize)>,
 }
 
 impl JsonLines {
@@ -40,15 +41,23 @@ impl JsonLines {
             b: text.as_bytes(),
             pos: 0,
             line: 1,
+            line_start: 0,
             out: HashMap::new(),
         };
-        s.out.insert(String::new(), 1);
+        s.out.insert(String::new(), (1, 1));
         s.value("", 0);
         JsonLines { lines: s.out }
     }
 
     /// The line of `path`, or of its nearest ancestor that was found.
     pub fn line(&self, path: &str) -> Option<usize> {
+        self.position(path).map(|(l, _)| l)
+    }
+
+    /// The 1-based (line, column) of `path` (where its key, or for array
+    /// elements its value, starts), or of its nearest ancestor that was
+    /// found. Columns count characters, as `serde_json`'s do.
+    pub fn position(&self, path: &str) -> Option<(usize, usize)> {
         let mut p = path;
         loop {
             if let Some(&l) = self.lines.get(p) {
@@ -65,7 +74,9 @@ struct Scanner<'a> {
     b: &'a [u8],
     pos: usize,
     line: usize,
-    out: HashMap<String, usize>,
+    /// Byte offset where the current line starts.
+    line_start: usize,
+    out: HashMap<String, (usize, usize)>,
 }
 
 impl Scanner<'_> {
@@ -75,8 +86,19 @@ impl Scanner<'_> {
     fn bump(&mut self) {
         if self.peek() == Some(b'\n') {
             self.line += 1;
+            self.line_start = self.pos + 1;
         }
         self.pos += 1;
+    }
+    /// The current (line, column); the column counts UTF-8 characters.
+    fn here(&self) -> (usize, usize) {
+        let end = self.pos.min(self.b.len());
+        let start = self.line_start.min(end);
+        let chars = self.b[start..end]
+            .iter()
+            .filter(|&&c| (c & 0xC0) != 0x80)
+            .count();
+        (self.line, chars + 1)
     }
     fn ws(&mut self) {
         while let Some(c) = self.peek() {
@@ -129,14 +151,14 @@ impl Scanner<'_> {
                             return;
                         }
                     }
-                    let line = self.line;
+                    let at = self.here();
                     let key = self.string();
                     let child = if path.is_empty() {
                         key
                     } else {
                         format!("{path}.{key}")
                     };
-                    self.out.insert(child.clone(), line);
+                    self.out.insert(child.clone(), at);
                     self.ws();
                     if self.peek() == Some(b':') {
                         self.bump();
@@ -169,7 +191,8 @@ impl Scanner<'_> {
                         return;
                     }
                     let child = format!("{path}[{i}]");
-                    self.out.insert(child.clone(), self.line);
+                    let at = self.here();
+                    self.out.insert(child.clone(), at);
                     self.value(&child, depth + 1);
                     i += 1;
                     self.ws();
@@ -217,5 +240,11 @@ mod tests {
         assert_eq!(j.line("b[1].c"), Some(6));
         // Unknown leaf: nearest ancestor.
         assert_eq!(j.line("b[1].zzz"), Some(5));
+        assert_eq!(j.position("a"), Some((2, 2)));
+        assert_eq!(j.position("b[0].c"), Some((4, 4)));
+        assert_eq!(j.position("b[1].c"), Some((6, 4)));
+        // Columns count characters, not bytes (`é` is two bytes).
+        let j = JsonLines::new("{\"é\": {\"x\": 1}}");
+        assert_eq!(j.position("é.x"), Some((1, 8)));
     }
 }

@@ -277,8 +277,8 @@ pub fn image_memory_errors(
         if bytes > available as f64 {
             let field = format!("sensors[{i}].{field}");
             let mut loc = Location::file(&scene.path);
-            if let Some(n) = lines.as_ref().and_then(|l| l.line(&field)) {
-                loc = loc.at_line(n);
+            if let Some((l, c)) = lines.as_ref().and_then(|l| l.position(&field)) {
+                loc = loc.at(l, c);
             }
             let per = if tiles > 1 { " per tile" } else { "" };
             errors.push(Error::parse(
@@ -496,8 +496,8 @@ impl Loader {
             .lines
             .get_or_init(|| jsonloc::JsonLines::new(&self.text));
         let mut loc = Location::file(&self.path);
-        if let Some(n) = l.line(field) {
-            loc = loc.at_line(n);
+        if let Some((n, c)) = l.position(field) {
+            loc = loc.at(n, c);
         }
         loc.with_field(field)
     }

@@ -27,7 +27,7 @@ use crate::radiometry::Band;
 use crate::{Error, Result};
 
 /// Point-spread function used to reduce oversampled sub-pixels.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Psf {
     /// Equal weights over the pixel's own `N×N` sub-samples.

@@ -74,7 +74,7 @@ impl<K, T: std::fmt::Debug> std::fmt::Debug for Derived<K, T> {
 
 /// A spectral band as given in the scene file. The response is resolved by
 /// the radiometry module (CSV reader, band integration).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BandConfig {
     /// Band name (used in layer names).
@@ -85,7 +85,7 @@ pub struct BandConfig {
 }
 
 /// A band's spectral response as written in the scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum ResponseSpec {
     /// A rectangular response from `lo` to `hi`, µm.
@@ -133,7 +133,7 @@ fn default_reference_temperature() -> f64 {
 }
 
 /// One sensor of the scene file.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum SensorConfig {
     /// A frame camera.
@@ -143,7 +143,7 @@ pub enum SensorConfig {
 }
 
 /// Sensor-effects settings shared by both sensor types (see [`Effects`]).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MtfConfig {
     /// Entrance-pupil (aperture) diameter for the diffraction-limited optics
@@ -161,7 +161,7 @@ pub struct MtfConfig {
 /// with `look_at` (+ `up`), or with `yaw_deg`/`pitch_deg`/`roll_deg`
 /// (azimuth clockwise from north, elevation, roll; see
 /// [`camera::yaw_pitch_roll_axes`]).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FrameCameraConfig {
     /// Sensor name (output file stem).
@@ -219,7 +219,7 @@ pub struct FrameCameraConfig {
 
 /// `{"type": "line_scanner", ...}`: an airborne whiskbroom scanner (see
 /// [`scanner`] for the geometry and conventions).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LineScannerConfig {
     /// Sensor name.
