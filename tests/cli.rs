@@ -262,6 +262,15 @@ const CASES: &[Case] = &[
         expect: &["w.csv", "expected"],
     },
     Case {
+        name: "weather: misspelt column",
+        files: &[(
+            "w.csv",
+            b"time,air_temprature_k,dew_point_k\n2025-06-21T00:00:00-04:00,290,280\n",
+        )],
+        args: &["weather", "show", "@/w.csv"],
+        expect: &["w.csv", "line 1", "air_temprature_k", "did you mean `air_temperature_k`?"],
+    },
+    Case {
         name: "weather: NaN in a row",
         files: &[(
             "w.csv",
@@ -341,7 +350,7 @@ const CASES: &[Case] = &[
             "thermal", "--material", "slabb", "--materials", "@/mats.json", "--weather",
             "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00",
         ],
-        expect: &["slabb", "mats.json", "slab"],
+        expect: &["slabb", "mats.json", "did you mean `slab`?"],
     },
     Case {
         name: "thermal: time outside the weather history",

@@ -85,7 +85,10 @@ impl Table {
             if !known.contains(&h.as_str()) {
                 return Err(Error::parse(
                     Location::file(path).at_line(1).with_field(h.clone()),
-                    format!("unknown column; expected {expected}"),
+                    format!(
+                        "unknown column{}; expected {expected}",
+                        crate::suggest::hint(h, known.iter().copied())
+                    ),
                 ));
             }
         }

@@ -278,8 +278,9 @@ pub fn find_material(spec: &str, db: &Path) -> Result<Material> {
             Error::invalid(
                 "material",
                 format!(
-                    "{}: no material named `{n}`; it has: {}",
+                    "{}: no material named `{n}`{}; it has: {}",
                     file.display(),
+                    crate::suggest::hint(n, mdb.materials().iter().map(|m| m.name.as_str())),
                     mdb.materials()
                         .iter()
                         .map(|m| m.name.as_str())

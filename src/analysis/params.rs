@@ -319,8 +319,12 @@ impl ParamSet {
                         Error::parse(
                             at("property"),
                             format!(
-                                "unknown material property `{}`; expected one of {}",
+                                "unknown material property `{}`{}; expected one of {}",
                                 r.property,
+                                crate::suggest::hint(
+                                    &r.property,
+                                    registry::MATERIAL_PARAMETERS.iter().map(|p| p.name)
+                                ),
                                 registry::MATERIAL_PARAMETERS
                                     .iter()
                                     .map(|p| p.name)

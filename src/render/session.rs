@@ -663,7 +663,8 @@ impl Session {
                 Error::invalid(
                     "sensor",
                     format!(
-                        "`{name}`: no such sensor (the scene has {})",
+                        "`{name}`: no such sensor{} (the scene has {})",
+                        crate::suggest::hint(name, self.sensors.iter().map(|s| s.name.as_str())),
                         self.sensors
                             .iter()
                             .map(|s| s.name.as_str())

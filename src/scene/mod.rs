@@ -1305,10 +1305,11 @@ impl Loader {
                 None => {
                     if !db.is_empty() {
                         let near = db.similar_names(name);
-                        let hint = if near.is_empty() {
-                            String::new()
-                        } else {
-                            format!(" (similar: {})", near.join(", "))
+                        let names = db.materials().iter().map(|m| m.name.as_str());
+                        let hint = match crate::suggest::closest(name, names) {
+                            Some(c) => format!(" (did you mean `{c}`?)"),
+                            None if near.is_empty() => String::new(),
+                            None => format!(" (similar: {})", near.join(", ")),
                         };
                         this.err(field, format!("unknown material `{name}`{hint}"));
                     }

@@ -97,8 +97,9 @@ pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
                     return Err(Error::parse(
                         loc.with_field(c.clone()),
                         format!(
-                            "unknown column `{c}` (column {}); expected names from `{CSV_HEADER}`",
-                            j + 1
+                            "unknown column `{c}` (column {}){}; expected names from `{CSV_HEADER}`",
+                            j + 1,
+                            crate::suggest::hint(c, known.iter().copied())
                         ),
                     ));
                 }
