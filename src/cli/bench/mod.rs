@@ -285,7 +285,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     }
     writeln!(
         out,
-        "agreement: {} of {} rays differ (hit/miss, or distance beyond 1e-4 relative)",
+        "agreement: {} of {} rays differ (hit/miss, or the hit: trace::hits_agree)",
         report.agreement.mismatched_rays, report.agreement.rays
     )?;
     Ok(())

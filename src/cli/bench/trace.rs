@@ -375,8 +375,9 @@ pub struct Agreement {
     /// Rays compared (all classes).
     pub rays: usize,
     /// Rays on which some backend differs from Embree packets on hit/miss,
-    /// or on the hit distance ([`trace::distances_agree`] with a floor of
-    /// 1e-6 of the scene size).
+    /// or on the hit ([`trace::hits_agree`]: the distance, with a floor of
+    /// 1e-6 of the scene size, or that floor over the incidence cosine on
+    /// the same triangle).
     pub mismatched_rays: usize,
 }
 
@@ -490,10 +491,8 @@ pub fn trace_bench(
 
     let (lo, hi) = geom.bounds().expect("checked in make_ray_sets");
     let abs_tol = 1e-6 * lo.abs().max(hi.abs()).max_element();
-    let hits_agree = |a: &Option<Hit>, b: &Option<Hit>| match (a, b) {
-        (None, None) => true,
-        (Some(x), Some(y)) => trace::distances_agree(x.t, y.t, abs_tol),
-        _ => false,
+    let hits_agree = |a: &Option<Hit>, b: &Option<Hit>, dir: Vec3| {
+        trace::hits_agree(a.as_ref(), b.as_ref(), dir, abs_tol)
     };
     let (reference, others) = last.split_first().expect("three backends");
     let mismatched: Vec<usize> = (0..classes.len())
@@ -504,7 +503,9 @@ pub fn trace_bench(
                     others
                         .iter()
                         .any(|o| match (r, o[c].as_ref().expect("one round")) {
-                            (Answers::Hits(a), Answers::Hits(b)) => !hits_agree(&a[i], &b[i]),
+                            (Answers::Hits(a), Answers::Hits(b)) => {
+                                !hits_agree(&a[i], &b[i], classes[c].rays[i].dir)
+                            }
                             (Answers::Occluded(a), Answers::Occluded(b)) => a[i] != b[i],
                             _ => true,
                         })
