@@ -18,7 +18,8 @@ pub use crate::geodesy::{WGS84_A_M, WGS84_F, ecef_from_geodetic, enu_from_geodet
 /// The continuous image coordinates in sensor `s` of the scene surface at
 /// latitude/longitude: the point goes to ENU at the site's altitude, drops
 /// vertically onto the scene's top surface (ground beyond the scene:
-/// z at the site's altitude), and is projected through the sensor.
+/// z at the site's altitude), and is projected through the sensor into its
+/// written image (after its orientation flip).
 ///
 /// # Errors
 /// The point is behind the sensor, outside its image, or hidden from the
@@ -53,12 +54,15 @@ pub fn pixel_of_latlon(
     };
     let sensor = &session.sensors[s];
     let (w, h) = (sensor.width() as f64, sensor.height() as f64);
-    match sensor.project(p) {
+    match sensor.project_written(p) {
         Some(uv) if uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w && uv.y < h => {
             // Seen, or hidden behind something nearer the sensor?
             let eye = match &sensor.geometry {
                 Geometry::Frame(c) => c.position(),
-                Geometry::LineScanner(l) => l.ray(uv.y as usize, uv.x, 0.0).origin.as_dvec3(),
+                Geometry::LineScanner(l) => {
+                    let (s, line) = sensor.orientation.apply(uv.x, uv.y, w, h);
+                    l.ray(line as usize, s, 0.0).origin.as_dvec3()
+                }
             };
             let to_eye = eye - p;
             let dist = to_eye.length();
