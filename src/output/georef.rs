@@ -261,7 +261,8 @@ pub fn write_geotiff(path: impl AsRef<Path>, stack: &ImageStack, georef: &Georef
             .map_err(tiff_err)?;
         // Georeference.
         let t = georef.transform;
-        if t[2] == 0.0 && t[4] == 0.0 && t[1] > 0.0 && t[5] < 0.0 {
+        let square = 1e-12 * t[1].abs().max(t[5].abs());
+        if t[2].abs() <= square && t[4].abs() <= square && t[1] > 0.0 && t[5] < 0.0 {
             dir.write_tag(Tag::ModelPixelScaleTag, &[t[1], -t[5], 0.0][..])
                 .map_err(tiff_err)?;
             dir.write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, t[0], t[3], 0.0][..])
