@@ -159,14 +159,15 @@ fn map_info_of_a_nadir_image_puts_the_marker_at_its_pixel() {
         assert_eq!(layer(&stack, "object_id")[0], -1.0);
     }
     // The turned camera's header states the rotation; the grid is turned
-    // by the yaw (clockwise from north) plus the meridian convergence
-    // (the grid north of zone 18 is about 1.8° east of true north here).
+    // clockwise by the yaw plus the meridian convergence (2.6° west of zone
+    // 18's central meridian, true north is 1.78° clockwise from grid north:
+    // PROJ's `cs2cs` puts a step along the parallel at −1.78°).
     let text = std::fs::read_to_string(out.join("turned.hdr")).unwrap();
     assert!(text.contains("rotation="), "{text}");
     assert!(text.contains("coordinate system string = {PROJCS[\"WGS 84 / UTM zone 18N\""));
     let (t, ..) = map_info(&out.join("turned.hdr")).unwrap();
     let rot = t[4].atan2(t[1]).to_degrees();
-    assert!((rot + 30.0 - 1.79).abs() < 0.1, "rotation {rot}");
+    assert!((rot + 30.0 + 1.78).abs() < 0.05, "rotation {rot}");
 }
 
 #[test]
@@ -228,9 +229,9 @@ fn north_up_scanner_images_have_the_northernmost_line_first_and_are_not_mirrored
     let scene = write_scene(
         dir.path(),
         json!([
-            scanner("flown_n", 0.0, [30.0, -60.0], "as_flown"),
-            scanner("up_n", 0.0, [30.0, -60.0], "north_up"),
-            scanner("up_s", 180.0, [30.0, 30.0], "north_up"),
+            scanner("flown_n", 0.0, [37.0, -60.0], "as_flown"),
+            scanner("up_n", 0.0, [37.0, -60.0], "north_up"),
+            scanner("up_s", 180.0, [37.0, 30.0], "north_up"),
         ]),
         json!({}),
     );
@@ -269,7 +270,7 @@ fn north_up_scanner_images_have_the_northernmost_line_first_and_are_not_mirrored
     }
     // As flown the grid is mirrored: no ENVI map info, said so.
     let text = std::fs::read_to_string(out.join("flown_n.hdr")).unwrap();
-    assert!(!text.contains("map info") && text.contains("; no map info"), "{text}");
+    assert!(!text.contains("map info =") && text.contains("; no map info"), "{text}");
 }
 
 #[test]
@@ -340,4 +341,50 @@ fn oblique_and_polar_images_get_no_utm_map_info() {
     let p = s.ground_point(0.0, 0.0, 0.0).unwrap();
     let (x, y) = g.map_of_pixel(0.0, 0.0);
     assert!((x - p.x).abs() < 1e-6 && (y - p.y).abs() < 1e-6);
+}
+
+#[test]
+fn compare_places_latlon_points_by_the_images_latitude_longitude_layers() {
+    use irsig::analysis::compare::locate_by_latlon_layers;
+    use irsig::analysis::csv::{PointPosition, TruthPoint};
+    let (w, h) = (4, 3);
+    let mut st = ImageStack::new(w, h);
+    let mut lat = Vec::new();
+    let mut lon = Vec::new();
+    for r in 0..h {
+        for c in 0..w {
+            lat.push(43.0 - 0.001 * r as f32);
+            lon.push(-77.0 + 0.001 * c as f32);
+        }
+    }
+    lat[2 * w + 3] = f32::NAN;
+    lon[2 * w + 3] = f32::NAN;
+    st.push("latitude", lat).unwrap();
+    st.push("longitude", lon).unwrap();
+    let pt = |line: usize, position: PointPosition| TruthPoint {
+        id: format!("p{line}"),
+        position,
+        value: Some(300.0),
+        material: None,
+        line,
+    };
+    let file = Path::new("points.csv");
+    let got = locate_by_latlon_layers(
+        &st,
+        &[
+            pt(2, PointPosition::LatLon { lat: 42.9991, lon: -76.9979 }),
+            pt(3, PointPosition::Pixel { x: 0.2, y: 0.7 }),
+        ],
+        file,
+    )
+    .unwrap();
+    assert_eq!(got[0].position, PointPosition::Pixel { x: 2.5, y: 1.5 });
+    assert_eq!(got[1].position, PointPosition::Pixel { x: 0.2, y: 0.7 });
+    // Off the image: a kilometre south, or 300 m east.
+    for (lat, lon) in [(42.99, -76.998), (42.999, -76.993)] {
+        let e = locate_by_latlon_layers(&st, &[pt(5, PointPosition::LatLon { lat, lon })], file)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("points.csv") && e.contains("line 5"), "{e}");
+    }
 }

@@ -37,6 +37,10 @@ pub enum MapSystem {
     },
 }
 
+/// Largest shift (pixels) at the far edge of an image between its affine
+/// transform and the rotated grid written as ENVI `map info`.
+pub const ROTATION_TOLERANCE_PX: f64 = 0.01;
+
 /// Pixel → map affine transform of an image and its map system.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Georef {
@@ -49,6 +53,8 @@ pub struct Georef {
     /// Largest distance between the affine transform and the exact
     /// projection over the image, pixels (what the transform is good to).
     pub max_error_px: f64,
+    /// Image size `(width, height)`, pixels.
+    pub size: (usize, usize),
     /// Free text for the headers (what surface the grid refers to, the
     /// image orientation).
     pub note: String,
@@ -80,7 +86,10 @@ impl Georef {
     /// `(x, y)` and the angle in degrees by which the image axes are turned
     /// counter-clockwise from east/south (as GDAL's ENVI driver reads
     /// `rotation=`: column step `x·(cos θ, sin θ)`, row step
-    /// `y·(sin θ, −cos θ)`). `None` when the grid is skewed or mirrored.
+    /// `y·(sin θ, −cos θ)`, θ from the column step). `None` when the grid is
+    /// skewed or mirrored: when the row step's departure from that moves
+    /// the far edge of the image by more than [`ROTATION_TOLERANCE_PX`]
+    /// (UTM's scale change across an image leaves a skew of about 10⁻⁶).
     pub fn envi_rotation(&self) -> Option<(f64, f64, f64)> {
         let t = &self.transform;
         let px = t[1].hypot(t[4]);
@@ -90,8 +99,8 @@ impl Georef {
         }
         let theta = t[4].atan2(t[1]);
         let (s, c) = theta.sin_cos();
-        let tol = 1e-9;
-        if (t[2] / py - s).abs() > tol || (t[5] / py + c).abs() > tol {
+        let off = (t[2] / py - s).hypot(t[5] / py + c) * self.size.1.max(1) as f64;
+        if !(off <= ROTATION_TOLERANCE_PX) {
             return None;
         }
         Some((px, py, theta.to_degrees()))

@@ -73,6 +73,7 @@ pub fn georeference(sensor: &Sensor, site: &Site) -> Option<Georef> {
         system,
         transform,
         max_error_px: 0.0,
+        size: (sensor.width(), sensor.height()),
         note: String::new(),
     };
     let mut worst = 0.0f64;
