@@ -312,7 +312,10 @@ mod tests {
     #[test]
     fn zones_and_codes() {
         let z = UtmZone::of(43.16, -77.61).unwrap();
-        assert_eq!((z.number, z.epsg(), z.central_meridian_deg()), (18, 32618, -75.0));
+        assert_eq!(
+            (z.number, z.epsg(), z.central_meridian_deg()),
+            (18, 32618, -75.0)
+        );
         assert_eq!(UtmZone::of(-1.0, 179.9).unwrap().epsg(), 32760);
         assert_eq!(UtmZone::of(0.0, -180.0).unwrap().number, 1);
         assert_eq!(UtmZone::of(78.0, 20.0).unwrap().number, 33);

@@ -149,7 +149,10 @@ fn map_info_of_a_nadir_image_puts_the_marker_at_its_pixel() {
             layer(&stack, "z")[k] as f64,
         );
         let pix = t[1].hypot(t[4]);
-        assert!((x - MARKER[0]).abs() < pix && (y - MARKER[1]).abs() < pix, "{x} {y}");
+        assert!(
+            (x - MARKER[0]).abs() < pix && (y - MARKER[1]).abs() < pix,
+            "{x} {y}"
+        );
         assert!((z - MARKER[2]).abs() < 1e-3, "{z}");
         let (plat, plon, _) = geodetic_from_enu(&site, DVec3::new(x, y, z));
         assert!((layer(&stack, "latitude")[k] as f64 - plat).abs() < 1e-5);
@@ -199,7 +202,10 @@ fn geotiff_reads_back_with_its_geokeys_and_layers() {
     for (a, b) in [m[3], m[0], m[1], m[7], m[4], m[5]].iter().zip(t) {
         assert!((a - b).abs() < 1e-6 * b.abs().max(1.0), "{m:?} vs {t:?}");
     }
-    assert_eq!(d.get_tag_u32(Tag::SamplesPerPixel).unwrap() as usize, stack.layers.len());
+    assert_eq!(
+        d.get_tag_u32(Tag::SamplesPerPixel).unwrap() as usize,
+        stack.layers.len()
+    );
     let meta = d.get_tag_ascii_string(Tag::Unknown(42112)).unwrap();
     assert!(meta.contains(">apparent_temperature<") && meta.contains(">latitude<"));
     // Every layer, pixel-interleaved float32, as in the EXR (NaN included).
@@ -209,7 +215,12 @@ fn geotiff_reads_back_with_its_geokeys_and_layers() {
     let n = stack.layers.len();
     for (i, l) in stack.layers.iter().enumerate() {
         for (k, &x) in l.data.iter().enumerate() {
-            assert_eq!(v[k * n + i].to_bits(), x.to_bits(), "layer {} pixel {k}", l.name);
+            assert_eq!(
+                v[k * n + i].to_bits(),
+                x.to_bits(),
+                "layer {} pixel {k}",
+                l.name
+            );
         }
     }
 }
@@ -249,7 +260,10 @@ fn north_up_scanner_images_have_the_northernmost_line_first_and_are_not_mirrored
             at(&s, "y", 20, 0) > at(&s, "y", 20, h),
             "{name}: first row northernmost"
         );
-        assert!(at(&s, "x", 0, 15) < at(&s, "x", w, 15), "{name}: west on the left");
+        assert!(
+            at(&s, "x", 0, 15) < at(&s, "x", w, 15),
+            "{name}: west on the left"
+        );
         // The header has map info (a narrow scan is affine to 0.1 px).
         let (t, ..) = map_info(&out.join(format!("{name}.hdr"))).expect("map info");
         assert!(t[5] < 0.0 && t[1] > 0.0, "{t:?}");
@@ -270,7 +284,10 @@ fn north_up_scanner_images_have_the_northernmost_line_first_and_are_not_mirrored
     }
     // As flown the grid is mirrored: no ENVI map info, said so.
     let text = std::fs::read_to_string(out.join("flown_n.hdr")).unwrap();
-    assert!(!text.contains("map info =") && text.contains("; no map info"), "{text}");
+    assert!(
+        !text.contains("map info =") && text.contains("; no map info"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -325,7 +342,10 @@ fn oblique_and_polar_images_get_no_utm_map_info() {
     let out = dir.path().join("out");
     render(&scene, &out, &RunOptions::default());
     let text = std::fs::read_to_string(out.join("oblique.hdr")).unwrap();
-    assert!(!text.contains("map info") && !text.contains("; map:"), "{text}");
+    assert!(
+        !text.contains("map info") && !text.contains("; map:"),
+        "{text}"
+    );
     // Beyond UTM's latitudes: a local east-north-up grid.
     let s = irsig::sensor::Sensor::from_config(
         &serde_json::from_value::<irsig::sensor::SensorConfig>(nadir("polar", 0.0)).unwrap(),
@@ -334,7 +354,10 @@ fn oblique_and_polar_images_get_no_utm_map_info() {
     .unwrap();
     let g = irsig::sensor::georef::georeference(&s, &Site::new(86.0, 10.0, 0.0).unwrap())
         .expect("a nadir camera is georeferenced");
-    assert!(matches!(g.system, irsig::output::MapSystem::LocalEnu { .. }));
+    assert!(matches!(
+        g.system,
+        irsig::output::MapSystem::LocalEnu { .. }
+    ));
     let lines = g.envi_lines();
     assert!(lines.contains("map info = {Arbitrary, 1, 1,"), "{lines}");
     // Corner (0, 0) is the ground point of the upper-left image corner.
@@ -372,7 +395,13 @@ fn compare_places_latlon_points_by_the_images_latitude_longitude_layers() {
     let got = locate_by_latlon_layers(
         &st,
         &[
-            pt(2, PointPosition::LatLon { lat: 42.9991, lon: -76.9979 }),
+            pt(
+                2,
+                PointPosition::LatLon {
+                    lat: 42.9991,
+                    lon: -76.9979,
+                },
+            ),
             pt(3, PointPosition::Pixel { x: 0.2, y: 0.7 }),
         ],
         file,

@@ -404,7 +404,9 @@ pub fn locate_by_latlon_layers(
                 .fold(0.0f64, f64::max);
             if !best.is_finite() || best > spacing {
                 return Err(Error::parse(
-                    Location::file(points_file).at_line(p.line).with_field("lat"),
+                    Location::file(points_file)
+                        .at_line(p.line)
+                        .with_field("lat"),
                     format!(
                         "({la}, {lo}) is not on the synthetic image: the nearest pixel with a \
                          latitude/longitude is ({col}, {row}), {:.1} m away",

@@ -100,7 +100,7 @@ impl Georef {
         let theta = t[4].atan2(t[1]);
         let (s, c) = theta.sin_cos();
         let off = (t[2] / py - s).hypot(t[5] / py + c) * self.size.1.max(1) as f64;
-        if !(off <= ROTATION_TOLERANCE_PX) {
+        if off.is_nan() || off > ROTATION_TOLERANCE_PX {
             return None;
         }
         Some((px, py, theta.to_degrees()))

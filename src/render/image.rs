@@ -253,9 +253,17 @@ impl RowBand {
                 format!(
                     "rows {:?} {} hit points, rows {:?} {}",
                     other.rows,
-                    if other.points.is_empty() { "lack" } else { "have" },
+                    if other.points.is_empty() {
+                        "lack"
+                    } else {
+                        "have"
+                    },
                     self.rows,
-                    if self.points.is_empty() { "do not" } else { "do" },
+                    if self.points.is_empty() {
+                        "do not"
+                    } else {
+                        "do"
+                    },
                 ),
             ));
         }
@@ -266,7 +274,13 @@ impl RowBand {
             .iter_mut()
             .chain(self.truth.iter_mut())
             .chain(self.points.iter_mut())
-            .zip(other.radiance.iter().chain(&other.truth).chain(&other.points))
+            .zip(
+                other
+                    .radiance
+                    .iter()
+                    .chain(&other.truth)
+                    .chain(&other.points),
+            )
         {
             d[at..at + n].copy_from_slice(&s[..n]);
         }
@@ -581,18 +595,21 @@ pub fn render_rows(
             .zip(truth_rows)
             .zip(point_rows)
             .enumerate()
-            .try_for_each_init(Scratch::default, |sc, (i, ((mut out, mut truth), mut pts))| {
-                let row = rows.start + i;
-                trace_row(shader, sensor, row, times, sc, &mut truth, &mut pts);
-                let t0 = Instant::now();
-                for (b, o) in out.iter_mut().enumerate() {
-                    box_reduce_row(&sc.radiance[b * per_row..(b + 1) * per_row], n, o);
-                }
-                let checked = check_row(sensor, row, w, out.iter().map(|o| &**o), &truth);
-                StageTimes::add(&times.reduction, t0.elapsed());
-                progress(1);
-                checked
-            })?;
+            .try_for_each_init(
+                Scratch::default,
+                |sc, (i, ((mut out, mut truth), mut pts))| {
+                    let row = rows.start + i;
+                    trace_row(shader, sensor, row, times, sc, &mut truth, &mut pts);
+                    let t0 = Instant::now();
+                    for (b, o) in out.iter_mut().enumerate() {
+                        box_reduce_row(&sc.radiance[b * per_row..(b + 1) * per_row], n, o);
+                    }
+                    let checked = check_row(sensor, row, w, out.iter().map(|o| &**o), &truth);
+                    StageTimes::add(&times.reduction, t0.elapsed());
+                    progress(1);
+                    checked
+                },
+            )?;
         return Ok(band);
     }
     let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
@@ -611,15 +628,18 @@ pub fn render_rows(
         .zip(rows_of(&mut truth, w))
         .zip(point_rows(&mut points, w, traced.len()))
         .enumerate()
-        .try_for_each_init(Scratch::default, |sc, (i, ((radiance, mut truth), mut pts))| {
-            let row = traced.start + i;
-            trace_row(shader, sensor, row, times, sc, &mut truth, &mut pts);
-            radiance.copy_from_slice(&sc.radiance);
-            progress(1);
-            // The oversampled radiance (n sub-rows of w·n per band): the
-            // PSF's weighted sums of finite values are finite.
-            check_row(sensor, row, w * n, radiance.chunks_exact(per_row), &truth)
-        })?;
+        .try_for_each_init(
+            Scratch::default,
+            |sc, (i, ((radiance, mut truth), mut pts))| {
+                let row = traced.start + i;
+                trace_row(shader, sensor, row, times, sc, &mut truth, &mut pts);
+                radiance.copy_from_slice(&sc.radiance);
+                progress(1);
+                // The oversampled radiance (n sub-rows of w·n per band): the
+                // PSF's weighted sums of finite values are finite.
+                check_row(sensor, row, w * n, radiance.chunks_exact(per_row), &truth)
+            },
+        )?;
     let t0 = Instant::now();
     let mut band = RowBand::empty_with(w, h, rows.clone(), nb, with_points);
     let skip = (rows.start - traced.start) * w;

@@ -85,7 +85,7 @@ pub fn georeference(sensor: &Sensor, site: &Site) -> Option<Georef> {
             worst = worst.max((pu - u).hypot(pv - v));
         }
     }
-    if !(worst <= MAX_ERROR_PX) {
+    if worst.is_nan() || worst > MAX_ERROR_PX {
         return None;
     }
     georef.max_error_px = worst;

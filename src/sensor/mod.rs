@@ -729,9 +729,9 @@ impl Sensor {
     /// [`Orientation`] flip).
     pub fn project_written(&self, p: DVec3) -> Option<DVec2> {
         let uv = self.project(p)?;
-        let (u, v) =
-            self.orientation
-                .apply(uv.x, uv.y, self.width() as f64, self.height() as f64);
+        let (u, v) = self
+            .orientation
+            .apply(uv.x, uv.y, self.width() as f64, self.height() as f64);
         Some(DVec2::new(u, v))
     }
 
@@ -748,7 +748,7 @@ impl Sensor {
                 (s.position(t), s.direction(theta, 0.0))
             }
         };
-        if !(d.z < -1e-12) {
+        if d.z.is_nan() || d.z >= -1e-12 {
             return None;
         }
         let k = (z_m - o.z) / d.z;
