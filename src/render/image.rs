@@ -36,7 +36,8 @@ pub const TRUTH_LAYERS: [&str; 6] = [
 /// Values written to the truth layers of pixels whose centre ray leaves the
 /// scene (sky or ground beyond), in [`TRUTH_LAYERS`] order:
 /// temperature 0 K, material and object id −1, shape factor 0, sun
-/// fraction 0, depth 0 m. (No NaN or infinity appears in any layer.)
+/// fraction 0, depth 0 m. (No NaN or infinity appears in these layers; the
+/// opt-in geolocation layers, [`crate::sensor::GeoLayer`], are NaN there.)
 pub const MISS_TRUTH: [f32; 6] = [0.0, -1.0, -1.0, 0.0, 0.0, 0.0];
 
 /// Rows of an image before the image-wide sensor effects.
@@ -673,7 +674,8 @@ pub fn render_rows(
 pub struct Finished {
     /// All layers: per band `NAME_radiance` (and `NAME_counts` when
     /// quantised), `apparent_temperature` (band 0) and
-    /// `NAME_apparent_temperature` (other bands), then the truth layers.
+    /// `NAME_apparent_temperature` (other bands), then the truth layers and
+    /// the sensor's geolocation layers, laid out in its orientation.
     pub stack: ImageStack,
     /// Names of the band radiance layers of `stack`, in band order (the
     /// ENVI bands).
