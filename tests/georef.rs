@@ -76,9 +76,10 @@ fn map_info(hdr: &Path) -> Option<([f64; 6], u8, bool)> {
         .map_or(0.0, |r| r.parse::<f64>().unwrap())
         .to_radians();
     let (s, c) = rot.sin_cos();
-    // GDAL's ENVI driver: column step px·(cos, sin), row step py·(sin, −cos);
-    // the tie point is the upper-left corner of 1-based pixel (px_ref, py_ref).
-    let (a, b, cc, d) = (c * px, s * py, s * px, -c * py);
+    // As GDAL's ENVI driver reads it (GDAL 3.6): GT = [px·cos, px·sin;
+    // py·sin, −py·cos]; the tie point is the upper-left corner of 1-based
+    // pixel (px_ref, py_ref).
+    let (a, b, cc, d) = (c * px, s * px, s * py, -c * py);
     let x0 = e - (px_ref - 1.0) * a - (py_ref - 1.0) * b;
     let y0 = n - (px_ref - 1.0) * cc - (py_ref - 1.0) * d;
     Some((
@@ -264,14 +265,26 @@ fn north_up_scanner_images_have_the_northernmost_line_first_and_are_not_mirrored
             at(&s, "x", 0, 15) < at(&s, "x", w, 15),
             "{name}: west on the left"
         );
-        // The header has map info (a narrow scan is affine to 0.1 px).
-        let (t, ..) = map_info(&out.join(format!("{name}.hdr"))).expect("map info");
-        assert!(t[5] < 0.0 && t[1] > 0.0, "{t:?}");
+        // A narrow scan is affine to 0.1 px: north up, not mirrored. Its
+        // oblong pixels (0.6 × 3 m) turned by the meridian convergence are
+        // beyond ENVI map info (the GeoTIFF has them).
+        let i = session.sensor_index(name).unwrap();
+        let g = irsig::sensor::georef::georeference(&session.sensors[i], &site())
+            .expect("georeferenced");
+        let t = g.transform;
+        assert!(
+            t[5] < 0.0 && t[1] > 0.0 && t[1] * t[5] - t[2] * t[4] < 0.0,
+            "{t:?}"
+        );
+        let text = std::fs::read_to_string(out.join(format!("{name}.hdr"))).unwrap();
+        assert!(
+            text.contains("; no map info: ENVI map info cannot state"),
+            "{text}"
+        );
         // The marker: map info, the projection into the written image and
         // the image itself agree.
         let (cu, cv, count) = centroid(&s, 1.0);
         assert!(count > 10, "{name}: {count}");
-        let i = session.sensor_index(name).unwrap();
         let uv = session.sensors[i]
             .project_written(DVec3::from_array(MARKER))
             .unwrap();

@@ -37,8 +37,8 @@ pub enum MapSystem {
     },
 }
 
-/// Largest shift (pixels) at the far edge of an image between its affine
-/// transform and the rotated grid written as ENVI `map info`.
+/// Largest shift (pixels) at an image corner between its affine transform
+/// and the grid written as ENVI `map info` ([`Georef::envi_rotation`]).
 pub const ROTATION_TOLERANCE_PX: f64 = 0.01;
 
 /// Pixel → map affine transform of an image and its map system.
@@ -82,14 +82,19 @@ impl Georef {
         Some(((t[5] * dx - t[2] * dy) / det, (t[1] * dy - t[4] * dx) / det))
     }
 
-    /// The ENVI rotation of the grid, if it is one: pixel sizes
-    /// `(x, y)` and the angle in degrees by which the image axes are turned
-    /// counter-clockwise from east/south (as GDAL's ENVI driver reads
-    /// `rotation=`: column step `x·(cos θ, sin θ)`, row step
-    /// `y·(sin θ, −cos θ)`, θ from the column step). `None` when the grid is
-    /// skewed or mirrored: when the row step's departure from that moves
-    /// the far edge of the image by more than [`ROTATION_TOLERANCE_PX`]
-    /// (UTM's scale change across an image leaves a skew of about 10⁻⁶).
+    /// The ENVI `map info` of the grid, if it can state it: pixel sizes
+    /// `(x, y)` (m) and the rotation θ (degrees, counter-clockwise).
+    ///
+    /// GDAL's ENVI driver (checked with `gdalinfo`, GDAL 3.6) reads
+    /// `rotation=θ` with pixel sizes `x`, `y` as the geotransform
+    /// `[x cos θ, x sin θ; y sin θ, −y cos θ]`: the rotation applied before
+    /// the scaling, which for pixels that are not square is not a turned
+    /// grid. So map info is given only where that reading and the turned
+    /// grid (column step `x·(cos θ, sin θ)`, row step `y·(sin θ, −cos θ)`)
+    /// both put every image corner within [`ROTATION_TOLERANCE_PX`] of this
+    /// transform: a north-up grid (θ = 0) of any pixel shape, or a turned
+    /// grid of square pixels. `None` otherwise (skewed or mirrored grids,
+    /// turned grids of oblong pixels): the GeoTIFF states those exactly.
     pub fn envi_rotation(&self) -> Option<(f64, f64, f64)> {
         let t = &self.transform;
         let px = t[1].hypot(t[4]);
@@ -99,8 +104,23 @@ impl Georef {
         }
         let theta = t[4].atan2(t[1]);
         let (s, c) = theta.sin_cos();
-        let off = (t[2] / py - s).hypot(t[5] / py + c) * self.size.1.max(1) as f64;
-        if off.is_nan() || off > ROTATION_TOLERANCE_PX {
+        let (w, h) = (self.size.0.max(1) as f64, self.size.1.max(1) as f64);
+        // Largest corner shift (pixels) of a model [t1, t2, t4, t5].
+        let shift = |m: [f64; 4]| {
+            let d = [t[1] - m[0], t[2] - m[1], t[4] - m[2], t[5] - m[3]];
+            [(w, 0.0), (0.0, h), (w, h)]
+                .iter()
+                .map(|&(u, v)| (d[0] * u + d[1] * v).hypot(d[2] * u + d[3] * v))
+                .fold(0.0f64, f64::max)
+                / px.min(py)
+        };
+        let turned = shift([px * c, py * s, px * s, -py * c]);
+        let gdal = shift([px * c, px * s, py * s, -py * c]);
+        if turned.is_nan()
+            || gdal.is_nan()
+            || turned > ROTATION_TOLERANCE_PX
+            || gdal > ROTATION_TOLERANCE_PX
+        {
             return None;
         }
         Some((px, py, theta.to_degrees()))
@@ -145,7 +165,8 @@ impl Georef {
                 }
             }
             None => s.push_str(&format!(
-                "; no map info: the grid is skewed or mirrored; geotransform (GDAL order) = {}\n",
+                "; no map info: ENVI map info cannot state this grid (skewed, mirrored, or turned \
+                 with oblong pixels; the GeoTIFF can); geotransform (GDAL order) = {}\n",
                 t.map(fmt_num).join(", ")
             )),
         }
@@ -338,4 +359,59 @@ fn xml_escape(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn georef(transform: [f64; 6]) -> Georef {
+        Georef {
+            system: MapSystem::Utm(UtmZone {
+                number: 18,
+                north: true,
+            }),
+            transform,
+            max_error_px: 0.0,
+            size: (100, 80),
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn envi_map_info_only_for_grids_it_states_unambiguously() {
+        let (s, c) = 30f64.to_radians().sin_cos();
+        // Square pixels turned 30°: column step 2·(cos, sin), row 2·(sin, −cos).
+        let g = georef([1000.0, 2.0 * c, 2.0 * s, 5000.0, 2.0 * s, -2.0 * c]);
+        let (px, py, rot) = g.envi_rotation().unwrap();
+        assert!((px - 2.0).abs() < 1e-12 && (py - 2.0).abs() < 1e-12 && (rot - 30.0).abs() < 1e-9);
+        let lines = g.envi_lines();
+        assert!(
+            lines.starts_with("map info = {UTM, 1, 1, 1000, 5000, 2, 2, 18, North, WGS-84, units=Meters, rotation=30}\n"),
+            "{lines}"
+        );
+        assert!(lines.contains("coordinate system string = {PROJCS[\"WGS 84 / UTM zone 18N\""));
+        // North-up oblong pixels: no rotation written.
+        let g = georef([1000.0, 0.5, 0.0, 5000.0, 0.0, -3.0]);
+        assert_eq!(g.envi_rotation(), Some((0.5, 3.0, 0.0)));
+        assert!(
+            g.envi_lines()
+                .contains("0.5, 3, 18, North, WGS-84, units=Meters}")
+        );
+        // Oblong pixels turned, a mirror, a skew: none.
+        for t in [
+            [1000.0, 0.5 * c, 3.0 * s, 5000.0, 0.5 * s, -3.0 * c],
+            [1000.0, 2.0, 0.0, 5000.0, 0.0, 2.0],
+            [1000.0, 2.0, 0.5, 5000.0, 0.0, -2.0],
+        ] {
+            let g = georef(t);
+            assert_eq!(g.envi_rotation(), None, "{t:?}");
+            assert!(g.envi_lines().starts_with("; no map info"));
+        }
+        // Pixel and map coordinates invert each other.
+        let g = georef([1000.0, 2.0 * c, 2.0 * s, 5000.0, 2.0 * s, -2.0 * c]);
+        let (x, y) = g.map_of_pixel(12.5, 40.25);
+        let (u, v) = g.pixel_of_map(x, y).unwrap();
+        assert!((u - 12.5).abs() < 1e-9 && (v - 40.25).abs() < 1e-9);
+    }
 }
