@@ -69,6 +69,7 @@ pub mod analysis;
 pub mod atmosphere;
 pub mod error;
 pub mod exposure;
+pub mod geodesy;
 pub mod geometry;
 pub mod material;
 pub mod math;

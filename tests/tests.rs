@@ -13,6 +13,7 @@ mod exposure;
 mod exposure_pipeline;
 mod flux;
 mod fuzz_smoke;
+mod georef;
 mod material;
 mod radiometry;
 mod reliability;

@@ -346,6 +346,85 @@ pub fn sample_points(
         .collect()
 }
 
+/// Names of the geolocation layers [`locate_by_latlon_layers`] reads.
+pub const LATLON_LAYERS: [&str; 2] = ["latitude", "longitude"];
+
+/// `points` with lat/lon positions replaced by the pixel of `synth` whose
+/// `latitude`/`longitude` layers (a sensor's `truth_layers`) are nearest,
+/// at its centre; pixel points pass unchanged. Distances are on the local
+/// sphere (east scaled by cos latitude). A point is refused (naming
+/// `points_file` and its line) when the nearest pixel is farther from it
+/// than that pixel's distance to its farthest neighbour: it lies off the
+/// image or in a gap (sky).
+pub fn locate_by_latlon_layers(
+    synth: &ImageStack,
+    points: &[TruthPoint],
+    points_file: &std::path::Path,
+) -> Result<Vec<TruthPoint>> {
+    let (Some(lat), Some(lon)) = (synth.layer(LATLON_LAYERS[0]), synth.layer(LATLON_LAYERS[1]))
+    else {
+        return Err(Error::invalid(
+            "layer",
+            "the synthetic image has no `latitude` and `longitude` layers (a sensor's `truth_layers`)",
+        ));
+    };
+    let (w, h) = (synth.width, synth.height);
+    // Squared distance in degrees of latitude between pixel k and (la, lo).
+    let d2 = |k: usize, la: f64, lo: f64, c: f64| -> f64 {
+        let (a, b) = (lat.data[k] as f64, lon.data[k] as f64);
+        if a.is_nan() || b.is_nan() {
+            return f64::INFINITY;
+        }
+        let dlon = (b - lo + 540.0).rem_euclid(360.0) - 180.0;
+        (a - la).powi(2) + (dlon * c).powi(2)
+    };
+    points
+        .iter()
+        .map(|p| {
+            let PointPosition::LatLon { lat: la, lon: lo } = p.position else {
+                return Ok(p.clone());
+            };
+            let c = la.to_radians().cos();
+            let (k, best) = (0..w * h)
+                .map(|k| (k, d2(k, la, lo, c)))
+                .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+            let (col, row) = (k % w.max(1), k / w.max(1));
+            let neighbours = [
+                (col > 0).then(|| k - 1),
+                (col + 1 < w).then(|| k + 1),
+                (row > 0).then(|| k - w),
+                (row + 1 < h).then(|| k + w),
+            ];
+            let (a, b) = (lat.data[k] as f64, lon.data[k] as f64);
+            let spacing = neighbours
+                .iter()
+                .flatten()
+                .map(|&n| d2(n, a, b, c))
+                .filter(|d| d.is_finite())
+                .fold(0.0f64, f64::max);
+            if !best.is_finite() || best > spacing {
+                return Err(Error::parse(
+                    Location::file(points_file)
+                        .at_line(p.line)
+                        .with_field("lat"),
+                    format!(
+                        "({la}, {lo}) is not on the synthetic image: the nearest pixel with a \
+                         latitude/longitude is ({col}, {row}), {:.1} m away",
+                        best.sqrt() * 111_195.0
+                    ),
+                ));
+            }
+            Ok(TruthPoint {
+                position: PointPosition::Pixel {
+                    x: col as f64 + 0.5,
+                    y: row as f64 + 0.5,
+                },
+                ..p.clone()
+            })
+        })
+        .collect()
+}
+
 /// Geometric accuracy from control points: offsets `truth − synthetic`.
 #[derive(Debug, Clone, Serialize)]
 pub struct GeometricAccuracy {

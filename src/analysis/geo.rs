@@ -2,62 +2,24 @@
 //! and through a sensor to a pixel.
 //!
 //! The scene's world frame is the local tangent plane (ENU, metres) at the
-//! site (latitude, longitude, altitude = z 0). A geodetic point goes to
-//! Earth-centred Earth-fixed coordinates on the WGS-84 ellipsoid and is
-//! rotated into that plane (Hofmann-Wellenhof, Lichtenegger & Wasle,
-//! *GNSS*, Springer 2008, eqs. 3.18 and 3.27; ellipsoid constants from
-//! NGA TR8350.2, 3rd ed., table 3.1).
+//! site (latitude, longitude, altitude = z 0); the conversions are
+//! [`crate::geodesy`]'s.
 
 use glam::{DVec2, DVec3};
 
 use super::csv::{PointPosition, TruthPoint};
 use crate::render::session::Session;
 use crate::sensor::Geometry;
-use crate::sun::Site;
 use crate::trace::{Coherence, Ray};
 use crate::{Error, Location, Result};
 
-/// WGS-84 semi-major axis, m.
-pub const WGS84_A_M: f64 = 6_378_137.0;
-/// WGS-84 flattening.
-pub const WGS84_F: f64 = 1.0 / 298.257_223_563;
-
-/// Earth-centred Earth-fixed coordinates (m) of geodetic latitude and
-/// longitude (degrees) and ellipsoidal height `h_m` (m) on WGS-84:
-/// `x = (N + h) cos φ cos λ`, `y = (N + h) cos φ sin λ`,
-/// `z = (N(1 − e²) + h) sin φ`, `N = a / √(1 − e² sin² φ)`.
-pub fn ecef_from_geodetic(lat_deg: f64, lon_deg: f64, h_m: f64) -> DVec3 {
-    let e2 = WGS84_F * (2.0 - WGS84_F);
-    let (sp, cp) = lat_deg.to_radians().sin_cos();
-    let (sl, cl) = lon_deg.to_radians().sin_cos();
-    let n = WGS84_A_M / (1.0 - e2 * sp * sp).sqrt();
-    DVec3::new(
-        (n + h_m) * cp * cl,
-        (n + h_m) * cp * sl,
-        (n * (1.0 - e2) + h_m) * sp,
-    )
-}
-
-/// East-north-up coordinates (m) of a geodetic point relative to `origin`
-/// (the scene's site; its altitude is the height of z = 0, taken as
-/// ellipsoidal — the geoid undulation cancels between points of one
-/// scene).
-pub fn enu_from_geodetic(origin: &Site, lat_deg: f64, lon_deg: f64, h_m: f64) -> DVec3 {
-    let d = ecef_from_geodetic(lat_deg, lon_deg, h_m)
-        - ecef_from_geodetic(origin.latitude_deg, origin.longitude_deg, origin.altitude_m);
-    let (sp, cp) = origin.latitude_deg.to_radians().sin_cos();
-    let (sl, cl) = origin.longitude_deg.to_radians().sin_cos();
-    DVec3::new(
-        -sl * d.x + cl * d.y,
-        -sp * cl * d.x - sp * sl * d.y + cp * d.z,
-        cp * cl * d.x + cp * sl * d.y + sp * d.z,
-    )
-}
+pub use crate::geodesy::{WGS84_A_M, WGS84_F, ecef_from_geodetic, enu_from_geodetic};
 
 /// The continuous image coordinates in sensor `s` of the scene surface at
 /// latitude/longitude: the point goes to ENU at the site's altitude, drops
 /// vertically onto the scene's top surface (ground beyond the scene:
-/// z at the site's altitude), and is projected through the sensor.
+/// z at the site's altitude), and is projected through the sensor into its
+/// written image (after its orientation flip).
 ///
 /// # Errors
 /// The point is behind the sensor, outside its image, or hidden from the
@@ -92,12 +54,15 @@ pub fn pixel_of_latlon(
     };
     let sensor = &session.sensors[s];
     let (w, h) = (sensor.width() as f64, sensor.height() as f64);
-    match sensor.project(p) {
+    match sensor.project_written(p) {
         Some(uv) if uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w && uv.y < h => {
             // Seen, or hidden behind something nearer the sensor?
             let eye = match &sensor.geometry {
                 Geometry::Frame(c) => c.position(),
-                Geometry::LineScanner(l) => l.ray(uv.y as usize, uv.x, 0.0).origin.as_dvec3(),
+                Geometry::LineScanner(l) => {
+                    let (s, line) = sensor.orientation.apply(uv.x, uv.y, w, h);
+                    l.ray(line as usize, s, 0.0).origin.as_dvec3()
+                }
             };
             let to_eye = eye - p;
             let dist = to_eye.length();

@@ -45,10 +45,12 @@ layer's radiance unit otherwise.
 
 CSV formats (header row; `#` comments):
   truth points    x,y,value[,material][,id]   (pixel x = column, y = row)
-                  lat,lon,value[,material][,id] (degrees; needs --scene: the scene
-                  whose sensor made the image; the point is dropped onto the
+                  lat,lon,value[,material][,id] (degrees; with --scene, the scene
+                  whose sensor made the image, the point is dropped onto the
                   scene surface, projected through the sensor, and refused when
-                  it falls outside the image or is hidden from the sensor)
+                  it falls outside the image or is hidden from the sensor;
+                  without it, the image's latitude/longitude layers (a sensor's
+                  truth_layers) give the nearest pixel)
   control points  synth_x,synth_y,truth_x,truth_y[,id]
 
 Examples:
@@ -150,7 +152,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.points.is_none(),
             "--points samples a truth image; with a CSV truth the points are in TRUTH itself"
         );
-        let pts = georeference(&args, csv::read_truth_points(&args.truth)?, &args.truth)?;
+        let pts = georeference(
+            &args,
+            &synth,
+            csv::read_truth_points(&args.truth)?,
+            &args.truth,
+        )?;
         report.points =
             Some(compare::compare_points(&synth, &pts, &args.truth, &opts).for_flags(LAYER_FLAGS)?);
     } else {
@@ -172,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 })?,
         );
         if let Some(pp) = &args.points {
-            let pts = georeference(&args, csv::read_truth_points(pp)?, pp)?;
+            let pts = georeference(&args, &synth, csv::read_truth_points(pp)?, pp)?;
             let pts = compare::sample_points(
                 &truth,
                 opts.truth_layer
@@ -225,10 +232,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Lat/lon points of `file` to pixels through `--scene`'s sensor (pixel
-/// points pass unchanged; without lat/lon points the scene is not opened).
+/// Lat/lon points of `file` to pixels through `--scene`'s sensor, or,
+/// without `--scene`, through the synthetic image's `latitude`/`longitude`
+/// layers (pixel points pass unchanged; without lat/lon points the scene is
+/// not opened).
 fn georeference(
     args: &Args,
+    synth: &irsig::output::ImageStack,
     pts: Vec<csv::TruthPoint>,
     file: &std::path::Path,
 ) -> anyhow::Result<Vec<csv::TruthPoint>> {
@@ -239,8 +249,14 @@ fn georeference(
         return Ok(pts);
     }
     let Some(scene) = &args.scene else {
+        if compare::LATLON_LAYERS
+            .iter()
+            .all(|l| synth.layer(l).is_some())
+        {
+            return Ok(compare::locate_by_latlon_layers(synth, &pts, file)?);
+        }
         anyhow::bail!(
-            "{}: lat/lon points need --scene SCENE.json (the scene whose sensor made {}) to georeference the image",
+            "{}: lat/lon points need --scene SCENE.json (the scene whose sensor made {}) to georeference the image, or `latitude`/`longitude` layers in it (the sensor's `truth_layers`)",
             file.display(),
             args.synth.display()
         );

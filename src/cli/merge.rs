@@ -13,6 +13,10 @@ pub struct Args {
     /// Output folder for the merged `NAME.exr`, `NAME.img`/`.hdr`, `NAME.png`.
     #[arg(short, long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Also write each georeferenced image as a GeoTIFF `NAME.tif` (as the
+    /// scene's `render.geotiff: true`).
+    #[arg(long)]
+    pub geotiff: bool,
     /// Print nothing on success.
     #[arg(short, long)]
     pub quiet: bool,
@@ -20,7 +24,7 @@ pub struct Args {
 
 /// Run `irsig merge`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let stems = irsig::render::tile::merge_tiles(&args.parts, &args.out)
+    let stems = irsig::render::tile::merge_tiles_with(&args.parts, &args.out, args.geotiff)
         .with_context(|| format!("merging {} tile file(s)", args.parts.len()))?;
     if !args.quiet {
         for s in stems {

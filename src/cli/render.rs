@@ -47,6 +47,11 @@ pub struct Args {
     /// [default: the scene's, else stratified:64].
     #[arg(long, value_name = "SPEC")]
     pub sky_sampling: Option<irsig::exposure::SkySampling>,
+    /// Also write each georeferenced image (a nadir-looking one, see
+    /// docs/georeferencing.md) as a GeoTIFF `STEM.tif` with every layer;
+    /// the same as the scene's `render.geotiff: true`.
+    #[arg(long)]
+    pub geotiff: bool,
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -99,6 +104,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(s) = args.sky_sampling {
         session.config.sky_sampling = s;
     }
+    if args.geotiff {
+        session.config.geotiff = true;
+    }
     let options = RunOptions {
         backend: args.backend,
         times,
@@ -119,10 +127,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     "wrote {}",
                     args.out.join(format!("{s}.tile{k}-of-{n}.exr")).display()
                 ),
-                None => eprintln!(
-                    "wrote {}",
-                    args.out.join(format!("{s}.{{exr,img,hdr,png}}")).display()
-                ),
+                None => {
+                    let tif = session.config.geotiff && args.out.join(format!("{s}.tif")).exists();
+                    eprintln!(
+                        "wrote {}",
+                        args.out
+                            .join(format!(
+                                "{s}.{{exr,img,hdr,png{}}}",
+                                if tif { ",tif" } else { "" }
+                            ))
+                            .display()
+                    )
+                }
             }
         }
         eprintln!(

@@ -13,6 +13,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::atomic::AtomicFile;
+use super::georef::Georef;
 use super::{ImageStack, Layer};
 use crate::{Error, Location, Result};
 
@@ -55,6 +56,18 @@ pub fn write_envi(
     stack: &ImageStack,
     wavelengths_um: Option<&[f64]>,
     description: &str,
+) -> Result<()> {
+    write_envi_georef(path, stack, wavelengths_um, description, None)
+}
+
+/// [`write_envi`] with the image's georeference in the header (`map info`,
+/// `coordinate system string`: see [`Georef::envi_lines`]).
+pub fn write_envi_georef(
+    path: impl AsRef<Path>,
+    stack: &ImageStack,
+    wavelengths_um: Option<&[f64]>,
+    description: &str,
+    georef: Option<&Georef>,
 ) -> Result<()> {
     stack.validate()?;
     let (img_path, hdr_path) = envi_paths(&path);
@@ -105,7 +118,10 @@ pub fn write_envi(
         }
     }
     let mut hdr = AtomicFile::create(&hdr_path)?;
-    let text = header_text(stack, wavelengths_um, description);
+    let mut text = header_text(stack, wavelengths_um, description);
+    if let Some(g) = georef {
+        text.push_str(&g.envi_lines());
+    }
     hdr.writer()
         .write_all(text.as_bytes())
         .map_err(|e| Error::io(&hdr_path, e))?;

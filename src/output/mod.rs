@@ -10,6 +10,9 @@
 //! - [`write_quicklook_png`]: PNG quick-look of apparent temperature with a
 //!   colour map and a scale bar in K.
 //! - [`read_image`]: read an EXR or ENVI file by its extension.
+//! - [`georef`]: an image's georeference ([`Georef`]: map system and
+//!   pixel → map transform), written into the ENVI header (`map info`) and
+//!   as a GeoTIFF ([`write_geotiff`]).
 //!
 //! Takes named layers; gives files (and reads them back). It must not know
 //! how the layers were computed: no scene, sensor or physics.
@@ -17,13 +20,16 @@
 pub mod atomic;
 mod envi;
 pub mod exr_io;
+pub mod georef;
 mod quicklook;
 
 use std::path::{Path, PathBuf};
 
 pub use atomic::{AtomicFile, WriteSeek, write_atomic};
-pub use envi::{EnviImage, envi_paths, read_envi, write_envi};
+pub use envi::{EnviImage, envi_paths, read_envi, write_envi, write_envi_georef};
 pub use exr_io::{read_exr, write_exr};
+pub use georef::{Georef, MapSystem, write_geotiff};
+
 pub use quicklook::{
     BAR_AREA_HEIGHT, MIN_CANVAS_WIDTH, RgbImage, auto_range, inferno, render_quicklook,
     write_quicklook_png,
@@ -173,6 +179,17 @@ pub struct ImageSetPaths {
     pub envi: Option<(PathBuf, PathBuf)>,
     /// `NAME.png`: quick-look of `apparent_temperature`, if that layer exists.
     pub png: Option<PathBuf>,
+    /// `NAME.tif`: every layer as a GeoTIFF, if asked for.
+    pub geotiff: Option<PathBuf>,
+}
+
+/// The georeferenced outputs of an image set (see [`write_image_set_geo`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GeoOutputs {
+    /// The image's georeference, written into the ENVI header.
+    pub georef: Option<Georef>,
+    /// Also write `NAME.tif`, a GeoTIFF of every layer (needs `georef`).
+    pub geotiff: bool,
 }
 
 /// Write the standard image set of a render into `dir`: `NAME.exr` (all
@@ -187,8 +204,36 @@ pub fn write_image_set(
     spectral: &[(&str, f64)],
     description: &str,
 ) -> Result<ImageSetPaths> {
+    write_image_set_geo(
+        dir,
+        name,
+        stack,
+        spectral,
+        description,
+        &GeoOutputs::default(),
+    )
+}
+
+/// [`write_image_set`] with a georeference: the ENVI header carries it,
+/// and with `geo.geotiff` every layer is also written to `NAME.tif`
+/// ([`write_geotiff`]). Errors if a GeoTIFF is asked for without a
+/// georeference.
+pub fn write_image_set_geo(
+    dir: impl AsRef<Path>,
+    name: &str,
+    stack: &ImageStack,
+    spectral: &[(&str, f64)],
+    description: &str,
+    geo: &GeoOutputs,
+) -> Result<ImageSetPaths> {
     let dir = dir.as_ref();
     stack.validate()?;
+    if geo.geotiff && geo.georef.is_none() {
+        return Err(Error::invalid(
+            "geotiff",
+            format!("image `{name}` has no georeference to write a GeoTIFF with"),
+        ));
+    }
     let mut envi_stack = ImageStack::new(stack.width, stack.height);
     for (layer, _) in spectral {
         let l = stack.layer(layer).ok_or_else(|| {
@@ -206,7 +251,13 @@ pub fn write_image_set(
     } else {
         let w: Vec<f64> = spectral.iter().map(|(_, w)| *w).collect();
         let base = dir.join(name);
-        write_envi(&base, &envi_stack, Some(&w), description)?;
+        write_envi_georef(
+            &base,
+            &envi_stack,
+            Some(&w),
+            description,
+            geo.georef.as_ref(),
+        )?;
         Some(envi_paths(&base))
     };
     let png = match stack.layer("apparent_temperature") {
@@ -217,7 +268,20 @@ pub fn write_image_set(
         }
         None => None,
     };
-    Ok(ImageSetPaths { exr, envi, png })
+    let geotiff = match (&geo.georef, geo.geotiff) {
+        (Some(g), true) => {
+            let p = dir.join(format!("{name}.tif"));
+            write_geotiff(&p, stack, g)?;
+            Some(p)
+        }
+        _ => None,
+    };
+    Ok(ImageSetPaths {
+        exr,
+        envi,
+        png,
+        geotiff,
+    })
 }
 
 /// Read an image file into an [`ImageStack`], choosing the format by the

@@ -36,7 +36,8 @@ pub const TRUTH_LAYERS: [&str; 6] = [
 /// Values written to the truth layers of pixels whose centre ray leaves the
 /// scene (sky or ground beyond), in [`TRUTH_LAYERS`] order:
 /// temperature 0 K, material and object id −1, shape factor 0, sun
-/// fraction 0, depth 0 m. (No NaN or infinity appears in any layer.)
+/// fraction 0, depth 0 m. (No NaN or infinity appears in these layers; the
+/// opt-in geolocation layers, [`crate::sensor::GeoLayer`], are NaN there.)
 pub const MISS_TRUTH: [f32; 6] = [0.0, -1.0, -1.0, 0.0, 0.0, 0.0];
 
 /// Rows of an image before the image-wide sensor effects.
@@ -59,7 +60,15 @@ pub struct RowBand {
     radiance: Vec<Vec<f32>>,
     /// Truth layers ([`TRUTH_LAYERS`] order) of each pixel's centre ray.
     truth: Vec<Vec<f32>>,
+    /// Scene x, y, z (m) of each pixel's centre-ray hit, NaN where it
+    /// misses ([`POINT_LAYERS`]); empty unless the sensor asks for
+    /// geolocation layers.
+    points: Vec<Vec<f32>>,
 }
+
+/// Names of the hit-point layers of a [`RowBand`] (scene x, y, z, m) as
+/// tiles store them.
+pub const POINT_LAYERS: [&str; 3] = ["hit_x", "hit_y", "hit_z"];
 
 /// The first non-finite value of `data` (rows of `width`, the first being
 /// image row `row0`) as (row, column, value); a branch-free scan first.
@@ -135,7 +144,33 @@ impl RowBand {
             rows,
             radiance,
             truth,
+            points: Vec::new(),
         })
+    }
+
+    /// This band with the hit points of its pixels ([`POINT_LAYERS`]: x,
+    /// y, z in m, NaN where the centre ray misses), `rows().len() × width()`
+    /// values each.
+    pub fn with_points(mut self, points: Vec<Vec<f32>>) -> Result<Self> {
+        let n = self.rows.len() * self.width;
+        if points.len() != POINT_LAYERS.len() || points.iter().any(|l| l.len() != n) {
+            return Err(Error::invalid(
+                "hit points",
+                format!(
+                    "{} layers: expected {} ({}) of {n} values",
+                    points.len(),
+                    POINT_LAYERS.len(),
+                    POINT_LAYERS.join(", ")
+                ),
+            ));
+        }
+        self.points = points;
+        Ok(self)
+    }
+
+    /// Hit points ([`POINT_LAYERS`]) of each pixel's centre ray, if kept.
+    pub fn points(&self) -> &[Vec<f32>] {
+        &self.points
     }
 
     /// Image width, pixels.
@@ -166,6 +201,17 @@ impl RowBand {
 
     /// An empty band of rows, to be filled.
     pub fn empty(width: usize, height: usize, rows: Range<usize>, bands: usize) -> Self {
+        Self::empty_with(width, height, rows, bands, false)
+    }
+
+    /// An empty band of rows, with hit-point layers if `points`.
+    pub fn empty_with(
+        width: usize,
+        height: usize,
+        rows: Range<usize>,
+        bands: usize,
+        points: bool,
+    ) -> Self {
         let n = rows.len() * width;
         let layers = |k: usize| (0..k).map(|_| zeros(n)).collect();
         RowBand {
@@ -174,6 +220,11 @@ impl RowBand {
             rows,
             radiance: layers(bands),
             truth: layers(TRUTH_LAYERS.len()),
+            points: if points {
+                layers(POINT_LAYERS.len())
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -197,13 +248,40 @@ impl RowBand {
                 ),
             ));
         }
+        if other.points.is_empty() != self.points.is_empty() {
+            return Err(Error::invalid(
+                "row band",
+                format!(
+                    "rows {:?} {} hit points, rows {:?} {}",
+                    other.rows,
+                    if other.points.is_empty() {
+                        "lack"
+                    } else {
+                        "have"
+                    },
+                    self.rows,
+                    if self.points.is_empty() {
+                        "do not"
+                    } else {
+                        "do"
+                    },
+                ),
+            ));
+        }
         let at = (other.rows.start - self.rows.start) * self.width;
         let n = other.rows.len() * self.width;
         for (d, s) in self
             .radiance
             .iter_mut()
             .chain(self.truth.iter_mut())
-            .zip(other.radiance.iter().chain(&other.truth))
+            .chain(self.points.iter_mut())
+            .zip(
+                other
+                    .radiance
+                    .iter()
+                    .chain(&other.truth)
+                    .chain(&other.points),
+            )
         {
             d[at..at + n].copy_from_slice(&s[..n]);
         }
@@ -280,7 +358,8 @@ struct Scratch {
 /// Trace and shade image row `row`: per band the band radiance of every
 /// sub-pixel ray into `sc.radiance` (`bands × rays_per_row`, band-major),
 /// the truth values of the row's pixels into `truth` (one row slice per
-/// layer, [`TRUTH_LAYERS`] order).
+/// layer, [`TRUTH_LAYERS`] order), and, if `points` is not empty, the hit
+/// point of each pixel's centre ray ([`POINT_LAYERS`]).
 fn trace_row(
     shader: &Shader,
     sensor: &Sensor,
@@ -288,6 +367,7 @@ fn trace_row(
     times: &StageTimes,
     sc: &mut Scratch,
     truth: &mut [&mut [f32]],
+    points: &mut [&mut [f32]],
 ) {
     let t0 = Instant::now();
     sc.rays.clear();
@@ -309,6 +389,21 @@ fn trace_row(
     // written as the hits are shaded.
     let n = sensor.oversample();
     let ws = sensor.width() * n;
+    if let [px, py, pz] = points {
+        let first = (n / 2) * ws + n / 2;
+        for col in 0..sensor.width() {
+            let i = first + col * n;
+            let p = match sc.hits[i] {
+                Some(h) => {
+                    let r = &sc.rays[i];
+                    let p = r.origin.as_dvec3() + r.dir.as_dvec3() * h.t as f64;
+                    [p.x as f32, p.y as f32, p.z as f32]
+                }
+                None => [f32::NAN; 3],
+            };
+            (px[col], py[col], pz[col]) = (p[0], p[1], p[2]);
+        }
+    }
     let truth = TruthOut {
         first: (n / 2) * ws + n / 2,
         stride: n,
@@ -427,6 +522,16 @@ fn check_row<'a>(
     Ok(())
 }
 
+/// [`rows_of`] for the hit-point layers, which may be absent: then `rows`
+/// empty rows.
+fn point_rows(layers: &mut [Vec<f32>], width: usize, rows: usize) -> Vec<Vec<&mut [f32]>> {
+    if layers.is_empty() {
+        (0..rows).map(|_| Vec::new()).collect()
+    } else {
+        rows_of(layers, width)
+    }
+}
+
 /// Split each layer of `layers` into rows of `width` and regroup them per
 /// row: element `r` holds row `r` of every layer, in layer order.
 fn rows_of(layers: &mut [Vec<f32>], width: usize) -> Vec<Vec<&mut [f32]>> {
@@ -477,29 +582,35 @@ pub fn render_rows(
     }
     let psf = sensor.effects.psf;
     let halo = psf.halo_px();
+    let with_points = !sensor.geo_layers.is_empty();
     let ws = w * n;
     // One image row: n sub-rows of ws sub-pixels, per band.
     let per_row = n * ws;
     if let Psf::Box = psf {
-        let mut band = RowBand::empty(w, h, rows.clone(), nb);
+        let mut band = RowBand::empty_with(w, h, rows.clone(), nb, with_points);
         let radiance_rows = rows_of(&mut band.radiance, w);
         let truth_rows = rows_of(&mut band.truth, w);
+        let point_rows = point_rows(&mut band.points, w, rows.len());
         radiance_rows
             .into_par_iter()
             .zip(truth_rows)
+            .zip(point_rows)
             .enumerate()
-            .try_for_each_init(Scratch::default, |sc, (i, (mut out, mut truth))| {
-                let row = rows.start + i;
-                trace_row(shader, sensor, row, times, sc, &mut truth);
-                let t0 = Instant::now();
-                for (b, o) in out.iter_mut().enumerate() {
-                    box_reduce_row(&sc.radiance[b * per_row..(b + 1) * per_row], n, o);
-                }
-                let checked = check_row(sensor, row, w, out.iter().map(|o| &**o), &truth);
-                StageTimes::add(&times.reduction, t0.elapsed());
-                progress(1);
-                checked
-            })?;
+            .try_for_each_init(
+                Scratch::default,
+                |sc, (i, ((mut out, mut truth), mut pts))| {
+                    let row = rows.start + i;
+                    trace_row(shader, sensor, row, times, sc, &mut truth, &mut pts);
+                    let t0 = Instant::now();
+                    for (b, o) in out.iter_mut().enumerate() {
+                        box_reduce_row(&sc.radiance[b * per_row..(b + 1) * per_row], n, o);
+                    }
+                    let checked = check_row(sensor, row, w, out.iter().map(|o| &**o), &truth);
+                    StageTimes::add(&times.reduction, t0.elapsed());
+                    progress(1);
+                    checked
+                },
+            )?;
         return Ok(band);
     }
     let traced = rows.start.saturating_sub(halo)..(rows.end + halo).min(h);
@@ -507,20 +618,31 @@ pub fn render_rows(
     let mut truth: Vec<Vec<f32>> = (0..TRUTH_LAYERS.len())
         .map(|_| zeros(traced.len() * w))
         .collect();
+    let mut points: Vec<Vec<f32>> = if with_points {
+        (0..POINT_LAYERS.len())
+            .map(|_| zeros(traced.len() * w))
+            .collect()
+    } else {
+        Vec::new()
+    };
     over.par_chunks_mut(nb * per_row)
         .zip(rows_of(&mut truth, w))
+        .zip(point_rows(&mut points, w, traced.len()))
         .enumerate()
-        .try_for_each_init(Scratch::default, |sc, (i, (radiance, mut truth))| {
-            let row = traced.start + i;
-            trace_row(shader, sensor, row, times, sc, &mut truth);
-            radiance.copy_from_slice(&sc.radiance);
-            progress(1);
-            // The oversampled radiance (n sub-rows of w·n per band): the
-            // PSF's weighted sums of finite values are finite.
-            check_row(sensor, row, w * n, radiance.chunks_exact(per_row), &truth)
-        })?;
+        .try_for_each_init(
+            Scratch::default,
+            |sc, (i, ((radiance, mut truth), mut pts))| {
+                let row = traced.start + i;
+                trace_row(shader, sensor, row, times, sc, &mut truth, &mut pts);
+                radiance.copy_from_slice(&sc.radiance);
+                progress(1);
+                // The oversampled radiance (n sub-rows of w·n per band): the
+                // PSF's weighted sums of finite values are finite.
+                check_row(sensor, row, w * n, radiance.chunks_exact(per_row), &truth)
+            },
+        )?;
     let t0 = Instant::now();
-    let mut band = RowBand::empty(w, h, rows.clone(), nb);
+    let mut band = RowBand::empty_with(w, h, rows.clone(), nb, with_points);
     let skip = (rows.start - traced.start) * w;
     for b in 0..nb {
         // Place the traced rows in a full-height image so every weight is
@@ -534,7 +656,12 @@ pub fn render_rows(
         let reduced = &full[traced.start * w..traced.end * w];
         band.radiance[b].copy_from_slice(&reduced[skip..skip + rows.len() * w]);
     }
-    for (d, s) in band.truth.iter_mut().zip(&truth) {
+    for (d, s) in band
+        .truth
+        .iter_mut()
+        .zip(&truth)
+        .chain(band.points.iter_mut().zip(&points))
+    {
         d.copy_from_slice(&s[skip..skip + rows.len() * w]);
     }
     StageTimes::add(&times.psf, t0.elapsed());
@@ -547,7 +674,8 @@ pub fn render_rows(
 pub struct Finished {
     /// All layers: per band `NAME_radiance` (and `NAME_counts` when
     /// quantised), `apparent_temperature` (band 0) and
-    /// `NAME_apparent_temperature` (other bands), then the truth layers.
+    /// `NAME_apparent_temperature` (other bands), then the truth layers and
+    /// the sensor's geolocation layers, laid out in its orientation.
     pub stack: ImageStack,
     /// Names of the band radiance layers of `stack`, in band order (the
     /// ENVI bands).
@@ -728,13 +856,93 @@ pub fn apparent_temperatures(band: &Band, radiance: &[f32]) -> Vec<f32> {
     out
 }
 
+/// Append the sensor's geolocation layers, in [`crate::sensor::GeoLayer`]
+/// order, from the hit points (x, y, z, m; NaN where the ray missed).
+fn push_geo_layers(
+    stack: &mut ImageStack,
+    sensor: &Sensor,
+    points: Vec<Vec<f32>>,
+    site: Option<&crate::sun::Site>,
+) -> Result<()> {
+    use crate::sensor::GeoLayer;
+    if sensor.geo_layers.is_empty() {
+        return Ok(());
+    }
+    let Ok([x, y, z]) = <[Vec<f32>; 3]>::try_from(points) else {
+        return Err(Error::invalid(
+            "truth_layers",
+            format!(
+                "sensor `{}` asks for geolocation layers but the rendered rows carry no hit points",
+                sensor.name
+            ),
+        ));
+    };
+    let wants = |l: GeoLayer| sensor.geo_layers.contains(&l);
+    if wants(GeoLayer::Latitude) || wants(GeoLayer::Longitude) {
+        let Some(site) = site else {
+            return Err(Error::invalid(
+                "truth_layers",
+                format!(
+                    "sensor `{}`: latitude and longitude need the scene's site",
+                    sensor.name
+                ),
+            ));
+        };
+        let (lat, lon): (Vec<f32>, Vec<f32>) = x
+            .par_iter()
+            .zip(&y)
+            .zip(&z)
+            .map(|((&x, &y), &z)| {
+                if x.is_nan() {
+                    (f32::NAN, f32::NAN)
+                } else {
+                    let p = glam::DVec3::new(x as f64, y as f64, z as f64);
+                    let (lat, lon, _) = crate::geodesy::geodetic_from_enu(site, p);
+                    (lat as f32, lon as f32)
+                }
+            })
+            .unzip();
+        if wants(GeoLayer::Latitude) {
+            stack.push(GeoLayer::Latitude.name(), lat)?;
+        }
+        if wants(GeoLayer::Longitude) {
+            stack.push(GeoLayer::Longitude.name(), lon)?;
+        }
+    }
+    for (l, v) in [(GeoLayer::X, x), (GeoLayer::Y, y), (GeoLayer::Z, z)] {
+        if wants(l) {
+            stack.push(l.name(), v)?;
+        }
+    }
+    Ok(())
+}
+
 /// Apply the image-wide sensor effects to a complete [`RowBand`] (MTF, then
 /// NEdT noise with `seed`, then quantisation) and build the output layers.
 /// The band's buffers become the layers (no copies). Every output value is
 /// finite: the band's are ([`RowBand`]), the apparent temperatures and
 /// counts are by construction, and the radiance after MTF or noise is
-/// checked (an error names the layer, row and column).
+/// checked (an error names the layer, row and column). The geolocation
+/// layers, which are NaN where a ray misses, are the exception; for
+/// `latitude`/`longitude` use [`finish_at`].
 pub fn finish(full: RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Result<Finished> {
+    finish_at(full, sensor, bands, seed, None)
+}
+
+/// [`finish`] for a scene at `site`, which the `latitude` and `longitude`
+/// layers need (an error if the sensor asks for them without a site). The
+/// sensor's geolocation layers ([`crate::sensor::GeoLayer`]) follow the
+/// truth layers; then every layer is laid out in the sensor's
+/// [`crate::sensor::Orientation`]. Latitude and longitude are f32 degrees:
+/// steps of 4–8 × 10⁻⁶° (under a metre) at longitudes of 64–128°; the
+/// `x`, `y`, `z` layers hold the hit points to a millimetre within 16 km.
+pub fn finish_at(
+    full: RowBand,
+    sensor: &Sensor,
+    bands: &[Band],
+    seed: u64,
+    site: Option<&crate::sun::Site>,
+) -> Result<Finished> {
     let (w, h) = (full.width, full.height);
     if full.rows != (0..h) || bands.len() != full.radiance.len() {
         return Err(Error::invalid(
@@ -800,6 +1008,13 @@ pub fn finish(full: RowBand, sensor: &Sensor, bands: &[Band], seed: u64) -> Resu
     }
     for (name, v) in TRUTH_LAYERS.iter().zip(full.truth) {
         stack.push(*name, v)?;
+    }
+    push_geo_layers(&mut stack, sensor, full.points, site)?;
+    if !sensor.orientation.is_identity() {
+        stack
+            .layers
+            .par_iter_mut()
+            .for_each(|l| sensor.orientation.flip_layer(&mut l.data, w));
     }
     Ok(Finished {
         stack,

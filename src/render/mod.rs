@@ -39,13 +39,16 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-pub use image::{Finished, MISS_TRUTH, RowBand, StageTimes, TRUTH_LAYERS, finish, render_rows};
+pub use image::{
+    Finished, MISS_TRUTH, POINT_LAYERS, RowBand, StageTimes, TRUTH_LAYERS, finish, finish_at,
+    render_rows,
+};
 pub use shade::{
     Conditions, FastMiss, FastScratch, SceneOptics, ShadeOptions, Shader, Sky, SunInput,
     SurfaceState, TruthOut, clear_sky_dni_w_m2, surface_solar_spectrum,
 };
 
-use crate::output::write_image_set;
+use crate::output::{GeoOutputs, write_image_set_geo};
 use crate::radiometry::Band;
 use crate::sensor::Sensor;
 use crate::{Error, Location, Result};
@@ -84,6 +87,10 @@ pub struct RenderConfig {
     #[serde(default)]
     #[schemars(schema_with = "sky_sampling_schema")]
     pub sky_sampling: crate::exposure::SkySampling,
+    /// Also write each georeferenced image as a GeoTIFF, `STEM.tif`
+    /// (default false; see [`write_outputs`]).
+    #[serde(default)]
+    pub geotiff: bool,
 }
 
 /// `render.sky_sampling` as written: `stratified:N`, `dirsig` or
@@ -105,6 +112,7 @@ impl Default for RenderConfig {
             sky_temperature_k: None,
             facet_samples: default_facet_samples(),
             sky_sampling: crate::exposure::SkySampling::default(),
+            geotiff: false,
         }
     }
 }
@@ -121,7 +129,7 @@ impl RenderConfig {
             location,
             "render",
             "an object with max_bounces, spectral_step_um, sky_temperature_k, facet_samples, \
-             sky_sampling",
+             sky_sampling, geotiff",
         )?;
         let bad = |field: &str, msg: String| {
             Error::parse(location.clone().with_field(format!("render.{field}")), msg)
@@ -223,12 +231,39 @@ pub fn output_paths(dir: &Path, stem: &str) -> [PathBuf; 4] {
 /// (quick-look of the apparent temperature), each atomically
 /// ([`crate::output::write_image_set`]).
 pub fn write_outputs(dir: &Path, stem: &str, f: &Finished, description: &str) -> Result<()> {
+    write_outputs_geo(dir, stem, f, description, &GeoOutputs::default())
+}
+
+/// [`write_outputs`] with the image's georeference: in the ENVI header
+/// (`map info`), and with `geo.geotiff` every layer also as `STEM.tif`
+/// (a GeoTIFF; written only for a georeferenced image).
+pub fn write_outputs_geo(
+    dir: &Path,
+    stem: &str,
+    f: &Finished,
+    description: &str,
+    geo: &GeoOutputs,
+) -> Result<()> {
     let spectral: Vec<(&str, f64)> = f
         .radiance_layers
         .iter()
         .map(String::as_str)
         .zip(f.wavelengths_um.iter().copied())
         .collect();
-    write_image_set(dir, stem, &f.stack, &spectral, description)?;
+    let geo = GeoOutputs {
+        georef: geo.georef.clone(),
+        geotiff: geo.geotiff && geo.georef.is_some(),
+    };
+    write_image_set_geo(dir, stem, &f.stack, &spectral, description, &geo)?;
     Ok(())
+}
+
+/// What to write about where `sensor`'s image lies, for a scene at `site`:
+/// its georeference where the geometry allows
+/// ([`crate::sensor::georef::georeference`]) and, with `geotiff`, a GeoTIFF.
+pub fn geo_outputs(sensor: &Sensor, site: &crate::sun::Site, geotiff: bool) -> GeoOutputs {
+    GeoOutputs {
+        georef: crate::sensor::georef::georeference(sensor, site),
+        geotiff,
+    }
 }

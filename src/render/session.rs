@@ -23,12 +23,12 @@ use std::time::{Duration, Instant};
 use chrono::{DateTime, FixedOffset};
 use serde::Deserialize;
 
-use super::image::{Finished, RowBand, StageTimes, finish, render_rows};
+use super::image::{Finished, RowBand, StageTimes, finish_at, render_rows};
 use super::path::PathTables;
 use super::scene_thermal::FacetTracers;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
-use super::{Fnv, RenderConfig, write_outputs};
+use super::{Fnv, RenderConfig, write_outputs_geo};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, Profile, SurfaceMet, Tape7Lut};
 use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
@@ -646,7 +646,13 @@ impl Session {
     /// Apply the image-wide effects to a full row band of sensor `s`.
     pub fn finish(&mut self, s: usize, band: RowBand, seed: u64) -> Result<Finished> {
         let t0 = Instant::now();
-        let f = finish(band, &self.sensors[s], &self.bands[s], seed)?;
+        let f = finish_at(
+            band,
+            &self.sensors[s],
+            &self.bands[s],
+            seed,
+            Some(&self.scene.site),
+        )?;
         self.timings.sensor += t0.elapsed();
         Ok(f)
     }
@@ -695,7 +701,8 @@ impl Session {
             &self.sensors[s].name,
             &time.to_rfc3339(),
         );
-        write_outputs(out_dir, stem, image, &desc)?;
+        let geo = super::geo_outputs(&self.sensors[s], &self.scene.site, self.config.geotiff);
+        write_outputs_geo(out_dir, stem, image, &desc, &geo)?;
         self.timings.output += t0.elapsed();
         Ok(())
     }

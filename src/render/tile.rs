@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use exr::prelude::{self as x};
 use serde::{Deserialize, Serialize};
 
-use super::image::{RowBand, TRUTH_LAYERS};
+use super::image::{POINT_LAYERS, RowBand, TRUTH_LAYERS};
 use crate::output::exr_io::{flat_exr_layer, read_flat_exr, write_flat_exr};
 use crate::{Error, Location, Result};
 
@@ -109,13 +109,24 @@ pub fn write_tile(path: &Path, info: &TileInfo, band: &RowBand) -> Result<()> {
             ),
         ));
     }
+    let point_names = if band.points().is_empty() {
+        &[][..]
+    } else {
+        &POINT_LAYERS[..]
+    };
     let names: Vec<String> = info
         .bands
         .iter()
         .map(|b| format!("{b}_radiance"))
         .chain(TRUTH_LAYERS.iter().map(|s| s.to_string()))
+        .chain(point_names.iter().map(|s| s.to_string()))
         .collect();
-    let data: Vec<&Vec<f32>> = band.radiance().iter().chain(band.truth()).collect();
+    let data: Vec<&Vec<f32>> = band
+        .radiance()
+        .iter()
+        .chain(band.truth())
+        .chain(band.points())
+        .collect();
     let mut attributes = x::LayerAttributes::named("irsig-tile");
     attributes.other.insert(
         x::Text::from(TILE_ATTRIBUTE),
@@ -186,6 +197,21 @@ pub fn read_tile(path: &Path) -> Result<(TileInfo, RowBand)> {
         radiance,
         truth,
     )?;
+    // The hit points, where the sensor asked for geolocation layers.
+    let has_points = layer
+        .channel_data
+        .list
+        .iter()
+        .any(|c| c.name.to_string() == POINT_LAYERS[0]);
+    let band = if has_points {
+        let points = POINT_LAYERS
+            .iter()
+            .map(|n| get(n))
+            .collect::<Result<Vec<_>>>()?;
+        band.with_points(points)?
+    } else {
+        band
+    };
     Ok((info, band))
 }
 
@@ -280,11 +306,12 @@ pub fn assemble(parts: &[(PathBuf, TileInfo, RowBand)]) -> Result<(TileInfo, Row
             ),
         ));
     }
-    let mut full = RowBand::empty(
+    let mut full = RowBand::empty_with(
         first.width,
         first.height,
         0..first.height,
         first.bands.len(),
+        parts.iter().any(|(_, _, b)| !b.points().is_empty()),
     );
     for (_, _, band) in parts {
         full.paste(band)?;
@@ -306,6 +333,28 @@ pub fn sensor_from_scene_file(
     name: &str,
     expected_file_hash: &str,
 ) -> Result<(crate::sensor::Sensor, Vec<crate::radiometry::Band>)> {
+    let (sensor, bands, _) = scene_sensor(scene, name, expected_file_hash)?;
+    Ok((sensor, bands))
+}
+
+/// What merging tiles of a sensor needs from the scene file.
+struct SceneSensor {
+    /// The scene's site (for the georeference and latitude/longitude).
+    site: crate::sun::Site,
+    /// The scene's `render.geotiff`.
+    geotiff: bool,
+}
+
+/// [`sensor_from_scene_file`], with the site and render settings.
+fn scene_sensor(
+    scene: &Path,
+    name: &str,
+    expected_file_hash: &str,
+) -> Result<(
+    crate::sensor::Sensor,
+    Vec<crate::radiometry::Band>,
+    SceneSensor,
+)> {
     let bytes = std::fs::read(scene).map_err(|e| Error::io(scene, e))?;
     let mut h = super::Fnv::default();
     h.write(&bytes);
@@ -338,7 +387,21 @@ pub fn sensor_from_scene_file(
         let sensor = crate::sensor::Sensor::from_config(&c, &loc)?;
         let base = scene.parent().unwrap_or(Path::new("."));
         let bands = super::sensor_bands(&sensor, base, config.spectral_step_um, &loc)?;
-        return Ok((sensor, bands));
+        let site_loc = file.clone().with_field("site");
+        let spec: crate::scene::file::SiteSpec = v
+            .get("site")
+            .cloned()
+            .ok_or_else(|| Error::parse(site_loc.clone(), "missing: expected an object"))
+            .and_then(|s| {
+                serde_json::from_value(s).map_err(|e| Error::parse(site_loc.clone(), e.to_string()))
+            })?;
+        let site = crate::sun::Site::new(spec.latitude_deg, spec.longitude_deg, spec.altitude_m)
+            .map_err(|e| Error::parse(site_loc.clone(), e.to_string()))?;
+        let extra = SceneSensor {
+            site,
+            geotiff: config.geotiff,
+        };
+        return Ok((sensor, bands, extra));
     }
     Err(Error::parse(
         file.with_field("sensors"),
@@ -351,6 +414,12 @@ pub fn sensor_from_scene_file(
 /// finished with the sensor's effects read from the scene file, and written
 /// ([`super::write_outputs`]). Returns the stems written.
 pub fn merge_tiles(parts: &[PathBuf], out_dir: &Path) -> Result<Vec<String>> {
+    merge_tiles_with(parts, out_dir, false)
+}
+
+/// [`merge_tiles`], also writing a GeoTIFF of each georeferenced image when
+/// `geotiff` (or the scene's `render.geotiff`) says so.
+pub fn merge_tiles_with(parts: &[PathBuf], out_dir: &Path, geotiff: bool) -> Result<Vec<String>> {
     let mut groups: std::collections::BTreeMap<String, Vec<(PathBuf, TileInfo, RowBand)>> =
         Default::default();
     for p in parts {
@@ -367,8 +436,8 @@ pub fn merge_tiles(parts: &[PathBuf], out_dir: &Path) -> Result<Vec<String>> {
     let mut done = Vec::new();
     for (stem, group) in groups {
         let (info, full) = assemble(&group)?;
-        let (sensor, bands) =
-            sensor_from_scene_file(&info.scene, &info.sensor, &info.scene_file_hash)?;
+        let (sensor, bands, extra) =
+            scene_sensor(&info.scene, &info.sensor, &info.scene_file_hash)?;
         if sensor.width() != info.width || sensor.height() != info.height {
             return Err(Error::parse(
                 Location::file(&info.scene),
@@ -382,9 +451,10 @@ pub fn merge_tiles(parts: &[PathBuf], out_dir: &Path) -> Result<Vec<String>> {
                 ),
             ));
         }
-        let finished = super::finish(full, &sensor, &bands, info.seed)?;
+        let finished = super::finish_at(full, &sensor, &bands, info.seed, Some(&extra.site))?;
         let desc = super::description(&info.scene, &info.backend, &info.sensor, &info.time);
-        super::write_outputs(out_dir, &stem, &finished, &desc)?;
+        let geo = super::geo_outputs(&sensor, &extra.site, geotiff || extra.geotiff);
+        super::write_outputs_geo(out_dir, &stem, &finished, &desc, &geo)?;
         done.push(stem);
     }
     Ok(done)

@@ -15,6 +15,11 @@
 //! - [`Sensor::project`] maps a world point to continuous image coordinates
 //!   (tests, ground-truth overlays).
 //!
+//! - [`georef`]: where the image lies on the map ([`georef::georeference`]:
+//!   an affine pixel → UTM transform where the geometry allows), the
+//!   output orientation ([`Orientation`]: line scanners north-up on request)
+//!   and the opt-in geolocation truth layers ([`GeoLayer`]).
+//!
 //! Transforms are named `<to>_from_<from>`; world space is ENU metres.
 //!
 //! Takes a sensor description; gives rays and, from radiances, the sensor's
@@ -22,6 +27,7 @@
 
 pub mod camera;
 pub mod effects;
+pub mod georef;
 pub mod scanner;
 
 use std::path::{Path, PathBuf};
@@ -215,6 +221,11 @@ pub struct FrameCameraConfig {
     /// Noise seed.
     #[serde(default)]
     pub seed: u64,
+    /// Extra truth layers, besides the six always written: any of
+    /// `latitude`, `longitude` (degrees, WGS-84) and `x`, `y`, `z` (scene
+    /// metres) of each pixel's centre-ray hit, NaN where the ray misses.
+    #[serde(default)]
+    pub truth_layers: Vec<String>,
 }
 
 /// `{"type": "line_scanner", ...}`: an airborne whiskbroom scanner (see
@@ -283,6 +294,156 @@ pub struct LineScannerConfig {
     /// Noise seed.
     #[serde(default)]
     pub seed: u64,
+    /// Extra truth layers (see [`FrameCameraConfig::truth_layers`]).
+    #[serde(default)]
+    pub truth_layers: Vec<String>,
+    /// Orientation of the written image: `as_flown` (default: row 0 is the
+    /// first line, column 0 the port end of each line) or `north_up` (see
+    /// [`Orientation::north_up`]).
+    #[serde(default)]
+    pub orientation: ScanOrientation,
+}
+
+/// How a line scanner's image is laid out in its files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ScanOrientation {
+    /// Row 0 is the first line flown, column 0 the port end of each line.
+    #[default]
+    AsFlown,
+    /// The first row is the northernmost line, and the image is not
+    /// mirrored ([`Orientation::north_up`]).
+    NorthUp,
+}
+
+/// A flip of the sensor's image into the written image: written pixel
+/// `(col, row)` is sensor pixel `(W − 1 − col, row)` with `flip_columns`,
+/// `(col, H − 1 − row)` with `flip_rows`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Orientation {
+    /// Reverse the order of the columns.
+    pub flip_columns: bool,
+    /// Reverse the order of the rows.
+    pub flip_rows: bool,
+}
+
+impl Orientation {
+    /// The north-up layout of a line scanner flying on `heading_rad`
+    /// (clockwise from north). As flown, rows follow the track and columns
+    /// run from port to starboard, which is a mirror image of the ground
+    /// (seen from above) on every heading. One flip undoes it: with a
+    /// northward track (`cos heading > 0`) the rows are reversed, so the
+    /// first row is the northernmost line; otherwise (southward, or exactly
+    /// east or west) the columns are reversed, and the first row already is
+    /// the northernmost (east/west: the westernmost / easternmost). The
+    /// image is then the ground as seen from above, turned by the heading
+    /// off north-up at most ±90° (the ENVI `rotation=`).
+    pub fn north_up(heading_rad: f64) -> Orientation {
+        if heading_rad.cos() > 1e-12 {
+            Orientation {
+                flip_columns: false,
+                flip_rows: true,
+            }
+        } else {
+            Orientation {
+                flip_columns: true,
+                flip_rows: false,
+            }
+        }
+    }
+
+    /// Whether anything is flipped.
+    pub fn is_identity(&self) -> bool {
+        !self.flip_columns && !self.flip_rows
+    }
+
+    /// Continuous sensor coordinates of continuous written-image point
+    /// `(u, v)` of a `w × h` image (the flip is its own inverse).
+    pub fn apply(&self, u: f64, v: f64, w: f64, h: f64) -> (f64, f64) {
+        (
+            if self.flip_columns { w - u } else { u },
+            if self.flip_rows { h - v } else { v },
+        )
+    }
+
+    /// Flip a row-major `w`-wide layer in place.
+    pub fn flip_layer(&self, data: &mut [f32], w: usize) {
+        if self.flip_columns {
+            for row in data.chunks_exact_mut(w.max(1)) {
+                row.reverse();
+            }
+        }
+        if self.flip_rows {
+            let h = data.len() / w.max(1);
+            for r in 0..h / 2 {
+                let (top, bottom) = data.split_at_mut((h - 1 - r) * w);
+                top[r * w..(r + 1) * w].swap_with_slice(&mut bottom[..w]);
+            }
+        }
+    }
+}
+
+/// A geolocation truth layer (opt-in: a sensor's `truth_layers`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GeoLayer {
+    /// Geodetic latitude of the hit, degrees (WGS-84).
+    Latitude,
+    /// Longitude of the hit, degrees east.
+    Longitude,
+    /// Scene x (east) of the hit, m.
+    X,
+    /// Scene y (north), m.
+    Y,
+    /// Scene z (up), m.
+    Z,
+}
+
+impl GeoLayer {
+    /// Every geolocation layer, in output order.
+    pub const ALL: [GeoLayer; 5] = [
+        GeoLayer::Latitude,
+        GeoLayer::Longitude,
+        GeoLayer::X,
+        GeoLayer::Y,
+        GeoLayer::Z,
+    ];
+
+    /// The layer name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            GeoLayer::Latitude => "latitude",
+            GeoLayer::Longitude => "longitude",
+            GeoLayer::X => "x",
+            GeoLayer::Y => "y",
+            GeoLayer::Z => "z",
+        }
+    }
+
+    /// Parse a sensor's `truth_layers` list (names as [`GeoLayer::name`]),
+    /// in output order, without repeats.
+    pub fn parse_list(names: &[String]) -> Result<Vec<GeoLayer>> {
+        let mut out = Vec::new();
+        for n in names {
+            let Some(l) = GeoLayer::ALL.iter().find(|l| l.name() == n) else {
+                return Err(Error::invalid(
+                    "truth_layers",
+                    format!(
+                        "unknown layer `{n}`: expected any of latitude, longitude, x, y, z \
+                         (the standard truth layers are always written)"
+                    ),
+                ));
+            };
+            if out.contains(l) {
+                return Err(Error::invalid(
+                    "truth_layers",
+                    format!("`{n}` is listed twice"),
+                ));
+            }
+            out.push(*l);
+        }
+        out.sort_by_key(|l| GeoLayer::ALL.iter().position(|a| a == l));
+        Ok(out)
+    }
 }
 
 /// The imaging geometry of a sensor.
@@ -305,6 +466,10 @@ pub struct Sensor {
     pub bands: Vec<BandConfig>,
     /// Sensor effects applied to each band's radiance image.
     pub effects: Effects,
+    /// Geolocation truth layers to write, in output order.
+    pub geo_layers: Vec<GeoLayer>,
+    /// How the sensor's image is laid out in the written image.
+    pub orientation: Orientation,
 }
 
 fn vec3(a: [f64; 3]) -> DVec3 {
@@ -404,6 +569,9 @@ impl Sensor {
                     geometry: Geometry::Frame(geometry),
                     bands: c.bands.clone(),
                     effects,
+                    geo_layers: GeoLayer::parse_list(&c.truth_layers)
+                        .map_err(|e| at("truth_layers", e))?,
+                    orientation: Orientation::default(),
                 })
             }
             SensorConfig::LineScanner(c) => {
@@ -454,11 +622,18 @@ impl Sensor {
                     at(&field, e)
                 })?;
                 check_bands(&c.bands).map_err(|e| at("bands", e))?;
+                let orientation = match c.orientation {
+                    ScanOrientation::AsFlown => Orientation::default(),
+                    ScanOrientation::NorthUp => Orientation::north_up(geometry.heading_rad),
+                };
                 Ok(Sensor {
                     name: c.name.clone(),
                     geometry: Geometry::LineScanner(geometry),
                     bands: c.bands.clone(),
                     effects,
+                    geo_layers: GeoLayer::parse_list(&c.truth_layers)
+                        .map_err(|e| at("truth_layers", e))?,
+                    orientation,
                 })
             }
         }
@@ -541,11 +716,43 @@ impl Sensor {
 
     /// Continuous image coordinates `(column, row)` — for a scanner
     /// `(sample, line)` — of world point `p`, or `None` where it is not seen.
+    /// These are the sensor's coordinates; the written image may be flipped
+    /// ([`Sensor::project_written`]).
     pub fn project(&self, p: DVec3) -> Option<DVec2> {
         match &self.geometry {
             Geometry::Frame(c) => c.project(p),
             Geometry::LineScanner(s) => s.project(p).map(|ls| DVec2::new(ls.y, ls.x)),
         }
+    }
+
+    /// [`Sensor::project`] in the written image's coordinates (after the
+    /// [`Orientation`] flip).
+    pub fn project_written(&self, p: DVec3) -> Option<DVec2> {
+        let uv = self.project(p)?;
+        let (u, v) = self
+            .orientation
+            .apply(uv.x, uv.y, self.width() as f64, self.height() as f64);
+        Some(DVec2::new(u, v))
+    }
+
+    /// The point where the line of sight through continuous sensor image
+    /// point `(u, v)` (`(sample, line)` for a scanner, whose aircraft
+    /// position is taken at that point's time) meets the horizontal plane
+    /// `z = z_m`, or `None` if it never does (looking up or level).
+    pub fn ground_point(&self, u: f64, v: f64, z_m: f64) -> Option<DVec3> {
+        let (o, d) = match &self.geometry {
+            Geometry::Frame(c) => (c.position(), c.direction(u, v)),
+            Geometry::LineScanner(s) => {
+                let theta = s.scan_angle(u);
+                let t = s.start_time_s + (v - 0.5) / s.scan_rate_hz + s.sweep_delay(theta);
+                (s.position(t), s.direction(theta, 0.0))
+            }
+        };
+        if d.z.is_nan() || d.z >= -1e-12 {
+            return None;
+        }
+        let k = (z_m - o.z) / d.z;
+        (k > 0.0).then(|| o + d * k)
     }
 }
 
