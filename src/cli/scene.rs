@@ -18,7 +18,7 @@ enum SceneCommand {
     /// Load a scene (materials, geometry, weather reference) and print a
     /// summary, or every problem found (exit status 2).
     Check {
-        /// The scene file (JSON).
+        /// The scene file (JSON), or a DIRSIG `.scene`/`.jsim`/`.sim` (imported first).
         file: PathBuf,
         /// Print the summary as JSON.
         #[arg(long)]

@@ -72,21 +72,21 @@ pub const THERM_THICKNESS_TO_SI: f64 = 0.01;
 
 /// A `{ … }` block of a DIRSIG text file.
 #[derive(Debug, Default)]
-struct Block {
-    name: String,
-    line: usize,
-    entries: Vec<(String, String, usize)>,
-    children: Vec<Block>,
+pub(crate) struct Block {
+    pub(crate) name: String,
+    pub(crate) line: usize,
+    pub(crate) entries: Vec<(String, String, usize)>,
+    pub(crate) children: Vec<Block>,
 }
 
 impl Block {
-    fn get(&self, key: &str) -> Option<(&str, usize)> {
+    pub(crate) fn get(&self, key: &str) -> Option<(&str, usize)> {
         self.entries
             .iter()
             .find(|(k, _, _)| k.eq_ignore_ascii_case(key))
             .map(|(_, v, l)| (v.as_str(), *l))
     }
-    fn child(&self, name: &str) -> Option<&Block> {
+    pub(crate) fn child(&self, name: &str) -> Option<&Block> {
         self.children
             .iter()
             .find(|b| b.name.eq_ignore_ascii_case(name))
@@ -94,7 +94,7 @@ impl Block {
 }
 
 /// Parse the nested block structure of a DIRSIG text file.
-fn parse_blocks(text: &str, path: &Path) -> Result<Block> {
+pub(crate) fn parse_blocks(text: &str, path: &Path) -> Result<Block> {
     let mut stack = vec![Block {
         name: "<root>".into(),
         ..Default::default()
@@ -269,6 +269,16 @@ fn find_relative(f: &str, base: &Path, dirs: &[PathBuf]) -> Option<PathBuf> {
 /// real corruption: unbalanced braces, an entry without `ID`/`NAME`, a `Therm` entry
 /// with a missing or non-numeric property, an unreadable emissivity file.
 pub fn read_mat(path: &Path, ems_dirs: &[PathBuf]) -> Result<MatFile> {
+    read_mat_with(path, ems_dirs, &mut |_| None)
+}
+
+/// As [`read_mat`]; a file found nowhere else is asked of `fallback` (given the name as
+/// written), which may say where it is.
+pub fn read_mat_with(
+    path: &Path,
+    ems_dirs: &[PathBuf],
+    fallback: &mut dyn FnMut(&str) -> Option<PathBuf>,
+) -> Result<MatFile> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let root = parse_blocks(&text, path)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -371,7 +381,7 @@ pub fn read_mat(path: &Path, ems_dirs: &[PathBuf]) -> Result<MatFile> {
                 specular = num(ep, "SPECULAR_FRACTION")?;
             }
             if let Some((f, fl)) = ep.get("FILENAME") {
-                match find_relative(f, base, ems_dirs) {
+                match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
                     Some(p) => {
                         curve = Some(read_ems(&p).map_err(|e| {
                             Error::parse(loc("FILENAME", fl), format!("material `{name}`: {e}"))
@@ -387,7 +397,7 @@ pub fn read_mat(path: &Path, ems_dirs: &[PathBuf]) -> Result<MatFile> {
         if curve.is_none() {
             if let Some(rp) = props.and_then(|s| s.child("REFLECTANCE_PROP")) {
                 if let Some((f, fl)) = rp.get("TXT_FILENAME").or_else(|| rp.get("FILENAME")) {
-                    match find_relative(f, base, ems_dirs) {
+                    match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
                         Some(p) => {
                             curve = Some(read_reflectance_as_emissivity(&p).map_err(|e| {
                                 Error::parse(

@@ -19,6 +19,7 @@
 //! It must not know ray tracing, the thermal model or rendering: it
 //! describes the scene; later stages read it.
 
+pub mod dirsig;
 pub mod file;
 pub mod gltf;
 pub mod jsonloc;
@@ -347,9 +348,40 @@ impl Scene {
         })
     }
 
-    /// Load a scene file, collecting every problem found.
+    /// Load a scene file, collecting every problem found. A DIRSIG scene or
+    /// simulation (`.scene`, `.jsim`, `.sim`; [`dirsig::is_dirsig_scene`]) is imported
+    /// first ([`dirsig::import`], into a temporary folder); the import's warnings come
+    /// first in [`Scene::warnings`].
     pub fn check(path: &Path) -> std::result::Result<Scene, Vec<Error>> {
+        if dirsig::is_dirsig_scene(path) {
+            return Self::check_dirsig(path, &dirsig::ImportOptions::default());
+        }
         Loader::new(path)?.load()
+    }
+
+    /// Import a DIRSIG scene or simulation with `options` and load the result, collecting
+    /// every problem found.
+    pub fn check_dirsig(
+        path: &Path,
+        options: &dirsig::ImportOptions,
+    ) -> std::result::Result<Scene, Vec<Error>> {
+        let tmp = tempfile::Builder::new()
+            .prefix("irsig-dirsig-")
+            .tempdir()
+            .map_err(|e| vec![Error::io(std::env::temp_dir(), e)])?;
+        let out = tmp.path().join(format!(
+            "{}.json",
+            path.file_stem().map_or("scene".into(), |s| s.to_string_lossy())
+        ));
+        let imported = dirsig::import(path, &out, options).map_err(|e| vec![e])?;
+        imported.write(&out).map_err(|e| vec![e])?;
+        let mut scene = Loader::new(&out)?.load()?;
+        // Everything the scene needs was read while loading; the temporary files go.
+        scene.path = path.to_path_buf();
+        let mut warnings = imported.warnings;
+        warnings.append(&mut scene.warnings);
+        scene.warnings = warnings;
+        Ok(scene)
     }
 
     /// Index into [`Scene::parts`] of primitive `prim` of instance `instance`.
