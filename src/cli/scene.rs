@@ -23,6 +23,10 @@ enum SceneCommand {
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
+        /// For a DIRSIG scene or simulation: a folder to look in for files not found
+        /// where the DIRSIG files say (see `irsig import dirsig`); repeat for more.
+        #[arg(long, value_name = "DIR")]
+        search: Vec<PathBuf>,
     },
     /// Print the JSON Schema of the scene file format.
     Schema {
@@ -49,7 +53,7 @@ fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
 /// Run `irsig scene`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     match args.command {
-        SceneCommand::Check { file, json } => check(&file, json),
+        SceneCommand::Check { file, json, search } => check(&file, json, search),
         SceneCommand::Schema { out } => {
             let s = schema_json();
             match out {
@@ -67,8 +71,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 }
 
-fn check(file: &Path, json: bool) -> anyhow::Result<()> {
-    let scene = match Scene::check(file) {
+fn check(file: &Path, json: bool, search: Vec<PathBuf>) -> anyhow::Result<()> {
+    let loaded = if search.is_empty() {
+        Scene::check(file)
+    } else {
+        let opts = irsig::scene::dirsig::ImportOptions {
+            search_dirs: search,
+            time: None,
+        };
+        Scene::check_dirsig(file, &opts)
+    };
+    let scene = match loaded {
         Ok(s) => s,
         Err(errs) => {
             let mut err = std::io::stderr().lock();

@@ -334,18 +334,26 @@ pub struct SceneSummary {
     pub object_list: Vec<(String, usize, usize)>,
 }
 
+/// One error for a list of problems: the problem itself when there is one.
+fn join_errors(errs: Vec<Error>) -> Error {
+    if errs.len() == 1 {
+        errs.into_iter().next().expect("one")
+    } else {
+        let n = errs.len();
+        let list: Vec<String> = errs.iter().map(|e| format!("  {e}")).collect();
+        Error::Other(format!("{n} problems in the scene:\n{}", list.join("\n")))
+    }
+}
+
 impl Scene {
     /// Load a scene file; the error lists every problem found.
     pub fn load(path: &Path) -> Result<Scene> {
-        Self::check(path).map_err(|errs| {
-            if errs.len() == 1 {
-                errs.into_iter().next().expect("one")
-            } else {
-                let n = errs.len();
-                let list: Vec<String> = errs.iter().map(|e| format!("  {e}")).collect();
-                Error::Other(format!("{n} problems in the scene:\n{}", list.join("\n")))
-            }
-        })
+        Self::check(path).map_err(join_errors)
+    }
+
+    /// [`Scene::load`] for a DIRSIG scene or simulation imported with `options`.
+    pub fn load_dirsig(path: &Path, options: &dirsig::ImportOptions) -> Result<Scene> {
+        Self::check_dirsig(path, options).map_err(join_errors)
     }
 
     /// Load a scene file, collecting every problem found. A DIRSIG scene or

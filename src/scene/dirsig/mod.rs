@@ -387,6 +387,22 @@ impl<'o> Importer<'o> {
                 return Ok(p.to_path_buf());
             }
             tried.push(p.to_path_buf());
+            // A path from another machine (`C:/DIRSIG/…/tasks/x.tasks`): its last one to
+            // three components below each base.
+            let comps: Vec<&str> = name.split(['/', '\\']).filter(|c| !c.is_empty()).collect();
+            for k in (1..=comps.len().saturating_sub(1).min(3)).rev() {
+                let tail: PathBuf = comps[comps.len() - k..].iter().collect();
+                for b in bases {
+                    let c = b.join(&tail);
+                    if c.is_file() {
+                        self.warn(
+                            at.clone(),
+                            format!("{what} `{name}` is not on this machine; using {}", c.display()),
+                        );
+                        return Ok(c);
+                    }
+                }
+            }
         } else {
             for b in bases {
                 let c = b.join(p);
