@@ -8,6 +8,7 @@ mod analysis;
 mod atmosphere;
 mod backends;
 mod cli;
+mod dirsig;
 mod exposure;
 mod exposure_pipeline;
 mod flux;

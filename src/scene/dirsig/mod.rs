@@ -520,6 +520,9 @@ impl<'o> Importer<'o> {
         let mut out = Vec::new();
         for e in &file.entries {
             self.warnings.extend(e.warnings.iter().cloned());
+            if !matches!(e.solver, TempSolver::DataDriven { .. }) {
+                self.warnings.extend(e.skipped.iter().cloned());
+            }
             let entry = match (&e.material, &e.solver) {
                 (Some(m), _) => Some(MaterialEntry {
                     id: m.id,
