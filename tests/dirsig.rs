@@ -55,10 +55,13 @@ fn tri_obj(id: &str) -> String {
 }
 
 fn load(path: &Path) -> Scene {
-    Scene::check_dirsig(path, &ImportOptions {
-        time: Some("2025-06-21T14:00:00-04:00".into()),
-        ..Default::default()
-    })
+    Scene::check_dirsig(
+        path,
+        &ImportOptions {
+            time: Some("2025-06-21T14:00:00-04:00".into()),
+            ..Default::default()
+        },
+    )
     .unwrap_or_else(|e| panic!("{e:#?}"))
 }
 
@@ -220,7 +223,9 @@ fn odb_and_gdb_import() {
     let out = dir.join("t.json");
     let im = import(&scene, &out, &ImportOptions::default()).unwrap();
     assert!(
-        im.warnings.iter().any(|w| w.contains("scene.odb:line 9") && w.contains("car_path.mov")),
+        im.warnings
+            .iter()
+            .any(|w| w.contains("scene.odb:line 9") && w.contains("car_path.mov")),
         "{:#?}",
         im.warnings
     );
@@ -238,7 +243,10 @@ fn odb_and_gdb_import() {
     let s = load(&scene);
     // The GDB in centimetres: (100, 0, 0) cm → 1 m, rotated 90° about z → (0, 1, 0),
     // moved by (10, 20, 0) m.
-    assert!(near(placed(&s, 0, [100.0 * 0.01, 0.0, 0.0]), [10.0, 21.0, 0.0]));
+    assert!(near(
+        placed(&s, 0, [100.0 * 0.01, 0.0, 0.0]),
+        [10.0, 21.0, 0.0]
+    ));
     // The matrix row by row: translation −5 m in x.
     assert!(near(placed(&s, 1, [0.0, 0.0, 0.0]), [-5.0, 0.0, 0.0]));
     // Nested: inner rotation 90° about z, then the outer lift of 3 m.
@@ -265,7 +273,11 @@ fn bundles_data_driven_and_null_materials() {
         "geometry/bundles/jet/jet.mat",
         "MATERIAL_ENTRY {\n    ID = Hot_mat\n    NAME = Hot_mat\n    DOUBLE_SIDED = TRUE\n    TEMP_SOLVER_NAME = DataDriven\n    TEMP_SOLVER {\n        TEMPERATURE = 1500\n    }\n    SURFACE_PROPERTIES {\n        REFLECTANCE_PROP_NAME = SimpleReflectance\n        REFLECTANCE_PROP {\n            TXT_FILENAME = ref.txt\n        }\n    }\n}\n",
     );
-    put(dir, "geometry/bundles/jet/ref.txt", "0.4 0.30\r\n14.0 0.30\r\n");
+    put(
+        dir,
+        "geometry/bundles/jet/ref.txt",
+        "0.4 0.30\r\n14.0 0.30\r\n",
+    );
     put(dir, "geometry/bundles/jet/jet.obj", &tri_obj("Body"));
     put(
         dir,
@@ -292,11 +304,17 @@ fn bundles_data_driven_and_null_materials() {
     let scene = put(dir, "t.scene", &scene_xml("l.glist"));
     let im = import(&scene, &dir.join("t.json"), &ImportOptions::default()).unwrap();
     assert!(
-        im.warnings.iter().any(|w| w.contains("scene.mat:line 18") && w.contains("`Null`")),
+        im.warnings
+            .iter()
+            .any(|w| w.contains("scene.mat:line 18") && w.contains("`Null`")),
         "{:#?}",
         im.warnings
     );
-    assert!(im.warnings.iter().any(|w| w.contains("l.glist:line 6") && w.contains("point sources")));
+    assert!(
+        im.warnings
+            .iter()
+            .any(|w| w.contains("l.glist:line 6") && w.contains("point sources"))
+    );
     let s = load(&scene);
     let jet = s.objects.iter().position(|o| o.name == "jet").unwrap();
     let part = s.parts.iter().find(|p| p.object == jet).unwrap();
@@ -311,7 +329,10 @@ fn bundles_data_driven_and_null_materials() {
     let e = import(&scene, &dir.join("t.json"), &ImportOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("scene.mat:line 15") && e.contains("`usemtl 100`"), "{e}");
+    assert!(
+        e.contains("scene.mat:line 15") && e.contains("`usemtl 100`"),
+        "{e}"
+    );
 }
 
 /// A 48-hour `.wth` of hourly rows (format of `irsig::weather`'s `.wth` reader).
@@ -333,7 +354,11 @@ fn wth() -> String {
 fn simulations_give_time_sensor_weather_and_atmosphere() {
     let d = tempfile::tempdir().unwrap();
     let dir = d.path();
-    put(dir, "scene/materials/scene.mat", &therm_entry("7", "concrete"));
+    put(
+        dir,
+        "scene/materials/scene.mat",
+        &therm_entry("7", "concrete"),
+    );
     put(
         dir,
         "scene/geometry/plane.obj",
@@ -396,8 +421,18 @@ fn simulations_give_time_sensor_weather_and_atmosphere() {
         Some("2025-06-20T00:00:00-04:00")
     );
     assert_eq!(s.atmosphere, Some(serde_json::json!("mid-latitude-summer")));
-    assert!(im.warnings.iter().any(|w| w.contains("s.jsim:line 8") && w.contains("`Clouds`")), "{:#?}", im.warnings);
-    assert!(im.warnings.iter().any(|w| w.contains("not on this machine")));
+    assert!(
+        im.warnings
+            .iter()
+            .any(|w| w.contains("s.jsim:line 8") && w.contains("`Clouds`")),
+        "{:#?}",
+        im.warnings
+    );
+    assert!(
+        im.warnings
+            .iter()
+            .any(|w| w.contains("not on this machine"))
+    );
     let cam = &s.sensors[0];
     assert_eq!(cam["name"], "LWIR_cam");
     assert_eq!(cam["width"], 64);
@@ -413,7 +448,10 @@ fn simulations_give_time_sensor_weather_and_atmosphere() {
     let mut session =
         irsig::render::session::Session::open(&out, irsig::trace::Backend::Embree).unwrap();
     let files = session
-        .run(&dir.join("img"), &irsig::render::session::RunOptions::default())
+        .run(
+            &dir.join("img"),
+            &irsig::render::session::RunOptions::default(),
+        )
         .unwrap();
     assert!(!files.is_empty());
 
@@ -437,7 +475,9 @@ fn simulations_give_time_sensor_weather_and_atmosphere() {
     );
     assert!(im.scene.weather.is_some());
     // A .atm is never taken for weather.
-    let e = irsig::weather::load(&dir.join("a.atm")).unwrap_err().to_string();
+    let e = irsig::weather::load(&dir.join("a.atm"))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("DIRSIG atmosphere file"), "{e}");
 }
 
@@ -457,27 +497,58 @@ fn bad_dirsig_input_names_file_and_line() {
     };
     let e = err("<geometrylist>\n<object>\n</geometrylist>");
     assert!(e.contains("l.glist:line 3") && e.contains("XML"), "{e}");
-    let e = err("<geometrylist>\n<object><basegeometry><obj><filename>tri.obj</filename></obj></basegeometry>\n<staticinstance><matrix>1 0 0</matrix></staticinstance></object></geometrylist>");
+    let e = err(
+        "<geometrylist>\n<object><basegeometry><obj><filename>tri.obj</filename></obj></basegeometry>\n<staticinstance><matrix>1 0 0</matrix></staticinstance></object></geometrylist>",
+    );
     assert!(e.contains("l.glist:line 3") && e.contains("16"), "{e}");
-    let e = err("<geometrylist>\n<object><basegeometry><obj><filename>missing.obj</filename></obj></basegeometry><staticinstance/></object></geometrylist>");
-    assert!(e.contains("l.glist:line 2") && e.contains("missing.obj") && e.contains("not found"), "{e}");
-    let e = err("<geometrylist>\n<object><basegeometry><obj><filename>tri.obj</filename></obj></basegeometry>\n<staticinstance><translation><point><x>ten</x></point></translation></staticinstance></object></geometrylist>");
+    let e = err(
+        "<geometrylist>\n<object><basegeometry><obj><filename>missing.obj</filename></obj></basegeometry><staticinstance/></object></geometrylist>",
+    );
+    assert!(
+        e.contains("l.glist:line 2") && e.contains("missing.obj") && e.contains("not found"),
+        "{e}"
+    );
+    let e = err(
+        "<geometrylist>\n<object><basegeometry><obj><filename>tri.obj</filename></obj></basegeometry>\n<staticinstance><translation><point><x>ten</x></point></translation></staticinstance></object></geometrylist>",
+    );
     assert!(e.contains("l.glist:line 3") && e.contains("`ten`"), "{e}");
-    put(dir, "geometry/bad.odb", "DIRSIG_ODB = 1.0\nOBJECT {\n  OBJ_FILENAME = tri.obj\n  INSTANCES {\n    INFO = 1, 2, 3\n  }\n}\n");
-    let e = err("<geometrylist><object><basegeometry><odb><filename>bad.odb</filename></odb></basegeometry><staticinstance/></object></geometrylist>");
-    assert!(e.contains("bad.odb:line 5") && e.contains("9 numbers"), "{e}");
-    put(dir, "geometry/bad.gdb", "OBJECT\nA\n1-0-0\nPART\nP\n1-1-0\nFACE\nF\n1-1-1\nm\n7\n-1\n0\n0\n0\nnull\nnull\nnull\n5\n");
-    let e = err("<geometrylist><object><basegeometry><gdb><filename>bad.gdb</filename></gdb></basegeometry><staticinstance/></object></geometrylist>");
+    put(
+        dir,
+        "geometry/bad.odb",
+        "DIRSIG_ODB = 1.0\nOBJECT {\n  OBJ_FILENAME = tri.obj\n  INSTANCES {\n    INFO = 1, 2, 3\n  }\n}\n",
+    );
+    let e = err(
+        "<geometrylist><object><basegeometry><odb><filename>bad.odb</filename></odb></basegeometry><staticinstance/></object></geometrylist>",
+    );
+    assert!(
+        e.contains("bad.odb:line 5") && e.contains("9 numbers"),
+        "{e}"
+    );
+    put(
+        dir,
+        "geometry/bad.gdb",
+        "OBJECT\nA\n1-0-0\nPART\nP\n1-1-0\nFACE\nF\n1-1-1\nm\n7\n-1\n0\n0\n0\nnull\nnull\nnull\n5\n",
+    );
+    let e = err(
+        "<geometrylist><object><basegeometry><gdb><filename>bad.gdb</filename></gdb></basegeometry><staticinstance/></object></geometrylist>",
+    );
     assert!(e.contains("bad.gdb:line 19") && e.contains("3 or 4"), "{e}");
     // A scene without an origin.
     let e = import(
-        &put(dir, "n.scene", "<classicscene>\n<geometrylist/>\n</classicscene>"),
+        &put(
+            dir,
+            "n.scene",
+            "<classicscene>\n<geometrylist/>\n</classicscene>",
+        ),
         &dir.join("t.json"),
         &ImportOptions::default(),
     )
     .unwrap_err()
     .to_string();
-    assert!(e.contains("n.scene:line 1") && e.contains("sceneorigin"), "{e}");
+    assert!(
+        e.contains("n.scene:line 1") && e.contains("sceneorigin"),
+        "{e}"
+    );
 }
 
 // ------------------------------------------------------------------ real files
@@ -498,7 +569,14 @@ fn substitutes(dir: &Path) {
     for k in 0..16 {
         let (i, j) = (k % 4, k / 4);
         let a = j * 5 + i + 1;
-        t += &format!("usemtl {}\nf {} {} {} {}\n", ids[k % 10], a, a + 1, a + 6, a + 5);
+        t += &format!(
+            "usemtl {}\nf {} {} {} {}\n",
+            ids[k % 10],
+            a,
+            a + 1,
+            a + 6,
+            a + 5
+        );
     }
     put(dir, "geometry/objects/small.obj", &t);
     let b = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv -1 -1 2\nv 1 -1 2\nv 1 1 2\nv -1 1 2\n\
@@ -530,21 +608,44 @@ fn real_auror_simulation_imports_and_renders() {
     assert_eq!(s.objects.len(), 2);
     // The vehicle at the start of its straight-line motion.
     let jet = s.objects.iter().find(|o| o.name == "hypersonic").unwrap();
-    assert_eq!(jet.instances.as_ref().unwrap()[0].translate, Some([-400.0, 400.0, 50000.0]));
+    assert_eq!(
+        jet.instances.as_ref().unwrap()[0].translate,
+        Some([-400.0, 400.0, 50000.0])
+    );
     assert_eq!(jet.parts[0].fixed_temperature_k, Some(1500.0));
     // Every tahoe.mat entry and the bundle's: 10 + 1, with every emissivity file found.
     assert_eq!(im.materials.materials.len(), 11);
-    assert!(im.materials.materials.iter().all(|m| m.emissivity_curve.is_some()));
+    assert!(
+        im.materials
+            .materials
+            .iter()
+            .all(|m| m.emissivity_curve.is_some())
+    );
     // The camera: 500 × 500, 10 µm, 306 mm, 550 km up, looking down, image up = south
     // (the .ppd's 180° about z).
     let cam = &s.sensors[0];
-    assert_eq!((cam["width"].as_u64(), cam["height"].as_u64()), (Some(500), Some(500)));
+    assert_eq!(
+        (cam["width"].as_u64(), cam["height"].as_u64()),
+        (Some(500), Some(500))
+    );
     assert!((cam["focal_length_m"].as_f64().unwrap() - 0.306).abs() < 1e-12);
-    assert_eq!(cam["position"], serde_json::json!([-400.0, 400.0, 550000.0]));
+    assert_eq!(
+        cam["position"],
+        serde_json::json!([-400.0, 400.0, 550000.0])
+    );
     let up = cam["up"].as_array().unwrap();
     assert!((up[1].as_f64().unwrap() + 1.0).abs() < 1e-9);
-    for needle in ["NewAtmosphere", "dynamic instance", "gaussian", "truthcollection"] {
-        assert!(im.warnings.iter().any(|w| w.contains(needle)), "{needle}: {:#?}", im.warnings);
+    for needle in [
+        "NewAtmosphere",
+        "dynamic instance",
+        "gaussian",
+        "truthcollection",
+    ] {
+        assert!(
+            im.warnings.iter().any(|w| w.contains(needle)),
+            "{needle}: {:#?}",
+            im.warnings
+        );
     }
     // Renders (a smaller image of the same camera, to keep the test fast).
     let mut im = im;
@@ -555,7 +656,10 @@ fn real_auror_simulation_imports_and_renders() {
     let mut session =
         irsig::render::session::Session::open(&out, irsig::trace::Backend::Embree).unwrap();
     let files = session
-        .run(&d.path().join("img"), &irsig::render::session::RunOptions::default())
+        .run(
+            &d.path().join("img"),
+            &irsig::render::session::RunOptions::default(),
+        )
         .unwrap();
     assert_eq!(files, vec!["CIS120".to_string()]);
     assert!(d.path().join("img/CIS120.exr").is_file());
@@ -586,7 +690,12 @@ fn every_real_dirsig_file_is_read() {
             }
         }
     }
-    let ext = |p: &Path| p.extension().and_then(|e| e.to_str()).unwrap_or("").to_string();
+    let ext = |p: &Path| {
+        p.extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_string()
+    };
     for p in files.iter().filter(|p| ext(p) == "mat") {
         let m = irsig::material::dirsig::read_mat(p, &[]).unwrap_or_else(|e| panic!("{e}"));
         assert!(!m.entries.is_empty(), "{}", p.display());
@@ -605,10 +714,20 @@ fn every_real_dirsig_file_is_read() {
     assert!((w.conductivity_w_m_k - 5.13 * 4.1868 / 36.0).abs() < 1e-12);
     assert!((w.conductivity_w_m_k - 0.596_619).abs() < 1e-6);
     assert!((w.thickness_m - 0.01).abs() < 1e-15);
-    assert_eq!((w.solar_absorptivity, w.thermal_emissivity, w.exposed_area), (0.45, 0.98, 0.5));
+    assert_eq!(
+        (w.solar_absorptivity, w.thermal_emissivity, w.exposed_area),
+        (0.45, 0.98, 0.5)
+    );
     // Terrain (proxy), ID 1: steel's values, 464.4 → 54.0 W/(m·K), 0.089 → 372.6 J/(kg·K),
     // 7.833 g/cm³ → 7833 kg/m³, exposed area −0.5 kept as read.
-    let t = tahoe.entries.iter().find(|e| e.id == "1").unwrap().material.clone().unwrap();
+    let t = tahoe
+        .entries
+        .iter()
+        .find(|e| e.id == "1")
+        .unwrap()
+        .material
+        .clone()
+        .unwrap();
     assert!((t.conductivity_w_m_k - 54.0097).abs() < 1e-4);
     assert!((t.specific_heat_j_kg_k - 372.6252).abs() < 1e-9);
     assert!((t.density_kg_m3 - 7833.0).abs() < 1e-9);
@@ -623,10 +742,15 @@ fn every_real_dirsig_file_is_read() {
     assert_eq!(hyp.entries[0].id, "Gidder_mat");
     assert_eq!(
         hyp.entries[0].solver,
-        irsig::material::dirsig::TempSolver::DataDriven { temperature_k: 1500.0 }
+        irsig::material::dirsig::TempSolver::DataDriven {
+            temperature_k: 1500.0
+        }
     );
     // ref.txt: reflectance 0 → emissivity 1.
-    assert_eq!(hyp.entries[0].emissivity.as_ref().unwrap().at(1.0, 0.0), 1.0);
+    assert_eq!(
+        hyp.entries[0].emissivity.as_ref().unwrap().at(1.0, 0.0),
+        1.0
+    );
 
     // The sidebar glists (assign, point source) and simple.atm, through a hand-made
     // scene and simulation that include them.
@@ -635,11 +759,17 @@ fn every_real_dirsig_file_is_read() {
     let side = pd.join("notebooks/sidebars/vehicle_point_source");
     let dir = d.path();
     put(dir, "materials/scene.mat", &therm_entry("7", "concrete"));
-    put(dir, "geometry/l.glist", &format!(
-        "<geometrylist>\n<geometrylistinclude>{}</geometrylistinclude>\n<geometrylistinclude>{}</geometrylistinclude>\n</geometrylist>",
-        side.join("hypersonic_reflective/hypersonic_reflective.glist").display(),
-        side.join("vehicle_pointsource/vehicle_pointsource.glist").display(),
-    ));
+    put(
+        dir,
+        "geometry/l.glist",
+        &format!(
+            "<geometrylist>\n<geometrylistinclude>{}</geometrylistinclude>\n<geometrylistinclude>{}</geometrylistinclude>\n</geometrylist>",
+            side.join("hypersonic_reflective/hypersonic_reflective.glist")
+                .display(),
+            side.join("vehicle_pointsource/vehicle_pointsource.glist")
+                .display(),
+        ),
+    );
     // The reflective bundle's OBJ (not in the set) is the substitute model.
     put(dir, "t.scene", &scene_xml("l.glist"));
     let sim = put(
@@ -647,7 +777,8 @@ fn every_real_dirsig_file_is_read() {
         "t.sim",
         &format!(
             "<simulation><scene externalfile=\"t.scene\"/><atmosphericconditions externalfile=\"{}\"/><tasklist externalfile=\"{}\"/></simulation>",
-            root.join("rendered-ai/packages/dirsig_pkg/dirsig_pkg/simple.atm").display(),
+            root.join("rendered-ai/packages/dirsig_pkg/dirsig_pkg/simple.atm")
+                .display(),
             pd.join("AUROR_ref/tasks/AurorTask.tasks").display()
         ),
     );
@@ -661,10 +792,19 @@ fn every_real_dirsig_file_is_read() {
     assert_eq!(jet.parts[0].material, "Gidder_mat_reflective");
     assert_eq!(jet.parts[0].fixed_temperature_k, Some(1500.0));
     // ref_reflective.txt: reflectance 0.30 → emissivity 0.70.
-    let m = im.materials.materials.iter().find(|m| m.name == "Gidder_mat_reflective").unwrap();
+    let m = im
+        .materials
+        .materials
+        .iter()
+        .find(|m| m.name == "Gidder_mat_reflective")
+        .unwrap();
     assert!((m.thermal_emissivity - 0.7).abs() < 1e-12);
     assert!(im.warnings.iter().any(|w| w.contains("point sources")));
-    let sky = im.scene.render.as_ref().and_then(|r| r.get("sky_temperature_k"));
+    let sky = im
+        .scene
+        .render
+        .as_ref()
+        .and_then(|r| r.get("sky_temperature_k"));
     assert_eq!(sky.and_then(|v| v.as_f64()), Some(250.0));
     assert_eq!(im.scene.atmosphere, Some(serde_json::json!("none")));
     assert_eq!(im.scene.time, "2009-07-27T11:29:32-08:00");

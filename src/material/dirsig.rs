@@ -434,9 +434,7 @@ pub fn read_mat_with(
         if solver != TempSolver::Therm {
             let line = solver_kv.map_or(b.line, |(_, l)| l);
             let why = match &solver {
-                TempSolver::Missing => {
-                    "has no temperature solver (TEMP_SOLVER_NAME)".to_string()
-                }
+                TempSolver::Missing => "has no temperature solver (TEMP_SOLVER_NAME)".to_string(),
                 TempSolver::DataDriven { temperature_k } => format!(
                     "uses temperature solver `DataDriven` (TEMPERATURE = {temperature_k}), which a \
                      material database cannot hold; give the parts that use it \
@@ -557,17 +555,20 @@ pub fn read_reflectance_as_emissivity(path: &Path) -> Result<EmissivityCurve> {
         if v.len() != 2 {
             return Err(Error::parse(
                 at,
-                format!("expected 2 numbers (wavelength µm, reflectance), found {}", v.len()),
+                format!(
+                    "expected 2 numbers (wavelength µm, reflectance), found {}",
+                    v.len()
+                ),
             ));
         }
         if !(0.0..=1.0).contains(&v[1]) {
-            return Err(Error::parse(at, format!("reflectance {} outside 0..=1", v[1])));
-        }
-        if wl.last().is_some_and(|&p| v[0] <= p) || !(v[0] > 0.0) {
             return Err(Error::parse(
                 at,
-                "wavelengths must be > 0 and increase",
+                format!("reflectance {} outside 0..=1", v[1]),
             ));
+        }
+        if wl.last().is_some_and(|&p| v[0] <= p) || !(v[0] > 0.0) {
+            return Err(Error::parse(at, "wavelengths must be > 0 and increase"));
         }
         wl.push(v[0]);
         em.push(1.0 - v[1]);

@@ -106,7 +106,7 @@ pub struct WeatherSpec {
     pub year: Option<i32>,
 }
 
-/// An affine transform: scale, then rotate (x, y, z), then translate.
+/// An affine transform: scale, then rotate (x, y, z), then translate; or a 4×4 `matrix`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TransformSpec {

@@ -379,7 +379,8 @@ impl Scene {
             .map_err(|e| vec![Error::io(std::env::temp_dir(), e)])?;
         let out = tmp.path().join(format!(
             "{}.json",
-            path.file_stem().map_or("scene".into(), |s| s.to_string_lossy())
+            path.file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy())
         ));
         let imported = dirsig::import(path, &out, options).map_err(|e| vec![e])?;
         imported.write(&out).map_err(|e| vec![e])?;

@@ -56,7 +56,12 @@ pub fn from_str(text: &str, path: &Path) -> Result<GdbObj> {
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
         .collect();
     let at = |n: usize| Location::file(path).at_line(n);
-    let kw = |l: &str| l.split_whitespace().next().unwrap_or("").to_ascii_uppercase();
+    let kw = |l: &str| {
+        l.split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_ascii_uppercase()
+    };
     let num = |(n, l): (usize, &str), what: &str| -> Result<f64> {
         l.split_whitespace()
             .next()
@@ -72,7 +77,10 @@ pub fn from_str(text: &str, path: &Path) -> Result<GdbObj> {
             .collect::<std::result::Result<_, _>>()
             .map_err(|_| Error::parse(at(n), format!("{what}: expected `x y z`, found `{l}`")))?;
         if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-            return Err(Error::parse(at(n), format!("{what}: expected 3 numbers, found `{l}`")));
+            return Err(Error::parse(
+                at(n),
+                format!("{what}: expected 3 numbers, found `{l}`"),
+            ));
         }
         Ok(DVec3::new(v[0], v[1], v[2]))
     };
@@ -88,7 +96,10 @@ pub fn from_str(text: &str, path: &Path) -> Result<GdbObj> {
     let mut i = 0;
     let next = |i: &mut usize, what: &str| -> Result<(usize, &str)> {
         let r = lines.get(*i).copied().ok_or_else(|| {
-            Error::parse(Location::file(path), format!("file ends inside a facet: expected {what}"))
+            Error::parse(
+                Location::file(path),
+                format!("file ends inside a facet: expected {what}"),
+            )
         })?;
         *i += 1;
         Ok(r)
@@ -121,7 +132,12 @@ pub fn from_str(text: &str, path: &Path) -> Result<GdbObj> {
                     return Err(Error::parse(at(mn), "empty material ID"));
                 }
                 // Optional unused facet name (not a number).
-                if lines.get(i).is_some_and(|(_, l)| l.split_whitespace().next().and_then(|t| t.parse::<f64>().ok()).is_none()) {
+                if lines.get(i).is_some_and(|(_, l)| {
+                    l.split_whitespace()
+                        .next()
+                        .and_then(|t| t.parse::<f64>().ok())
+                        .is_none()
+                }) {
                     i += 1;
                 }
                 let temp_c = num(next(&mut i, "the temperature")?, "facet temperature (°C)")?;
@@ -140,13 +156,19 @@ pub fn from_str(text: &str, path: &Path) -> Result<GdbObj> {
                         .to_string(),
                     );
                 }
-                while lines.get(i).is_some_and(|(_, l)| l.eq_ignore_ascii_case("null")) {
+                while lines
+                    .get(i)
+                    .is_some_and(|(_, l)| l.eq_ignore_ascii_case("null"))
+                {
                     i += 1;
                 }
                 let (cn, cl) = next(&mut i, "the vertex count")?;
                 let count = num((cn, cl), "vertex count")?;
                 if count != 3.0 && count != 4.0 {
-                    return Err(Error::parse(at(cn), format!("vertex count {count}: expected 3 or 4")));
+                    return Err(Error::parse(
+                        at(cn),
+                        format!("vertex count {count}: expected 3 or 4"),
+                    ));
                 }
                 let first = verts.len() + 1;
                 let mut poly = Vec::new();
@@ -200,7 +222,10 @@ pub fn from_str(text: &str, path: &Path) -> Result<GdbObj> {
         }
     }
     if verts.is_empty() {
-        return Err(Error::parse(Location::file(path), "no facets: not a DIRSIG GDB file?"));
+        return Err(Error::parse(
+            Location::file(path),
+            "no facets: not a DIRSIG GDB file?",
+        ));
     }
     for v in &verts {
         let _ = writeln!(out.obj, "v {} {} {}", v.x, v.y, v.z);

@@ -90,7 +90,12 @@ impl Importer<'_> {
                     }
                     let name = xml::text(n);
                     let at = xml::loc(path, n);
-                    let bases: Vec<PathBuf> = dirs.geometry.iter().cloned().chain([here.clone()]).collect();
+                    let bases: Vec<PathBuf> = dirs
+                        .geometry
+                        .iter()
+                        .cloned()
+                        .chain([here.clone()])
+                        .collect();
                     let p = self.find(&name, &bases, "geometry list", &at)?;
                     self.glist_file(&p, dirs, mats, parent, depth + 1)?;
                 }
@@ -160,7 +165,10 @@ impl Importer<'_> {
         }
         let Some(base) = xml::child(obj, "basegeometry") else {
             if xml::child(obj, "basesource").is_none() {
-                self.warn(xml::loc(path, obj), "object without `<basegeometry>`: skipped");
+                self.warn(
+                    xml::loc(path, obj),
+                    "object without `<basegeometry>`: skipped",
+                );
             }
             return Ok(());
         };
@@ -184,14 +192,20 @@ impl Importer<'_> {
                 Some(u) => Some(length_unit(u).ok_or_else(|| {
                     Error::parse(
                         at.clone(),
-                        format!("units `{u}`: expected METERS, CENTIMETERS, MILLIMETERS, INCHES or FEET"),
+                        format!(
+                            "units `{u}`: expected METERS, CENTIMETERS, MILLIMETERS, INCHES or FEET"
+                        ),
                     )
                 })?),
             };
             match kind.as_str() {
                 "obj" | "gdb" => {
                     let name = file()?;
-                    let what = if kind == "obj" { "OBJ file" } else { "GDB file" };
+                    let what = if kind == "obj" {
+                        "OBJ file"
+                    } else {
+                        "GDB file"
+                    };
                     let p = self.find(&name, &bases, what, &at)?;
                     let mut m = mats.clone();
                     for a in xml::children(g, "assign") {
@@ -200,7 +214,11 @@ impl Importer<'_> {
                         })?;
                         m.assign.insert(xml::text(a), id.to_string());
                     }
-                    let geo = if kind == "obj" { Geo::Obj(p) } else { Geo::Gdb(p) };
+                    let geo = if kind == "obj" {
+                        Geo::Obj(p)
+                    } else {
+                        Geo::Gdb(p)
+                    };
                     for pl in &placements {
                         self.place(&geo, &m, unit, &parent.then(pl), &at)?;
                     }
@@ -295,11 +313,13 @@ pub(crate) fn static_instance(path: &Path, n: Node) -> Result<Placement> {
     }
     if let Some(s) = xml::child(n, "scale") {
         let t = xml::text(s);
-        spec.scale = Some(if xml::elements(s).next().is_none() && t.parse::<f64>().is_ok() {
-            Scale::Uniform(xml::number(path, s)?)
-        } else {
-            Scale::PerAxis(xml::triple(path, s, 1.0)?)
-        });
+        spec.scale = Some(
+            if xml::elements(s).next().is_none() && t.parse::<f64>().is_ok() {
+                Scale::Uniform(xml::number(path, s)?)
+            } else {
+                Scale::PerAxis(xml::triple(path, s, 1.0)?)
+            },
+        );
     }
     if let Some(r) = xml::child(n, "rotation") {
         let mut a = xml::triple(path, r, 0.0)?;
@@ -363,11 +383,19 @@ pub(crate) fn matrix_at(at: &Location, text: &str) -> Result<Placement> {
         .filter(|s| !s.is_empty())
         .map(str::parse)
         .collect::<std::result::Result<_, _>>()
-        .map_err(|_| Error::parse(at.clone(), format!("matrix: expected 16 numbers, found `{text}`")))?;
+        .map_err(|_| {
+            Error::parse(
+                at.clone(),
+                format!("matrix: expected 16 numbers, found `{text}`"),
+            )
+        })?;
     if v.len() != 16 || v.iter().any(|x| !x.is_finite()) {
         return Err(Error::parse(
             at.clone(),
-            format!("matrix: expected 16 finite numbers (4 rows of 4), found {}", v.len()),
+            format!(
+                "matrix: expected 16 finite numbers (4 rows of 4), found {}",
+                v.len()
+            ),
         ));
     }
     let rows = DMat4::from_cols_array(&v.clone().try_into().expect("16")).transpose();

@@ -397,7 +397,10 @@ impl<'o> Importer<'o> {
                     if c.is_file() {
                         self.warn(
                             at.clone(),
-                            format!("{what} `{name}` is not on this machine; using {}", c.display()),
+                            format!(
+                                "{what} `{name}` is not on this machine; using {}",
+                                c.display()
+                            ),
                         );
                         return Ok(c);
                     }
@@ -427,7 +430,11 @@ impl<'o> Importer<'o> {
             at.clone(),
             format!(
                 "{what} `{name}` not found (looked for {}{})",
-                if list.is_empty() { "it".into() } else { list.join(", ") },
+                if list.is_empty() {
+                    "it".into()
+                } else {
+                    list.join(", ")
+                },
                 if self.opts.search_dirs.is_empty() {
                     "; a search folder may help"
                 } else {
@@ -620,8 +627,7 @@ impl<'o> Importer<'o> {
     fn resolve(&self, lib: usize, id: &str, used: &str) -> Result<(String, Option<f64>)> {
         let l = &self.libs[lib];
         let same = |a: &str, b: &str| {
-            a == b
-                || matches!((a.parse::<u64>(), b.parse::<u64>()), (Ok(x), Ok(y)) if x == y)
+            a == b || matches!((a.parse::<u64>(), b.parse::<u64>()), (Ok(x), Ok(y)) if x == y)
         };
         let k = l
             .entries
@@ -701,8 +707,7 @@ impl<'o> Importer<'o> {
                  the object no `<localmaterials>`)",
             ));
         };
-        let (file, path, groups): (String, &Path, Vec<(String, String, Option<f64>)>) = match geo
-        {
+        let (file, path, groups): (String, &Path, Vec<(String, String, Option<f64>)>) = match geo {
             Geo::Obj(p) => {
                 let gs = crate::scene::load_obj(p)?;
                 let mut names: Vec<String> = Vec::new();
@@ -810,9 +815,8 @@ impl<'o> Importer<'o> {
             ));
         }
         let time = match (&self.opts.time, self.time) {
-            (Some(t), _) => crate::sun::parse_time(t).map_err(|e| {
-                Error::parse(Location::field("time"), e.to_string())
-            })?,
+            (Some(t), _) => crate::sun::parse_time(t)
+                .map_err(|e| Error::parse(Location::field("time"), e.to_string()))?,
             (None, Some(t)) => t,
             (None, None) => {
                 // A placeholder: noon, 21 June 2020, in the site's nominal time zone.
@@ -891,9 +895,7 @@ impl<'o> Importer<'o> {
     /// THERM spins up over the days before; a 48-hour file covers the day before).
     fn weather_spec(&mut self, w: &Path, time: DateTime<FixedOffset>) -> Result<WeatherSpec> {
         let file = self.relative(w);
-        let is_wth = w
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("wth"));
+        let is_wth = w.extension().is_some_and(|e| e.eq_ignore_ascii_case("wth"));
         if !is_wth {
             return Ok(WeatherSpec {
                 file,

@@ -71,7 +71,10 @@ impl Importer<'_> {
             if !b.name.eq_ignore_ascii_case("OBJECT") {
                 self.warn(
                     at(b.line),
-                    format!("`{}` block is not imported (irsig reads OBJECT blocks); dropped", b.name),
+                    format!(
+                        "`{}` block is not imported (irsig reads OBJECT blocks); dropped",
+                        b.name
+                    ),
                 );
                 continue;
             }
@@ -104,7 +107,10 @@ impl Importer<'_> {
                 Some(inst) => {
                     for (k, v, l) in &inst.entries {
                         if !k.eq_ignore_ascii_case("INFO") {
-                            self.warn(at(*l).with_field(k.as_str()), format!("`{k}` is not imported; dropped"));
+                            self.warn(
+                                at(*l).with_field(k.as_str()),
+                                format!("`{k}` is not imported; dropped"),
+                            );
                             continue;
                         }
                         if let Some(p) = self.info(&at(*l).with_field("INFO"), v)? {
@@ -122,9 +128,17 @@ impl Importer<'_> {
                     }
                 }
                 _ => {
-                    let what = if key == "GDB_FILENAME" { "GDB file" } else { "OBJ file" };
+                    let what = if key == "GDB_FILENAME" {
+                        "GDB file"
+                    } else {
+                        "OBJ file"
+                    };
                     let p = self.find(&name, &bases, what, &loc)?;
-                    let geo = if key == "GDB_FILENAME" { Geo::Gdb(p) } else { Geo::Obj(p) };
+                    let geo = if key == "GDB_FILENAME" {
+                        Geo::Gdb(p)
+                    } else {
+                        Geo::Obj(p)
+                    };
                     for pl in &placements {
                         self.place(&geo, mats, unit, &parent.then(pl), &loc)?;
                     }

@@ -83,7 +83,9 @@ impl Importer<'_> {
                 if !ty.eq_ignore_ascii_case("static") {
                     self.warn(
                         xml::loc(path, m),
-                        format!("mount type `{ty}` is not imported; treated as static at zero rotation"),
+                        format!(
+                            "mount type `{ty}` is not imported; treated as static at zero rotation"
+                        ),
                     );
                     continue;
                 }
@@ -94,7 +96,10 @@ impl Importer<'_> {
                         xml::opt_number(path, d, "zrotation")?.unwrap_or(0.0),
                     ];
                     let a = to_radians(xml::attr(d, "angularunits"), a).ok_or_else(|| {
-                        Error::parse(xml::loc(path, d), "angularunits: expected radians or degrees")
+                        Error::parse(
+                            xml::loc(path, d),
+                            "angularunits: expected radians or degrees",
+                        )
                     })?;
                     let order = xml::attr(d, "rotationorder").unwrap_or("xyz");
                     let r = euler(order, a).ok_or_else(|| {
@@ -139,7 +144,10 @@ impl Importer<'_> {
         aperture_m: Option<f64>,
     ) -> Result<()> {
         let Some(da) = xml::child(fp, "detectorarray") else {
-            self.warn(xml::loc(path, fp), "focal plane without a `<detectorarray>`: dropped");
+            self.warn(
+                xml::loc(path, fp),
+                "focal plane without a `<detectorarray>`: dropped",
+            );
             return Ok(());
         };
         let count = |name: &str| -> Result<usize> {
@@ -154,7 +162,11 @@ impl Importer<'_> {
             }
         };
         let (w, h) = (count("xelementcount")?, count("yelementcount")?);
-        let unit = match xml::attr(da, "spatialunits").unwrap_or("microns").to_ascii_lowercase().as_str() {
+        let unit = match xml::attr(da, "spatialunits")
+            .unwrap_or("microns")
+            .to_ascii_lowercase()
+            .as_str()
+        {
             "microns" | "micrometers" | "um" => 1e-6,
             "millimeters" | "mm" => 1e-3,
             "meters" | "m" => 1.0,
@@ -165,12 +177,16 @@ impl Importer<'_> {
                 ));
             }
         };
-        let pitch = |axis: &str| -> Result<Option<f64>> {
-            Ok(xml::opt_number(path, da, &format!("{axis}elementspacing"))?
-                .or(xml::opt_number(path, da, &format!("{axis}elementsize"))?))
-        };
+        let pitch =
+            |axis: &str| -> Result<Option<f64>> {
+                Ok(xml::opt_number(path, da, &format!("{axis}elementspacing"))?
+                    .or(xml::opt_number(path, da, &format!("{axis}elementsize"))?))
+            };
         let px = pitch("x")?.filter(|p| *p > 0.0).ok_or_else(|| {
-            Error::parse(xml::loc(path, da), "no `<xelementspacing>` or `<xelementsize>` > 0")
+            Error::parse(
+                xml::loc(path, da),
+                "no `<xelementspacing>` or `<xelementsize>` > 0",
+            )
         })?;
         if let Some(py) = pitch("y")? {
             if (py - px).abs() > 1e-9 * px.abs() {
@@ -192,7 +208,11 @@ impl Importer<'_> {
         let mut bands = Vec::new();
         let mut centre_um = None;
         if let Some(sr) = sr {
-            let um = |n: Node| match xml::attr(n, "spectralunits").unwrap_or("microns").to_ascii_lowercase().as_str() {
+            let um = |n: Node| match xml::attr(n, "spectralunits")
+                .unwrap_or("microns")
+                .to_ascii_lowercase()
+                .as_str()
+            {
                 "nanometers" | "nm" => 1e-3,
                 _ => 1.0,
             };
@@ -202,7 +222,9 @@ impl Importer<'_> {
                 .map(|c| xml::children(c, "channel").collect())
                 .unwrap_or_default();
             for (k, c) in channels.iter().enumerate() {
-                let name = xml::attr(*c, "name").map(sanitize).unwrap_or_else(|| format!("band{k}"));
+                let name = xml::attr(*c, "name")
+                    .map(sanitize)
+                    .unwrap_or_else(|| format!("band{k}"));
                 let centre = xml::opt_number(path, *c, "center")?;
                 let width = xml::opt_number(path, *c, "width")?;
                 let shape = xml::attr(*c, "shape").unwrap_or("").to_ascii_lowercase();
@@ -221,7 +243,9 @@ impl Importer<'_> {
                             );
                         }
                         centre_um.get_or_insert(ce);
-                        bands.push(json!({"name": name, "response": [ce - wi / 2.0, ce + wi / 2.0]}));
+                        bands.push(
+                            json!({"name": name, "response": [ce - wi / 2.0, ce + wi / 2.0]}),
+                        );
                     }
                     _ => self.warn(
                         xml::loc(path, *c),
@@ -239,7 +263,10 @@ impl Importer<'_> {
             }
         }
         if bands.is_empty() {
-            self.warn(xml::loc(path, fp), "focal plane without a spectral response: dropped");
+            self.warn(
+                xml::loc(path, fp),
+                "focal plane without a spectral response: dropped",
+            );
             return Ok(());
         }
         // Pointing.
@@ -248,7 +275,9 @@ impl Importer<'_> {
         let up = r * DVec3::new(0.0, 1.0, 0.0);
         let range = pose.position.z.abs().max(1.0);
         let target = pose.position + look * range;
-        let name = xml::attr(fp, "name").map(sanitize).unwrap_or_else(|| "camera".into());
+        let name = xml::attr(fp, "name")
+            .map(sanitize)
+            .unwrap_or_else(|| "camera".into());
         let mut s = Map::new();
         s.insert("type".into(), "frame".into());
         s.insert("name".into(), name.into());
@@ -277,7 +306,10 @@ impl Importer<'_> {
             "polarizer",
         ]
         .into_iter()
-        .filter(|t| fp.descendants().any(|n| n.tag_name().name().eq_ignore_ascii_case(t)))
+        .filter(|t| {
+            fp.descendants()
+                .any(|n| n.tag_name().name().eq_ignore_ascii_case(t))
+        })
         .collect();
         if !dropped.is_empty() {
             self.warn(
@@ -285,7 +317,11 @@ impl Importer<'_> {
                 format!(
                     "focal plane: {} not imported (irsig renders radiance per band at one \
                      instant); dropped",
-                    dropped.iter().map(|d| format!("`<{d}>`")).collect::<Vec<_>>().join(", ")
+                    dropped
+                        .iter()
+                        .map(|d| format!("`<{d}>`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             );
         }
@@ -298,10 +334,17 @@ impl Importer<'_> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
         let root = doc.root_element();
-        if !root.tag_name().name().eq_ignore_ascii_case("platformmotion") {
+        if !root
+            .tag_name()
+            .name()
+            .eq_ignore_ascii_case("platformmotion")
+        {
             return Err(Error::parse(
                 xml::loc(path, root),
-                format!("root `<{}>`: expected `<platformmotion>`", root.tag_name().name()),
+                format!(
+                    "root `<{}>`: expected `<platformmotion>`",
+                    root.tag_name().name()
+                ),
             ));
         }
         let Some(data) = xml::child(root, "data") else {
@@ -318,7 +361,9 @@ impl Importer<'_> {
                 format!("rotation frame `{frame}`: irsig reads `sceneenu`; angles taken as such"),
             );
         }
-        let order = xml::attr(data, "rotationorder").unwrap_or("xyz").to_string();
+        let order = xml::attr(data, "rotationorder")
+            .unwrap_or("xyz")
+            .to_string();
         let units = xml::attr(data, "angularunits").map(str::to_string);
         if let Some(u) = xml::attr(data, "spatialunits") {
             if !u.eq_ignore_ascii_case("meters") {
@@ -334,7 +379,9 @@ impl Importer<'_> {
         let entries: Vec<Node> = xml::children(data, "entry").collect();
         for e in &entries {
             let t = match xml::child(*e, "datetime") {
-                Some(d) if xml::attr(d, "type").is_none_or(|t| t.eq_ignore_ascii_case("relative")) => {
+                Some(d)
+                    if xml::attr(d, "type").is_none_or(|t| t.eq_ignore_ascii_case("relative")) =>
+                {
                     xml::number(path, d)?
                 }
                 _ => 0.0,
@@ -344,7 +391,10 @@ impl Importer<'_> {
             }
         }
         let Some((_, e)) = best else {
-            self.warn(xml::loc(path, data), "platform motion without entries: not imported");
+            self.warn(
+                xml::loc(path, data),
+                "platform motion without entries: not imported",
+            );
             return Ok(None);
         };
         if entries.len() > 1 {
@@ -354,7 +404,10 @@ impl Importer<'_> {
             );
         }
         let loc = xml::path(e, &["position", "location"]).ok_or_else(|| {
-            Error::parse(xml::loc(path, e), "motion entry without `<position><location>`")
+            Error::parse(
+                xml::loc(path, e),
+                "motion entry without `<position><location>`",
+            )
         })?;
         let ty = xml::attr(loc, "type").unwrap_or("scene");
         if !ty.eq_ignore_ascii_case("scene") {
@@ -369,7 +422,10 @@ impl Importer<'_> {
             None => [0.0; 3],
         };
         let a = to_radians(units.as_deref(), angles).ok_or_else(|| {
-            Error::parse(xml::loc(path, data), "angularunits: expected radians or degrees")
+            Error::parse(
+                xml::loc(path, data),
+                "angularunits: expected radians or degrees",
+            )
         })?;
         let rotation = euler(&order, a).ok_or_else(|| {
             Error::parse(xml::loc(path, data), format!("rotation order `{order}`"))
@@ -386,7 +442,13 @@ fn sanitize(s: &str) -> String {
     let t: String = s
         .trim()
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     if t.is_empty() { "sensor".into() } else { t }
 }

@@ -69,8 +69,8 @@ impl Importer<'_> {
 
     /// Import a DIRSIG5 `.jsim`.
     pub(crate) fn jsim(&mut self, path: &Path, text: &str) -> Result<()> {
-        let v: Value = serde_json::from_str(text)
-            .map_err(|e| crate::scene::jsonloc::serde_error(path, &e))?;
+        let v: Value =
+            serde_json::from_str(text).map_err(|e| crate::scene::jsonloc::serde_error(path, &e))?;
         let lines = JsonLines::new(text);
         let at = |p: &str| {
             let mut l = Location::file(path).with_field(p.trim_start_matches('.'));
@@ -82,9 +82,16 @@ impl Importer<'_> {
         let (sim, prefix) = match &v {
             Value::Array(a) => {
                 if a.len() > 1 {
-                    self.warn(at("[1]"), format!("{} simulations: irsig imports the first", a.len()));
+                    self.warn(
+                        at("[1]"),
+                        format!("{} simulations: irsig imports the first", a.len()),
+                    );
                 }
-                (a.first().ok_or_else(|| Error::parse(at(""), "empty simulation list"))?, "[0]")
+                (
+                    a.first()
+                        .ok_or_else(|| Error::parse(at(""), "empty simulation list"))?,
+                    "[0]",
+                )
             }
             Value::Object(_) => (&v, ""),
             _ => {
@@ -106,16 +113,24 @@ impl Importer<'_> {
         for (i, s) in scenes.iter().enumerate() {
             let p = format!("{prefix}.scene_list[{i}]");
             if i > 0 {
-                self.warn(at(&p), "a second scene: irsig imports the first only; dropped");
+                self.warn(
+                    at(&p),
+                    "a second scene: irsig imports the first only; dropped",
+                );
                 continue;
             }
             let name = s
                 .get("inputs")
                 .and_then(Value::as_str)
                 .or_else(|| s.as_str())
-                .ok_or_else(|| Error::parse(at(&p), "a scene entry needs `inputs` (the `.scene` file)"))?;
+                .ok_or_else(|| {
+                    Error::parse(at(&p), "a scene entry needs `inputs` (the `.scene` file)")
+                })?;
             if let Some(off) = s.get("offset") {
-                self.warn(at(&format!("{p}.offset")), format!("scene offset {off} is not imported; dropped"));
+                self.warn(
+                    at(&format!("{p}.offset")),
+                    format!("scene offset {off} is not imported; dropped"),
+                );
             }
             let l = at(&format!("{p}.inputs"));
             files.scene = Some((self.find(name, &bases, "scene", &l)?, l));
@@ -189,10 +204,7 @@ impl Importer<'_> {
                     }
                 }
                 "SpiceEphemeris" | "SimpleEphemeris" | "BasicEphemeris" => {}
-                other => self.warn(
-                    at(&p),
-                    format!("plugin `{other}` is not imported; dropped"),
-                ),
+                other => self.warn(at(&p), format!("plugin `{other}` is not imported; dropped")),
             }
         }
         self.run_files(files)
@@ -240,7 +252,9 @@ impl Importer<'_> {
             if ext.is_none() && matches!(tag.as_str(), "scene" | "platform" | "platformmotion") {
                 self.warn(
                     xml::loc(path, n),
-                    format!("inline `<{tag}>`: irsig reads it from an `externalfile` only; dropped"),
+                    format!(
+                        "inline `<{tag}>`: irsig reads it from an `externalfile` only; dropped"
+                    ),
                 );
             }
         }
@@ -314,19 +328,27 @@ impl Importer<'_> {
         let reference = reference.map(parse_abs).transpose()?;
         let tasks: Vec<Node> = xml::children(root, "task").collect();
         let Some(task) = tasks.first() else {
-            return Err(Error::parse(xml::loc(path, root), "a task list without a `<task>`"));
+            return Err(Error::parse(
+                xml::loc(path, root),
+                "a task list without a `<task>`",
+            ));
         };
         if tasks.len() > 1 {
             self.warn(
                 xml::loc(path, tasks[1]),
-                format!("{} tasks: the image time is the first task's start; the others are dropped", tasks.len()),
+                format!(
+                    "{} tasks: the image time is the first task's start; the others are dropped",
+                    tasks.len()
+                ),
             );
         }
         let moment = |n: Option<Node>| -> Result<Option<chrono::DateTime<chrono::FixedOffset>>> {
             let Some(d) = n.and_then(|n| xml::child(n, "datetime")) else {
                 return Ok(None);
             };
-            let ty = xml::attr(d, "type").unwrap_or("absolute").to_ascii_lowercase();
+            let ty = xml::attr(d, "type")
+                .unwrap_or("absolute")
+                .to_ascii_lowercase();
             if ty == "relative" {
                 let s = xml::number(path, d)?;
                 let r = reference.ok_or_else(|| {
@@ -335,7 +357,9 @@ impl Importer<'_> {
                         "a relative datetime needs the task list's `<reference>` datetime",
                     )
                 })?;
-                Ok(Some(r + chrono::TimeDelta::milliseconds((s * 1000.0).round() as i64)))
+                Ok(Some(
+                    r + chrono::TimeDelta::milliseconds((s * 1000.0).round() as i64),
+                ))
             } else {
                 parse_abs(d).map(Some)
             }
@@ -343,7 +367,10 @@ impl Importer<'_> {
         let start = moment(xml::child(*task, "start"))?;
         let stop = moment(xml::child(*task, "stop"))?;
         let start = start.or(reference).ok_or_else(|| {
-            Error::parse(xml::loc(path, *task), "the task has no start and the list no reference time")
+            Error::parse(
+                xml::loc(path, *task),
+                "the task has no start and the list no reference time",
+            )
         })?;
         if stop.is_some_and(|s| s != start) {
             self.warn(
@@ -361,7 +388,11 @@ impl Importer<'_> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
         let root = doc.root_element();
-        if !root.tag_name().name().eq_ignore_ascii_case("atmosphericconditions") {
+        if !root
+            .tag_name()
+            .name()
+            .eq_ignore_ascii_case("atmosphericconditions")
+        {
             return Err(Error::parse(
                 xml::loc(path, root),
                 format!(
@@ -384,7 +415,12 @@ impl Importer<'_> {
                     Some(f) => {
                         let name = Importer::expand(&xml::text(f), &[]);
                         let at = xml::loc(path, f);
-                        self.weather = Some(self.find(&name, std::slice::from_ref(&dir), "weather file", &at)?);
+                        self.weather = Some(self.find(
+                            &name,
+                            std::slice::from_ref(&dir),
+                            "weather file",
+                            &at,
+                        )?);
                     }
                     None => self.warn(
                         xml::loc(path, n),
