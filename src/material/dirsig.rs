@@ -567,7 +567,7 @@ pub fn read_reflectance_as_emissivity(path: &Path) -> Result<EmissivityCurve> {
                 format!("reflectance {} outside 0..=1", v[1]),
             ));
         }
-        if wl.last().is_some_and(|&p| v[0] <= p) || !(v[0] > 0.0) {
+        if wl.last().is_some_and(|&p| v[0] <= p) || !v[0].is_finite() || v[0] <= 0.0 {
             return Err(Error::parse(at, "wavelengths must be > 0 and increase"));
         }
         wl.push(v[0]);

@@ -30,13 +30,16 @@ use glam::DVec3;
 
 use crate::error::{Error, Location, Result};
 
+/// Per `usemtl` group: its name, its `.mat` ID, its fixed temperature (K) if any.
+pub type Groups = Vec<(String, String, Option<f64>)>;
+
 /// A `.gdb` file as OBJ.
 #[derive(Debug, Clone)]
 pub struct GdbObj {
     /// OBJ text: `v` and `f` lines in `usemtl` groups.
     pub obj: String,
     /// Per group: its `usemtl` name, its `.mat` ID, its fixed temperature (K) if any.
-    pub groups: Vec<(String, String, Option<f64>)>,
+    pub groups: Groups,
     /// What was not used, naming file and line.
     pub warnings: Vec<String>,
 }

@@ -707,7 +707,7 @@ impl<'o> Importer<'o> {
                  the object no `<localmaterials>`)",
             ));
         };
-        let (file, path, groups): (String, &Path, Vec<(String, String, Option<f64>)>) = match geo {
+        let (file, path, groups): (String, &Path, gdb::Groups) = match geo {
             Geo::Obj(p) => {
                 let gs = crate::scene::load_obj(p)?;
                 let mut names: Vec<String> = Vec::new();
