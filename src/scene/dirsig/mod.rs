@@ -22,8 +22,11 @@
 //! - Instance transforms (`.glist` `<staticinstance>`, `.odb` `INFO`): scale, then
 //!   rotation about x, then y, then z (fixed scene axes, right-handed; degrees unless the
 //!   element says `radians`), then translation (m) — irsig's own order
-//!   ([`crate::scene::file::TransformSpec`]). A 4×4 matrix is row by row with the
-//!   translation in the fourth column.
+//!   ([`crate::scene::file::TransformSpec`]). DIRSIG's documentation calls the ODB order
+//!   "fixed" and writes the angles x, y, z (its example turns a truck 90° about z); the
+//!   x → y → z order itself is this importer's reading, honoured otherwise when a
+//!   `rotationorder` is given. A 4×4 matrix is row by row with the translation in the
+//!   fourth column (the ODB documentation's example ends `0 0 0 1`).
 //! - Nested lists compose: world = parent instance ∘ child instance.
 //!
 //! Takes DIRSIG files; gives irsig scene and material files. Must not know ray tracing,
