@@ -70,6 +70,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let t0 = std::time::Instant::now();
+    anyhow::ensure!(
+        args.search.is_empty() || irsig::scene::dirsig::is_dirsig_scene(&args.scene),
+        "--search: {} is not a DIRSIG scene or simulation (.scene, .jsim, .sim)",
+        args.scene.display()
+    );
     let scene = if args.search.is_empty() {
         irsig::scene::Scene::load(&args.scene)
     } else {

@@ -72,6 +72,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn check(file: &Path, json: bool, search: Vec<PathBuf>) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        search.is_empty() || irsig::scene::dirsig::is_dirsig_scene(file),
+        "--search: {} is not a DIRSIG scene or simulation (.scene, .jsim, .sim)",
+        file.display()
+    );
     let loaded = if search.is_empty() {
         Scene::check(file)
     } else {
