@@ -9,6 +9,7 @@ mod atmosphere;
 mod backends;
 mod check_parity;
 mod cli;
+mod dirsig;
 mod exposure;
 mod exposure_pipeline;
 mod flux;

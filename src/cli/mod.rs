@@ -27,6 +27,7 @@ mod bench;
 mod calibrate;
 mod compare;
 mod diurnal;
+mod import;
 mod info;
 mod merge;
 mod progress;
@@ -85,6 +86,8 @@ enum Command {
     Diurnal(diurnal::Args),
     /// Merge tiles rendered with `render --tile K/N` into one image set.
     Merge(merge::Args),
+    /// Import a scene from another tool (DIRSIG) as an irsig scene file.
+    Import(import::Args),
 }
 
 /// Parse the command line and run the chosen subcommand.
@@ -111,5 +114,6 @@ pub fn run() -> anyhow::Result<()> {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Diurnal(a) => diurnal::run(a),
         Command::Merge(a) => merge::run(a),
+        Command::Import(a) => import::run(a),
     }
 }

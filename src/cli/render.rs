@@ -11,7 +11,7 @@ use super::progress::Bar;
 /// Arguments of `irsig render`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Scene file (JSON).
+    /// Scene file (JSON), or a DIRSIG `.scene`/`.jsim`/`.sim` (imported first).
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
     /// Output folder (created if needed): per sensor `NAME.exr`, `NAME.img` +
@@ -55,6 +55,10 @@ pub struct Args {
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
+    /// For a DIRSIG scene or simulation: a folder to look in for files not found where
+    /// the DIRSIG files say (see `irsig import dirsig`); repeat for more.
+    #[arg(long, value_name = "DIR")]
+    pub search: Vec<std::path::PathBuf>,
 }
 
 /// Run `irsig render`.
@@ -71,8 +75,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let t0 = std::time::Instant::now();
-    let scene = irsig::scene::Scene::load(&args.scene)
-        .with_context(|| format!("loading {}", args.scene.display()))?;
+    anyhow::ensure!(
+        args.search.is_empty() || irsig::scene::dirsig::is_dirsig_scene(&args.scene),
+        "--search: {} is not a DIRSIG scene or simulation (.scene, .jsim, .sim)",
+        args.scene.display()
+    );
+    let scene = if args.search.is_empty() {
+        irsig::scene::Scene::load(&args.scene)
+    } else {
+        let opts = irsig::scene::dirsig::ImportOptions {
+            search_dirs: args.search.clone(),
+            time: None,
+        };
+        irsig::scene::Scene::load_dirsig(&args.scene, &opts)
+    }
+    .with_context(|| format!("loading {}", args.scene.display()))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

@@ -22,7 +22,7 @@ enum SceneCommand {
     /// thermal spin-up, image memory, what each sensor sees); print a
     /// summary, or every problem found (exit status 2).
     Check {
-        /// The scene file (JSON).
+        /// The scene file (JSON), or a DIRSIG `.scene`/`.jsim`/`.sim` (imported first).
         file: PathBuf,
         /// Image times to check the weather coverage for, as `render
         /// --times` takes them [default: the scene's time].
@@ -37,6 +37,10 @@ enum SceneCommand {
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
+        /// For a DIRSIG scene or simulation: a folder to look in for files not found
+        /// where the DIRSIG files say (see `irsig import dirsig`); repeat for more.
+        #[arg(long, value_name = "DIR")]
+        search: Vec<PathBuf>,
     },
     /// Print the JSON Schema of the scene file format.
     Schema {
@@ -68,7 +72,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             times,
             load_only,
             json,
-        } => check(&file, times.as_deref(), load_only, json),
+            search,
+        } => check(&file, times.as_deref(), load_only, json, search),
         SceneCommand::Schema { out } => {
             let s = schema_json();
             match out {
@@ -86,12 +91,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 }
 
-fn check(file: &Path, times: Option<&str>, load_only: bool, json: bool) -> anyhow::Result<()> {
+fn check(
+    file: &Path,
+    times: Option<&str>,
+    load_only: bool,
+    json: bool,
+    search: Vec<PathBuf>,
+) -> anyhow::Result<()> {
     let times = times
         .map(super::args::parse_times)
         .transpose()?
         .unwrap_or_default();
-    let scene = match Scene::check(file) {
+    anyhow::ensure!(
+        search.is_empty() || irsig::scene::dirsig::is_dirsig_scene(file),
+        "--search: {} is not a DIRSIG scene or simulation (.scene, .jsim, .sim)",
+        file.display()
+    );
+    let loaded = if search.is_empty() {
+        Scene::check(file)
+    } else {
+        let opts = irsig::scene::dirsig::ImportOptions {
+            search_dirs: search,
+            time: None,
+        };
+        Scene::check_dirsig(file, &opts)
+    };
+    let scene = match loaded {
         Ok(s) => s,
         Err(errs) => {
             let mut err = std::io::stderr().lock();

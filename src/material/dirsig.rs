@@ -55,7 +55,7 @@
 //! [`EmissivityCurve`]s (curves resampled by [`crate::math::interp1d`]).
 //! Must not know irsig's JSON database format ([`super::db`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::{EmissivityCurve, Material, MaterialDb};
 use crate::error::{Error, Location, Result};
@@ -72,21 +72,21 @@ pub const THERM_THICKNESS_TO_SI: f64 = 0.01;
 
 /// A `{ … }` block of a DIRSIG text file.
 #[derive(Debug, Default)]
-struct Block {
-    name: String,
-    line: usize,
-    entries: Vec<(String, String, usize)>,
-    children: Vec<Block>,
+pub(crate) struct Block {
+    pub(crate) name: String,
+    pub(crate) line: usize,
+    pub(crate) entries: Vec<(String, String, usize)>,
+    pub(crate) children: Vec<Block>,
 }
 
 impl Block {
-    fn get(&self, key: &str) -> Option<(&str, usize)> {
+    pub(crate) fn get(&self, key: &str) -> Option<(&str, usize)> {
         self.entries
             .iter()
             .find(|(k, _, _)| k.eq_ignore_ascii_case(key))
             .map(|(_, v, l)| (v.as_str(), *l))
     }
-    fn child(&self, name: &str) -> Option<&Block> {
+    pub(crate) fn child(&self, name: &str) -> Option<&Block> {
         self.children
             .iter()
             .find(|b| b.name.eq_ignore_ascii_case(name))
@@ -94,7 +94,7 @@ impl Block {
 }
 
 /// Parse the nested block structure of a DIRSIG text file.
-fn parse_blocks(text: &str, path: &Path) -> Result<Block> {
+pub(crate) fn parse_blocks(text: &str, path: &Path) -> Result<Block> {
     let mut stack = vec![Block {
         name: "<root>".into(),
         ..Default::default()
@@ -157,14 +157,132 @@ fn parse_blocks(text: &str, path: &Path) -> Result<Block> {
     Ok(stack.pop().expect("root"))
 }
 
-/// Load a DIRSIG4 `.mat` material database, converting THERM units to SI.
-/// Every `MATERIAL_ENTRY` must have a `Therm` temperature solver. Errors name
-/// the file, line and key.
+/// The temperature solver of a `.mat` entry (`TEMP_SOLVER_NAME`).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum TempSolver {
+    /// THERM: irsig's slab model ([`MatEntry::material`] holds the properties in SI).
+    Therm,
+    /// `DataDriven`: the surface temperature is given (`TEMPERATURE`, taken as kelvin, as
+    /// DIRSIG's radiometry uses; `../shared/data/dirsig/FORMAT_NOTES.md`: a hypersonic
+    /// vehicle skin at 1500).
+    DataDriven {
+        /// The temperature, K.
+        temperature_k: f64,
+    },
+    /// Another solver (`Null`, `Balfour`, …): no thermal model irsig can use.
+    Other(String),
+    /// No `TEMP_SOLVER_NAME`.
+    Missing,
+}
+
+/// One `MATERIAL_ENTRY` of a `.mat` file, whatever its solver.
+#[derive(Debug, Clone)]
+pub struct MatEntry {
+    /// `ID` as written: a number or a label (`Gidder_mat`).
+    pub id: String,
+    /// The numeric id irsig gives it (a label gets the next number after the file's
+    /// numeric IDs).
+    pub numeric_id: u32,
+    /// `NAME`.
+    pub name: String,
+    /// Line of the entry.
+    pub line: usize,
+    /// The temperature solver.
+    pub solver: TempSolver,
+    /// The material in SI: for `Therm` entries that map onto the slab model; `None`
+    /// otherwise (see `skipped`).
+    pub material: Option<Material>,
+    /// Why the entry gives no [`Material`] (file, line, reason), if it does not.
+    pub skipped: Option<String>,
+    /// Spectral emissivity: from `EMISSIVITY_PROP` (`.ems`), else from
+    /// `REFLECTANCE_PROP` `SimpleReflectance` as 1 − ρ (an opaque surface, Kirchhoff's
+    /// law); read for every solver.
+    pub emissivity: Option<EmissivityCurve>,
+    /// `DOUBLE_SIDED`.
+    pub double_sided: bool,
+    /// `SPECULAR_FRACTION` (or `SPECULARITY`), 0 when absent.
+    pub specular_fraction: f64,
+    /// Non-fatal notes about the entry (a missing emissivity file), each naming file
+    /// and line.
+    pub warnings: Vec<String>,
+}
+
+/// Every entry of a `.mat` file.
+#[derive(Debug, Clone, Default)]
+pub struct MatFile {
+    /// The entries, in file order.
+    pub entries: Vec<MatEntry>,
+}
+
+/// Load a DIRSIG4 `.mat` material database, converting THERM units to SI: the
+/// entries [`read_mat`] gives a [`Material`]; the others are left out with a warning in
+/// [`MaterialDb::warnings`]. Errors name the file, line and key.
 pub fn load_mat(path: &Path) -> Result<MaterialDb> {
+    let file = read_mat(path, &[])?;
+    let mut db = MaterialDb::new();
+    for e in file.entries {
+        db.warnings.extend(e.warnings);
+        let Some(m) = e.material else {
+            db.warnings.extend(e.skipped);
+            continue;
+        };
+        if db.index_of(&m.name).is_some() {
+            return Err(Error::parse(
+                Location::file(path).at_line(e.line).with_field("NAME"),
+                format!("material name `{}` is defined twice", m.name),
+            ));
+        }
+        db.insert(
+            m,
+            Some(super::MaterialSource::Text(format!(
+                "DIRSIG4 material file {}, line {}{} (THERM units converted to SI)",
+                path.display(),
+                e.line,
+                if e.id.parse::<u32>().is_ok() {
+                    String::new()
+                } else {
+                    format!(", ID `{}`", e.id)
+                }
+            ))),
+            path,
+        )?;
+    }
+    Ok(db)
+}
+
+/// Find a file a `.mat` names (`FILENAME = emissivity/x.ems`): relative to each of
+/// `dirs` (a scene's `<emsdirectory>`), then to the `.mat` file's folder, then its base
+/// name in that folder.
+fn find_relative(f: &str, base: &Path, dirs: &[PathBuf]) -> Option<PathBuf> {
+    let name = Path::new(f).file_name().map(|n| base.join(n));
+    dirs.iter()
+        .map(|d| d.join(f))
+        .chain([base.join(f)])
+        .chain(name)
+        .find(|p| p.is_file())
+}
+
+/// Read every `MATERIAL_ENTRY` of a DIRSIG4 `.mat` file, whatever its solver (format in
+/// the module docs). Emissivity files are looked up relative to `ems_dirs`, then to the
+/// `.mat` file (see [`find_relative`]). Errors (naming file, line and key) are kept for
+/// real corruption: unbalanced braces, an entry without `ID`/`NAME`, a `Therm` entry
+/// with a missing or non-numeric property, an unreadable emissivity file.
+pub fn read_mat(path: &Path, ems_dirs: &[PathBuf]) -> Result<MatFile> {
+    read_mat_with(path, ems_dirs, &mut |_| None)
+}
+
+/// As [`read_mat`]; a file found nowhere else is asked of `fallback` (given the name as
+/// written), which may say where it is.
+pub fn read_mat_with(
+    path: &Path,
+    ems_dirs: &[PathBuf],
+    fallback: &mut dyn FnMut(&str) -> Option<PathBuf>,
+) -> Result<MatFile> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let root = parse_blocks(&text, path)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut db = MaterialDb::new();
+    let mut out = MatFile::default();
     let entries: Vec<&Block> = root
         .children
         .iter()
@@ -203,11 +321,11 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
         let (id_s, id_line) = req(b, "ID")?;
         // A label ID (`ID = Gidder_mat`, DIRSIG ≥ 4.7) gets the next number after the
         // file's numeric IDs; the label stays in the material's source.
-        let (id, label) = match id_s.parse::<u32>() {
-            Ok(id) => (id, None),
+        let id = match id_s.parse::<u32>() {
+            Ok(id) => id,
             Err(_) if !id_s.is_empty() && !id_s.contains(char::is_whitespace) => {
                 next_label_id += 1;
-                (next_label_id, Some(id_s.clone()))
+                next_label_id
             }
             Err(_) => {
                 return Err(Error::parse(
@@ -226,30 +344,108 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
                 )
             })?,
         };
-        // Only THERM maps onto irsig's slab model. Other solvers (Null, DataDriven, …)
-        // and entries without one are left out with a warning, so that a library is
-        // usable for the entries a scene needs; a surface naming a left-out material is
-        // an error there (no material of that name).
-        let solver = b.get("TEMP_SOLVER_NAME");
-        if !solver.is_some_and(|(v, _)| v.eq_ignore_ascii_case("Therm")) {
-            let line = solver.map_or(b.line, |(_, l)| l);
-            let why = match solver {
-                None => "has no temperature solver (TEMP_SOLVER_NAME)".to_string(),
-                Some((v, _)) if v.eq_ignore_ascii_case("DataDriven") => {
-                    let t = b
-                        .child("TEMP_SOLVER")
-                        .and_then(|ts| ts.get("TEMPERATURE"))
-                        .map_or(String::new(), |(t, _)| format!(" (TEMPERATURE = {t})"));
-                    format!(
-                        "uses temperature solver `DataDriven`{t}, which irsig does not import; \
-                         give the parts that use it `fixed_temperature_k`"
-                    )
+        let solver_kv = b.get("TEMP_SOLVER_NAME");
+        let ts = b.child("TEMP_SOLVER");
+        let solver = match solver_kv {
+            None => TempSolver::Missing,
+            Some((v, _)) if v.eq_ignore_ascii_case("Therm") => TempSolver::Therm,
+            Some((v, l)) if v.eq_ignore_ascii_case("DataDriven") => {
+                let t = ts.and_then(|ts| ts.get("TEMPERATURE"));
+                let Some((tv, tl)) = t else {
+                    return Err(Error::parse(
+                        loc("TEMPERATURE", l),
+                        format!("material `{name}`: `DataDriven` solver without `TEMPERATURE`"),
+                    ));
+                };
+                let k = tv.parse::<f64>().ok().filter(|k| k.is_finite() && *k > 0.0);
+                let Some(temperature_k) = k else {
+                    return Err(Error::parse(
+                        loc("TEMPERATURE", tl),
+                        format!("material `{name}`: expected a temperature > 0 K, found `{tv}`"),
+                    ));
+                };
+                TempSolver::DataDriven { temperature_k }
+            }
+            Some((v, _)) => TempSolver::Other(v.to_string()),
+        };
+        // Surface properties, read for every solver.
+        let mut specular = match ts.and_then(|ts| ts.get("SPECULARITY")) {
+            Some(_) => num(ts.expect("has key"), "SPECULARITY")?,
+            None => 0.0,
+        };
+        let mut curve = None;
+        let mut warnings = Vec::new();
+        let props = b.child("SURFACE_PROPERTIES");
+        if let Some(ep) = props.and_then(|s| s.child("EMISSIVITY_PROP")) {
+            if ep.get("SPECULAR_FRACTION").is_some() {
+                specular = num(ep, "SPECULAR_FRACTION")?;
+            }
+            if let Some((f, fl)) = ep.get("FILENAME") {
+                match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
+                    Some(p) => {
+                        curve = Some(read_ems(&p).map_err(|e| {
+                            Error::parse(loc("FILENAME", fl), format!("material `{name}`: {e}"))
+                        })?)
+                    }
+                    None => warnings.push(format!(
+                        "{}:{fl}: material `{name}`: emissivity file `{f}` not found; using grey THERMAL_EMISSIVITY",
+                        path.display()
+                    )),
                 }
-                Some((v, _)) => {
+            }
+        }
+        if curve.is_none() {
+            if let Some(rp) = props.and_then(|s| s.child("REFLECTANCE_PROP")) {
+                if let Some((f, fl)) = rp.get("TXT_FILENAME").or_else(|| rp.get("FILENAME")) {
+                    match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
+                        Some(p) => {
+                            curve = Some(read_reflectance_as_emissivity(&p).map_err(|e| {
+                                Error::parse(
+                                    loc("TXT_FILENAME", fl),
+                                    format!("material `{name}`: {e}"),
+                                )
+                            })?)
+                        }
+                        None => warnings.push(format!(
+                            "{}:{fl}: material `{name}`: reflectance file `{f}` not found",
+                            path.display()
+                        )),
+                    }
+                }
+            }
+        }
+        let mut entry = MatEntry {
+            id: id_s.clone(),
+            numeric_id: id,
+            name: name.clone(),
+            line: b.line,
+            solver: solver.clone(),
+            material: None,
+            skipped: None,
+            emissivity: curve.clone(),
+            double_sided,
+            specular_fraction: specular,
+            warnings,
+        };
+        // Only THERM maps onto irsig's slab model. Other solvers (Null, DataDriven, …)
+        // and entries without one give no material here, with the reason, so that a
+        // library is usable for the entries a scene needs (the scene importer maps
+        // `DataDriven` to fixed-temperature parts).
+        if solver != TempSolver::Therm {
+            let line = solver_kv.map_or(b.line, |(_, l)| l);
+            let why = match &solver {
+                TempSolver::Missing => "has no temperature solver (TEMP_SOLVER_NAME)".to_string(),
+                TempSolver::DataDriven { temperature_k } => format!(
+                    "uses temperature solver `DataDriven` (TEMPERATURE = {temperature_k}), which a \
+                     material database cannot hold; give the parts that use it \
+                     `fixed_temperature_k` (`irsig import dirsig` does)"
+                ),
+                TempSolver::Other(v) => {
                     format!("uses temperature solver `{v}`; irsig imports `Therm` only")
                 }
+                TempSolver::Therm => unreachable!("excluded above"),
             };
-            db.warnings.push(
+            entry.skipped = Some(
                 Error::parse(
                     loc("TEMP_SOLVER_NAME", line),
                     format!(
@@ -258,9 +454,10 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
                 )
                 .to_string(),
             );
+            out.entries.push(entry);
             continue;
         }
-        let ts = b.child("TEMP_SOLVER").ok_or_else(|| {
+        let ts = ts.ok_or_else(|| {
             Error::parse(
                 loc("TEMP_SOLVER", b.line),
                 format!("material `{name}` has no `TEMP_SOLVER {{ … }}` block"),
@@ -270,39 +467,6 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             Some(_) => num(ts, "SELF_GENERATED_POWER")?,
             None => 0.0,
         };
-        let mut specular = match ts.get("SPECULARITY") {
-            Some(_) => num(ts, "SPECULARITY")?,
-            None => 0.0,
-        };
-        let mut curve = None;
-        if let Some(ep) = b
-            .child("SURFACE_PROPERTIES")
-            .and_then(|s| s.child("EMISSIVITY_PROP"))
-        {
-            if ep.get("SPECULAR_FRACTION").is_some() {
-                specular = num(ep, "SPECULAR_FRACTION")?;
-            }
-            if let Some((f, fl)) = ep.get("FILENAME") {
-                let direct = base.join(f);
-                let by_name = Path::new(f).file_name().map(|n| base.join(n));
-                let found = if direct.is_file() {
-                    Some(direct)
-                } else {
-                    by_name.filter(|p| p.is_file())
-                };
-                match found {
-                    Some(p) => {
-                        curve = Some(read_ems(&p).map_err(|e| {
-                            Error::parse(loc("FILENAME", fl), format!("material `{name}`: {e}"))
-                        })?)
-                    }
-                    None => db.warnings.push(format!(
-                        "{}:{fl}: material `{name}`: emissivity file `{f}` not found; using grey THERMAL_EMISSIVITY",
-                        path.display()
-                    )),
-                }
-            }
-        }
         let m = Material {
             id,
             name: name.clone(),
@@ -326,19 +490,19 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
         // Real libraries hold THERM entries with THICKNESS = 0 (anadirsig.mat: water,
         // grass) whose meaning in THERM is not documented; irsig's slab cannot represent
         // them, so such entries are left out with a warning.
-        let odd = [("THICKNESS", m.thickness_m <= 0.0, "≤ 0")];
-        if let Some((key, _, what)) = odd.iter().find(|o| o.1) {
-            let (v, line) = ts.get(key).unwrap_or(("", b.line));
-            db.warnings.push(
+        if m.thickness_m <= 0.0 {
+            let (v, line) = ts.get("THICKNESS").unwrap_or(("", b.line));
+            entry.skipped = Some(
                 Error::parse(
-                    loc(key, line),
+                    loc("THICKNESS", line),
                     format!(
-                        "material `{name}` (ID {id_s}): {key} = {v} ({what}) has no equivalent in \
+                        "material `{name}` (ID {id_s}): THICKNESS = {v} (≤ 0) has no equivalent in \
                          irsig's slab model: not loaded (a surface that uses it is an error)"
                     ),
                 )
                 .to_string(),
             );
+            out.entries.push(entry);
             continue;
         }
         if let Some((field, msg)) = m.problems().into_iter().next() {
@@ -359,24 +523,64 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
                 format!("material `{name}` (after conversion to SI): {msg}"),
             ));
         }
-        if db.index_of(&name).is_some() {
+        entry.material = Some(m);
+        out.entries.push(entry);
+    }
+    Ok(out)
+}
+
+/// Read a DIRSIG `SimpleReflectance` text file (`wavelength_µm reflectance` per line,
+/// blanks, tabs or commas, CRLF allowed) as the emissivity of an opaque surface,
+/// ε(λ) = 1 − ρ(λ) (Kirchhoff's law for zero transmittance).
+pub fn read_reflectance_as_emissivity(path: &Path) -> Result<EmissivityCurve> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let (mut wl, mut em) = (Vec::new(), Vec::new());
+    for (n, l) in text.lines().enumerate() {
+        let l = l.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let at = Location::file(path).at_line(n + 1);
+        let v: Vec<f64> = l
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+            .map(str::parse)
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| {
+                Error::parse(
+                    at.clone(),
+                    format!("expected `wavelength_µm reflectance`, found `{l}`"),
+                )
+            })?;
+        if v.len() != 2 {
             return Err(Error::parse(
-                loc("NAME", b.line),
-                format!("material name `{name}` is defined twice"),
+                at,
+                format!(
+                    "expected 2 numbers (wavelength µm, reflectance), found {}",
+                    v.len()
+                ),
             ));
         }
-        db.insert(
-            m,
-            Some(super::MaterialSource::Text(format!(
-                "DIRSIG4 material file {}, line {}{} (THERM units converted to SI)",
-                path.display(),
-                b.line,
-                label.map_or(String::new(), |l| format!(", ID `{l}`"))
-            ))),
-            path,
-        )?;
+        if !(0.0..=1.0).contains(&v[1]) {
+            return Err(Error::parse(
+                at,
+                format!("reflectance {} outside 0..=1", v[1]),
+            ));
+        }
+        if wl.last().is_some_and(|&p| v[0] <= p) || !v[0].is_finite() || v[0] <= 0.0 {
+            return Err(Error::parse(at, "wavelengths must be > 0 and increase"));
+        }
+        wl.push(v[0]);
+        em.push(1.0 - v[1]);
     }
-    Ok(db)
+    if wl.is_empty() {
+        return Err(Error::parse(Location::file(path), "no reflectance values"));
+    }
+    Ok(EmissivityCurve {
+        wavelengths_um: wl,
+        emissivity: vec![em],
+        angles_deg: vec![],
+    })
 }
 
 fn parse_bool(v: &str) -> Option<bool> {

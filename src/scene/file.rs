@@ -29,7 +29,7 @@
 //!   part of the same name; else to an implicit part with the object's
 //!   `material`; else to the database material of the same name.
 //! - **Transforms**: `scale`, then `rotate_deg` (about x, then y, then z,
-//!   degrees, right-handed), then `translate` (m). A shape's transform places
+//!   degrees, right-handed), then `translate` (m); or a 4×4 `matrix`. A shape's transform places
 //!   it in its object; an instance's transform places the object in the
 //!   world, after the object's own `transform` (world = instance ∘ object).
 //!   No `instances` = one instance at the object's `transform`.
@@ -106,7 +106,7 @@ pub struct WeatherSpec {
     pub year: Option<i32>,
 }
 
-/// An affine transform: scale, then rotate (x, y, z), then translate.
+/// An affine transform: scale, then rotate (x, y, z), then translate; or a 4×4 `matrix`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TransformSpec {
@@ -119,6 +119,11 @@ pub struct TransformSpec {
     /// Scale: one factor or one per axis.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<Scale>,
+    /// A 4×4 affine matrix instead of the three keys above: 16 numbers, row by row,
+    /// last row `0, 0, 0, 1`; a point moves to M·[x, y, z, 1]ᵀ (translation in the
+    /// fourth column, m), as DIRSIG's `.glist` `<matrix>` and `.odb` `INFO` give it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<Vec<f64>>,
 }
 
 /// Uniform or per-axis scale.

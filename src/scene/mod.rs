@@ -19,6 +19,7 @@
 //! It must not know ray tracing, the thermal model or rendering: it
 //! describes the scene; later stages read it.
 
+pub mod dirsig;
 pub mod file;
 pub mod gltf;
 pub mod jsonloc;
@@ -333,23 +334,63 @@ pub struct SceneSummary {
     pub object_list: Vec<(String, usize, usize)>,
 }
 
+/// One error for a list of problems: the problem itself when there is one.
+fn join_errors(errs: Vec<Error>) -> Error {
+    if errs.len() == 1 {
+        errs.into_iter().next().expect("one")
+    } else {
+        let n = errs.len();
+        let list: Vec<String> = errs.iter().map(|e| format!("  {e}")).collect();
+        Error::Other(format!("{n} problems in the scene:\n{}", list.join("\n")))
+    }
+}
+
 impl Scene {
     /// Load a scene file; the error lists every problem found.
     pub fn load(path: &Path) -> Result<Scene> {
-        Self::check(path).map_err(|errs| {
-            if errs.len() == 1 {
-                errs.into_iter().next().expect("one")
-            } else {
-                let n = errs.len();
-                let list: Vec<String> = errs.iter().map(|e| format!("  {e}")).collect();
-                Error::Other(format!("{n} problems in the scene:\n{}", list.join("\n")))
-            }
-        })
+        Self::check(path).map_err(join_errors)
     }
 
-    /// Load a scene file, collecting every problem found.
+    /// [`Scene::load`] for a DIRSIG scene or simulation imported with `options`.
+    pub fn load_dirsig(path: &Path, options: &dirsig::ImportOptions) -> Result<Scene> {
+        Self::check_dirsig(path, options).map_err(join_errors)
+    }
+
+    /// Load a scene file, collecting every problem found. A DIRSIG scene or
+    /// simulation (`.scene`, `.jsim`, `.sim`; [`dirsig::is_dirsig_scene`]) is imported
+    /// first ([`dirsig::import`], into a temporary folder); the import's warnings come
+    /// first in [`Scene::warnings`].
     pub fn check(path: &Path) -> std::result::Result<Scene, Vec<Error>> {
+        if dirsig::is_dirsig_scene(path) {
+            return Self::check_dirsig(path, &dirsig::ImportOptions::default());
+        }
         Loader::new(path)?.load()
+    }
+
+    /// Import a DIRSIG scene or simulation with `options` and load the result, collecting
+    /// every problem found.
+    pub fn check_dirsig(
+        path: &Path,
+        options: &dirsig::ImportOptions,
+    ) -> std::result::Result<Scene, Vec<Error>> {
+        let tmp = tempfile::Builder::new()
+            .prefix("irsig-dirsig-")
+            .tempdir()
+            .map_err(|e| vec![Error::io(std::env::temp_dir(), e)])?;
+        let out = tmp.path().join(format!(
+            "{}.json",
+            path.file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy())
+        ));
+        let imported = dirsig::import(path, &out, options).map_err(|e| vec![e])?;
+        imported.write(&out).map_err(|e| vec![e])?;
+        let mut scene = Loader::new(&out)?.load()?;
+        // Everything the scene needs was read while loading; the temporary files go.
+        scene.path = path.to_path_buf();
+        let mut warnings = imported.warnings;
+        warnings.append(&mut scene.warnings);
+        scene.warnings = warnings;
+        Ok(scene)
     }
 
     /// Index into [`Scene::parts`] of primitive `prim` of instance `instance`.
@@ -450,8 +491,38 @@ pub fn schema_json() -> String {
     serde_json::to_string_pretty(&s).expect("schema serialises") + "\n"
 }
 
-/// Object → parent transform: scale, then rotate x, y, z, then translate.
+/// Problems with a transform (as messages): a `matrix` that is not 16 finite numbers
+/// with last row `0, 0, 0, 1`, or given together with `translate`, `rotate_deg` or
+/// `scale`.
+pub fn transform_problems(t: &file::TransformSpec) -> Vec<String> {
+    let mut p = Vec::new();
+    if let Some(m) = &t.matrix {
+        if m.len() != 16 || m.iter().any(|v| !v.is_finite()) {
+            p.push(format!(
+                "`matrix` needs 16 finite numbers (4 rows of 4), found {}",
+                m.len()
+            ));
+        } else if m[12..16] != [0.0, 0.0, 0.0, 1.0] {
+            p.push(format!(
+                "`matrix` last row is {:?}: expected [0, 0, 0, 1] (an affine transform; translation in the fourth column)",
+                &m[12..16]
+            ));
+        }
+        if t.translate.is_some() || t.rotate_deg.is_some() || t.scale.is_some() {
+            p.push("`matrix` replaces `translate`, `rotate_deg` and `scale`: give one form".into());
+        }
+    }
+    p
+}
+
+/// Object → parent transform: scale, then rotate x, y, z, then translate; or the
+/// `matrix` (row by row, translation in the fourth column) when given and valid (see
+/// [`transform_problems`]).
 pub fn transform_affine(t: &file::TransformSpec) -> Affine3A {
+    if let Some(m) = t.matrix.as_deref().filter(|m| m.len() == 16) {
+        let c = |j: usize| Vec3::new(m[j] as f32, m[4 + j] as f32, m[8 + j] as f32);
+        return Affine3A::from_cols(c(0).into(), c(1).into(), c(2).into(), c(3).into());
+    }
     let s = match &t.scale {
         None => Vec3::ONE,
         Some(file::Scale::Uniform(s)) => Vec3::splat(*s as f32),
@@ -717,6 +788,25 @@ impl Loader {
             else {
                 continue;
             };
+            let mut bad_transform = false;
+            let specs = o.transform.iter().map(|t| (format!("{at}.transform"), t));
+            let inst = o.instances.iter().flatten().enumerate();
+            let specs = specs.chain(inst.map(|(i, t)| (format!("{at}.instances[{i}]"), t)));
+            let shape = o.shapes.iter().enumerate();
+            let shape = shape.filter_map(|(j, s)| {
+                s.transform
+                    .as_ref()
+                    .map(|t| (format!("{at}.shapes[{j}].transform"), t))
+            });
+            for (field, t) in specs.chain(shape).collect::<Vec<_>>() {
+                for p in transform_problems(t) {
+                    self.err(&field, p);
+                    bad_transform = true;
+                }
+            }
+            if bad_transform {
+                continue;
+            }
             let obj_t = o
                 .transform
                 .as_ref()

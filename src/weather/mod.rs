@@ -540,6 +540,15 @@ pub fn detect_format(path: &Path, text: &str) -> Result<Format> {
     let first = lines.next().unwrap_or("").trim_start_matches('\u{feff}');
     let second = lines.next().unwrap_or("");
     let tmy3_like = second.starts_with("Date (MM/DD/YYYY)");
+    // A DIRSIG atmosphere file names a weather file but is not one.
+    if ext.as_deref() == Some("atm") || first.trim_start().starts_with("<atmosphericconditions") {
+        return Err(Error::parse(
+            Location::file(path).at_line(1),
+            "this is a DIRSIG atmosphere file (`.atm`), not weather: give the `.wth` file it \
+             names (`<classicdata><filename>`), or import the DIRSIG scene with \
+             `irsig import dirsig`",
+        ));
+    }
     match ext.as_deref() {
         Some("epw") => return Ok(Format::Epw),
         Some("wth") => return Ok(Format::DirsigWth),
