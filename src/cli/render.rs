@@ -47,6 +47,11 @@ pub struct Args {
     /// [default: the scene's, else stratified:64].
     #[arg(long, value_name = "SPEC")]
     pub sky_sampling: Option<irsig::exposure::SkySampling>,
+    /// Read every facet's state from this folder (made by `irsig
+    /// thermal-scene --state DIR` for this scene, these times and
+    /// settings) instead of solving it; the images are the same bit for bit.
+    #[arg(long, value_name = "DIR")]
+    pub state: Option<PathBuf>,
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -66,7 +71,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let t0 = std::time::Instant::now();
-    let scene = irsig::scene::Scene::load(&args.scene)
+    let bar = (!args.quiet).then(Bar::on_terminal);
+    let progress: &dyn irsig::Progress = match &bar {
+        Some(b) => b.as_ref(),
+        None => &irsig::progress::NoProgress,
+    };
+    let scene = Session::load_scene_observed(&args.scene, progress)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -84,7 +94,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Err(anyhow::Error::new(e))
             .with_context(|| format!("loading {}", args.scene.display()));
     }
-    let mut session = Session::from_scene(scene, args.backend, t0)
+    let mut session = Session::from_scene_observed(scene, args.backend, t0, progress)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     for w in irsig::render::checks::view_warnings(
         &session.scene,
@@ -104,12 +114,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         times,
         tile,
         seed: args.seed,
-        progress: (!args.quiet).then(|| Bar::on_terminal() as _),
+        progress: bar.map(|b| b as _),
         sensors: args.sensors.clone(),
+        state: args.state.clone(),
     };
     let stems = session
         .run(&args.out, &options)
-        .for_flags(&[("sensor", "--sensor")])
+        .for_flags(&[("sensor", "--sensor"), ("state", "--state")])
         .with_context(|| format!("rendering {}", args.scene.display()))?;
     if !args.quiet {
         let t = &session.timings;

@@ -30,6 +30,7 @@ pub mod checks;
 pub mod image;
 pub mod path;
 pub mod scene_thermal;
+pub mod state;
 pub mod session;
 pub mod shade;
 pub mod tile;

@@ -27,7 +27,7 @@ use crate::exposure::{
     exposure_of, history_step, history_times, image_window, sun_directions,
 };
 use crate::geometry::SceneGeometry;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::{NoProgress, Progress, Stage};
 use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
@@ -475,6 +475,7 @@ fn trace_range(
     range: Range<usize>,
     progress: &dyn Progress,
 ) -> Result<FacetRays> {
+    progress.start(Stage::Exposure, 2 * range.len() as u64);
     progress.item("solar history and sky view");
     let (solar, mut sky, stats) = exposure_of(
         tracers.exposure,
@@ -497,6 +498,7 @@ fn trace_range(
     } else {
         vec![false; range.len()]
     };
+    progress.finish();
     Ok(FacetRays {
         range,
         solar,
@@ -576,8 +578,11 @@ fn solve_traced(
         (setup.clone(), 0)
     };
     let t2 = Instant::now();
+    progress.start(Stage::Thermal, n as u64);
     progress.item("thermal solve");
     let temperatures = solve_windows(&exposure, &setup, &history, &params.thermal)?;
+    progress.advance(n as u64);
+    progress.finish();
     let t3 = Instant::now();
     Ok(SceneThermal {
         times: history.times,
