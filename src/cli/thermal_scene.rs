@@ -95,7 +95,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(1) => state::run_pass1(&mut session, &args.state, &times, shard, progress),
         Some(_) => state::run_pass2(&mut session, &args.state, &times, shard, progress),
     }
-    .for_flags(&[("shard", "--shard"), ("state", "--state"), ("times", "--times")])
+    .for_flags(&[
+        ("shard", "--shard"),
+        ("state", "--state"),
+        ("times", "--times"),
+    ])
     .with_context(|| format!("thermal-scene {}", args.scene.display()))?;
     if !args.quiet {
         match outcome {

@@ -67,8 +67,7 @@ pub use sky::{
     RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view, sky_view_of,
 };
 pub use solar::{
-    RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_history_of,
-    solar_rays,
+    RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_history_of, solar_rays,
 };
 
 use crate::geometry::SceneGeometry;

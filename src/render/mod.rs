@@ -30,9 +30,9 @@ pub mod checks;
 pub mod image;
 pub mod path;
 pub mod scene_thermal;
-pub mod state;
 pub mod session;
 pub mod shade;
+pub mod state;
 pub mod tile;
 
 use std::path::{Path, PathBuf};

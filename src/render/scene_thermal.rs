@@ -401,7 +401,15 @@ pub fn solve_scene_temperatures_observed<'a>(
     let n = facets.len();
     let rays = trace_range(tracers, &facets, setup, &history, params, 0..n, progress)?;
     let t2 = Instant::now();
-    let mut out = solve_traced(facets, setup, history, image_times, params, vec![rays], progress)?;
+    let mut out = solve_traced(
+        facets,
+        setup,
+        history,
+        image_times,
+        params,
+        vec![rays],
+        progress,
+    )?;
     out.timings.setup = t1 - t0;
     out.timings.rays = t2 - t1;
     Ok(out)
@@ -486,7 +494,10 @@ fn trace_range(
         &|n| progress.advance(n),
     )?;
     if !setup.shape_factor_override.is_empty() {
-        for (i, o) in setup.shape_factor_override[range.clone()].iter().enumerate() {
+        for (i, o) in setup.shape_factor_override[range.clone()]
+            .iter()
+            .enumerate()
+        {
             if let Some(v) = *o {
                 sky.shape_factor[i] = v;
             }
@@ -825,10 +836,21 @@ pub fn trace_scene_facets<'a>(
     if range.start > range.end || range.end > n {
         return Err(Error::invalid(
             "facet range",
-            format!("{}..{} is not within the scene's {n} facets", range.start, range.end),
+            format!(
+                "{}..{} is not within the scene's {n} facets",
+                range.start, range.end
+            ),
         ));
     }
-    trace_range(tracers.into(), &facets, &setup, &history, params, range, progress)
+    trace_range(
+        tracers.into(),
+        &facets,
+        &setup,
+        &history,
+        params,
+        range,
+        progress,
+    )
 }
 
 /// The second half of [`solve_scene`]: the thermal passes on the rays of

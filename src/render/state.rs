@@ -52,9 +52,7 @@ use std::sync::Arc;
 use arrow_array::builder::{FixedSizeListBuilder, Float32Builder, ListBuilder, UInt32Builder};
 use arrow_array::cast::AsArray;
 use arrow_array::types::{Float32Type, UInt32Type};
-use arrow_array::{
-    Array, ArrayRef, BooleanArray, Float32Array, RecordBatch, UInt32Array,
-};
+use arrow_array::{Array, ArrayRef, BooleanArray, Float32Array, RecordBatch, UInt32Array};
 use arrow_schema::{DataType, Field, Schema};
 use chrono::{DateTime, FixedOffset};
 use serde::{Deserialize, Serialize};
@@ -328,8 +326,12 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(Error::io(&path, e)),
     };
-    let m: Manifest = serde_json::from_str(&text)
-        .map_err(|e| Error::parse(crate::Location::file(&path).at_line(e.line()), e.to_string()))?;
+    let m: Manifest = serde_json::from_str(&text).map_err(|e| {
+        Error::parse(
+            crate::Location::file(&path).at_line(e.line()),
+            e.to_string(),
+        )
+    })?;
     if m.format != FORMAT {
         return Err(Error::parse(
             crate::Location::file(&path).with_field("format"),
@@ -405,8 +407,7 @@ fn open_manifest(session: &Session, dir: &Path, key: &StateKey) -> Result<Manife
         None => Ok(Manifest {
             format: FORMAT.to_string(),
             version: VERSION,
-            scene: std::path::absolute(&session.scene.path)
-                .unwrap_or(session.scene.path.clone()),
+            scene: std::path::absolute(&session.scene.path).unwrap_or(session.scene.path.clone()),
             scene_hash: key.scene_hash.clone(),
             facets: key.facets,
             times: key.times.clone(),
@@ -417,7 +418,12 @@ fn open_manifest(session: &Session, dir: &Path, key: &StateKey) -> Result<Manife
 }
 
 /// The metadata every shard file carries.
-fn file_metadata(kind: &str, key: &StateKey, (k, n): (usize, usize), range: &Range<usize>) -> HashMap<String, String> {
+fn file_metadata(
+    kind: &str,
+    key: &StateKey,
+    (k, n): (usize, usize),
+    range: &Range<usize>,
+) -> HashMap<String, String> {
     HashMap::from([
         ("irsig.format".to_string(), kind.to_string()),
         ("irsig.version".to_string(), VERSION.to_string()),
@@ -427,7 +433,10 @@ fn file_metadata(kind: &str, key: &StateKey, (k, n): (usize, usize), range: &Ran
             serde_json::to_string(&key.times).unwrap_or_default(),
         ),
         ("irsig.shard".to_string(), format!("{k}/{n}")),
-        ("irsig.facets".to_string(), format!("{}..{}", range.start, range.end)),
+        (
+            "irsig.facets".to_string(),
+            format!("{}..{}", range.start, range.end),
+        ),
     ])
 }
 
@@ -479,7 +488,14 @@ pub fn run_pass1(
         exact: session.tracer.as_ref(),
     };
     let t0 = std::time::Instant::now();
-    let rays = trace_scene_facets(tracers, &session.scene, &times, &params, range.clone(), progress)?;
+    let rays = trace_scene_facets(
+        tracers,
+        &session.scene,
+        &times,
+        &params,
+        range.clone(),
+        progress,
+    )?;
     drop(own);
     session.timings.thermal += t0.elapsed();
     write_rays(&path, &key, (k, n), &rays)?;
@@ -516,7 +532,10 @@ pub fn run_pass2(
     let Some(m) = manifest.rays_shards else {
         return Err(Error::invalid(
             "state",
-            format!("{} records no pass 1: run pass 1 into it first", dir.join(MANIFEST).display()),
+            format!(
+                "{} records no pass 1: run pass 1 into it first",
+                dir.join(MANIFEST).display()
+            ),
         ));
     };
     let path = state_path(dir, k, n);
@@ -628,7 +647,10 @@ pub fn read_states(
     if !missing.is_empty() {
         return Err(Error::invalid(
             "state",
-            format!("the facet states are not complete: missing {}", missing.join(", ")),
+            format!(
+                "the facet states are not complete: missing {}",
+                missing.join(", ")
+            ),
         ));
     }
     let batch = solve_params(session).exposure.batch_facets;
@@ -640,7 +662,12 @@ pub fn read_states(
     if out.len() != key.facets {
         return Err(Error::invalid(
             "state",
-            format!("{} holds {} of {} facets", dir.display(), out.len(), key.facets),
+            format!(
+                "{} holds {} of {} facets",
+                dir.display(),
+                out.len(),
+                key.facets
+            ),
         ));
     }
     out.times = parse_times(&key)?;
@@ -702,7 +729,13 @@ fn read_batch(
         .map_err(|e| bad(format!("not an Arrow IPC file: {e}")))?;
     let meta = reader.schema().metadata().clone();
     let want = file_metadata(kind, key, shard, range);
-    for field in ["irsig.format", "irsig.scene_hash", "irsig.times", "irsig.shard", "irsig.facets"] {
+    for field in [
+        "irsig.format",
+        "irsig.scene_hash",
+        "irsig.times",
+        "irsig.shard",
+        "irsig.facets",
+    ] {
         if meta.get(field) != want.get(field) {
             return Err(bad(format!(
                 "its {field} is {} but {} was expected (a file of another scene, times or split)",
@@ -749,12 +782,9 @@ fn arrow_select_concat(
 
 /// A column of `batch` by name.
 fn column<'b>(batch: &'b RecordBatch, path: &Path, name: &str) -> Result<&'b ArrayRef> {
-    batch.column_by_name(name).ok_or_else(|| {
-        Error::invalid(
-            "state",
-            format!("{}: no column `{name}`", path.display()),
-        )
-    })
+    batch
+        .column_by_name(name)
+        .ok_or_else(|| Error::invalid("state", format!("{}: no column `{name}`", path.display())))
 }
 
 fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> {
@@ -762,7 +792,11 @@ fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> 
     let a = c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
         Error::invalid(
             "state",
-            format!("{}: column `{name}` is {}, expected float32", path.display(), c.data_type()),
+            format!(
+                "{}: column `{name}` is {}, expected float32",
+                path.display(),
+                c.data_type()
+            ),
         )
     })?;
     if a.null_count() > 0 {
@@ -777,7 +811,10 @@ fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> 
 fn check_facet_ids(batch: &RecordBatch, path: &Path, range: &Range<usize>) -> Result<()> {
     let c = column(batch, path, "facet")?;
     let a = c.as_primitive_opt::<UInt32Type>().ok_or_else(|| {
-        Error::invalid("state", format!("{}: column `facet` is not uint32", path.display()))
+        Error::invalid(
+            "state",
+            format!("{}: column `facet` is not uint32", path.display()),
+        )
     })?;
     if let Some((i, &v)) = a
         .values()
@@ -804,14 +841,21 @@ fn time_column(quantity: &str, i: usize) -> String {
 }
 
 /// Write the facet states `states` (shard `k` of `n`) to `path`.
-fn write_states(path: &Path, key: &StateKey, shard: (usize, usize), states: &FacetStates) -> Result<()> {
+fn write_states(
+    path: &Path,
+    key: &StateKey,
+    shard: (usize, usize),
+    states: &FacetStates,
+) -> Result<()> {
     let range = states.first..states.first + states.len();
     let mut fields = vec![
         Field::new("facet", DataType::UInt32, false),
         Field::new("shape_factor", DataType::Float32, false),
     ];
     let mut columns: Vec<ArrayRef> = vec![
-        Arc::new(UInt32Array::from_iter_values(range.clone().map(|f| f as u32))),
+        Arc::new(UInt32Array::from_iter_values(
+            range.clone().map(|f| f as u32),
+        )),
         Arc::new(Float32Array::from(states.shape_factor.clone())),
     ];
     for (i, at) in states.at.iter().enumerate() {
@@ -868,9 +912,13 @@ fn write_rays(path: &Path, key: &StateKey, shard: (usize, usize), rays: &FacetRa
     let mut bg_weight = ListBuilder::new(Float32Builder::new());
     for f in 0..range.len() {
         let e = &sky.entries[sky.offsets[f] as usize..sky.offsets[f + 1] as usize];
-        bg_facet.values().append_slice(&e.iter().map(|x| x.facet).collect::<Vec<_>>());
+        bg_facet
+            .values()
+            .append_slice(&e.iter().map(|x| x.facet).collect::<Vec<_>>());
         bg_facet.append(true);
-        bg_weight.values().append_slice(&e.iter().map(|x| x.weight).collect::<Vec<_>>());
+        bg_weight
+            .values()
+            .append_slice(&e.iter().map(|x| x.weight).collect::<Vec<_>>());
         bg_weight.append(true);
     }
     let history = |v: &[f32]| {
@@ -901,7 +949,9 @@ fn write_rays(path: &Path, key: &StateKey, shard: (usize, usize), rays: &FacetRa
         Field::new("cos_incidence", cos.data_type().clone(), false),
     ];
     let columns: Vec<ArrayRef> = vec![
-        Arc::new(UInt32Array::from_iter_values(range.clone().map(|f| f as u32))),
+        Arc::new(UInt32Array::from_iter_values(
+            range.clone().map(|f| f as u32),
+        )),
         Arc::new(Float32Array::from(sky.shape_factor.clone())),
         Arc::new(Float32Array::from(sky.back_shape_factor.clone())),
         Arc::new(Float32Array::from(sky.std_error.clone())),
@@ -947,12 +997,17 @@ fn read_rays(
             .ok_or_else(|| bad(format!("column `{name}` is not a list")))?;
         let o = l.offsets();
         let base = o[0];
-        Ok((o.iter().map(|&x| (x - base) as usize).collect(), l.values().slice(base as usize, (o[nf] - base) as usize)))
+        Ok((
+            o.iter().map(|&x| (x - base) as usize).collect(),
+            l.values().slice(base as usize, (o[nf] - base) as usize),
+        ))
     };
     let (off_f, facets) = list("background_facet")?;
     let (off_w, weights) = list("background_weight")?;
     if off_f != off_w {
-        return Err(bad("`background_facet` and `background_weight` differ in length".into()));
+        return Err(bad(
+            "`background_facet` and `background_weight` differ in length".into(),
+        ));
     }
     let facets = facets
         .as_primitive_opt::<UInt32Type>()
@@ -961,7 +1016,10 @@ fn read_rays(
         .as_primitive_opt::<Float32Type>()
         .ok_or_else(|| bad("`background_weight` does not hold float32".into()))?;
     if let Some(&f) = facets.values().iter().find(|&&f| f as usize >= key.facets) {
-        return Err(bad(format!("background facet {f} is beyond the scene's {} facets", key.facets)));
+        return Err(bad(format!(
+            "background facet {f} is beyond the scene's {} facets",
+            key.facets
+        )));
     }
     let entries = facets
         .values()
@@ -974,7 +1032,11 @@ fn read_rays(
             .as_fixed_size_list_opt()
             .ok_or_else(|| bad(format!("column `{name}` is not a fixed-size list")))?;
         let steps = l.value_length() as usize;
-        let start = if nf > 0 { l.value_offset(0) as usize } else { 0 };
+        let start = if nf > 0 {
+            l.value_offset(0) as usize
+        } else {
+            0
+        };
         let v = l
             .values()
             .as_primitive_opt::<Float32Type>()
@@ -984,7 +1046,9 @@ fn read_rays(
     let (steps, sun_fraction) = history("sun_fraction")?;
     let (steps2, cos_incidence) = history("cos_incidence")?;
     if steps != steps2 {
-        return Err(bad("`sun_fraction` and `cos_incidence` differ in steps".into()));
+        return Err(bad(
+            "`sun_fraction` and `cos_incidence` differ in steps".into()
+        ));
     }
     Ok(FacetRays {
         range,
