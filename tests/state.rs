@@ -318,10 +318,10 @@ fn a_state_from_another_scene_or_other_times_is_refused() {
 #[test]
 fn a_killed_shard_leaves_no_file_under_its_final_name() {
     let dir = tempfile::tempdir().unwrap();
-    // Fine ground and three days of history: a pass-1 file of some MB.
+    // Fine ground and two days of history: a pass-1 file of some MB.
     let scene = write_scene(dir.path(), 2.0, "asphalt");
     let st = dir.path().join("st");
-    let times = "2025-06-19T14:00:00-04:00,2025-06-21T14:00:00-04:00";
+    let times = "2025-06-20T14:00:00-04:00,2025-06-21T14:00:00-04:00";
     let args = [
         "thermal-scene",
         s(&scene),
