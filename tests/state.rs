@@ -106,7 +106,7 @@ fn shard_ranges_are_whole_batches_covering_every_facet_once() {
         for k in 1..=n {
             let r = state::shard_range(k, n, facets, 512);
             assert_eq!(r.start, next, "{facets} facets, {k}/{n}");
-            assert!(r.start % 512 == 0 || r.start == facets);
+            assert!(r.start.is_multiple_of(512) || r.start == facets);
             next = r.end;
         }
         assert_eq!(next, facets);

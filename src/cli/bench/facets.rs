@@ -68,13 +68,27 @@ fn write_scene(dir: &Path, facets: usize, seed: u64) -> anyhow::Result<std::path
     let mut base = 1usize;
     for (i, inst) in geo.instances.iter().enumerate() {
         let m = &geo.meshes[inst.mesh];
-        writeln!(w, "o {}", if i == 0 { "terrain".to_string() } else { format!("building{i}") })?;
+        writeln!(
+            w,
+            "o {}",
+            if i == 0 {
+                "terrain".to_string()
+            } else {
+                format!("building{i}")
+            }
+        )?;
         for p in &m.positions {
             let q = inst.world_from_object.transform_point3(*p);
             writeln!(w, "v {} {} {}", q.x, q.y, q.z)?;
         }
         for t in &m.indices {
-            writeln!(w, "f {} {} {}", t[0] as usize + base, t[1] as usize + base, t[2] as usize + base)?;
+            writeln!(
+                w,
+                "f {} {} {}",
+                t[0] as usize + base,
+                t[1] as usize + base,
+                t[2] as usize + base
+            )?;
         }
         base += m.positions.len();
     }
@@ -134,7 +148,11 @@ pub(super) fn run(a: FacetsArgs) -> anyhow::Result<()> {
         outln!("{}", serde_json::to_string(&r)?);
         return Ok(());
     }
-    outln!("generated scene: {} facets, {} threads", r.facets, r.threads);
+    outln!(
+        "generated scene: {} facets, {} threads",
+        r.facets,
+        r.threads
+    );
     outln!("  load (parse, validate)   {:8.3} s", r.load_s);
     outln!("  BVH builds               {:8.3} s", r.bvh_build_s);
     outln!("  rays (sun, sky, ground)  {:8.3} s", r.rays_s);
