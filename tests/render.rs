@@ -861,6 +861,33 @@ fn session_run_reports_the_rays_the_thermal_passes_and_every_row_to_its_observer
 }
 
 #[test]
+fn opening_a_session_reports_loading_and_the_bvh_to_its_observer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 8, 6, 1);
+    let calls = Calls::default();
+    Session::open_observed(&scene, Backend::Embree, &calls).unwrap();
+    let log = calls.log.lock().unwrap().clone();
+    assert_eq!(
+        log,
+        [
+            "start Load 0",
+            "finish after 0",
+            "start Bvh 0",
+            "finish after 0"
+        ]
+    );
+    // A scene that cannot load still finishes its stage.
+    let calls = Calls::default();
+    assert!(
+        Session::open_observed(&dir.path().join("none.json"), Backend::Embree, &calls).is_err()
+    );
+    assert_eq!(
+        calls.log.lock().unwrap().clone(),
+        ["start Load 0", "finish after 0"]
+    );
+}
+
+#[test]
 fn slurm_script_submits_a_tile_array_and_a_dependent_merge() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), 8, 6, 1);

@@ -425,3 +425,25 @@ fn slurm_chain_run_locally_equals_the_render_in_one_piece() {
     assert!(out.join("state/rays-2-of-3.arrow").exists());
     same_images(&one, &out);
 }
+
+#[test]
+fn cli_bench_facets_reports_the_stages_facets_per_second_and_peak_memory() {
+    let out = irsig(&["bench", "facets", "--facets", "3000", "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let num = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
+    let facets = num("facets");
+    assert!((facets - 3000.0).abs() <= 60.0, "{r}");
+    for k in ["load_s", "bvh_build_s", "rays_s", "thermal_s"] {
+        assert!(num(k) >= 0.0, "{k}: {r}");
+    }
+    assert!(num("thermal_s") > 0.0 && num("rays_s") > 0.0, "{r}");
+    let per_s = facets / (num("rays_s") + num("thermal_s"));
+    assert!((num("facets_per_s") - per_s).abs() <= 1e-6 * per_s, "{r}");
+    // Linux reports the peak resident set; it is the process's whole.
+    let peak = num("peak_rss_bytes");
+    assert!(peak > 1e6, "{r}");
+    assert!(
+        (num("peak_bytes_per_facet") - peak / facets).abs() <= 1e-6 * peak,
+        "{r}"
+    );
+}

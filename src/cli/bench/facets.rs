@@ -59,8 +59,8 @@ fn peak_rss_bytes() -> Option<u64> {
 }
 
 /// Write the generated scene into `dir`: `scene.obj` (world coordinates,
-/// one object per instance), `weather.csv` (the bundled town's) and
-/// `scene.json`.
+/// one object per instance), `weather.csv` (the bundled town's),
+/// `materials.json` (the built-in library) and `scene.json`.
 fn write_scene(dir: &Path, facets: usize, seed: u64) -> anyhow::Result<std::path::PathBuf> {
     let geo = procedural::generate(&TerrainParams::with_triangles(facets, seed));
     let obj = dir.join("scene.obj");
@@ -98,11 +98,16 @@ fn write_scene(dir: &Path, facets: usize, seed: u64) -> anyhow::Result<std::path
     let mut buf = Vec::new();
     irsig::weather::write_csv(&history, &comments, &mut buf)?;
     std::fs::write(dir.join("weather.csv"), buf)?;
+    std::fs::write(
+        dir.join("materials.json"),
+        irsig::material::stock::STOCK_JSON,
+    )?;
     let scene = serde_json::json!({
         "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160.0,
                  "utc_offset_hours": -4.0},
         "time": "2025-06-21T14:00:00-04:00",
         "weather": {"file": "weather.csv"},
+        "materials": ["materials.json"],
         "objects": [{"name": "generated", "material": "asphalt", "shapes": [{"obj": "scene.obj"}]}],
         "sensors": [{"type": "frame", "name": "cam", "width": 8, "height": 6, "fov_deg": 60.0,
                      "position": [0.0, -600.0, 400.0], "look_at": [0.0, 0.0, 0.0],
