@@ -1,8 +1,10 @@
 //! Progress of long library operations, reported to an observer.
 //!
-//! Owns the [`Progress`] trait and its [`Stage`]s. A long operation (for
-//! now [`Session::run`](crate::render::session::Session::run): the
-//! per-facet rays and thermal solve, then the image rows) takes an observer
+//! Owns the [`Progress`] trait and its [`Stage`]s. A long operation
+//! ([`Session::open_observed`](crate::render::session::Session::open_observed):
+//! loading and the BVH; [`Session::run`](crate::render::session::Session::run):
+//! the per-facet rays, the thermal passes, then the image rows; the
+//! split per-facet stage of [`crate::render::state`]) takes an observer
 //! and tells it when a stage starts and how much of it is done; the caller
 //! decides what to do with that — the command line draws a bar, a test
 //! counts the calls, a binding forwards them. [`NoProgress`] ignores them.
@@ -13,8 +15,16 @@
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Stage {
-    /// The scene-wide thermal state: per-facet rays (solar history, sky
-    /// view) and the slab model over every facet. Counted in facets.
+    /// Loading the scene: geometry, materials, weather. No count (the
+    /// total is 0).
+    Load,
+    /// Building the ray-tracing acceleration structures. No count.
+    Bvh,
+    /// The per-facet rays: solar history then sky view, each counted in
+    /// facets (the total is twice the facets), then the ground test.
+    Exposure,
+    /// The scene-wide thermal passes (the slab model over every facet).
+    /// Counted in facets, advanced when the passes are done.
     Thermal,
     /// The images: primary rays, radiometry and sensor, row by row.
     /// Counted in image rows over all the images of the run.
@@ -25,7 +35,8 @@ impl Stage {
     /// What the stage counts, for messages ("facets", "rows").
     pub fn unit(&self) -> &'static str {
         match self {
-            Stage::Thermal => "facets",
+            Stage::Load | Stage::Bvh => "",
+            Stage::Exposure | Stage::Thermal => "facets",
             Stage::Rows => "rows",
         }
     }

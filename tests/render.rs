@@ -816,7 +816,7 @@ impl Progress for Calls {
 }
 
 #[test]
-fn session_run_reports_the_facets_and_every_row_to_its_observer() {
+fn session_run_reports_the_rays_the_thermal_passes_and_every_row_to_its_observer() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), 8, 6, 1);
     let mut session = Session::open(&scene, Backend::Embree).unwrap();
@@ -835,9 +835,11 @@ fn session_run_reports_the_facets_and_every_row_to_its_observer() {
     assert_eq!(
         log,
         [
-            format!("start Thermal {facets}"),
+            format!("start Exposure {}", 2 * facets),
             "item solar history and sky view".to_string(),
             "item ground test".to_string(),
+            format!("finish after {}", 2 * facets),
+            format!("start Thermal {facets}"),
             "item thermal solve".to_string(),
             format!("finish after {facets}"),
             "start Rows 12".to_string(),
@@ -855,6 +857,33 @@ fn session_run_reports_the_facets_and_every_row_to_its_observer() {
     assert!(
         matches!(&e, irsig::Error::Invalid { field, .. } if field == "sensor"),
         "{e}"
+    );
+}
+
+#[test]
+fn opening_a_session_reports_loading_and_the_bvh_to_its_observer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), 8, 6, 1);
+    let calls = Calls::default();
+    Session::open_observed(&scene, Backend::Embree, &calls).unwrap();
+    let log = calls.log.lock().unwrap().clone();
+    assert_eq!(
+        log,
+        [
+            "start Load 0",
+            "finish after 0",
+            "start Bvh 0",
+            "finish after 0"
+        ]
+    );
+    // A scene that cannot load still finishes its stage.
+    let calls = Calls::default();
+    assert!(
+        Session::open_observed(&dir.path().join("none.json"), Backend::Embree, &calls).is_err()
+    );
+    assert_eq!(
+        calls.log.lock().unwrap().clone(),
+        ["start Load 0", "finish after 0"]
     );
 }
 
@@ -878,7 +907,15 @@ fn slurm_script_submits_a_tile_array_and_a_dependent_merge() {
     let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap());
     let out = Command::new("bash")
         .arg(repo_path("scripts/slurm-render.sh"))
-        .args([s(&scene), s(&dir.path().join("out")), "4", "--seed", "3"])
+        .args([
+            s(&scene),
+            s(&dir.path().join("out")),
+            "4",
+            "--seed",
+            "3",
+            "--times",
+            "2025-06-21T15:00:00-04:00",
+        ])
         .env("PATH", path)
         .env("IRSIG", irsig_bin())
         .output()
@@ -890,20 +927,58 @@ fn slurm_script_submits_a_tile_array_and_a_dependent_merge() {
     );
     let calls = std::fs::read_to_string(&log).unwrap();
     let lines: Vec<&str> = calls.lines().collect();
-    assert_eq!(lines.len(), 2, "{calls}");
+    assert_eq!(lines.len(), 4, "{calls}");
+    // Pass 1: four shards of the rays; the render-only --seed stays out,
+    // --times goes to every step.
     assert!(lines[0].contains("--array=1-4"), "{}", lines[0]);
     assert!(
-        lines[0].contains("--tile ${SLURM_ARRAY_TASK_ID}/4"),
+        lines[0].contains("thermal-scene")
+            && lines[0].contains("--pass 1 --shard ${SLURM_ARRAY_TASK_ID}/4"),
         "{}",
         lines[0]
     );
-    assert!(lines[0].contains("--seed 3"), "{}", lines[0]);
+    assert!(!lines[0].contains("--dependency"), "{}", lines[0]);
+    assert!(!lines[0].contains("--seed"), "{}", lines[0]);
+    assert!(
+        lines[0].contains("--times 2025-06-21T15:00:00-04:00"),
+        "{}",
+        lines[0]
+    );
+    // Pass 2 after every pass-1 task.
+    assert!(lines[1].contains("--array=1-1"), "{}", lines[1]);
     assert!(
         lines[1].contains("--dependency=afterok:1001"),
         "{}",
         lines[1]
     );
-    assert!(lines[1].contains(" merge "), "{}", lines[1]);
+    assert!(
+        lines[1].contains("--pass 2 --shard ${SLURM_ARRAY_TASK_ID}/1"),
+        "{}",
+        lines[1]
+    );
+    // The tiles from the state, after pass 2.
+    assert!(lines[2].contains("--array=1-4"), "{}", lines[2]);
+    assert!(
+        lines[2].contains("--dependency=afterok:1002"),
+        "{}",
+        lines[2]
+    );
+    assert!(
+        lines[2].contains(" render ")
+            && lines[2].contains("--state ")
+            && lines[2].contains("--tile ${SLURM_ARRAY_TASK_ID}/4"),
+        "{}",
+        lines[2]
+    );
+    assert!(lines[2].contains("--seed 3"), "{}", lines[2]);
+    // The merge after every tile.
+    assert!(!lines[3].contains("--array"), "{}", lines[3]);
+    assert!(
+        lines[3].contains("--dependency=afterok:1003"),
+        "{}",
+        lines[3]
+    );
+    assert!(lines[3].contains(" merge "), "{}", lines[3]);
 }
 
 #[test]

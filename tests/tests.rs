@@ -22,6 +22,7 @@ mod render;
 mod scene;
 mod scene_thermal;
 mod sensor;
+mod state;
 mod sun;
 mod thermal;
 mod weather;

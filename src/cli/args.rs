@@ -77,7 +77,12 @@ fn parse_step(s: &str) -> anyhow::Result<TimeDelta> {
 
 /// `--tile K/N` (1 ≤ K ≤ N).
 pub(crate) fn parse_tile(s: &str) -> anyhow::Result<(usize, usize)> {
-    let bad = || anyhow::anyhow!("--tile: `{s}`: expected K/N with 1 ≤ K ≤ N, e.g. 3/8");
+    parse_k_of_n("--tile", s)
+}
+
+/// `K/N` (1 ≤ K ≤ N) given with `flag` (`--tile`, `--shard`).
+pub(crate) fn parse_k_of_n(flag: &str, s: &str) -> anyhow::Result<(usize, usize)> {
+    let bad = || anyhow::anyhow!("{flag}: `{s}`: expected K/N with 1 ≤ K ≤ N, e.g. 3/8");
     let (k, n) = s.split_once('/').ok_or_else(bad)?;
     let k: usize = k.trim().parse().map_err(|_| bad())?;
     let n: usize = n.trim().parse().map_err(|_| bad())?;

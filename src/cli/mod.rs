@@ -37,6 +37,7 @@ mod scene;
 mod sensitivity;
 mod sun;
 mod thermal;
+mod thermal_scene;
 mod weather;
 
 /// irsig — physics-based thermal-infrared synthetic image generator.
@@ -72,6 +73,9 @@ enum Command {
     Sun(sun::Args),
     /// Solve the thermal model for one free-standing facet.
     Thermal(thermal::Args),
+    /// Every facet's state (rays and thermal passes) into a state folder
+    /// for `render --state`, in one process or split across many.
+    ThermalScene(thermal_scene::Args),
     /// Planck band radiance and its inverse (brightness temperature).
     Radiance(radiance::Args),
     /// Atmospheric transmittance and path (or sky) radiance of one path.
@@ -107,6 +111,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Weather(a) => weather::run(a),
         Command::Sun(a) => sun::run(a),
         Command::Thermal(a) => thermal::run(a),
+        Command::ThermalScene(a) => thermal_scene::run(a),
         Command::Radiance(a) => radiance::run(a),
         Command::Atmosphere(a) => atmosphere::run(a),
         Command::Compare(a) => compare::run(a),

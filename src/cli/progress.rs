@@ -41,9 +41,10 @@ impl Progress for Bar {
         }
         let bar = ProgressBar::new(total);
         let template = match stage {
-            // Its sub-stages come as items (rays, ground test, thermal
-            // solve), the count in one step at the end: a turning spinner,
-            // the sub-stage and the clock.
+            // No count: a turning spinner, what runs and the clock.
+            Stage::Load | Stage::Bvh => "{spinner} {msg:28} ({elapsed})".to_string(),
+            // The count comes in one step at the end: a spinner, the item
+            // and the clock.
             Stage::Thermal => "{spinner} {len} facets: {msg:28} ({elapsed})".to_string(),
             _ => format!(
                 "{{spinner}} {{msg:20}} [{{bar:40}}] {{pos}}/{{len}} {} ({{eta}})",
@@ -55,8 +56,14 @@ impl Progress for Bar {
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> "),
         );
-        if stage == Stage::Thermal {
-            bar.set_message("thermal");
+        let message = match stage {
+            Stage::Load => Some("loading the scene"),
+            Stage::Bvh => Some("building the BVH"),
+            Stage::Thermal => Some("thermal passes"),
+            _ => None,
+        };
+        if let Some(m) = message {
+            bar.set_message(m);
             bar.enable_steady_tick(Duration::from_millis(100));
         }
         let old = match self.bar.lock() {

@@ -52,6 +52,11 @@ pub struct Args {
     /// the same as the scene's `render.geotiff: true`.
     #[arg(long)]
     pub geotiff: bool,
+    /// Read every facet's state from this folder (made by `irsig
+    /// thermal-scene --state DIR` for this scene, these times and
+    /// settings) instead of solving it; the images are the same bit for bit.
+    #[arg(long, value_name = "DIR")]
+    pub state: Option<PathBuf>,
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -75,13 +80,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let t0 = std::time::Instant::now();
+    let bar = (!args.quiet).then(Bar::on_terminal);
+    let progress: &dyn irsig::Progress = match &bar {
+        Some(b) => b.as_ref(),
+        None => &irsig::progress::NoProgress,
+    };
     anyhow::ensure!(
         args.search.is_empty() || irsig::scene::dirsig::is_dirsig_scene(&args.scene),
         "--search: {} is not a DIRSIG scene or simulation (.scene, .jsim, .sim)",
         args.scene.display()
     );
     let scene = if args.search.is_empty() {
-        irsig::scene::Scene::load(&args.scene)
+        Session::load_scene_observed(&args.scene, progress)
     } else {
         let opts = irsig::scene::dirsig::ImportOptions {
             search_dirs: args.search.clone(),
@@ -106,7 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Err(anyhow::Error::new(e))
             .with_context(|| format!("loading {}", args.scene.display()));
     }
-    let mut session = Session::from_scene(scene, args.backend, t0)
+    let mut session = Session::from_scene_observed(scene, args.backend, t0, progress)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     for w in irsig::render::checks::view_warnings(
         &session.scene,
@@ -129,12 +139,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         times,
         tile,
         seed: args.seed,
-        progress: (!args.quiet).then(|| Bar::on_terminal() as _),
+        progress: bar.map(|b| b as _),
         sensors: args.sensors.clone(),
+        state: args.state.clone(),
     };
     let stems = session
         .run(&args.out, &options)
-        .for_flags(&[("sensor", "--sensor")])
+        .for_flags(&[("sensor", "--sensor"), ("state", "--state")])
         .with_context(|| format!("rendering {}", args.scene.display()))?;
     if !args.quiet {
         let t = &session.timings;

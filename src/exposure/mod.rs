@@ -63,8 +63,12 @@ use glam::Vec3;
 pub use crate::geometry::BackgroundEntry;
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_step, history_times, image_window, sun_directions};
-pub use sky::{RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view};
-pub use solar::{RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_rays};
+pub use sky::{
+    RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view, sky_view_of,
+};
+pub use solar::{
+    RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_history_of, solar_rays,
+};
 
 use crate::geometry::SceneGeometry;
 use crate::trace::Tracer;
@@ -186,39 +190,81 @@ pub fn compute_exposure<T: Tracer + ?Sized>(
         params.samples_per_edge,
         params.offset_rel,
     );
-    let t1 = Instant::now();
-    let (solar, solar_rays) = solar_history(
-        tracer,
-        &facets,
-        sun_dirs,
-        params.batch_facets,
-        params.solar_stride,
-    );
-    let t2 = Instant::now();
-    let (sky, sky_rays) = sky_view(
-        tracer,
-        &facets,
-        params.sky,
-        params.seed,
-        params.batch_facets,
-    );
-    let t3 = Instant::now();
+    let setup = t0.elapsed();
+    let (solar, sky, mut stats) = exposure_of(tracer, &facets, sun_dirs, params, 0..n, &|_| {})?;
+    stats.setup = setup;
     Ok(Exposure {
         facets,
         solar,
         sky,
-        stats: ExposureStats {
-            facets: n,
-            solar_rays,
-            sky_rays,
-            setup: t1 - t0,
-            solar: t2 - t1,
-            sky: t3 - t2,
-        },
+        stats,
     })
 }
 
-fn validate_params(p: &ExposureParams) -> Result<()> {
+/// The solar history and sky view of the facets `range` of `facets` (one
+/// shard of a scene), as [`compute_exposure`] traces them: a range that
+/// starts on a multiple of [`ExposureParams::batch_facets`] gets the whole
+/// scene's answers bit for bit. `done(n)` is called as each batch of `n`
+/// facets is traced (solar history, then sky view: twice the range's
+/// facets in all). The stats' `setup` is zero.
+///
+/// # Errors
+/// As [`compute_exposure`] for the sun directions and parameters.
+pub fn exposure_of<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    sun_dirs: &[Vec3],
+    params: &ExposureParams,
+    range: std::ops::Range<usize>,
+    done: &(dyn Fn(u64) + Sync),
+) -> Result<(SolarHistory, SkyView, ExposureStats)> {
+    if let Some((i, d)) = sun_dirs
+        .iter()
+        .enumerate()
+        .find(|(_, d)| !d.is_finite() || (d.length() - 1.0).abs() > 1e-3)
+    {
+        return Err(Error::invalid(
+            format!("sun_dirs[{i}]"),
+            format!("expected a finite unit vector, got {d}"),
+        ));
+    }
+    validate_params(params)?;
+    let t1 = Instant::now();
+    let (solar, solar_rays) = solar_history_of(
+        tracer,
+        facets,
+        sun_dirs,
+        params.batch_facets,
+        params.solar_stride,
+        range.clone(),
+        done,
+    );
+    let t2 = Instant::now();
+    let (sky, sky_rays) = sky_view_of(
+        tracer,
+        facets,
+        params.sky,
+        params.seed,
+        params.batch_facets,
+        range.clone(),
+        done,
+    );
+    let t3 = Instant::now();
+    Ok((
+        solar,
+        sky,
+        ExposureStats {
+            facets: range.len(),
+            solar_rays,
+            sky_rays,
+            setup: Duration::ZERO,
+            solar: t2 - t1,
+            sky: t3 - t2,
+        },
+    ))
+}
+
+pub(crate) fn validate_params(p: &ExposureParams) -> Result<()> {
     if !(1..=16).contains(&p.samples_per_edge) {
         return Err(Error::invalid(
             "samples_per_edge",

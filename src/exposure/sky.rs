@@ -205,6 +205,22 @@ impl SkyView {
             None => self.shape_factor[facet],
         }
     }
+    /// Appends the facets of `other` after this view's (the views of two
+    /// consecutive facet ranges become the view of both).
+    pub fn append(&mut self, other: SkyView) {
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        let base = self.entries.len() as u32;
+        self.shape_factor.extend(other.shape_factor);
+        self.back_shape_factor.extend(other.back_shape_factor);
+        self.std_error.extend(other.std_error);
+        self.ground_weight.extend(other.ground_weight);
+        self.offsets
+            .extend(other.offsets.iter().skip(1).map(|o| o + base));
+        self.entries.extend(other.entries);
+    }
+
     /// The facets seen by `facet`, with their view factors.
     pub fn background(&self, facet: usize) -> &[BackgroundEntry] {
         &self.entries[self.offsets[facet] as usize..self.offsets[facet + 1] as usize]
@@ -321,14 +337,40 @@ pub fn sky_view<T: Tracer + ?Sized>(
     seed: u64,
     batch_facets: usize,
 ) -> (SkyView, u64) {
-    let n = facets.len();
+    sky_view_of(
+        tracer,
+        facets,
+        sampling,
+        seed,
+        batch_facets,
+        0..facets.len(),
+        &|_| {},
+    )
+}
+
+/// [`sky_view`] of the facets `range` only (the view holds those facets,
+/// in order; background entries still name facets by their global id),
+/// calling `done(n)` as each batch of `n` facets is traced. Each facet's
+/// pattern depends only on its id and `seed`, and batches start at
+/// `range.start`: a range starting on a multiple of `batch_facets` gets
+/// the whole scene's answers bit for bit.
+pub fn sky_view_of<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    sampling: SkySampling,
+    seed: u64,
+    batch_facets: usize,
+    range: std::ops::Range<usize>,
+    done: &(dyn Fn(u64) + Sync),
+) -> (SkyView, u64) {
+    let (start, n) = (range.start, range.end.min(facets.len()));
     let batch = batch_facets.max(1);
     let base = sampling.base(seed);
     let face_rays = sampling.rays_per_face();
-    let chunks: Vec<(SkyView, u64)> = (0..n.div_ceil(batch))
+    let chunks: Vec<(SkyView, u64)> = (0..n.saturating_sub(start).div_ceil(batch))
         .into_par_iter()
         .map(|c| {
-            let (f0, f1) = (c * batch, ((c + 1) * batch).min(n));
+            let (f0, f1) = (start + c * batch, (start + (c + 1) * batch).min(n));
             let mut rays = Vec::new();
             let mut weights = Vec::new();
             // Range of rays of each facet.
@@ -392,6 +434,7 @@ pub fn sky_view<T: Tracer + ?Sized>(
                 out.std_error.push(var.sqrt() as f32);
                 out.offsets.push(out.entries.len() as u32);
             }
+            done((f1 - f0) as u64);
             (out, rays.len() as u64)
         })
         .collect();

@@ -39,6 +39,14 @@ impl SolarHistory {
     pub fn facet_count(&self) -> usize {
         self.sun_fraction.len().checked_div(self.steps).unwrap_or(0)
     }
+    /// Appends the facets of `other` (the same steps) after this
+    /// history's.
+    pub fn append(&mut self, other: SolarHistory) {
+        debug_assert!(self.steps == other.steps || self.sun_fraction.is_empty());
+        self.steps = other.steps;
+        self.sun_fraction.extend(other.sun_fraction);
+        self.cos_incidence.extend(other.cos_incidence);
+    }
     /// Sunlit fraction of `facet` at every step.
     pub fn sun_fraction(&self, facet: usize) -> &[f32] {
         &self.sun_fraction[facet * self.steps..(facet + 1) * self.steps]
@@ -130,21 +138,49 @@ pub fn solar_history<T: Tracer + ?Sized>(
     batch_facets: usize,
     stride: u32,
 ) -> (SolarHistory, u64) {
+    solar_history_of(
+        tracer,
+        facets,
+        sun_dirs,
+        batch_facets,
+        stride,
+        0..facets.len(),
+        &|_| {},
+    )
+}
+
+/// [`solar_history`] of the facets `range` only (the history holds those
+/// facets, in order), calling `done(n)` as each batch of `n` facets is
+/// traced. Batches start at `range.start`: a range that starts on a
+/// multiple of `batch_facets` traces the very batches of the whole scene's
+/// run, so its facets get the same answers bit for bit.
+pub fn solar_history_of<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    sun_dirs: &[Vec3],
+    batch_facets: usize,
+    stride: u32,
+    range: Range<usize>,
+    done: &(dyn Fn(u64) + Sync),
+) -> (SolarHistory, u64) {
     let steps = sun_dirs.len();
-    let n = facets.len();
+    let (start, n) = (range.start, range.end.min(facets.len()));
     let batch = batch_facets.max(1);
     let stride = stride.max(1) as usize;
-    let chunks: Vec<(Vec<f32>, Vec<f32>, u64)> = (0..n.div_ceil(batch))
+    let chunks: Vec<(Vec<f32>, Vec<f32>, u64)> = (0..n.saturating_sub(start).div_ceil(batch))
         .into_par_iter()
         .map(|c| {
-            let (f0, f1) = (c * batch, ((c + 1) * batch).min(n));
-            if stride == 1 {
+            let (f0, f1) = (start + c * batch, (start + (c + 1) * batch).min(n));
+            let r = if stride == 1 {
                 exhaustive_batch(tracer, facets, sun_dirs, f0..f1)
             } else {
                 refined_batch(tracer, facets, sun_dirs, f0..f1, stride)
-            }
+            };
+            done((f1 - f0) as u64);
+            r
         })
         .collect();
+    let n = n.saturating_sub(start);
     let mut out = SolarHistory {
         steps,
         sun_fraction: Vec::with_capacity(n * steps),

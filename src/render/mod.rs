@@ -33,6 +33,7 @@ pub mod scene_thermal;
 pub mod sections;
 pub mod session;
 pub mod shade;
+pub mod state;
 pub mod tile;
 
 use std::path::{Path, PathBuf};

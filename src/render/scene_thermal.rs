@@ -16,17 +16,18 @@
 //!   thermal solve as plain arrays ([`SceneInputs`], `From<&Exposure>`).
 //!   It knows nothing of sensors, shading or images.
 
+use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use chrono::{DateTime, FixedOffset, TimeDelta};
 use rayon::prelude::*;
 
 use crate::exposure::{
-    Exposure, ExposureParams, FacetSamples, HistoryWindow, compute_exposure, history_step,
-    history_times, image_window, sun_directions,
+    Exposure, ExposureParams, ExposureStats, FacetSamples, HistoryWindow, SkyView, SolarHistory,
+    exposure_of, history_step, history_times, image_window, sun_directions,
 };
 use crate::geometry::SceneGeometry;
-use crate::progress::{NoProgress, Progress};
+use crate::progress::{NoProgress, Progress, Stage};
 use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
@@ -135,8 +136,20 @@ impl FacetThermalSetup {
         tracer: &T,
         facets: &FacetSamples,
     ) -> Vec<bool> {
-        let n = facets.len();
-        let candidate: Vec<usize> = (0..n)
+        self.ground_facets_of(tracer, facets, 0..facets.len())
+    }
+
+    /// [`FacetThermalSetup::ground_facets`] of the facets `range` only: one
+    /// flag per facet of the range. Each facet's test is one ray of its
+    /// own, so a range's flags are the whole scene's.
+    pub fn ground_facets_of<T: Tracer + ?Sized>(
+        &self,
+        tracer: &T,
+        facets: &FacetSamples,
+        range: Range<usize>,
+    ) -> Vec<bool> {
+        let (start, n) = (range.start, range.end.min(facets.len()));
+        let candidate: Vec<usize> = (start..n)
             .filter(|&f| match self.kinds.get(f) {
                 Some(FacetThermal::Solve(pi)) => {
                     self.props[*pi as usize].back == BackBoundary::Insulated
@@ -159,9 +172,9 @@ impl FacetThermalSetup {
         rays.par_chunks(4096)
             .zip(hit.par_chunks_mut(4096))
             .for_each(|(r, o)| tracer.occluded(r, Coherence::Coherent, o));
-        let mut ground = vec![false; n];
+        let mut ground = vec![false; n.saturating_sub(start)];
         for (&f, h) in candidate.iter().zip(hit) {
-            ground[f] = !h;
+            ground[f - start] = !h;
         }
         ground
     }
@@ -383,28 +396,205 @@ pub fn solve_scene_temperatures_observed<'a>(
     let tracers = tracers.into();
     let t0 = Instant::now();
     let history = History::new(weather, site, image_times, &params.window)?;
+    let facets = facet_samples(geometry, setup, &params.exposure)?;
     let t1 = Instant::now();
-    progress.item("solar history and sky view");
-    let exposure = trace_exposure(
-        tracers.exposure,
-        geometry,
+    let n = facets.len();
+    let rays = trace_range(tracers, &facets, setup, &history, params, 0..n, progress)?;
+    let t2 = Instant::now();
+    let mut out = solve_traced(
+        facets,
         setup,
+        history,
+        image_times,
+        params,
+        vec![rays],
+        progress,
+    )?;
+    out.timings.setup = t1 - t0;
+    out.timings.rays = t2 - t1;
+    Ok(out)
+}
+
+/// The ray-traced inputs of the facets `range` of a scene: what one shard
+/// of the split per-facet stage traces (rays and ground test) before the
+/// thermal passes, which need every facet's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FacetRays {
+    /// The facets, in global facet order.
+    pub range: Range<usize>,
+    /// Their solar history (every record of the history window).
+    pub solar: SolarHistory,
+    /// Their sky view (with the setup's shape-factor overrides); the
+    /// background entries name facets by global id.
+    pub sky: SkyView,
+    /// Per facet of the range: it lies on the ground
+    /// ([`FacetThermalSetup::ground_facets`]; all false when
+    /// [`SceneThermalParams::ground`] is off).
+    pub ground: Vec<bool>,
+    /// Ray counts and times.
+    pub stats: ExposureStats,
+}
+
+/// The facet frames and sample points of the rays, checked against the
+/// setup.
+fn facet_samples(
+    geometry: &SceneGeometry,
+    setup: &FacetThermalSetup,
+    params: &ExposureParams,
+) -> Result<FacetSamples> {
+    let n = geometry.facet_count();
+    if !setup.double_sided.is_empty() && setup.double_sided.len() != n {
+        return Err(Error::invalid(
+            "double_sided",
+            format!(
+                "expected one flag per facet ({n}) or none, got {}",
+                setup.double_sided.len()
+            ),
+        ));
+    }
+    if !setup.shape_factor_override.is_empty() && setup.shape_factor_override.len() != n {
+        return Err(Error::invalid(
+            "shape_factor_override",
+            format!(
+                "expected one entry per facet ({n}) or none, got {}",
+                setup.shape_factor_override.len()
+            ),
+        ));
+    }
+    crate::exposure::validate_params(params)?;
+    Ok(FacetSamples::new(
+        geometry,
+        &setup.double_sided,
+        params.samples_per_edge,
+        params.offset_rel,
+    ))
+}
+
+/// Stages 2 and 3 for the facets `range`: their rays (solar history and
+/// sky view, with the setup's shape-factor overrides) and their ground
+/// test. Reports the items "solar history and sky view" (advancing by
+/// each batch of facets, twice the range in all) and "ground test".
+fn trace_range(
+    tracers: FacetTracers<'_>,
+    facets: &FacetSamples,
+    setup: &FacetThermalSetup,
+    history: &History,
+    params: &SceneThermalParams,
+    range: Range<usize>,
+    progress: &dyn Progress,
+) -> Result<FacetRays> {
+    progress.start(Stage::Exposure, 2 * range.len() as u64);
+    progress.item("solar history and sky view");
+    let (solar, mut sky, stats) = exposure_of(
+        tracers.exposure,
+        facets,
         &history.sun,
         &params.exposure,
+        range.clone(),
+        &|n| progress.advance(n),
     )?;
-    let (setup, ground_facets) = if params.ground {
+    if !setup.shape_factor_override.is_empty() {
+        for (i, o) in setup.shape_factor_override[range.clone()]
+            .iter()
+            .enumerate()
+        {
+            if let Some(v) = *o {
+                sky.shape_factor[i] = v;
+            }
+        }
+    }
+    let ground = if params.ground {
         progress.item("ground test");
-        let ground = setup.ground_facets(tracers.exact, &exposure.facets);
+        setup.ground_facets_of(tracers.exact, facets, range.clone())
+    } else {
+        vec![false; range.len()]
+    };
+    progress.finish();
+    Ok(FacetRays {
+        range,
+        solar,
+        sky,
+        ground,
+        stats,
+    })
+}
+
+/// Stage 4 on the traced inputs of every facet (`parts`: consecutive
+/// ranges from facet 0 to the last), reporting the item "thermal solve".
+/// The timings' `setup` and `rays` are left zero.
+///
+/// # Errors
+/// Parts that do not cover the facets in order; as
+/// [`solve_facet_temperatures`].
+fn solve_traced(
+    facets: FacetSamples,
+    setup: &FacetThermalSetup,
+    history: History,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    parts: Vec<FacetRays>,
+    progress: &dyn Progress,
+) -> Result<SceneThermal> {
+    let n = facets.len();
+    let mut solar = SolarHistory {
+        steps: history.times.len(),
+        ..SolarHistory::default()
+    };
+    let mut sky = SkyView::default();
+    let mut ground = Vec::with_capacity(n);
+    let mut stats = ExposureStats::default();
+    let mut next = 0;
+    for p in parts {
+        if p.range.start != next
+            || p.ground.len() != p.range.len()
+            || p.sky.facet_count() != p.range.len()
+            || p.solar.steps != solar.steps
+            || p.solar.facet_count() != p.range.len()
+        {
+            return Err(Error::invalid(
+                "facet rays",
+                format!(
+                    "the part of facets {}..{} ({} steps) does not follow facet {next} \
+                     of a history of {} steps",
+                    p.range.start, p.range.end, p.solar.steps, solar.steps
+                ),
+            ));
+        }
+        next = p.range.end;
+        solar.append(p.solar);
+        sky.append(p.sky);
+        ground.extend(p.ground);
+        stats.solar_rays += p.stats.solar_rays;
+        stats.sky_rays += p.stats.sky_rays;
+        stats.solar += p.stats.solar;
+        stats.sky += p.stats.sky;
+    }
+    if next != n {
+        return Err(Error::invalid(
+            "facet rays",
+            format!("the parts cover facets 0..{next} of {n}"),
+        ));
+    }
+    stats.facets = n;
+    let exposure = Exposure {
+        facets,
+        solar,
+        sky,
+        stats,
+    };
+    let (setup, ground_facets) = if params.ground {
         let count = ground.iter().filter(|&&g| g).count();
         (setup.with_ground(&ground), count)
     } else {
         (setup.clone(), 0)
     };
     let t2 = Instant::now();
+    progress.start(Stage::Thermal, n as u64);
     progress.item("thermal solve");
     let temperatures = solve_windows(&exposure, &setup, &history, &params.thermal)?;
+    progress.advance(n as u64);
+    progress.finish();
     let t3 = Instant::now();
-    progress.advance(exposure.facets.len() as u64);
     Ok(SceneThermal {
         times: history.times,
         records: history.records,
@@ -414,8 +604,8 @@ pub fn solve_scene_temperatures_observed<'a>(
         setup,
         ground_facets,
         timings: SceneThermalTimings {
-            setup: t1 - t0,
-            rays: t2 - t1,
+            setup: Duration::ZERO,
+            rays: Duration::ZERO,
             thermal: t3 - t2,
         },
     })
@@ -583,39 +773,6 @@ fn add_passes(total: &mut Vec<PassStats>, passes: &[PassStats]) {
     }
 }
 
-/// Stage 2: the rays — solar history and sky view of every facet — with the
-/// setup's shape-factor overrides in place of the traced values.
-///
-/// # Errors
-/// As [`compute_exposure`]; an override list of the wrong length.
-fn trace_exposure(
-    tracer: &dyn Tracer,
-    geometry: &SceneGeometry,
-    setup: &FacetThermalSetup,
-    sun: &[glam::Vec3],
-    params: &ExposureParams,
-) -> Result<Exposure> {
-    let mut exposure = compute_exposure(tracer, geometry, &setup.double_sided, sun, params)?;
-    if !setup.shape_factor_override.is_empty() {
-        if setup.shape_factor_override.len() != exposure.facets.len() {
-            return Err(Error::invalid(
-                "shape_factor_override",
-                format!(
-                    "expected one entry per facet ({}) or none, got {}",
-                    exposure.facets.len(),
-                    setup.shape_factor_override.len()
-                ),
-            ));
-        }
-        for (f, o) in setup.shape_factor_override.iter().enumerate() {
-            if let Some(v) = *o {
-                exposure.sky.shape_factor[f] = v;
-            }
-        }
-    }
-    Ok(exposure)
-}
-
 /// [`solve_scene_temperatures`] for a loaded scene at its image time: the
 /// scene's geometry, parts, weather and site.
 ///
@@ -643,6 +800,90 @@ pub fn solve_scene_observed<'a>(
     params: &SceneThermalParams,
     progress: &dyn Progress,
 ) -> Result<SceneThermal> {
+    let (weather, setup, times) = scene_parts(scene, image_times)?;
+    solve_scene_temperatures_observed(
+        tracers,
+        &scene.geometry,
+        &setup,
+        weather,
+        &scene.site,
+        &times,
+        params,
+        progress,
+    )
+}
+
+/// The first half of [`solve_scene`] for the facets `range` only: their
+/// rays and ground test, as the whole scene's solve traces them when the
+/// range starts on a multiple of [`ExposureParams::batch_facets`]
+/// (`crate::render::state` splits a scene so). Reports as
+/// [`solve_scene_observed`] does, without the thermal solve.
+///
+/// # Errors
+/// As [`solve_scene`], for the history and the rays.
+pub fn trace_scene_facets<'a>(
+    tracers: impl Into<FacetTracers<'a>>,
+    scene: &Scene,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    range: Range<usize>,
+    progress: &dyn Progress,
+) -> Result<FacetRays> {
+    let (weather, setup, times) = scene_parts(scene, image_times)?;
+    let history = History::new(weather, &scene.site, &times, &params.window)?;
+    let facets = facet_samples(&scene.geometry, &setup, &params.exposure)?;
+    let n = facets.len();
+    if range.start > range.end || range.end > n {
+        return Err(Error::invalid(
+            "facet range",
+            format!(
+                "{}..{} is not within the scene's {n} facets",
+                range.start, range.end
+            ),
+        ));
+    }
+    trace_range(
+        tracers.into(),
+        &facets,
+        &setup,
+        &history,
+        params,
+        range,
+        progress,
+    )
+}
+
+/// The second half of [`solve_scene`]: the thermal passes on the rays of
+/// every facet, traced in parts ([`trace_scene_facets`]; consecutive
+/// ranges from facet 0 to the last). With the parts of one scene, times
+/// and parameters, the result is [`solve_scene`]'s bit for bit.
+///
+/// # Errors
+/// Parts that do not cover the facets in order or hold another history
+/// length; as [`solve_scene`].
+pub fn solve_scene_traced(
+    scene: &Scene,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    parts: Vec<FacetRays>,
+    progress: &dyn Progress,
+) -> Result<SceneThermal> {
+    let (weather, setup, times) = scene_parts(scene, image_times)?;
+    let history = History::new(weather, &scene.site, &times, &params.window)?;
+    let facets = facet_samples(&scene.geometry, &setup, &params.exposure)?;
+    solve_traced(facets, &setup, history, &times, params, parts, progress)
+}
+
+/// A scene's weather history, thermal setup and image times (the scene's
+/// time when `image_times` is empty).
+fn scene_parts<'s>(
+    scene: &'s Scene,
+    image_times: &[DateTime<FixedOffset>],
+) -> Result<(
+    &'s WeatherHistory,
+    FacetThermalSetup,
+    Vec<DateTime<FixedOffset>>,
+)> {
     let weather = scene.weather.as_ref().ok_or_else(|| {
         Error::parse(
             Location::file(&scene.path).with_field("weather"),
@@ -655,14 +896,5 @@ pub fn solve_scene_observed<'a>(
     } else {
         image_times.to_vec()
     };
-    solve_scene_temperatures_observed(
-        tracers,
-        &scene.geometry,
-        &setup,
-        &weather.history,
-        &scene.site,
-        &times,
-        params,
-        progress,
-    )
+    Ok((&weather.history, setup, times))
 }

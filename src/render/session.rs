@@ -27,6 +27,7 @@ use super::image::{Finished, RowBand, StageTimes, finish_at, render_rows};
 use super::path::PathTables;
 use super::scene_thermal::FacetTracers;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
+use super::state::{FacetStates, FacetTimeState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, write_outputs_geo};
 use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, Profile, SurfaceMet, Tape7Lut};
@@ -257,11 +258,15 @@ pub struct RunOptions {
     pub tile: Option<(usize, usize)>,
     /// Noise seed overriding the sensors' own.
     pub seed: Option<u64>,
-    /// Told how the run progresses ([`Stage::Thermal`], then
-    /// [`Stage::Rows`]); `None`: nobody is told.
+    /// Told how the run progresses ([`Stage::Exposure`],
+    /// [`Stage::Thermal`], then [`Stage::Rows`]); `None`: nobody is told.
     pub progress: Option<Arc<dyn Progress>>,
     /// Only these sensors (by name); empty: all.
     pub sensors: Vec<String>,
+    /// Read every facet's state from this state folder
+    /// ([`super::state::read_states`]) instead of solving it; the folder
+    /// must hold this scene's state at the run's times.
+    pub state: Option<PathBuf>,
 }
 
 impl std::fmt::Debug for RunOptions {
@@ -273,6 +278,7 @@ impl std::fmt::Debug for RunOptions {
             .field("seed", &self.seed)
             .field("progress", &self.progress.is_some())
             .field("sensors", &self.sensors)
+            .field("state", &self.state)
             .finish()
     }
 }
@@ -286,6 +292,7 @@ impl Default for RunOptions {
             seed: None,
             progress: None,
             sensors: Vec::new(),
+            state: None,
         }
     }
 }
@@ -406,6 +413,46 @@ impl Session {
     /// # Errors
     /// As [`Session::open`], for everything after reading the scene file.
     pub fn from_scene(scene: Scene, backend: Backend, t0: Instant) -> Result<Session> {
+        Self::from_scene_observed(scene, backend, t0, &NoProgress)
+    }
+
+    /// [`Session::open`], reporting [`Stage::Load`] and [`Stage::Bvh`] to
+    /// `progress`.
+    ///
+    /// # Errors
+    /// As [`Session::open`].
+    pub fn open_observed(
+        scene_path: &Path,
+        backend: Backend,
+        progress: &dyn Progress,
+    ) -> Result<Session> {
+        let t0 = Instant::now();
+        let scene = Self::load_scene_observed(scene_path, progress)?;
+        Self::from_scene_observed(scene, backend, t0, progress)
+    }
+
+    /// [`Scene::load`], reporting [`Stage::Load`] to `progress` (for a
+    /// caller that looks at the scene before [`Session::from_scene_observed`]).
+    ///
+    /// # Errors
+    /// As [`Scene::load`].
+    pub fn load_scene_observed(scene_path: &Path, progress: &dyn Progress) -> Result<Scene> {
+        progress.start(Stage::Load, 0);
+        let scene = Scene::load(scene_path);
+        progress.finish();
+        scene
+    }
+
+    /// [`Session::from_scene`], reporting [`Stage::Bvh`] to `progress`.
+    ///
+    /// # Errors
+    /// As [`Session::from_scene`].
+    pub fn from_scene_observed(
+        scene: Scene,
+        backend: Backend,
+        t0: Instant,
+        progress: &dyn Progress,
+    ) -> Result<Session> {
         let scene_path = scene.path.clone();
         let scene_path = scene_path.as_path();
         let file = Location::file(scene_path);
@@ -449,7 +496,10 @@ impl Session {
         h.write(env!("CARGO_PKG_VERSION").as_bytes());
         let load = t0.elapsed();
         let t1 = Instant::now();
-        let tracer = trace::build(&scene.geometry, backend)?;
+        progress.start(Stage::Bvh, 0);
+        let tracer = trace::build(&scene.geometry, backend);
+        progress.finish();
+        let tracer = tracer?;
         let bvh_build = t1.elapsed();
         Ok(Session {
             scene,
@@ -483,10 +533,9 @@ impl Session {
         self.thermal_observed(times, &NoProgress)
     }
 
-    /// [`Session::thermal`], telling `progress` which of its stages runs
-    /// (the rays, the ground test, the thermal passes) and advancing it by
-    /// the facet count when done; the caller starts and finishes the
-    /// [`Stage::Thermal`] stage.
+    /// [`Session::thermal`], reporting to `progress` the stages
+    /// [`Stage::Exposure`] (the rays, advanced per batch of facets, and
+    /// the ground test) and [`Stage::Thermal`] (the thermal passes).
     ///
     /// # Errors
     /// As [`Session::thermal`].
@@ -504,6 +553,43 @@ impl Session {
         let states = scene_thermal(self, tracers, times, progress)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += states.timings.thermal;
+        Ok(states)
+    }
+
+    /// Every facet's state at `times` (the scene's time when empty), solved
+    /// in one go as [`Session::thermal_observed`] does: what a state folder
+    /// holds ([`super::state`]).
+    ///
+    /// # Errors
+    /// As [`Session::thermal`].
+    pub fn facet_states(
+        &mut self,
+        times: &[DateTime<FixedOffset>],
+        progress: &dyn Progress,
+    ) -> Result<FacetStates> {
+        let times = if times.is_empty() {
+            vec![self.scene.time]
+        } else {
+            times.to_vec()
+        };
+        let own = self.exposure_tracer()?;
+        let t0 = Instant::now();
+        let tracers = FacetTracers {
+            exposure: own.as_deref().unwrap_or(self.tracer.as_ref()),
+            exact: self.tracer.as_ref(),
+        };
+        let params = solve_params(self);
+        let solved = super::scene_thermal::solve_scene_observed(
+            tracers,
+            &self.scene,
+            &times,
+            &params,
+            progress,
+        )?;
+        drop(own);
+        let states = self.facet_states_of(&solved, &times)?;
+        self.timings.thermal += t0.elapsed();
+        self.timings.thermal_solve += solved.timings.thermal;
         Ok(states)
     }
 
@@ -750,10 +836,16 @@ impl Session {
             return Ok(done);
         }
         let progress: &dyn Progress = options.progress.as_deref().unwrap_or(&NoProgress);
-        let facets = self.scene.geometry.facet_count() as u64;
-        progress.start(Stage::Thermal, facets);
-        let states = self.thermal_observed(&times, progress)?;
-        progress.finish();
+        let states = match &options.state {
+            Some(dir) => {
+                let t0 = Instant::now();
+                let read = super::state::read_states(self, dir, &times)?;
+                let states = self.conditions(&read)?;
+                self.timings.thermal += t0.elapsed();
+                states
+            }
+            None => self.thermal_observed(&times, progress)?,
+        };
         let total_rows: u64 = jobs
             .iter()
             .map(|(_, s, _, _)| match options.tile {
@@ -791,6 +883,14 @@ impl Session {
     }
 }
 
+/// The scene-wide solve's parameters under the render settings.
+pub(crate) fn solve_params(session: &Session) -> super::scene_thermal::SceneThermalParams {
+    let mut params = super::scene_thermal::SceneThermalParams::default();
+    params.exposure.samples_per_edge = session.config.facet_samples;
+    params.exposure.sky = session.config.sky_sampling;
+    params
+}
+
 /// The thermal state at each image time from the scene-wide solve
 /// ([`super::scene_thermal::solve_scene`]: per-facet solar history and sky view
 /// traced once, the two-pass slab model spun up over the history window
@@ -802,73 +902,129 @@ fn scene_thermal(
     times: &[DateTime<FixedOffset>],
     progress: &dyn Progress,
 ) -> Result<ThermalStates> {
-    use super::scene_thermal::{SceneThermalParams, solve_scene_observed};
-    let scene = &session.scene;
-    let mut params = SceneThermalParams::default();
-    params.exposure.samples_per_edge = session.config.facet_samples;
-    params.exposure.sky = session.config.sky_sampling;
-    let solved = solve_scene_observed(tracers, scene, times, &params, progress)?;
-    let n = scene.geometry.facet_count();
-    let shape = solved.shape_factor().to_vec();
-    let mut conditions = Vec::new();
-    let mut records = Vec::new();
-    for (ti, time) in times.iter().enumerate() {
-        let rec = session.weather.at(*time)?;
-        let t_air = rec.air_temperature_k;
-        let record = solved.temperatures.image_records[ti];
-        let temps = solved.surface_temperature_k(ti).to_vec();
-        let sun_fraction = solved.sun_fraction(ti);
-        let solar = &solved.exposure.solar;
-        let cos_sun: Vec<f32> = (0..n)
-            .map(|f| solar.cos_incidence(f)[record].max(0.0))
-            .collect();
-        let background_k: Vec<f32> = (0..n)
-            .map(|f| {
-                solved
-                    .exposure
-                    .sky
-                    .background_temperature(f, &temps, t_air as f32)
-            })
-            .collect();
-        let mut shape_factor = shape.clone();
+    use super::scene_thermal::solve_scene_observed;
+    let params = solve_params(session);
+    let solved = solve_scene_observed(tracers, &session.scene, times, &params, progress)?;
+    let states = session.facet_states_of(&solved, times)?;
+    let mut out = session.conditions(&states)?;
+    out.timings = solved.timings;
+    Ok(out)
+}
+
+impl Session {
+    /// What the render reads of a scene-wide solve at `times` (the solve's
+    /// image times): per facet, its temperature, sun fraction, incidence
+    /// and background at each time, and its shape factor with the parts'
+    /// overrides.
+    ///
+    /// # Errors
+    /// The weather not covering a time.
+    pub fn facet_states_of(
+        &self,
+        solved: &super::scene_thermal::SceneThermal,
+        times: &[DateTime<FixedOffset>],
+    ) -> Result<FacetStates> {
+        let scene = &self.scene;
+        let n = scene.geometry.facet_count();
+        let mut shape_factor = solved.shape_factor().to_vec();
         for (f, sf) in shape_factor.iter_mut().enumerate() {
-            if let Some(v) = scene.parts[session.optics.facet_material[f] as usize].shape_factor {
+            if let Some(v) = scene.parts[self.optics.facet_material[f] as usize].shape_factor {
                 *sf = v as f32;
             }
         }
-        let surface = SurfaceState {
-            temperature_k: temps,
+        let mut at = Vec::with_capacity(times.len());
+        for (ti, time) in times.iter().enumerate() {
+            let rec = self.weather.at(*time)?;
+            let t_air = rec.air_temperature_k;
+            let record = solved.temperatures.image_records[ti];
+            let temps = solved.surface_temperature_k(ti).to_vec();
+            let sun_fraction = solved.sun_fraction(ti);
+            let solar = &solved.exposure.solar;
+            let cos_sun: Vec<f32> = (0..n)
+                .map(|f| solar.cos_incidence(f)[record].max(0.0))
+                .collect();
+            let background_k: Vec<f32> = (0..n)
+                .map(|f| {
+                    solved
+                        .exposure
+                        .sky
+                        .background_temperature(f, &temps, t_air as f32)
+                })
+                .collect();
+            at.push(FacetTimeState {
+                temperature_k: temps,
+                sun_fraction,
+                cos_sun,
+                background_k,
+            });
+        }
+        Ok(FacetStates {
+            times: times.to_vec(),
+            first: 0,
             shape_factor,
-            sun_fraction,
-            cos_sun,
-            background_k,
-        };
-        let sp = session.weather.sun_position(*time)?;
-        let d = sp.direction_enu().as_vec3().normalize_or_zero();
-        let sun = (d.z > 0.0).then_some(SunInput {
-            direction: d,
-            direct_normal_w_m2: rec.direct_normal_w_m2,
-        });
-        let sky = match session.config.sky_temperature_k {
-            Some(t) => Sky::Blackbody { temperature_k: t },
-            None => Sky::Atmosphere(crate::atmosphere::SkyConditions {
-                air_temperature_k: t_air,
-                sky_longwave_w_m2: rec.sky_longwave_w_m2,
-            }),
-        };
-        conditions.push(Conditions {
-            surface,
-            sky,
-            sun,
-            ground_temperature_k: t_air,
-            atmosphere: session.atmosphere_at(&rec)?,
-        });
-        records.push(rec);
+            at,
+        })
     }
-    Ok(ThermalStates {
-        times: times.to_vec(),
-        conditions,
-        records,
-        timings: solved.timings,
-    })
+
+    /// The conditions of each time of `states` (every facet of the scene):
+    /// its per-facet state, and the sky, sun and atmosphere from the
+    /// weather at that time. The same whether `states` was solved or read
+    /// from a state folder.
+    ///
+    /// # Errors
+    /// States of another facet count; the weather not covering a time; the
+    /// atmosphere's errors.
+    pub fn conditions(&self, states: &FacetStates) -> Result<ThermalStates> {
+        let n = self.scene.geometry.facet_count();
+        if states.first != 0 || states.len() != n {
+            return Err(Error::invalid(
+                "facet state",
+                format!(
+                    "holds facets {}..{}, the scene has {n}",
+                    states.first,
+                    states.first + states.len()
+                ),
+            ));
+        }
+        let mut conditions = Vec::new();
+        let mut records = Vec::new();
+        for (time, at) in states.times.iter().zip(&states.at) {
+            let rec = self.weather.at(*time)?;
+            let t_air = rec.air_temperature_k;
+            let surface = SurfaceState {
+                temperature_k: at.temperature_k.clone(),
+                shape_factor: states.shape_factor.clone(),
+                sun_fraction: at.sun_fraction.clone(),
+                cos_sun: at.cos_sun.clone(),
+                background_k: at.background_k.clone(),
+            };
+            let sp = self.weather.sun_position(*time)?;
+            let d = sp.direction_enu().as_vec3().normalize_or_zero();
+            let sun = (d.z > 0.0).then_some(SunInput {
+                direction: d,
+                direct_normal_w_m2: rec.direct_normal_w_m2,
+            });
+            let sky = match self.config.sky_temperature_k {
+                Some(t) => Sky::Blackbody { temperature_k: t },
+                None => Sky::Atmosphere(crate::atmosphere::SkyConditions {
+                    air_temperature_k: t_air,
+                    sky_longwave_w_m2: rec.sky_longwave_w_m2,
+                }),
+            };
+            conditions.push(Conditions {
+                surface,
+                sky,
+                sun,
+                ground_temperature_k: t_air,
+                atmosphere: self.atmosphere_at(&rec)?,
+            });
+            records.push(rec);
+        }
+        Ok(ThermalStates {
+            times: states.times.clone(),
+            conditions,
+            records,
+            timings: Default::default(),
+        })
+    }
 }

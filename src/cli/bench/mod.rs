@@ -17,6 +17,7 @@ use super::args::FlagContext;
 use trace::{TileShape, TraceBenchOptions, trace_bench};
 
 mod exposure;
+mod facets;
 mod modes;
 mod trace;
 
@@ -48,6 +49,10 @@ enum What {
     /// several sampling settings: rays, time, facets/s and accuracy against
     /// an exhaustive reference (the sun at every step, many sky rays).
     Exposure(ExposureArgs),
+    /// The per-facet stage of a generated scene of a given size (written
+    /// as an OBJ scene file): load, BVH, rays and thermal passes in
+    /// seconds, facets/s, and peak memory (total and per facet).
+    Facets(facets::FacetsArgs),
 }
 
 /// Arguments of `irsig bench exposure`.
@@ -135,6 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     match args.what {
         What::Trace(a) => run_trace(a),
         What::Render(a) => run_render(a),
+        What::Facets(a) => facets::run(a),
         What::Modes(a) => {
             let (geom, opts) = scene_and_options(&a)?;
             modes::run(&geom, &opts)

@@ -1,0 +1,1071 @@
+//! The per-facet state of a render, split across processes and kept on
+//! disk: what `irsig thermal-scene --state DIR` writes and
+//! `irsig render --state DIR` reads instead of solving.
+//!
+//! # What it owns, takes and gives
+//! - Owns [`FacetStates`] (per facet: surface temperature, sun fraction,
+//!   incidence and background at each image time, and the shape factor:
+//!   everything the render reads of the per-facet stage), the state
+//!   folder's layout ([`Manifest`], the shard files), the split of a
+//!   scene's facets into shards ([`shard_range`]) and the hash that ties a
+//!   folder to one scene and one set of settings ([`StateKey`]).
+//! - Takes a [`Session`] (scene, weather, settings, tracer) and the image
+//!   times; gives files in the folder, or [`FacetStates`] back from them.
+//!   The render turns a [`FacetStates`] into its conditions with
+//!   [`Session::conditions`], whether it was solved or read.
+//! - Knows nothing of the command line (no flags, nothing printed) or of
+//!   Slurm; the split into processes is the caller's.
+//!
+//! # The split
+//! The per-facet stage is rays (solar history, sky view, ground test: ≈ 85 %
+//! of it) then the thermal passes. The thermal solve's linearised method
+//! chooses its reference facets among *all* facets' inputs, and pass 2's
+//! backgrounds need pass 1's temperatures of every facet seen, so the
+//! barrier sits after the rays:
+//! - **pass 1** ([`run_pass1`], `K/N`): the rays of shard `K`'s facets →
+//!   `rays-K-of-N.arrow`;
+//! - **pass 2** ([`run_pass2`], `K/M`): reads every pass-1 shard (refusing to
+//!   start while one is missing, naming it), runs both thermal passes over
+//!   all facets (a few seconds at a million facets), and writes shard `K`'s
+//!   facet states → `state-K-of-M.arrow`;
+//! - in one process ([`run_all`]): the same solve, `state-1-of-1.arrow`.
+//!
+//! Shards start on multiples of the exposure's batch of facets, so each
+//! facet is traced in the very batch of a run in one piece, and the merged
+//! state equals the unsplit one bit for bit. Each file is written
+//! atomically ([`crate::output::atomic`]): a killed shard leaves no file
+//! under its final name, and a rerun skips shards already complete.
+//!
+//! # Format
+//! Arrow IPC files (Feather v2: `pyarrow.feather.read_table`,
+//! `pandas.read_feather`) and a JSON `manifest.json`, described in
+//! `docs/cluster.md`. Every file carries the format version; a reader
+//! ignores columns it does not know, so later versions may add columns
+//! (or files listed in the manifest, e.g. per-property-set data for
+//! render-time temperatures) without breaking older readers of the rest.
+
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use arrow_array::builder::{FixedSizeListBuilder, Float32Builder, ListBuilder, UInt32Builder};
+use arrow_array::cast::AsArray;
+use arrow_array::types::{Float32Type, UInt32Type};
+use arrow_array::{Array, ArrayRef, BooleanArray, Float32Array, RecordBatch, UInt32Array};
+use arrow_schema::{DataType, Field, Schema};
+use chrono::{DateTime, FixedOffset};
+use serde::{Deserialize, Serialize};
+
+use super::Fnv;
+use super::scene_thermal::{FacetRays, solve_scene_traced, trace_scene_facets};
+use super::session::{Session, solve_params};
+use crate::exposure::{BackgroundEntry, ExposureStats, SkyView, SolarHistory};
+use crate::progress::Progress;
+use crate::{Error, Result};
+
+/// The `format` of the manifest.
+pub const FORMAT: &str = "irsig-facet-state";
+/// The version of the folder's layout and files this build writes and reads.
+pub const VERSION: u32 = 1;
+/// The manifest's file name.
+pub const MANIFEST: &str = "manifest.json";
+
+/// One image time's per-facet state (every vector: one value per facet of
+/// the [`FacetStates`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FacetTimeState {
+    /// Surface temperature, K.
+    pub temperature_k: Vec<f32>,
+    /// Sunlit fraction of the facet's sample points.
+    pub sun_fraction: Vec<f32>,
+    /// Cosine of the solar incidence angle (0 at night or facing away).
+    pub cos_sun: Vec<f32>,
+    /// Background (non-sky) temperature, K: the radiative mean of what the
+    /// facet sees below the sky, the ground beyond the scene at the air
+    /// temperature.
+    pub background_k: Vec<f32>,
+}
+
+/// What a render reads of the per-facet stage, for the facets
+/// `first..first + len()` at each image time.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FacetStates {
+    /// The image times.
+    pub times: Vec<DateTime<FixedOffset>>,
+    /// Global id of the first facet (0 for a whole scene).
+    pub first: usize,
+    /// Shape factor (sky view factor of the front face, the parts'
+    /// overrides applied), per facet.
+    pub shape_factor: Vec<f32>,
+    /// Per image time.
+    pub at: Vec<FacetTimeState>,
+}
+
+impl FacetStates {
+    /// Number of facets.
+    pub fn len(&self) -> usize {
+        self.shape_factor.len()
+    }
+
+    /// No facets.
+    pub fn is_empty(&self) -> bool {
+        self.shape_factor.is_empty()
+    }
+
+    /// The facets `range` (global ids) of these states.
+    ///
+    /// # Panics
+    /// When `range` is not within these states' facets.
+    pub fn slice(&self, range: Range<usize>) -> FacetStates {
+        let local = range.start - self.first..range.end - self.first;
+        let cut = |v: &Vec<f32>| v[local.clone()].to_vec();
+        FacetStates {
+            times: self.times.clone(),
+            first: range.start,
+            shape_factor: cut(&self.shape_factor),
+            at: self
+                .at
+                .iter()
+                .map(|a| FacetTimeState {
+                    temperature_k: cut(&a.temperature_k),
+                    sun_fraction: cut(&a.sun_fraction),
+                    cos_sun: cut(&a.cos_sun),
+                    background_k: cut(&a.background_k),
+                })
+                .collect(),
+        }
+    }
+
+    /// Appends the facets of `other`, which must follow these (same times).
+    ///
+    /// # Errors
+    /// `other` does not start where these end, or has other times.
+    pub fn append(&mut self, other: FacetStates) -> Result<()> {
+        if self.is_empty() && self.at.is_empty() {
+            *self = other;
+            return Ok(());
+        }
+        if other.first != self.first + self.len() || other.times != self.times {
+            return Err(Error::invalid(
+                "facet state",
+                format!(
+                    "facets {}..{} do not follow facets {}..{} at the same times",
+                    other.first,
+                    other.first + other.len(),
+                    self.first,
+                    self.first + self.len()
+                ),
+            ));
+        }
+        self.shape_factor.extend(other.shape_factor);
+        for (a, b) in self.at.iter_mut().zip(other.at) {
+            a.temperature_k.extend(b.temperature_k);
+            a.sun_fraction.extend(b.sun_fraction);
+            a.cos_sun.extend(b.cos_sun);
+            a.background_k.extend(b.background_k);
+        }
+        Ok(())
+    }
+}
+
+/// What ties a state folder to one scene: a hash of everything the
+/// per-facet state depends on, and the image times.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StateKey {
+    /// FNV-1a of the geometry (every vertex, triangle and instance
+    /// transform), each facet's part and each part's material with its
+    /// overrides (thermal and optical properties, fixed temperature, shape
+    /// factor), the site, the weather file's bytes, the per-facet solve's
+    /// parameters (facet samples, sky sampling, history window, thermal
+    /// method), the backend and the irsig version; 16 hex digits.
+    pub scene_hash: String,
+    /// The image times, RFC 3339.
+    pub times: Vec<String>,
+    /// Facets in the scene.
+    pub facets: usize,
+}
+
+impl StateKey {
+    /// The key of `session`'s scene at `times` (the scene's time when
+    /// empty).
+    ///
+    /// # Errors
+    /// The weather file cannot be read.
+    pub fn of(session: &Session, times: &[DateTime<FixedOffset>]) -> Result<StateKey> {
+        let scene = &session.scene;
+        let mut h = Fnv::default();
+        let geo = &scene.geometry;
+        for m in &geo.meshes {
+            h.write(&(m.positions.len() as u64).to_le_bytes());
+            for p in &m.positions {
+                for c in p.to_array() {
+                    h.write(&c.to_le_bytes());
+                }
+            }
+            h.write(&(m.indices.len() as u64).to_le_bytes());
+            for t in &m.indices {
+                for c in t {
+                    h.write(&c.to_le_bytes());
+                }
+            }
+        }
+        for i in &geo.instances {
+            h.write(&(i.mesh as u64).to_le_bytes());
+            for c in i.world_from_object.to_cols_array() {
+                h.write(&c.to_le_bytes());
+            }
+        }
+        for p in &session.optics.facet_material {
+            h.write(&p.to_le_bytes());
+        }
+        for (i, p) in scene.parts.iter().enumerate() {
+            h.write(
+                format!(
+                    "{:?}|{:?}|{:?}",
+                    scene.part_material(i),
+                    p.fixed_temperature_k,
+                    p.shape_factor
+                )
+                .as_bytes(),
+            );
+        }
+        h.write(format!("{:?}", scene.site).as_bytes());
+        if let Some(w) = &scene.weather {
+            h.write(&std::fs::read(&w.path).map_err(|e| Error::io(&w.path, e))?);
+        }
+        h.write(format!("{:?}", solve_params(session)).as_bytes());
+        h.write(session.backend.as_str().as_bytes());
+        h.write(env!("CARGO_PKG_VERSION").as_bytes());
+        let times = if times.is_empty() {
+            vec![scene.time]
+        } else {
+            times.to_vec()
+        };
+        Ok(StateKey {
+            scene_hash: format!("{:016x}", h.finish()),
+            times: times.iter().map(|t| t.to_rfc3339()).collect(),
+            facets: geo.facet_count(),
+        })
+    }
+}
+
+/// The state folder's `manifest.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// [`FORMAT`].
+    pub format: String,
+    /// [`VERSION`].
+    pub version: u32,
+    /// The scene file (absolute path), for people; the hash decides.
+    pub scene: PathBuf,
+    /// [`StateKey::scene_hash`].
+    pub scene_hash: String,
+    /// Facets in the scene.
+    pub facets: usize,
+    /// The image times, RFC 3339.
+    pub times: Vec<String>,
+    /// Pass 1's split: `rays-K-of-N.arrow` for K = 1..N (absent until a
+    /// pass-1 shard has run; absent after a run in one process).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rays_shards: Option<usize>,
+    /// The states' split: `state-K-of-N.arrow` for K = 1..N (absent until
+    /// pass 2 has run).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub state_shards: Option<usize>,
+}
+
+/// The facets of shard `k` (1-based) of `n` of a scene of `facets` facets:
+/// whole batches of `batch` facets, as equal as possible (a shard may be
+/// empty when there are more shards than batches).
+pub fn shard_range(k: usize, n: usize, facets: usize, batch: usize) -> Range<usize> {
+    let batch = batch.max(1);
+    let blocks = facets.div_ceil(batch);
+    let rows = super::tile::tile_rows(k, n, blocks);
+    (rows.start * batch).min(facets)..(rows.end * batch).min(facets)
+}
+
+/// The pass-1 file of shard `k` of `n` in `dir`.
+pub fn rays_path(dir: &Path, k: usize, n: usize) -> PathBuf {
+    dir.join(format!("rays-{k}-of-{n}.arrow"))
+}
+
+/// The state file of shard `k` of `n` in `dir`.
+pub fn state_path(dir: &Path, k: usize, n: usize) -> PathBuf {
+    dir.join(format!("state-{k}-of-{n}.arrow"))
+}
+
+/// What a pass did with its shard.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    /// Wrote this file.
+    Wrote(PathBuf),
+    /// This file was already complete for the same scene and times.
+    Skipped(PathBuf),
+}
+
+fn check_shard((k, n): (usize, usize)) -> Result<()> {
+    if n == 0 || k == 0 || k > n {
+        return Err(Error::invalid(
+            "shard",
+            format!("{k}/{n}: expected K/N with 1 ≤ K ≤ N"),
+        ));
+    }
+    Ok(())
+}
+
+/// Read `dir/manifest.json`, if there is one.
+///
+/// # Errors
+/// An unreadable or malformed manifest, or one of another format or a
+/// newer version, naming the file.
+pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>> {
+    let path = dir.join(MANIFEST);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(&path, e)),
+    };
+    let m: Manifest = serde_json::from_str(&text).map_err(|e| {
+        Error::parse(
+            crate::Location::file(&path).at_line(e.line()),
+            e.to_string(),
+        )
+    })?;
+    if m.format != FORMAT {
+        return Err(Error::parse(
+            crate::Location::file(&path).with_field("format"),
+            format!("`{}`: expected `{FORMAT}`", m.format),
+        ));
+    }
+    if m.version > VERSION {
+        return Err(Error::parse(
+            crate::Location::file(&path).with_field("version"),
+            format!(
+                "{}: written by a newer irsig (this one reads version {VERSION})",
+                m.version
+            ),
+        ));
+    }
+    Ok(Some(m))
+}
+
+/// The manifest of `dir` checked against `key`: the same scene hash,
+/// facets and times.
+fn check_manifest(dir: &Path, m: &Manifest, key: &StateKey) -> Result<()> {
+    let path = dir.join(MANIFEST);
+    if m.scene_hash != key.scene_hash || m.facets != key.facets {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{} was made from another scene or other settings (scene hash {}, {} facets; \
+                 this scene: {}, {} facets; made from {}): use another folder or remake it",
+                path.display(),
+                m.scene_hash,
+                m.facets,
+                key.scene_hash,
+                key.facets,
+                m.scene.display()
+            ),
+        ));
+    }
+    if m.times != key.times {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{} holds the times {} but {} were asked for",
+                path.display(),
+                m.times.join(", "),
+                key.times.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Write the manifest atomically.
+fn write_manifest(dir: &Path, m: &Manifest) -> Result<()> {
+    let path = dir.join(MANIFEST);
+    let text = serde_json::to_string_pretty(m)
+        .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
+    crate::output::atomic::write_atomic(&path, |w| {
+        w.write_all(text.as_bytes())
+            .and_then(|_| w.write_all(b"\n"))
+            .map_err(|e| Error::io(&path, e))
+    })
+}
+
+/// The folder's manifest for `key`, created if absent; refused when it is
+/// another scene's or other times'.
+fn open_manifest(session: &Session, dir: &Path, key: &StateKey) -> Result<Manifest> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    match read_manifest(dir)? {
+        Some(m) => {
+            check_manifest(dir, &m, key)?;
+            Ok(m)
+        }
+        None => Ok(Manifest {
+            format: FORMAT.to_string(),
+            version: VERSION,
+            scene: std::path::absolute(&session.scene.path).unwrap_or(session.scene.path.clone()),
+            scene_hash: key.scene_hash.clone(),
+            facets: key.facets,
+            times: key.times.clone(),
+            rays_shards: None,
+            state_shards: None,
+        }),
+    }
+}
+
+/// The metadata every shard file carries.
+fn file_metadata(
+    kind: &str,
+    key: &StateKey,
+    (k, n): (usize, usize),
+    range: &Range<usize>,
+) -> HashMap<String, String> {
+    HashMap::from([
+        ("irsig.format".to_string(), kind.to_string()),
+        ("irsig.version".to_string(), VERSION.to_string()),
+        ("irsig.scene_hash".to_string(), key.scene_hash.clone()),
+        (
+            "irsig.times".to_string(),
+            serde_json::to_string(&key.times).unwrap_or_default(),
+        ),
+        ("irsig.shard".to_string(), format!("{k}/{n}")),
+        (
+            "irsig.facets".to_string(),
+            format!("{}..{}", range.start, range.end),
+        ),
+    ])
+}
+
+const RAYS_KIND: &str = "irsig-facet-rays";
+const STATE_KIND: &str = "irsig-facet-state";
+
+/// Pass 1 of the split per-facet stage: the rays of shard `k` of `n` into
+/// `dir/rays-K-of-N.arrow` (skipped when already complete), the manifest
+/// created or checked. `progress` sees [`crate::progress::Stage::Exposure`].
+///
+/// # Errors
+/// A bad shard; a folder of another scene, other times or another split
+/// (naming the manifest); the rays' errors; writing.
+pub fn run_pass1(
+    session: &mut Session,
+    dir: &Path,
+    times: &[DateTime<FixedOffset>],
+    (k, n): (usize, usize),
+    progress: &dyn Progress,
+) -> Result<Outcome> {
+    check_shard((k, n))?;
+    let key = StateKey::of(session, times)?;
+    let mut manifest = open_manifest(session, dir, &key)?;
+    if let Some(m) = manifest.rays_shards
+        && m != n
+    {
+        return Err(Error::invalid(
+            "shard",
+            format!(
+                "{} holds pass 1 split into {m} shards, not {n}: use K/{m} or another folder",
+                dir.join(MANIFEST).display()
+            ),
+        ));
+    }
+    let path = rays_path(dir, k, n);
+    let params = solve_params(session);
+    let range = shard_range(k, n, key.facets, params.exposure.batch_facets);
+    if file_is_complete(&path, RAYS_KIND, &key, (k, n), &range) {
+        return Ok(Outcome::Skipped(path));
+    }
+    if manifest.rays_shards.is_none() {
+        manifest.rays_shards = Some(n);
+        write_manifest(dir, &manifest)?;
+    }
+    let times = parse_times(&key)?;
+    let own = session.exposure_tracer()?;
+    let tracers = super::scene_thermal::FacetTracers {
+        exposure: own.as_deref().unwrap_or(session.tracer.as_ref()),
+        exact: session.tracer.as_ref(),
+    };
+    let t0 = std::time::Instant::now();
+    let rays = trace_scene_facets(
+        tracers,
+        &session.scene,
+        &times,
+        &params,
+        range.clone(),
+        progress,
+    )?;
+    drop(own);
+    session.timings.thermal += t0.elapsed();
+    write_rays(&path, &key, (k, n), &rays)?;
+    Ok(Outcome::Wrote(path))
+}
+
+/// Pass 2 of the split per-facet stage: reads every pass-1 shard, solves
+/// the thermal passes over all facets and writes shard `k` of `n` of the
+/// facet states into `dir/state-K-of-N.arrow` (skipped when already
+/// complete). `progress` sees [`crate::progress::Stage::Thermal`].
+///
+/// # Errors
+/// No pass 1 in the folder; a pass-1 shard missing (naming each missing
+/// file) or of another scene; as [`run_pass1`].
+pub fn run_pass2(
+    session: &mut Session,
+    dir: &Path,
+    times: &[DateTime<FixedOffset>],
+    (k, n): (usize, usize),
+    progress: &dyn Progress,
+) -> Result<Outcome> {
+    check_shard((k, n))?;
+    let key = StateKey::of(session, times)?;
+    let manifest = read_manifest(dir)?.ok_or_else(|| {
+        Error::invalid(
+            "state",
+            format!(
+                "{} has no {MANIFEST}: run pass 1 into it first",
+                dir.display()
+            ),
+        )
+    })?;
+    check_manifest(dir, &manifest, &key)?;
+    let Some(m) = manifest.rays_shards else {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{} records no pass 1: run pass 1 into it first",
+                dir.join(MANIFEST).display()
+            ),
+        ));
+    };
+    let path = state_path(dir, k, n);
+    let params = solve_params(session);
+    let range = shard_range(k, n, key.facets, params.exposure.batch_facets);
+    if file_is_complete(&path, STATE_KIND, &key, (k, n), &range) {
+        return Ok(Outcome::Skipped(path));
+    }
+    let missing: Vec<String> = (1..=m)
+        .map(|j| rays_path(dir, j, m))
+        .filter(|p| !p.exists())
+        .map(|p| p.display().to_string())
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "pass 1 is not complete: missing {} (rerun pass 1 for {})",
+                missing.join(", "),
+                if missing.len() == 1 { "it" } else { "them" }
+            ),
+        ));
+    }
+    let times = parse_times(&key)?;
+    let t0 = std::time::Instant::now();
+    let mut parts = Vec::with_capacity(m);
+    for j in 1..=m {
+        let r = shard_range(j, m, key.facets, params.exposure.batch_facets);
+        parts.push(read_rays(&rays_path(dir, j, m), &key, (j, m), r)?);
+    }
+    let solved = solve_scene_traced(&session.scene, &times, &params, parts, progress)?;
+    session.timings.thermal += t0.elapsed();
+    session.timings.thermal_solve += solved.timings.thermal;
+    let states = session.facet_states_of(&solved, &times)?;
+    drop(solved);
+    write_states(&path, &key, (k, n), &states.slice(range))?;
+    let mut manifest = read_manifest(dir)?.unwrap_or(manifest);
+    if manifest.state_shards != Some(n) {
+        manifest.state_shards = Some(n);
+        write_manifest(dir, &manifest)?;
+    }
+    Ok(Outcome::Wrote(path))
+}
+
+/// The per-facet stage in one process: every facet's rays and thermal
+/// passes, written as `dir/state-1-of-1.arrow` (skipped when already
+/// complete). `progress` sees [`crate::progress::Stage::Exposure`] then
+/// [`crate::progress::Stage::Thermal`].
+///
+/// # Errors
+/// As [`run_pass1`].
+pub fn run_all(
+    session: &mut Session,
+    dir: &Path,
+    times: &[DateTime<FixedOffset>],
+    progress: &dyn Progress,
+) -> Result<Outcome> {
+    let key = StateKey::of(session, times)?;
+    let mut manifest = open_manifest(session, dir, &key)?;
+    let path = state_path(dir, 1, 1);
+    let range = 0..key.facets;
+    if file_is_complete(&path, STATE_KIND, &key, (1, 1), &range) {
+        return Ok(Outcome::Skipped(path));
+    }
+    let times = parse_times(&key)?;
+    let thermal = session.facet_states(&times, progress)?;
+    write_states(&path, &key, (1, 1), &thermal)?;
+    manifest.state_shards = Some(1);
+    write_manifest(dir, &manifest)?;
+    Ok(Outcome::Wrote(path))
+}
+
+/// The facet states of every facet from `dir`, checked against `session`'s
+/// scene and `times`.
+///
+/// # Errors
+/// No manifest or no states yet; a folder of another scene or other times;
+/// a state shard missing (naming each) or unreadable.
+pub fn read_states(
+    session: &Session,
+    dir: &Path,
+    times: &[DateTime<FixedOffset>],
+) -> Result<FacetStates> {
+    let key = StateKey::of(session, times)?;
+    let manifest = read_manifest(dir)?.ok_or_else(|| {
+        Error::invalid(
+            "state",
+            format!(
+                "{} has no {MANIFEST}: make it with the thermal-scene stage first",
+                dir.display()
+            ),
+        )
+    })?;
+    check_manifest(dir, &manifest, &key)?;
+    let Some(n) = manifest.state_shards else {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{} holds no facet states yet: run pass 2 into it first",
+                dir.display()
+            ),
+        ));
+    };
+    let missing: Vec<String> = (1..=n)
+        .map(|j| state_path(dir, j, n))
+        .filter(|p| !p.exists())
+        .map(|p| p.display().to_string())
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "the facet states are not complete: missing {}",
+                missing.join(", ")
+            ),
+        ));
+    }
+    let batch = solve_params(session).exposure.batch_facets;
+    let mut out = FacetStates::default();
+    for j in 1..=n {
+        let r = shard_range(j, n, key.facets, batch);
+        out.append(read_state_file(&state_path(dir, j, n), &key, (j, n), r)?)?;
+    }
+    if out.len() != key.facets {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{} holds {} of {} facets",
+                dir.display(),
+                out.len(),
+                key.facets
+            ),
+        ));
+    }
+    out.times = parse_times(&key)?;
+    Ok(out)
+}
+
+fn parse_times(key: &StateKey) -> Result<Vec<DateTime<FixedOffset>>> {
+    key.times
+        .iter()
+        .map(|t| {
+            DateTime::parse_from_rfc3339(t)
+                .map_err(|e| Error::invalid("times", format!("`{t}`: {e}")))
+        })
+        .collect()
+}
+
+/// The file exists, is readable and belongs to `key`, shard and range.
+fn file_is_complete(
+    path: &Path,
+    kind: &str,
+    key: &StateKey,
+    shard: (usize, usize),
+    range: &Range<usize>,
+) -> bool {
+    let Ok(f) = std::fs::File::open(path) else {
+        return false;
+    };
+    let Ok(reader) = arrow_ipc::reader::FileReader::try_new(f, None) else {
+        return false;
+    };
+    let want = file_metadata(kind, key, shard, range);
+    let meta = reader.schema().metadata().clone();
+    want.iter().all(|(k, v)| meta.get(k) == Some(v))
+}
+
+/// Write one record batch atomically.
+fn write_batch(path: &Path, batch: &RecordBatch) -> Result<()> {
+    let arrow = |e: arrow_schema::ArrowError| Error::Other(format!("{}: {e}", path.display()));
+    crate::output::atomic::write_atomic(path, |w| {
+        let mut writer =
+            arrow_ipc::writer::FileWriter::try_new(w, &batch.schema()).map_err(arrow)?;
+        writer.write(batch).map_err(arrow)?;
+        writer.finish().map_err(arrow)?;
+        Ok(())
+    })
+}
+
+/// Read the one record batch of `path`, checking its metadata.
+fn read_batch(
+    path: &Path,
+    kind: &str,
+    key: &StateKey,
+    shard: (usize, usize),
+    range: &Range<usize>,
+) -> Result<RecordBatch> {
+    let bad = |m: String| Error::invalid("state", format!("{}: {m}", path.display()));
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let reader = arrow_ipc::reader::FileReader::try_new(f, None)
+        .map_err(|e| bad(format!("not an Arrow IPC file: {e}")))?;
+    let meta = reader.schema().metadata().clone();
+    let want = file_metadata(kind, key, shard, range);
+    for field in [
+        "irsig.format",
+        "irsig.scene_hash",
+        "irsig.times",
+        "irsig.shard",
+        "irsig.facets",
+    ] {
+        if meta.get(field) != want.get(field) {
+            return Err(bad(format!(
+                "its {field} is {} but {} was expected (a file of another scene, times or split)",
+                meta.get(field).map_or("absent", |s| s.as_str()),
+                want[field]
+            )));
+        }
+    }
+    let mut batches = Vec::new();
+    for b in reader {
+        batches.push(b.map_err(|e| bad(e.to_string()))?);
+    }
+    let schema = batches
+        .first()
+        .map(|b| b.schema())
+        .ok_or_else(|| bad("no record batch".into()))?;
+    let batch = arrow_select_concat(&schema, &batches).map_err(|e| bad(e.to_string()))?;
+    if batch.num_rows() != range.len() {
+        return Err(bad(format!(
+            "{} rows, expected {} (facets {}..{})",
+            batch.num_rows(),
+            range.len(),
+            range.start,
+            range.end
+        )));
+    }
+    Ok(batch)
+}
+
+/// The batches of one file as one (this crate writes one per file).
+fn arrow_select_concat(
+    schema: &arrow_schema::SchemaRef,
+    batches: &[RecordBatch],
+) -> std::result::Result<RecordBatch, arrow_schema::ArrowError> {
+    if batches.len() == 1 {
+        return Ok(batches[0].clone());
+    }
+    Err(arrow_schema::ArrowError::InvalidArgumentError(format!(
+        "{} record batches of {} columns, expected one",
+        batches.len(),
+        schema.fields().len()
+    )))
+}
+
+/// A column of `batch` by name.
+fn column<'b>(batch: &'b RecordBatch, path: &Path, name: &str) -> Result<&'b ArrayRef> {
+    batch
+        .column_by_name(name)
+        .ok_or_else(|| Error::invalid("state", format!("{}: no column `{name}`", path.display())))
+}
+
+fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> {
+    let c = column(batch, path, name)?;
+    let a = c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
+        Error::invalid(
+            "state",
+            format!(
+                "{}: column `{name}` is {}, expected float32",
+                path.display(),
+                c.data_type()
+            ),
+        )
+    })?;
+    if a.null_count() > 0 {
+        return Err(Error::invalid(
+            "state",
+            format!("{}: column `{name}` has nulls", path.display()),
+        ));
+    }
+    Ok(a.values().to_vec())
+}
+
+fn check_facet_ids(batch: &RecordBatch, path: &Path, range: &Range<usize>) -> Result<()> {
+    let c = column(batch, path, "facet")?;
+    let a = c.as_primitive_opt::<UInt32Type>().ok_or_else(|| {
+        Error::invalid(
+            "state",
+            format!("{}: column `facet` is not uint32", path.display()),
+        )
+    })?;
+    if let Some((i, &v)) = a
+        .values()
+        .iter()
+        .enumerate()
+        .find(|&(i, &v)| v as usize != range.start + i)
+    {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{}: row {i} holds facet {v}, expected {}",
+                path.display(),
+                range.start + i
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The name of a per-time column: `QUANTITY_I` for image time `I`
+/// (0-based, in the manifest's order).
+fn time_column(quantity: &str, i: usize) -> String {
+    format!("{quantity}_{i}")
+}
+
+/// Write the facet states `states` (shard `k` of `n`) to `path`.
+fn write_states(
+    path: &Path,
+    key: &StateKey,
+    shard: (usize, usize),
+    states: &FacetStates,
+) -> Result<()> {
+    let range = states.first..states.first + states.len();
+    let mut fields = vec![
+        Field::new("facet", DataType::UInt32, false),
+        Field::new("shape_factor", DataType::Float32, false),
+    ];
+    let mut columns: Vec<ArrayRef> = vec![
+        Arc::new(UInt32Array::from_iter_values(
+            range.clone().map(|f| f as u32),
+        )),
+        Arc::new(Float32Array::from(states.shape_factor.clone())),
+    ];
+    for (i, at) in states.at.iter().enumerate() {
+        let time = HashMap::from([("time".to_string(), key.times[i].clone())]);
+        for (q, v) in [
+            ("temperature_k", &at.temperature_k),
+            ("sun_fraction", &at.sun_fraction),
+            ("cos_sun", &at.cos_sun),
+            ("background_k", &at.background_k),
+        ] {
+            fields.push(
+                Field::new(time_column(q, i), DataType::Float32, false).with_metadata(time.clone()),
+            );
+            columns.push(Arc::new(Float32Array::from(v.clone())));
+        }
+    }
+    let schema = Schema::new(fields).with_metadata(file_metadata(STATE_KIND, key, shard, &range));
+    let batch = RecordBatch::try_new(Arc::new(schema), columns)
+        .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
+    write_batch(path, &batch)
+}
+
+fn read_state_file(
+    path: &Path,
+    key: &StateKey,
+    shard: (usize, usize),
+    range: Range<usize>,
+) -> Result<FacetStates> {
+    let batch = read_batch(path, STATE_KIND, key, shard, &range)?;
+    check_facet_ids(&batch, path, &range)?;
+    let mut at = Vec::with_capacity(key.times.len());
+    for i in 0..key.times.len() {
+        at.push(FacetTimeState {
+            temperature_k: f32_column(&batch, path, &time_column("temperature_k", i))?,
+            sun_fraction: f32_column(&batch, path, &time_column("sun_fraction", i))?,
+            cos_sun: f32_column(&batch, path, &time_column("cos_sun", i))?,
+            background_k: f32_column(&batch, path, &time_column("background_k", i))?,
+        });
+    }
+    Ok(FacetStates {
+        times: Vec::new(),
+        first: range.start,
+        shape_factor: f32_column(&batch, path, "shape_factor")?,
+        at,
+    })
+}
+
+/// Write pass 1's rays of a shard to `path`.
+fn write_rays(path: &Path, key: &StateKey, shard: (usize, usize), rays: &FacetRays) -> Result<()> {
+    let range = rays.range.clone();
+    let steps = rays.solar.steps;
+    let sky = &rays.sky;
+    let mut bg_facet = ListBuilder::new(UInt32Builder::new());
+    let mut bg_weight = ListBuilder::new(Float32Builder::new());
+    for f in 0..range.len() {
+        let e = &sky.entries[sky.offsets[f] as usize..sky.offsets[f + 1] as usize];
+        bg_facet
+            .values()
+            .append_slice(&e.iter().map(|x| x.facet).collect::<Vec<_>>());
+        bg_facet.append(true);
+        bg_weight
+            .values()
+            .append_slice(&e.iter().map(|x| x.weight).collect::<Vec<_>>());
+        bg_weight.append(true);
+    }
+    let history = |v: &[f32]| {
+        let mut b = FixedSizeListBuilder::with_capacity(
+            Float32Builder::with_capacity(v.len()),
+            steps as i32,
+            range.len(),
+        );
+        for f in 0..range.len() {
+            b.values().append_slice(&v[f * steps..(f + 1) * steps]);
+            b.append(true);
+        }
+        b.finish()
+    };
+    let sun = history(&rays.solar.sun_fraction);
+    let cos = history(&rays.solar.cos_incidence);
+    let (bg_facet, bg_weight) = (bg_facet.finish(), bg_weight.finish());
+    let fields = vec![
+        Field::new("facet", DataType::UInt32, false),
+        Field::new("shape_factor", DataType::Float32, false),
+        Field::new("back_shape_factor", DataType::Float32, true),
+        Field::new("shape_factor_std_error", DataType::Float32, false),
+        Field::new("ground_weight", DataType::Float32, false),
+        Field::new("on_ground", DataType::Boolean, false),
+        Field::new("background_facet", bg_facet.data_type().clone(), false),
+        Field::new("background_weight", bg_weight.data_type().clone(), false),
+        Field::new("sun_fraction", sun.data_type().clone(), false),
+        Field::new("cos_incidence", cos.data_type().clone(), false),
+    ];
+    let columns: Vec<ArrayRef> = vec![
+        Arc::new(UInt32Array::from_iter_values(
+            range.clone().map(|f| f as u32),
+        )),
+        Arc::new(Float32Array::from(sky.shape_factor.clone())),
+        Arc::new(Float32Array::from(sky.back_shape_factor.clone())),
+        Arc::new(Float32Array::from(sky.std_error.clone())),
+        Arc::new(Float32Array::from(sky.ground_weight.clone())),
+        Arc::new(BooleanArray::from(rays.ground.clone())),
+        Arc::new(bg_facet),
+        Arc::new(bg_weight),
+        Arc::new(sun),
+        Arc::new(cos),
+    ];
+    let mut meta = file_metadata(RAYS_KIND, key, shard, &range);
+    meta.insert("irsig.history_steps".into(), steps.to_string());
+    let schema = Schema::new(fields).with_metadata(meta);
+    let batch = RecordBatch::try_new(Arc::new(schema), columns)
+        .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
+    write_batch(path, &batch)
+}
+
+/// Read pass 1's rays of a shard from `path`.
+fn read_rays(
+    path: &Path,
+    key: &StateKey,
+    shard: (usize, usize),
+    range: Range<usize>,
+) -> Result<FacetRays> {
+    let batch = read_batch(path, RAYS_KIND, key, shard, &range)?;
+    let bad = |m: String| Error::invalid("state", format!("{}: {m}", path.display()));
+    check_facet_ids(&batch, path, &range)?;
+    let nf = range.len();
+    let back = column(&batch, path, "back_shape_factor")?
+        .as_primitive_opt::<Float32Type>()
+        .ok_or_else(|| bad("column `back_shape_factor` is not float32".into()))?;
+    let back_shape_factor = (0..nf)
+        .map(|i| (!back.is_null(i)).then(|| back.value(i)))
+        .collect();
+    let on_ground = column(&batch, path, "on_ground")?
+        .as_boolean_opt()
+        .ok_or_else(|| bad("column `on_ground` is not boolean".into()))?;
+    let ground = (0..nf).map(|i| on_ground.value(i)).collect();
+    let list = |name: &str| -> Result<(Vec<usize>, ArrayRef)> {
+        let l = column(&batch, path, name)?
+            .as_list_opt::<i32>()
+            .ok_or_else(|| bad(format!("column `{name}` is not a list")))?;
+        let o = l.offsets();
+        let base = o[0];
+        Ok((
+            o.iter().map(|&x| (x - base) as usize).collect(),
+            l.values().slice(base as usize, (o[nf] - base) as usize),
+        ))
+    };
+    let (off_f, facets) = list("background_facet")?;
+    let (off_w, weights) = list("background_weight")?;
+    if off_f != off_w {
+        return Err(bad(
+            "`background_facet` and `background_weight` differ in length".into(),
+        ));
+    }
+    let facets = facets
+        .as_primitive_opt::<UInt32Type>()
+        .ok_or_else(|| bad("`background_facet` does not hold uint32".into()))?;
+    let weights = weights
+        .as_primitive_opt::<Float32Type>()
+        .ok_or_else(|| bad("`background_weight` does not hold float32".into()))?;
+    if let Some(&f) = facets.values().iter().find(|&&f| f as usize >= key.facets) {
+        return Err(bad(format!(
+            "background facet {f} is beyond the scene's {} facets",
+            key.facets
+        )));
+    }
+    let entries = facets
+        .values()
+        .iter()
+        .zip(weights.values().iter())
+        .map(|(&facet, &weight)| BackgroundEntry { facet, weight })
+        .collect();
+    let history = |name: &str| -> Result<(usize, Vec<f32>)> {
+        let l = column(&batch, path, name)?
+            .as_fixed_size_list_opt()
+            .ok_or_else(|| bad(format!("column `{name}` is not a fixed-size list")))?;
+        let steps = l.value_length() as usize;
+        let start = if nf > 0 {
+            l.value_offset(0) as usize
+        } else {
+            0
+        };
+        let v = l
+            .values()
+            .as_primitive_opt::<Float32Type>()
+            .ok_or_else(|| bad(format!("`{name}` does not hold float32")))?;
+        Ok((steps, v.values()[start..start + nf * steps].to_vec()))
+    };
+    let (steps, sun_fraction) = history("sun_fraction")?;
+    let (steps2, cos_incidence) = history("cos_incidence")?;
+    if steps != steps2 {
+        return Err(bad(
+            "`sun_fraction` and `cos_incidence` differ in steps".into()
+        ));
+    }
+    Ok(FacetRays {
+        range,
+        solar: SolarHistory {
+            steps,
+            sun_fraction,
+            cos_incidence,
+        },
+        sky: SkyView {
+            shape_factor: f32_column(&batch, path, "shape_factor")?,
+            back_shape_factor,
+            std_error: f32_column(&batch, path, "shape_factor_std_error")?,
+            ground_weight: f32_column(&batch, path, "ground_weight")?,
+            offsets: off_f.iter().map(|&o| o as u32).collect(),
+            entries,
+        },
+        ground,
+        stats: ExposureStats::default(),
+    })
+}
