@@ -322,6 +322,8 @@ pub fn load_mat(path: &Path) -> Result<MaterialDb> {
             emissivity_curve: curve,
             double_sided,
             surface_energy: None,
+            layers: Vec::new(),
+            back: None,
         };
         // Real libraries hold THERM entries with THICKNESS = 0 (anadirsig.mat: water,
         // grass) whose meaning in THERM is not documented; irsig's slab cannot represent

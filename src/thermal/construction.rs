@@ -196,8 +196,7 @@ pub fn column_cells(layers: &Layers, depth_m: f64, grid: Grid) -> Vec<LayerCells
         .collect()
 }
 
-/// Hours in an interior schedule.
-pub const SCHEDULE_HOURS: usize = 24;
+pub use crate::material::construction::SCHEDULE_HOURS;
 
 /// The air temperature a building interior holds.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -168,6 +168,49 @@ impl BackBoundary {
     }
 }
 
+impl BackBoundary {
+    /// The back boundary a file spells ([`crate::material::BackSpec`]); an
+    /// interior without a film coefficient gets the wall's,
+    /// [`crate::material::construction::INTERIOR_FILM_WALL_W_M2_K`]. The
+    /// spec is taken as checked ([`crate::material::BackSpec::problems`]);
+    /// [`SlabProperties::validate`] catches what is out of range.
+    pub fn from_spec(spec: &crate::material::BackSpec) -> BackBoundary {
+        use crate::material::BackSpec;
+        match spec {
+            BackSpec::Insulated => BackBoundary::Insulated,
+            BackSpec::OutdoorAir { fraction } => BackBoundary::Exposed {
+                fraction: *fraction,
+            },
+            BackSpec::Ground {
+                deep_temperature_k,
+                depth_m,
+            } => BackBoundary::Ground {
+                deep_temperature_k: *deep_temperature_k,
+                depth_m: *depth_m,
+            },
+            BackSpec::Interior(i) => BackBoundary::Interior {
+                air: match (&i.air_temperature_k, &i.schedule_k) {
+                    (Some(t), _) => InteriorAir::Constant(*t),
+                    (None, Some(h)) => {
+                        let mut a = [f64::NAN; SCHEDULE_HOURS];
+                        for (x, t) in a.iter_mut().zip(h) {
+                            *x = *t;
+                        }
+                        InteriorAir::Hourly(a)
+                    }
+                    (None, None) => InteriorAir::SetPoints {
+                        heating_k: i.heating_setpoint_k.unwrap_or(f64::NAN),
+                        cooling_k: i.cooling_setpoint_k.unwrap_or(f64::NAN),
+                    },
+                },
+                film_coefficient_w_m2_k: i
+                    .film_coefficient_w_m2_k
+                    .unwrap_or(crate::material::construction::INTERIOR_FILM_WALL_W_M2_K),
+            },
+        }
+    }
+}
+
 /// Thermal properties of one slab material, SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlabProperties {
@@ -273,7 +316,10 @@ impl SlabProperties {
             solar_absorptivity: m.solar_absorptivity,
             thermal_emissivity: m.thermal_emissivity,
             self_power_w_m2: m.self_power_w_m2,
-            back: BackBoundary::from_exposed_area(m.exposed_area),
+            back: match &m.back {
+                Some(spec) => BackBoundary::from_spec(spec),
+                None => BackBoundary::from_exposed_area(m.exposed_area),
+            },
             surface: match &m.surface_energy {
                 Some(spec) => Some(LandSurface::from_spec(spec).map_err(|e| {
                     Error::invalid(
@@ -283,7 +329,19 @@ impl SlabProperties {
                 })?),
                 None => None,
             },
-            layers: Layers::NONE,
+            layers: Layers::new(
+                &m.layers
+                    .iter()
+                    .map(|l| Layer {
+                        conductivity_w_m_k: l.conductivity_w_m_k,
+                        density_kg_m3: l.density_kg_m3,
+                        specific_heat_j_kg_k: l.specific_heat_j_kg_k,
+                        thickness_m: l.thickness_m,
+                        contact_resistance_m2_k_w: l.contact_resistance_m2_k_w,
+                    })
+                    .collect::<Vec<_>>(),
+            )
+            .map_err(|e| rename(e, &field))?,
         };
         p.validate_with(&field)?;
         Ok(p)
