@@ -12,6 +12,7 @@ mod exposure;
 mod exposure_pipeline;
 mod flux;
 mod fuzz_smoke;
+mod layers;
 mod material;
 mod radiometry;
 mod reliability;
