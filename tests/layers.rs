@@ -134,7 +134,9 @@ impl C {
         self.exp().add(self.scale(-1.0).exp()).scale(0.5)
     }
     fn sinh(self) -> C {
-        self.exp().add(self.scale(-1.0).exp().scale(-1.0)).scale(0.5)
+        self.exp()
+            .add(self.scale(-1.0).exp().scale(-1.0))
+            .scale(0.5)
     }
     fn abs(self) -> f64 {
         self.0.hypot(self.1)
@@ -184,10 +186,10 @@ fn periodic_two_layer_slab_matches_thermal_quadrupole() {
     let (k2, rc2, l2) = (1.4, 2300.0 * 880.0, 0.15);
     let r_contact = 0.05;
     let m = matmul(
-        matmul(quadrupole(k1, rc1, l1, omega), [
-            [C(1.0, 0.0), C(r_contact, 0.0)],
-            [C(0.0, 0.0), C(1.0, 0.0)],
-        ]),
+        matmul(
+            quadrupole(k1, rc1, l1, omega),
+            [[C(1.0, 0.0), C(r_contact, 0.0)], [C(0.0, 0.0), C(1.0, 0.0)]],
+        ),
         quadrupole(k2, rc2, l2, omega),
     );
     let z = m[0][0].div(m[1][0]);
@@ -535,8 +537,9 @@ fn construction(layers: &str, back: &str) -> String {
 
 fn has(errs: &[String], line: usize, field: &str, what: &str) {
     assert!(
-        errs.iter()
-            .any(|e| e.contains(&format!("m.json:line {line}: field `{field}`")) && e.contains(what)),
+        errs.iter().any(
+            |e| e.contains(&format!("m.json:line {line}: field `{field}`")) && e.contains(what)
+        ),
         "no error at line {line} `{field}` about {what}: {errs:#?}"
     );
 }
@@ -584,30 +587,55 @@ fn bad_constructions_name_file_line_and_field() {
         { "material": "brik", "thickness_m": 0.05 }"#,
         "",
     ));
-    has(&e, 8, "materials[1].layers[1].material", "no material `brik`");
+    has(
+        &e,
+        8,
+        "materials[1].layers[1].material",
+        "no material `brik`",
+    );
     let e = db_errors(&construction(
         r#"        { "material": "brick", "thickness_m": -0.1 }"#,
         "",
     ));
-    has(&e, 7, "materials[1].layers[0].thickness_m", "expected a finite value > 0");
+    has(
+        &e,
+        7,
+        "materials[1].layers[0].thickness_m",
+        "expected a finite value > 0",
+    );
     let e = db_errors(&construction(
         r#"        { "material": "brick", "thickness_m": 0.0 },
         { "material": "brick", "thickness_m": 0.05 }"#,
         "",
     ));
-    has(&e, 7, "materials[1].layers[0].thickness_m", "expected a finite value > 0");
+    has(
+        &e,
+        7,
+        "materials[1].layers[0].thickness_m",
+        "expected a finite value > 0",
+    );
     let e = db_errors(&construction(
         r#"        { "material": "brick", "thickness_m": 0.1 }"#,
         r#",
       "back": { "interior": { "air_temperature_k": -5 } }"#,
     ));
-    has(&e, 9, "materials[1].back.interior.air_temperature_k", "expected a temperature > 0 K");
+    has(
+        &e,
+        9,
+        "materials[1].back.interior.air_temperature_k",
+        "expected a temperature > 0 K",
+    );
     let e = db_errors(&construction(
         r#"        { "material": "brick", "thickness_m": 0.1 }"#,
         r#",
       "back": { "interior": { "schedule_k": [293, 293, 293] } }"#,
     ));
-    has(&e, 9, "materials[1].back.interior.schedule_k", "3 values: expected 24");
+    has(
+        &e,
+        9,
+        "materials[1].back.interior.schedule_k",
+        "3 values: expected 24",
+    );
     // A layer naming a layered material, and top-level values beside layers.
     let e = db_errors(
         r#"{ "materials": [
@@ -652,7 +680,11 @@ fn interior_nan_is_refused() {
 }
 
 fn scene_with(dir: &Path, objects: &str) -> std::path::PathBuf {
-    std::fs::copy(repo_path("scenes/materials.json"), dir.join("materials.json")).unwrap();
+    std::fs::copy(
+        repo_path("scenes/materials.json"),
+        dir.join("materials.json"),
+    )
+    .unwrap();
     let text = format!(
         r#"{{
   "site": {{"latitude_deg": 43.2, "longitude_deg": -77.61, "utc_offset_hours": -4}},
@@ -740,7 +772,15 @@ fn scene_bad_back_boundaries_name_file_line_and_field() {
             "no error at line {line} `{field}` about {what}: {errs:#?}"
         );
     };
-    has(9, "objects[0].back.interior.schedule_k", "2 values: expected 24");
-    has(11, "objects[0].parts[0].back.interior.air_temperature_k", "> 0 K");
+    has(
+        9,
+        "objects[0].back.interior.schedule_k",
+        "2 values: expected 24",
+    );
+    has(
+        11,
+        "objects[0].parts[0].back.interior.air_temperature_k",
+        "> 0 K",
+    );
     has(12, "objects[0].parts[1].exposed_area", "not both");
 }

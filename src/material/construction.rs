@@ -86,11 +86,18 @@ impl MaterialLayer {
         for (name, v, unit) in [
             ("conductivity_w_m_k", self.conductivity_w_m_k, "W/(m·K)"),
             ("density_kg_m3", self.density_kg_m3, "kg/m³"),
-            ("specific_heat_j_kg_k", self.specific_heat_j_kg_k, "J/(kg·K)"),
+            (
+                "specific_heat_j_kg_k",
+                self.specific_heat_j_kg_k,
+                "J/(kg·K)",
+            ),
             ("thickness_m", self.thickness_m, "m"),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                p.push((name.to_string(), format!("{v} {unit}: expected a finite value > 0")));
+                p.push((
+                    name.to_string(),
+                    format!("{v} {unit}: expected a finite value > 0"),
+                ));
             }
         }
         let r = self.contact_resistance_m2_k_w;
@@ -174,7 +181,10 @@ impl BackSpec {
         let mut p: Vec<(String, String)> = Vec::new();
         let temp = |p: &mut Vec<(String, String)>, field: &str, t: f64| {
             if !(t.is_finite() && t > 0.0) {
-                p.push((field.to_string(), format!("{t} K: expected a temperature > 0 K")));
+                p.push((
+                    field.to_string(),
+                    format!("{t} K: expected a temperature > 0 K"),
+                ));
             }
         };
         match self {

@@ -16,6 +16,10 @@
 //!   ]
 //! }
 //! ```
+//! A material may instead be a layered construction (`layers`, outer face
+//! first, each naming a single-slab material of the same file or giving
+//! its properties inline) and may say what its back face touches (`back`):
+//! see [`crate::material::construction`].
 //! `exposed_area`, `self_power_w_m2`, `specular_fraction`, `transmissivity`
 //! and `double_sided` default to 0/false. Spectral emissivity is either
 //! inline (`emissivity_curve`: `{wavelengths_um, emissivity, angles_deg}`,
@@ -349,7 +353,9 @@ fn resolve_thermal(
                     ),
                     None => {
                         let why = if all.iter().any(|m| &m.name == name) {
-                            format!("material `{name}` is itself layered; a layer must name a single-slab material")
+                            format!(
+                                "material `{name}` is itself layered; a layer must name a single-slab material"
+                            )
                         } else {
                             let mut near: Vec<&str> = singles
                                 .keys()

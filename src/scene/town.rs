@@ -355,8 +355,20 @@ pub fn town_scene() -> Value {
     let sites = house_sites();
     let (a, b): (Vec<_>, Vec<_>) = sites.iter().enumerate().partition(|(i, _)| i % 3 != 2);
     for (name, list, wall, size, roof_h) in [
-        ("house_clapboard", a, ("wood_frame_wall", "wood_siding"), [9.0, 12.0, 5.5], 3.5),
-        ("house_brick", b, ("brick_cavity_wall", "brick"), [10.0, 13.0, 3.2], 3.0),
+        (
+            "house_clapboard",
+            a,
+            ("wood_frame_wall", "wood_siding"),
+            [9.0, 12.0, 5.5],
+            3.5,
+        ),
+        (
+            "house_brick",
+            b,
+            ("brick_cavity_wall", "brick"),
+            [10.0, 13.0, 3.2],
+            3.0,
+        ),
     ] {
         let inst: Vec<Value> = list
             .iter()

@@ -370,7 +370,16 @@ impl Slab {
             capacity[j] += 0.5 * rc * wj;
             capacity[j + 1] += 0.5 * rc * wj;
         }
-        let mut s = Slab::new(depth[n], 1.0, 1.0, Grid { cells: n, growth: 1.0 }, initial_k);
+        let mut s = Slab::new(
+            depth[n],
+            1.0,
+            1.0,
+            Grid {
+                cells: n,
+                growth: 1.0,
+            },
+            initial_k,
+        );
         s.depth_m = depth;
         s.capacity = capacity;
         s.conductance = conductance;
