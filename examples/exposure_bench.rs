@@ -87,6 +87,7 @@ fn main() -> anyhow::Result<()> {
             self_power_w_m2: 0.0,
             back: BackBoundary::GROUND,
             surface: None,
+            layers: irsig::thermal::Layers::NONE,
         };
         let brick = SlabProperties {
             conductivity_w_m_k: 0.7,
@@ -98,6 +99,7 @@ fn main() -> anyhow::Result<()> {
             self_power_w_m2: 0.0,
             back: BackBoundary::BUILDING,
             surface: None,
+            layers: irsig::thermal::Layers::NONE,
         };
         let offsets = geo.facet_offsets();
         let setup = FacetThermalSetup {

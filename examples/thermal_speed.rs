@@ -42,6 +42,7 @@ fn main() {
         self_power_w_m2: 0.0,
         back,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     let aluminium = SlabProperties {
         conductivity_w_m_k: 200.0,

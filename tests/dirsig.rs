@@ -169,10 +169,10 @@ fn imported_materials_carry_si_values() {
     let out = dir.join("out/t.json");
     let im = import(&scene, &out, &ImportOptions::default()).unwrap();
     let m = &im.materials.materials[0];
-    assert!((m.specific_heat_j_kg_k - 921.096).abs() < 1e-9);
-    assert!((m.density_kg_m3 - 2300.0).abs() < 1e-9);
-    assert!((m.conductivity_w_m_k - 0.930_4).abs() < 1e-9);
-    assert!((m.thickness_m - 0.1).abs() < 1e-12);
+    assert!((m.specific_heat_j_kg_k.unwrap() - 921.096).abs() < 1e-9);
+    assert!((m.density_kg_m3.unwrap() - 2300.0).abs() < 1e-9);
+    assert!((m.conductivity_w_m_k.unwrap() - 0.930_4).abs() < 1e-9);
+    assert!((m.thickness_m.unwrap() - 0.1).abs() < 1e-12);
     // No time in a bare .scene: a placeholder with a warning.
     assert!(im.warnings.iter().any(|w| w.contains("no image time")));
     // Written and loadable as an ordinary irsig scene.

@@ -110,6 +110,8 @@ fn material() -> impl Strategy<Value = Material> {
             emissivity_curve: None,
             double_sided: false,
             surface_energy: None,
+            layers: Vec::new(),
+            back: None,
         })
 }
 

@@ -40,6 +40,8 @@ fn material(name: &str, id: u32, emissivity: f64, specular: f64) -> Material {
         emissivity_curve: None,
         double_sided: false,
         surface_energy: None,
+        layers: Vec::new(),
+        back: None,
     }
 }
 

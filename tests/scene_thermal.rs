@@ -50,6 +50,7 @@ pub(crate) fn asphalt() -> SlabProperties {
         self_power_w_m2: 0.0,
         back: BackBoundary::GROUND,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     }
 }
 
@@ -64,6 +65,7 @@ fn brick() -> SlabProperties {
         self_power_w_m2: 0.0,
         back: BackBoundary::BUILDING,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     }
 }
 
@@ -426,6 +428,7 @@ fn yard() -> (
         self_power_w_m2: 0.0,
         back: BackBoundary::BOTH_FACES,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     let props = vec![
         asphalt(),

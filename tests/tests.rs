@@ -15,6 +15,7 @@ mod exposure_pipeline;
 mod flux;
 mod fuzz_smoke;
 mod georef;
+mod layers;
 mod material;
 mod radiometry;
 mod reliability;

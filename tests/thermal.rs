@@ -227,6 +227,7 @@ fn solve_energy_budget_closes() {
             self_power_w_m2: 0.0,
             back,
             surface: None,
+            layers: irsig::thermal::Layers::NONE,
         };
         let mut opts = SolveOptions::default();
         opts.spinup.max_cycles = 0;
@@ -285,7 +286,7 @@ fn steady_state_is_root_of_surface_balance() {
     for back in [
         BackBoundary::Insulated,
         BackBoundary::Interior {
-            air_temperature_k: t_in,
+            air: irsig::thermal::InteriorAir::Constant(t_in),
             film_coefficient_w_m2_k: h_in,
         },
     ] {
@@ -299,6 +300,7 @@ fn steady_state_is_root_of_surface_balance() {
             self_power_w_m2: 25.0,
             back,
             surface: None,
+            layers: irsig::thermal::Layers::NONE,
         };
         let expected = match back {
             BackBoundary::Insulated => bisect(balance, 200.0, 450.0),
@@ -355,6 +357,7 @@ fn panel_and_wall() -> (SlabProperties, SlabProperties) {
         self_power_w_m2: 0.0,
         back: BackBoundary::BOTH_FACES,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     let wall = SlabProperties {
         conductivity_w_m_k: 0.15,
@@ -531,10 +534,11 @@ fn coarse_grids_conserve_energy_and_reach_steady_state() {
         thermal_emissivity: 0.9,
         self_power_w_m2: 0.0,
         back: BackBoundary::Interior {
-            air_temperature_k: 295.0,
+            air: irsig::thermal::InteriorAir::Constant(295.0),
             film_coefficient_w_m2_k: 8.0,
         },
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     let sigma = STEFAN_BOLTZMANN_W_M2_K4;
     let h = 5.7 + 3.8 * 3.0;
@@ -589,6 +593,7 @@ fn invalid_inputs_name_the_field() {
         self_power_w_m2: 0.0,
         back: BackBoundary::Insulated,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     let opts = SolveOptions::default();
     let err = |props: &SlabProperties, forcing: &Forcing, inputs: &FacetInputs| {
@@ -874,6 +879,7 @@ fn concrete_with_backs() -> Vec<SlabProperties> {
         self_power_w_m2: 0.0,
         back: BackBoundary::Insulated,
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     vec![
         base,
@@ -1036,6 +1042,7 @@ fn ground_column_conducts_to_the_deep_soil() {
             depth_m: Some(depth),
         },
         surface: None,
+        layers: irsig::thermal::Layers::NONE,
     };
     let opts = SolveOptions {
         spinup: Spinup {

@@ -25,6 +25,12 @@
 //! changes: parsing, listing, sensitivity, calibration, the fitted material
 //! file and `irsig thermal --params` all go through the table.
 //!
+//! # Layered constructions
+//! For a material with `layers`, `conductivity_w_m_k`, `density_kg_m3` and
+//! `specific_heat_j_kg_k` are the **outer layer's** (setting one sets that
+//! layer's); `thickness_m` is refused (not listed, and a PARAMS file that
+//! names it gets the setter's error): the total thickness is the layers'.
+//!
 //! # Bounds
 //! `low`/`high` are the **physical** range of the property over the
 //! materials a thermal scene holds (sources per row). They are the default
@@ -130,7 +136,11 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         domain: POSITIVE,
         get: |m| Some(m.conductivity_w_m_k),
         set: |m, v| {
+            // A layered material's top-level value is its outer layer's.
             m.conductivity_w_m_k = v;
+            if let Some(l) = m.layers.first_mut() {
+                l.conductivity_w_m_k = v;
+            }
             Ok(())
         },
         source: "Incropera et al., Fundamentals of Heat and Mass Transfer, 6th ed., Tables A.1–A.3: insulating foams ≈ 0.026 to silver 429 W/(m·K)",
@@ -144,7 +154,11 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         domain: POSITIVE,
         get: |m| Some(m.specific_heat_j_kg_k),
         set: |m, v| {
+            // A layered material's top-level value is its outer layer's.
             m.specific_heat_j_kg_k = v;
+            if let Some(l) = m.layers.first_mut() {
+                l.specific_heat_j_kg_k = v;
+            }
             Ok(())
         },
         source: "Incropera et al., 6th ed., Tables A.1 and A.6: lead/gold ≈ 129 to liquid water 4217 J/(kg·K) at 0 °C",
@@ -158,7 +172,11 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         domain: POSITIVE,
         get: |m| Some(m.density_kg_m3),
         set: |m, v| {
+            // A layered material's top-level value is its outer layer's.
             m.density_kg_m3 = v;
+            if let Some(l) = m.layers.first_mut() {
+                l.density_kg_m3 = v;
+            }
             Ok(())
         },
         source: "Incropera et al., 6th ed., Tables A.1–A.3: expanded foams ≈ 16 to osmium/iridium ≈ 22 600 kg/m³",
@@ -170,8 +188,14 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         low: 1e-4,
         high: 10.0,
         domain: POSITIVE,
-        get: |m| Some(m.thickness_m),
+        get: |m| m.layers.is_empty().then_some(m.thickness_m),
         set: |m, v| {
+            if !m.layers.is_empty() {
+                return Err(
+                    "the material is a layered construction: its thickness is its layers' (set them in the material file)"
+                        .into(),
+                );
+            }
             m.thickness_m = v;
             Ok(())
         },

@@ -16,6 +16,10 @@
 //!   ]
 //! }
 //! ```
+//! A material may instead be a layered construction (`layers`, outer face
+//! first, each naming a single-slab material of the same file or giving
+//! its properties inline) and may say what its back face touches (`back`):
+//! see [`crate::material::construction`].
 //! `exposed_area`, `self_power_w_m2`, `specular_fraction`, `transmissivity`
 //! and `double_sided` default to 0/false. Spectral emissivity is either
 //! inline (`emissivity_curve`: `{wavelengths_um, emissivity, angles_deg}`,
@@ -102,14 +106,25 @@ pub struct MaterialEntry {
     /// Free text.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
-    /// Specific heat, J/(kg·K).
-    pub specific_heat_j_kg_k: f64,
-    /// Thermal conductivity, W/(m·K).
-    pub conductivity_w_m_k: f64,
-    /// Density, kg/m³.
-    pub density_kg_m3: f64,
-    /// Slab thickness, m.
-    pub thickness_m: f64,
+    /// Specific heat, J/(kg·K) (required without `layers`; left out with them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specific_heat_j_kg_k: Option<f64>,
+    /// Thermal conductivity, W/(m·K) (as `specific_heat_j_kg_k`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conductivity_w_m_k: Option<f64>,
+    /// Density, kg/m³ (as `specific_heat_j_kg_k`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density_kg_m3: Option<f64>,
+    /// Slab thickness, m (as `specific_heat_j_kg_k`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness_m: Option<f64>,
+    /// The construction's layers from the outer face
+    /// ([`crate::material::construction`]); absent: a single slab.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<crate::material::LayerEntry>,
+    /// What the back face touches (absent: decided by `exposed_area`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub back: Option<crate::material::BackSpec>,
     /// Solar absorptivity, 0–1.
     pub solar_absorptivity: f64,
     /// Broadband thermal emissivity, 0–1.
@@ -168,7 +183,27 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
     };
     let mut errors = Vec::new();
     let mut db = MaterialDb::new();
-    for (i, e) in file.materials.into_iter().enumerate() {
+    // Layers name single-slab materials of this file.
+    let singles: std::collections::HashMap<&str, &MaterialEntry> = file
+        .materials
+        .iter()
+        .filter(|e| e.layers.is_empty())
+        .map(|e| (e.name.as_str(), e))
+        .collect();
+    let mut resolved = Vec::with_capacity(file.materials.len());
+    for (i, e) in file.materials.iter().enumerate() {
+        resolved.push(resolve_thermal(e, &singles, &file.materials, &|f| {
+            at(format!("materials[{i}].{f}"))
+        }));
+    }
+    for (i, (e, thermal)) in file.materials.into_iter().zip(resolved).enumerate() {
+        let (k, rho, c, thickness, layers) = match thermal {
+            Ok(t) => t,
+            Err(mut errs) => {
+                errors.append(&mut errs);
+                continue;
+            }
+        };
         let curve = match (&e.emissivity_curve, &e.emissivity_file) {
             (Some(_), Some(_)) => {
                 errors.push(Error::parse(
@@ -193,10 +228,10 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
         let m = Material {
             id: e.id,
             name: e.name.clone(),
-            specific_heat_j_kg_k: e.specific_heat_j_kg_k,
-            conductivity_w_m_k: e.conductivity_w_m_k,
-            density_kg_m3: e.density_kg_m3,
-            thickness_m: e.thickness_m,
+            specific_heat_j_kg_k: c,
+            conductivity_w_m_k: k,
+            density_kg_m3: rho,
+            thickness_m: thickness,
             solar_absorptivity: e.solar_absorptivity,
             thermal_emissivity: e.thermal_emissivity,
             exposed_area: e.exposed_area,
@@ -206,6 +241,8 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
             emissivity_curve: curve,
             double_sided: e.double_sided,
             surface_energy: e.surface_energy,
+            layers,
+            back: e.back,
         };
         let problems = m.problems();
         if !problems.is_empty() {
@@ -232,6 +269,166 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
     } else {
         Err(errors)
     }
+}
+
+/// A material entry's thermal values `(k, ρ, c, thickness, layers)`: its
+/// own fields (all four required) without layers; with layers, each layer
+/// resolved (a named single-slab material of `singles`, or inline values)
+/// and the top-level values the outer layer's and the total thickness
+/// (the four then must be absent). Errors name the field through `at`.
+type Thermal = (f64, f64, f64, f64, Vec<crate::material::MaterialLayer>);
+fn resolve_thermal(
+    e: &MaterialEntry,
+    singles: &std::collections::HashMap<&str, &MaterialEntry>,
+    all: &[MaterialEntry],
+    at: &dyn Fn(&str) -> Location,
+) -> std::result::Result<Thermal, Vec<Error>> {
+    let mut errors = Vec::new();
+    let top = [
+        ("conductivity_w_m_k", e.conductivity_w_m_k),
+        ("density_kg_m3", e.density_kg_m3),
+        ("specific_heat_j_kg_k", e.specific_heat_j_kg_k),
+        ("thickness_m", e.thickness_m),
+    ];
+    if e.layers.is_empty() {
+        for (f, v) in top {
+            if v.is_none() {
+                errors.push(Error::parse(
+                    at(f),
+                    format!(
+                        "material `{}`: missing `{f}` (required for a single slab; a construction gives `layers` instead)",
+                        e.name
+                    ),
+                ));
+            }
+        }
+        return if errors.is_empty() {
+            Ok((
+                e.conductivity_w_m_k.expect("checked"),
+                e.density_kg_m3.expect("checked"),
+                e.specific_heat_j_kg_k.expect("checked"),
+                e.thickness_m.expect("checked"),
+                Vec::new(),
+            ))
+        } else {
+            Err(errors)
+        };
+    }
+    for (f, v) in top {
+        if v.is_some() {
+            errors.push(Error::parse(
+                at(f),
+                format!(
+                    "material `{}`: has `layers`, so `{f}` comes from them (the outer layer's, the total thickness); leave it out",
+                    e.name
+                ),
+            ));
+        }
+    }
+    let mut layers = Vec::with_capacity(e.layers.len());
+    for (j, l) in e.layers.iter().enumerate() {
+        let f = |name: &str| format!("layers[{j}].{name}");
+        let inline = [
+            ("conductivity_w_m_k", l.conductivity_w_m_k),
+            ("density_kg_m3", l.density_kg_m3),
+            ("specific_heat_j_kg_k", l.specific_heat_j_kg_k),
+        ];
+        let (k, rho, c) = match &l.material {
+            Some(name) => {
+                if let Some((n, _)) = inline.iter().find(|(_, v)| v.is_some()) {
+                    errors.push(Error::parse(
+                        at(&f(n)),
+                        format!(
+                            "material `{}`: the layer names material `{name}`, whose `{n}` it takes; leave it out",
+                            e.name
+                        ),
+                    ));
+                    continue;
+                }
+                match singles.get(name.as_str()) {
+                    Some(m) => (
+                        m.conductivity_w_m_k.unwrap_or(f64::NAN),
+                        m.density_kg_m3.unwrap_or(f64::NAN),
+                        m.specific_heat_j_kg_k.unwrap_or(f64::NAN),
+                    ),
+                    None => {
+                        let why = if all.iter().any(|m| &m.name == name) {
+                            format!(
+                                "material `{name}` is itself layered; a layer must name a single-slab material"
+                            )
+                        } else {
+                            let mut near: Vec<&str> = singles
+                                .keys()
+                                .copied()
+                                .filter(|n| {
+                                    let (a, b) = (n.to_lowercase(), name.to_lowercase());
+                                    a.contains(&b) || b.contains(&a)
+                                })
+                                .collect();
+                            near.sort_unstable();
+                            let hint = if near.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" (similar: {})", near.join(", "))
+                            };
+                            format!("no material `{name}` in this file{hint}")
+                        };
+                        errors.push(Error::parse(
+                            at(&f("material")),
+                            format!("material `{}`: {why}", e.name),
+                        ));
+                        continue;
+                    }
+                }
+            }
+            None => {
+                let missing: Vec<&str> = inline
+                    .iter()
+                    .filter(|(_, v)| v.is_none())
+                    .map(|(n, _)| *n)
+                    .collect();
+                if !missing.is_empty() {
+                    errors.push(Error::parse(
+                        at(&format!("layers[{j}]")),
+                        format!(
+                            "material `{}`: the layer needs `material` or inline {}",
+                            e.name,
+                            missing
+                                .iter()
+                                .map(|n| format!("`{n}`"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    ));
+                    continue;
+                }
+                (
+                    l.conductivity_w_m_k.expect("checked"),
+                    l.density_kg_m3.expect("checked"),
+                    l.specific_heat_j_kg_k.expect("checked"),
+                )
+            }
+        };
+        layers.push(crate::material::MaterialLayer {
+            material: l.material.clone(),
+            conductivity_w_m_k: k,
+            density_kg_m3: rho,
+            specific_heat_j_kg_k: c,
+            thickness_m: l.thickness_m,
+            contact_resistance_m2_k_w: l.contact_resistance_m2_k_w,
+        });
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let outer = &layers[0];
+    Ok((
+        outer.conductivity_w_m_k,
+        outer.density_kg_m3,
+        outer.specific_heat_j_kg_k,
+        layers.iter().map(|l| l.thickness_m).sum(),
+        layers,
+    ))
 }
 
 /// Read a spectral emissivity file: DIRSIG `.ems` by extension, else CSV.

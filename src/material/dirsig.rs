@@ -486,6 +486,8 @@ pub fn read_mat_with(
             emissivity_curve: curve,
             double_sided,
             surface_energy: None,
+            layers: Vec::new(),
+            back: None,
         };
         // Real libraries hold THERM entries with THICKNESS = 0 (anadirsig.mat: water,
         // grass) whose meaning in THERM is not documented; irsig's slab cannot represent

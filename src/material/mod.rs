@@ -33,6 +33,7 @@
 //! materials by name in SI units. Must not know the thermal solver or the
 //! radiometry that consume them.
 
+pub mod construction;
 pub mod db;
 pub mod dirsig;
 pub mod stock;
@@ -46,6 +47,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Location, Result};
 use crate::math::{bracket, interp1d, lerp};
+pub use construction::{BackSpec, InteriorSpec, LayerEntry, MaterialLayer};
 pub use surface::{SurfaceEnergySpec, SurfaceKind};
 
 /// A spectral emissivity curve, optionally angle-dependent.
@@ -180,6 +182,15 @@ pub struct Material {
     /// How the surface evaporates (`None`: a dry surface with McAdams'
     /// convection).
     pub surface_energy: Option<SurfaceEnergySpec>,
+    /// The construction's layers from the outer face (empty: a single slab
+    /// of the properties above). With layers, `conductivity_w_m_k`,
+    /// `density_kg_m3` and `specific_heat_j_kg_k` are the outer layer's and
+    /// `thickness_m` the total ([`construction`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<MaterialLayer>,
+    /// What the back face touches (`None`: decided by `exposed_area`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub back: Option<BackSpec>,
 }
 
 impl Material {
@@ -241,6 +252,25 @@ impl Material {
         if let Some(s) = &self.surface_energy {
             for (f, m) in s.problems() {
                 p.push((format!("surface_energy.{f}"), m));
+            }
+        }
+        for (i, l) in self.layers.iter().enumerate() {
+            for (f, m) in l.problems() {
+                p.push((format!("layers[{i}].{f}"), m));
+            }
+        }
+        if let Some(b) = &self.back {
+            for (f, m) in b.problems() {
+                p.push((format!("back.{f}"), m));
+            }
+            if self.exposed_area != 0.0 {
+                p.push((
+                    "exposed_area".to_string(),
+                    format!(
+                        "{}: give either `exposed_area` or `back`, not both",
+                        self.exposed_area
+                    ),
+                ));
             }
         }
         p

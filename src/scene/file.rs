@@ -159,6 +159,11 @@ pub struct ObjectSpec {
     /// Placements; absent = one, at `transform`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub instances: Option<Vec<TransformSpec>>,
+    /// What the back faces of the object's parts touch (a building's
+    /// interior), over their materials' own; a part's `back` or
+    /// `exposed_area` overrides it ([`crate::material::BackSpec`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub back: Option<crate::material::BackSpec>,
 }
 
 /// A part: a material and per-part overrides of its thermal inputs.
@@ -178,6 +183,10 @@ pub struct PartSpec {
     /// Exposed-area override (−1..=1, see `irsig::material`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exposed_area: Option<f64>,
+    /// What the part's back face touches, over the object's and the
+    /// material's ([`crate::material::BackSpec`]; not with `exposed_area`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub back: Option<crate::material::BackSpec>,
     /// Fixed temperature, K: bypasses the thermal model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fixed_temperature_k: Option<f64>,

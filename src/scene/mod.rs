@@ -64,6 +64,9 @@ pub struct Part {
     pub self_power_w_m2: Option<f64>,
     /// Exposed-area override.
     pub exposed_area: Option<f64>,
+    /// Back-boundary override: the part's own, else its object's (None
+    /// where the part gives `exposed_area`).
+    pub back: Option<crate::material::BackSpec>,
     /// Fixed temperature, K (bypasses the thermal model).
     pub fixed_temperature_k: Option<f64>,
     /// Default sky-view shape factor, 0..=1.
@@ -414,7 +417,9 @@ impl Scene {
     }
 
     /// The material of part `part` with the part's overrides applied
-    /// (thickness, self power, exposed area).
+    /// (thickness, self power, exposed area, back boundary: a part's
+    /// `back` or `exposed_area` over its object's `back` over the
+    /// material's).
     pub fn part_material(&self, part: usize) -> Material {
         let p = &self.parts[part];
         let mut m = self.materials.materials()[p.material].clone();
@@ -426,6 +431,11 @@ impl Scene {
         }
         if let Some(e) = p.exposed_area {
             m.exposed_area = e;
+            m.back = None;
+        }
+        if let Some(b) = &p.back {
+            m.back = Some(b.clone());
+            m.exposed_area = 0.0;
         }
         m
     }
@@ -1387,6 +1397,12 @@ impl Loader {
         parts: &mut Vec<Part>,
     ) -> Option<Vec<u32>> {
         let mut ok = true;
+        if let Some(b) = &o.back {
+            for (field, msg) in b.problems() {
+                self.err(&format!("{at}.back.{field}"), msg);
+                ok = false;
+            }
+        }
         let mut spec_used = vec![false; o.parts.len()];
         let mut map = Vec::with_capacity(gm.groups.len());
         let material_index = |this: &mut Self, name: &str, field: &str| -> Option<usize> {
@@ -1449,6 +1465,31 @@ impl Loader {
                     &|v| (-1.0..=1.0).contains(&v),
                     "−1..=1",
                 );
+                if let Some(b) = &p.back {
+                    if p.exposed_area.is_some() {
+                        self.err(
+                            &format!("{f}.exposed_area"),
+                            "give either `exposed_area` or `back`, not both",
+                        );
+                        good = false;
+                    }
+                    for (field, msg) in b.problems() {
+                        self.err(&format!("{f}.back.{field}"), msg);
+                        good = false;
+                    }
+                }
+                if let (Some(t), Some(mi)) = (p.thickness_m, m)
+                    && !db.materials()[mi].layers.is_empty()
+                {
+                    self.err(
+                        &format!("{f}.thickness_m"),
+                        format!(
+                            "{t} m: material `{}` is a layered construction, whose thickness is its layers'; give another material instead",
+                            p.material
+                        ),
+                    );
+                    good = false;
+                }
                 good &= check(
                     self,
                     p.fixed_temperature_k,
@@ -1470,6 +1511,11 @@ impl Loader {
                     thickness_m: p.thickness_m,
                     self_power_w_m2: p.self_power_w_m2,
                     exposed_area: p.exposed_area,
+                    back: match (&p.back, p.exposed_area) {
+                        (Some(b), _) => Some(b.clone()),
+                        (None, Some(_)) => None,
+                        (None, None) => o.back.clone(),
+                    },
                     fixed_temperature_k: p.fixed_temperature_k,
                     shape_factor: p.shape_factor,
                 })
@@ -1502,6 +1548,7 @@ impl Loader {
                         thickness_m: None,
                         self_power_w_m2: None,
                         exposed_area: None,
+                        back: o.back.clone(),
                         fixed_temperature_k: None,
                         shape_factor: None,
                     }),

@@ -12,6 +12,15 @@
 //! vehicle. Everything is built from primitives and instancing, so the file
 //! stays small; the output is deterministic.
 //!
+//! Built surfaces are layered constructions of `scenes/materials.json`:
+//! streets and parking lots `asphalt_road` (asphalt on a crushed-stone base
+//! on the soil), the plant's roof `flat_roof_insulated`, its walls
+//! `insulated_metal_panel`, brick walls `brick_cavity_wall`, clapboard walls
+//! `wood_frame_wall`. Walls and flat roofs have the building interior
+//! behind them ([`interior`]: suited to the season of [`TOWN_TIME`]);
+//! pitched roofs and gables keep their ventilated attic (their materials'
+//! `exposed_area`).
+//!
 //! Owns the town's layout and its random placements. Takes nothing; gives
 //! the scene JSON ([`town_scene`]), the same document a user would write.
 //! Must not know how scenes are loaded or rendered.
@@ -22,6 +31,42 @@ use serde_json::{Value, json};
 
 use super::file::{Bowl, Flat, HeightFunction, Wave};
 use super::height_function;
+
+/// The scene's image time (local, RFC 3339).
+pub const TOWN_TIME: &str = "2025-06-21T14:00:00-04:00";
+
+/// Whether a month (1–12) lies in the cooling season of the northern
+/// mid-latitudes (May–September; the town is at 43° N).
+fn cooling_season(month: u32) -> bool {
+    (5..=9).contains(&month)
+}
+
+/// The interior behind the town's walls (`roof: false`) and flat roofs in
+/// the season of `month`, as a scene-file `back`:
+/// - heating season: held at 20 °C, the EN 16798-1:2019 category II design
+///   value for heating;
+/// - cooling season: set points 20 °C (heating) and 26 °C (cooling,
+///   EN 16798-1 category II), free-floating at the outdoor air between —
+///   cooled on a hot afternoon, at 20 °C on a cool night.
+///
+/// Film coefficients `1/R_si` from EN ISO 6946:2017 Table 7: walls
+/// `1/0.13`; roofs `1/0.10` when heat flows up (a heated room under a cold
+/// roof) and `1/0.17` when it flows down (a sun-heated roof over a cooled
+/// room).
+pub fn interior(month: u32, roof: bool) -> Value {
+    let r_si: f64 = match (roof, cooling_season(month)) {
+        (false, _) => 0.13,
+        (true, false) => 0.10,
+        (true, true) => 0.17,
+    };
+    let h = (1.0 / r_si * 100.0).round() / 100.0;
+    if cooling_season(month) {
+        json!({"interior": {"heating_setpoint_k": 293.15, "cooling_setpoint_k": 299.15,
+                            "film_coefficient_w_m2_k": h}})
+    } else {
+        json!({"interior": {"air_temperature_k": 293.15, "film_coefficient_w_m2_k": h}})
+    }
+}
 
 /// Half-extent of the terrain, m.
 const HALF: f64 = 300.0;
@@ -199,6 +244,11 @@ fn car_parts(running: bool) -> Value {
 /// The bundled town scene as JSON (what `scenes/town/scene.json` holds).
 pub fn town_scene() -> Value {
     let l = layout();
+    let month = chrono::DateTime::parse_from_rfc3339(TOWN_TIME)
+        .map(|t| chrono::Datelike::month(&t))
+        .expect("a valid RFC 3339 time");
+    let wall_in = interior(month, false);
+    let roof_in = interior(month, true);
     let h = |x: f64, y: f64| height_function(&l.terrain, x, y);
     let cell = 2.0 * HALF / CELLS as f64;
     // Class map, first row = north.
@@ -222,7 +272,7 @@ pub fn town_scene() -> Value {
             "size": [2.0 * HALF, 2.0 * HALF],
             "cells": [CELLS, CELLS],
             "function": serde_json::to_value(&l.terrain).expect("serialises"),
-            "classes": {"legend": {"g": "grass", "a": "asphalt", "c": "concrete",
+            "classes": {"legend": {"g": "grass", "a": "asphalt_road", "c": "concrete",
                                     "s": "bare_soil", "d": "sand"},
                         "rows": rows}
         }}]
@@ -231,16 +281,16 @@ pub fn town_scene() -> Value {
     let pz = h(0.0, 60.0);
     objects.push(json!({
         "name": "plant_building",
-        "description": "Main plant building, 160 m x 80 m x 14 m, built-up tar-and-gravel roof",
+        "description": "Main plant building, 160 m x 80 m x 14 m, insulated flat roof, metal-panel walls",
         "shapes": [
             {"box": {"size": [160.0, 80.0, 14.0], "max_edge_m": 4.0, "bottom": false}},
             {"box": {"size": [40.0, 30.0, 6.0], "max_edge_m": 4.0, "bottom": false},
              "transform": {"translate": [-60.0, -55.0, 0.0]}, "part": "annex"}
         ],
         "parts": [
-            {"name": "top", "material": "tar_gravel_roof"},
-            {"name": "sides", "material": "aluminium_siding"},
-            {"name": "annex", "material": "brick"}
+            {"name": "top", "material": "flat_roof_insulated", "back": roof_in},
+            {"name": "sides", "material": "insulated_metal_panel", "back": wall_in},
+            {"name": "annex", "material": "brick_cavity_wall", "back": wall_in}
         ],
         "transform": tf(0.0, 60.0, pz - 0.3, 0.0)
     }));
@@ -294,7 +344,7 @@ pub fn town_scene() -> Value {
              "transform": {"translate": [0.0, 19.5, 24.0], "rotate_deg": [0.0, 0.0, 22.5]}, "part": "spire"}
         ],
         "parts": [
-            {"name": "walls", "material": "brick", "thickness_m": 0.4},
+            {"name": "walls", "material": "brick", "thickness_m": 0.4, "back": wall_in},
             {"name": "roof", "material": "asphalt_shingle_roof"},
             {"name": "gables", "material": "brick", "thickness_m": 0.4},
             {"name": "spire", "material": "asphalt_shingle_roof", "exposed_area": 1.0}
@@ -305,8 +355,20 @@ pub fn town_scene() -> Value {
     let sites = house_sites();
     let (a, b): (Vec<_>, Vec<_>) = sites.iter().enumerate().partition(|(i, _)| i % 3 != 2);
     for (name, list, wall, size, roof_h) in [
-        ("house_clapboard", a, "wood_siding", [9.0, 12.0, 5.5], 3.5),
-        ("house_brick", b, "brick", [10.0, 13.0, 3.2], 3.0),
+        (
+            "house_clapboard",
+            a,
+            ("wood_frame_wall", "wood_siding"),
+            [9.0, 12.0, 5.5],
+            3.5,
+        ),
+        (
+            "house_brick",
+            b,
+            ("brick_cavity_wall", "brick"),
+            [10.0, 13.0, 3.2],
+            3.0,
+        ),
     ] {
         let inst: Vec<Value> = list
             .iter()
@@ -320,9 +382,9 @@ pub fn town_scene() -> Value {
                  "transform": {"translate": [0.0, 0.0, size[2]]}}
             ],
             "parts": [
-                {"name": "walls", "material": wall},
+                {"name": "walls", "material": wall.0, "back": wall_in},
                 {"name": "roof", "material": "asphalt_shingle_roof"},
-                {"name": "gables", "material": wall}
+                {"name": "gables", "material": wall.1}
             ],
             "instances": inst
         }));
@@ -482,7 +544,7 @@ pub fn town_scene() -> Value {
         "$schema": "../scene.schema.json",
         "description": "Bundled default scene: a small industrial town after the Kodak Hawkeye plant area, Rochester NY. Generated by `irsig scene town` (src/scene/town.rs); edit the generator, not this file.",
         "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160.0, "utc_offset_hours": -4.0},
-        "time": "2025-06-21T14:00:00-04:00",
+        "time": TOWN_TIME,
         "weather": {"file": "weather.csv"},
         "materials": ["../materials.json"],
         "objects": objects,

@@ -182,6 +182,24 @@ impl Default for Grid {
     }
 }
 
+/// One layer of a [`Slab::layered`] column.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayerCells {
+    /// Thickness, m (> 0).
+    pub thickness_m: f64,
+    /// Conductivity `k`, W m⁻¹ K⁻¹ (> 0).
+    pub conductivity_w_m_k: f64,
+    /// Volumetric heat capacity `ρc`, J m⁻³ K⁻¹ (> 0).
+    pub rho_c: f64,
+    /// Contact resistance between this layer and the next, m² K W⁻¹ (≥ 0;
+    /// ignored behind the last layer).
+    pub contact_resistance_m2_k_w: f64,
+    /// Cells in the layer (≥ 1).
+    pub cells: usize,
+    /// Ratio of successive cell widths away from the layer's front face (≥ 1).
+    pub growth: f64,
+}
+
 /// Counters of the work done, for diagnostics.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct StepStats {
@@ -297,6 +315,75 @@ impl Slab {
             ],
             stage_boundary_k: [(initial_k, initial_k); 3],
         }
+    }
+
+    /// A slab of layers from the front face: each [`LayerCells`] is a layer
+    /// of its own conductivity and volumetric heat capacity split into
+    /// `cells` cells growing by `growth` away from the layer's front face,
+    /// with a node on every interface. Every cell lies within one layer, so
+    /// the conductance between two nodes is that layer's `k/Δ` (the
+    /// harmonic mean of the two half-cells' conductances, Patankar 1980
+    /// §4.2-3, reduces to it); a contact resistance `R` (m² K W⁻¹) behind a
+    /// layer adds in series to the next layer's first cell,
+    /// `K = 1/(Δ/k + R)`. The interface node's capacity is the sum of its
+    /// two half cells, as for any node, so energy is conserved exactly.
+    ///
+    /// Panics in debug builds on an empty list or non-positive inputs; the
+    /// public solver validates them first.
+    pub fn layered(layers: &[LayerCells], initial_k: f64) -> Slab {
+        debug_assert!(!layers.is_empty());
+        let mut widths = Vec::new();
+        let mut conductance = Vec::new();
+        let mut rho_c = Vec::new();
+        let mut extra_r = 0.0;
+        for l in layers {
+            debug_assert!(l.thickness_m > 0.0 && l.conductivity_w_m_k > 0.0 && l.rho_c > 0.0);
+            let n = l.cells.max(1);
+            let r = l.growth.max(1.0);
+            let series = if (r - 1.0).abs() < 1e-12 {
+                n as f64
+            } else {
+                (r.powi(n as i32) - 1.0) / (r - 1.0)
+            };
+            let mut w = l.thickness_m / series;
+            let mut used = 0.0;
+            for j in 0..n {
+                // The last cell closes the layer exactly.
+                let wj = if j + 1 == n { l.thickness_m - used } else { w };
+                used += wj;
+                widths.push(wj);
+                rho_c.push(l.rho_c);
+                conductance.push(1.0 / (wj / l.conductivity_w_m_k + extra_r));
+                extra_r = 0.0;
+                w *= r;
+            }
+            extra_r = l.contact_resistance_m2_k_w;
+        }
+        let n = widths.len();
+        let mut depth = Vec::with_capacity(n + 1);
+        depth.push(0.0);
+        for (j, w) in widths.iter().enumerate() {
+            depth.push(depth[j] + w);
+        }
+        let mut capacity = vec![0.0; n + 1];
+        for (j, (&wj, &rc)) in widths.iter().zip(&rho_c).enumerate() {
+            capacity[j] += 0.5 * rc * wj;
+            capacity[j + 1] += 0.5 * rc * wj;
+        }
+        let mut s = Slab::new(
+            depth[n],
+            1.0,
+            1.0,
+            Grid {
+                cells: n,
+                growth: 1.0,
+            },
+            initial_k,
+        );
+        s.depth_m = depth;
+        s.capacity = capacity;
+        s.conductance = conductance;
+        s
     }
 
     /// The slab with a **skin** node in front of its front surface: a node

@@ -51,6 +51,7 @@
 //!     conductivity_w_m_k: 1.4, density_kg_m3: 2300.0, specific_heat_j_kg_k: 880.0,
 //!     thickness_m: 0.2, solar_absorptivity: 0.7, thermal_emissivity: 0.9,
 //!     self_power_w_m2: 0.0, back: BackBoundary::Insulated, surface: None,
+//!     layers: thermal::Layers::NONE,
 //! };
 //! let sun = [1.0f32, 1.0];
 //! let cos = [0.8f32, 0.8];
@@ -61,6 +62,7 @@
 
 pub mod balance;
 pub mod conduction;
+pub mod construction;
 pub mod latent;
 pub mod linear;
 pub mod scene;
@@ -70,7 +72,10 @@ use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::weather::WeatherRecord;
 pub use balance::{INTERIOR_AIR_K, INTERIOR_FILM_W_M2_K, mcadams_h_w_m2_k};
-pub use conduction::{Boundary, Grid, STEFAN_BOLTZMANN_W_M2_K4, Slab, StepStats, SurfaceFlux};
+pub use conduction::{
+    Boundary, Grid, LayerCells, STEFAN_BOLTZMANN_W_M2_K4, Slab, StepStats, SurfaceFlux,
+};
+pub use construction::{InteriorAir, Layer, Layers, MAX_LAYERS, SCHEDULE_HOURS};
 pub use linear::{
     Linearization, SourceHistory, SourceModel, background_coefficients, linearize, linearize_with,
     source_history, source_history_into, source_history_with,
@@ -87,7 +92,7 @@ pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
 /// | `Insulated`  | roads, lawns, soil, insulated roofs (exposed area 0) | 0                        |
 /// | `Exposed`    | leaves, fences, vehicle panels (1); walls with a ventilated cavity (0.5) | `a·[h(u)(T_air−T) + ε F_b E_sky + ε(1−F_b)σT_bg⁴ − εσT⁴]` |
 /// | `Ground`     | soil and pavements as a deep column | none: the column extends to `depth_m`, held at `T_deep` |
-/// | `Interior`   | building walls and roofs         | `h_i (T_interior − T)`                      |
+/// | `Interior`   | building walls and roofs         | `h_i (T_interior(t) − T)`                   |
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BackBoundary {
     /// Adiabatic back face: no heat flows through it.
@@ -113,10 +118,14 @@ pub enum BackBoundary {
         depth_m: Option<f64>,
     },
     /// Building envelope: the back face exchanges heat with interior air
-    /// through a film coefficient (convection + radiation to the room).
+    /// through a film coefficient (convection + radiation to the room):
+    /// `q = h_i (T_in(t) − T)`, the interior surface resistance
+    /// `R_si = 1/h_i` of EN ISO 6946:2017 Table 7 (0.13 m² K/W for walls,
+    /// 0.10 heat flow up, 0.17 heat flow down).
     Interior {
-        /// Interior air temperature, K.
-        air_temperature_k: f64,
+        /// Interior air temperature at each record (constant, hourly
+        /// schedule or set points against the outdoor air).
+        air: InteriorAir,
         /// Interior film coefficient, W m⁻² K⁻¹.
         film_coefficient_w_m2_k: f64,
     },
@@ -126,7 +135,7 @@ impl BackBoundary {
     /// A building interior at [`INTERIOR_AIR_K`] with the ISO 6946 film
     /// coefficient [`INTERIOR_FILM_W_M2_K`].
     pub const BUILDING: BackBoundary = BackBoundary::Interior {
-        air_temperature_k: INTERIOR_AIR_K,
+        air: InteriorAir::Constant(INTERIOR_AIR_K),
         film_coefficient_w_m2_k: INTERIOR_FILM_W_M2_K,
     };
 
@@ -159,6 +168,49 @@ impl BackBoundary {
     }
 }
 
+impl BackBoundary {
+    /// The back boundary a file spells ([`crate::material::BackSpec`]); an
+    /// interior without a film coefficient gets the wall's,
+    /// [`crate::material::construction::INTERIOR_FILM_WALL_W_M2_K`]. The
+    /// spec is taken as checked ([`crate::material::BackSpec::problems`]);
+    /// [`SlabProperties::validate`] catches what is out of range.
+    pub fn from_spec(spec: &crate::material::BackSpec) -> BackBoundary {
+        use crate::material::BackSpec;
+        match spec {
+            BackSpec::Insulated => BackBoundary::Insulated,
+            BackSpec::OutdoorAir { fraction } => BackBoundary::Exposed {
+                fraction: *fraction,
+            },
+            BackSpec::Ground {
+                deep_temperature_k,
+                depth_m,
+            } => BackBoundary::Ground {
+                deep_temperature_k: *deep_temperature_k,
+                depth_m: *depth_m,
+            },
+            BackSpec::Interior(i) => BackBoundary::Interior {
+                air: match (&i.air_temperature_k, &i.schedule_k) {
+                    (Some(t), _) => InteriorAir::Constant(*t),
+                    (None, Some(h)) => {
+                        let mut a = [f64::NAN; SCHEDULE_HOURS];
+                        for (x, t) in a.iter_mut().zip(h) {
+                            *x = *t;
+                        }
+                        InteriorAir::Hourly(a)
+                    }
+                    (None, None) => InteriorAir::SetPoints {
+                        heating_k: i.heating_setpoint_k.unwrap_or(f64::NAN),
+                        cooling_k: i.cooling_setpoint_k.unwrap_or(f64::NAN),
+                    },
+                },
+                film_coefficient_w_m2_k: i
+                    .film_coefficient_w_m2_k
+                    .unwrap_or(crate::material::construction::INTERIOR_FILM_WALL_W_M2_K),
+            },
+        }
+    }
+}
+
 /// Thermal properties of one slab material, SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlabProperties {
@@ -181,6 +233,12 @@ pub struct SlabProperties {
     /// How the front surface exchanges heat and vapour with the air (None:
     /// dry, McAdams' convection; [`surface`]).
     pub surface: Option<LandSurface>,
+    /// The construction's layers from the outer face ([`Layers::NONE`]: a
+    /// homogeneous slab of the properties above). With layers, the column
+    /// is the layers: `conductivity`, `density` and `specific_heat` above
+    /// are the outer layer's (for reports) and `thickness_m` is the layers'
+    /// total; the optical properties and `surface` are the outer face's.
+    pub layers: Layers,
 }
 
 impl SlabProperties {
@@ -194,6 +252,27 @@ impl SlabProperties {
         (2.0 * self.diffusivity_m2_s() / DIURNAL_OMEGA_RAD_S).sqrt()
     }
 
+    /// The slab's finite-volume column at a uniform `initial_k` (K): the
+    /// homogeneous slab of [`Slab::new`] without layers, else
+    /// [`Slab::layered`] with [`construction::column_cells`].
+    pub fn column(&self, grid: Grid, initial_k: f64) -> Slab {
+        let depth = self.column_depth_m();
+        if self.layers.is_empty() {
+            Slab::new(
+                depth,
+                self.conductivity_w_m_k,
+                self.density_kg_m3 * self.specific_heat_j_kg_k,
+                grid,
+                initial_k,
+            )
+        } else {
+            Slab::layered(
+                &construction::column_cells(&self.layers, depth, grid),
+                initial_k,
+            )
+        }
+    }
+
     /// Depth of the computed column, m: the thickness, or for
     /// [`BackBoundary::Ground`] the column depth described there.
     pub fn column_depth_m(&self) -> f64 {
@@ -201,9 +280,18 @@ impl SlabProperties {
             BackBoundary::Ground {
                 depth_m: Some(d), ..
             } => d,
-            BackBoundary::Ground { depth_m: None, .. } => {
-                self.thickness_m.max(5.0 * self.diurnal_damping_depth_m())
-            }
+            BackBoundary::Ground { depth_m: None, .. } => match self.layers.as_slice() {
+                [] => self.thickness_m.max(5.0 * self.diurnal_damping_depth_m()),
+                // The last layer continues down to five of its own damping
+                // depths below the layers above it.
+                l => {
+                    let last = l[l.len() - 1];
+                    let above = self.layers.thickness_m() - last.thickness_m;
+                    self.layers
+                        .thickness_m()
+                        .max(above + 5.0 * last.diurnal_damping_depth_m())
+                }
+            },
             _ => self.thickness_m,
         }
     }
@@ -228,7 +316,10 @@ impl SlabProperties {
             solar_absorptivity: m.solar_absorptivity,
             thermal_emissivity: m.thermal_emissivity,
             self_power_w_m2: m.self_power_w_m2,
-            back: BackBoundary::from_exposed_area(m.exposed_area),
+            back: match &m.back {
+                Some(spec) => BackBoundary::from_spec(spec),
+                None => BackBoundary::from_exposed_area(m.exposed_area),
+            },
             surface: match &m.surface_energy {
                 Some(spec) => Some(LandSurface::from_spec(spec).map_err(|e| {
                     Error::invalid(
@@ -238,6 +329,19 @@ impl SlabProperties {
                 })?),
                 None => None,
             },
+            layers: Layers::new(
+                &m.layers
+                    .iter()
+                    .map(|l| Layer {
+                        conductivity_w_m_k: l.conductivity_w_m_k,
+                        density_kg_m3: l.density_kg_m3,
+                        specific_heat_j_kg_k: l.specific_heat_j_kg_k,
+                        thickness_m: l.thickness_m,
+                        contact_resistance_m2_k_w: l.contact_resistance_m2_k_w,
+                    })
+                    .collect::<Vec<_>>(),
+            )
+            .map_err(|e| rename(e, &field))?,
         };
         p.validate_with(&field)?;
         Ok(p)
@@ -315,15 +419,10 @@ impl SlabProperties {
                 }
             }
             BackBoundary::Interior {
-                air_temperature_k,
+                air,
                 film_coefficient_w_m2_k,
             } => {
-                if !(air_temperature_k.is_finite() && air_temperature_k > 0.0) {
-                    return Err(Error::invalid(
-                        field("back.air_temperature_k"),
-                        format!("expected a positive temperature (K), got {air_temperature_k}"),
-                    ));
-                }
+                air.validate("back").map_err(|e| rename(e, field))?;
                 if !(film_coefficient_w_m2_k.is_finite() && film_coefficient_w_m2_k >= 0.0) {
                     return Err(Error::invalid(
                         field("back.film_coefficient_w_m2_k"),
@@ -344,12 +443,30 @@ impl SlabProperties {
             BackBoundary::Insulated => {}
         }
         if let Some(s) = &self.surface {
-            s.validate().map_err(|e| match e {
-                Error::Invalid { field: f, message } => Error::invalid(field(&f), message),
-                other => other,
-            })?;
+            s.validate().map_err(|e| rename(e, field))?;
+        }
+        if !self.layers.is_empty() {
+            self.layers.validate().map_err(|e| rename(e, field))?;
+            let total = self.layers.thickness_m();
+            if (self.thickness_m - total).abs() > 1e-9 * total {
+                return Err(Error::invalid(
+                    field("thickness_m"),
+                    format!(
+                        "{} m differs from the layers' total {total} m (a layered slab's thickness is its layers')",
+                        self.thickness_m
+                    ),
+                ));
+            }
         }
         Ok(())
+    }
+}
+
+/// An invalid-field error with its field named through `field`.
+fn rename(e: Error, field: &dyn Fn(&str) -> String) -> Error {
+    match e {
+        Error::Invalid { field: f, message } => Error::invalid(field(&f), message),
+        other => other,
     }
 }
 
@@ -391,6 +508,10 @@ pub struct Forcing {
     /// Height of the air temperature and humidity measurement, m (default
     /// [`AIR_HEIGHT_M`]).
     pub air_height_m: f64,
+    /// Local time of day of the first record, s after local midnight (for
+    /// interior schedules, [`InteriorAir::Hourly`]; 0 for
+    /// [`Forcing::constant`]).
+    pub start_second_of_day: f64,
 }
 
 /// Default height of a weather file's wind, m: the WMO standard anemometer
@@ -436,6 +557,11 @@ impl Forcing {
             precipitation_mm: records.iter().map(|r| r.precipitation_mm).collect(),
             wind_height_m: WIND_HEIGHT_M,
             air_height_m: AIR_HEIGHT_M,
+            start_second_of_day: t0.map_or(0.0, |t| {
+                use chrono::Timelike;
+                let c = t.time();
+                c.num_seconds_from_midnight() as f64 + c.nanosecond() as f64 * 1e-9
+            }),
         };
         f.validate()?;
         Ok(f)
@@ -473,6 +599,7 @@ impl Forcing {
             precipitation_mm: vec![0.0; n],
             wind_height_m: WIND_HEIGHT_M,
             air_height_m: AIR_HEIGHT_M,
+            start_second_of_day: 0.0,
         }
     }
 
@@ -963,10 +1090,10 @@ fn prepare(
             )),
             BackBoundary::Ground { .. } => Boundary::Temperature(deep_k.unwrap_or(air)),
             BackBoundary::Interior {
-                air_temperature_k,
+                air: interior,
                 film_coefficient_w_m2_k,
             } => Boundary::Flux(balance::film_flux(
-                air_temperature_k,
+                interior.temperature_k(forcing.start_second_of_day + forcing.times_s[k], air),
                 film_coefficient_w_m2_k,
             )),
         });
@@ -1112,13 +1239,7 @@ fn solve_prepared(
     mut tangent: Option<&mut linear::Tangent>,
 ) -> ThermalSolution {
     let depth = props.column_depth_m();
-    let mut slab = Slab::new(
-        depth,
-        props.conductivity_w_m_k,
-        props.density_kg_m3 * props.specific_heat_j_kg_k,
-        opts.grid,
-        p.initial_surface_k,
-    );
+    let mut slab = props.column(opts.grid, p.initial_surface_k);
     if let Some(skin) = props.surface.and_then(|s| s.skin) {
         slab = slab.with_skin(skin.capacity_j_m2_k, skin.conductance_w_m2_k);
     }

@@ -538,10 +538,10 @@ impl<'o> Importer<'o> {
                     id: m.id,
                     name: m.name.clone(),
                     description: None,
-                    specific_heat_j_kg_k: m.specific_heat_j_kg_k,
-                    conductivity_w_m_k: m.conductivity_w_m_k,
-                    density_kg_m3: m.density_kg_m3,
-                    thickness_m: m.thickness_m,
+                    specific_heat_j_kg_k: Some(m.specific_heat_j_kg_k),
+                    conductivity_w_m_k: Some(m.conductivity_w_m_k),
+                    density_kg_m3: Some(m.density_kg_m3),
+                    thickness_m: Some(m.thickness_m),
                     solar_absorptivity: m.solar_absorptivity,
                     thermal_emissivity: m.thermal_emissivity,
                     exposed_area: m.exposed_area,
@@ -551,6 +551,8 @@ impl<'o> Importer<'o> {
                     double_sided: m.double_sided,
                     emissivity_curve: m.emissivity_curve.as_ref().map(curve_spec),
                     emissivity_file: None,
+                    layers: Vec::new(),
+                    back: None,
                     surface_energy: None,
                     source: Some(MaterialSource::Text(format!(
                         "DIRSIG {} line {} (ID {}), THERM units converted to SI",
@@ -579,10 +581,10 @@ impl<'o> Importer<'o> {
                         id: e.numeric_id,
                         name: e.name.clone(),
                         description: Some(PLACEHOLDER_NOTE.into()),
-                        specific_heat_j_kg_k: 1000.0,
-                        conductivity_w_m_k: 1.0,
-                        density_kg_m3: 1000.0,
-                        thickness_m: 0.01,
+                        specific_heat_j_kg_k: Some(1000.0),
+                        conductivity_w_m_k: Some(1.0),
+                        density_kg_m3: Some(1000.0),
+                        thickness_m: Some(0.01),
                         solar_absorptivity: eps,
                         thermal_emissivity: eps,
                         exposed_area: 0.0,
@@ -592,6 +594,8 @@ impl<'o> Importer<'o> {
                         double_sided: e.double_sided,
                         emissivity_curve: e.emissivity.as_ref().map(curve_spec),
                         emissivity_file: None,
+                        layers: Vec::new(),
+                        back: None,
                         surface_energy: None,
                         source: Some(MaterialSource::Text(format!(
                             "DIRSIG {} line {} (ID {}); {PLACEHOLDER_NOTE}",
@@ -763,6 +767,7 @@ impl<'o> Importer<'o> {
                 exposed_area: None,
                 fixed_temperature_k: fixed_k.or(fixed),
                 shape_factor: None,
+                back: None,
             });
         }
         let mut name = stem(path);
@@ -782,6 +787,7 @@ impl<'o> Importer<'o> {
             }],
             parts,
             material: None,
+            back: None,
             transform: None,
             instances: None,
         })

@@ -644,13 +644,33 @@ fn prop_key(p: &SlabProperties) -> Vec<u64> {
             depth_m.map_or(u64::MAX, f64::to_bits),
         ]),
         thermal::BackBoundary::Interior {
-            air_temperature_k,
+            air,
             film_coefficient_w_m2_k,
-        } => k.extend([
-            3,
-            air_temperature_k.to_bits(),
-            film_coefficient_w_m2_k.to_bits(),
-        ]),
+        } => {
+            k.extend([3, film_coefficient_w_m2_k.to_bits()]);
+            match air {
+                thermal::InteriorAir::Constant(t) => k.extend([0, t.to_bits()]),
+                thermal::InteriorAir::Hourly(h) => {
+                    k.push(1);
+                    k.extend(h.iter().map(|t| t.to_bits()));
+                }
+                thermal::InteriorAir::SetPoints {
+                    heating_k,
+                    cooling_k,
+                } => k.extend([2, heating_k.to_bits(), cooling_k.to_bits()]),
+            }
+        }
+    }
+    // The layers, outer face first.
+    for l in p.layers.as_slice() {
+        k.extend([
+            5,
+            l.conductivity_w_m_k.to_bits(),
+            l.density_kg_m3.to_bits(),
+            l.specific_heat_j_kg_k.to_bits(),
+            l.thickness_m.to_bits(),
+            l.contact_resistance_m2_k_w.to_bits(),
+        ]);
     }
     // The surface's parameters, by their exact (round-trip) decimal form.
     if let Some(s) = &p.surface {
