@@ -47,9 +47,25 @@ pub struct Args {
     /// [default: the scene's, else stratified:64].
     #[arg(long, value_name = "SPEC")]
     pub sky_sampling: Option<irsig::exposure::SkySampling>,
+    /// Per-hit temperatures: `on` (a hit on a facet whose exposure is not
+    /// uniform, or that is large against the pixel footprint, gets the
+    /// temperature of its own solar history) or `off` (one temperature per
+    /// facet); overrides the scene's `render.per_hit` [default: the
+    /// scene's, else on].
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    pub per_hit: Option<bool>,
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `on`/`off` (also `true`/`false`).
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" | "true" => Ok(true),
+        "off" | "false" => Ok(false),
+        _ => Err(format!("`{s}`: expected on or off")),
+    }
 }
 
 /// Run `irsig render`.
@@ -98,6 +114,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(s) = args.sky_sampling {
         session.config.sky_sampling = s;
+    }
+    if let Some(p) = args.per_hit {
+        session.config.per_hit = p;
     }
     let options = RunOptions {
         backend: args.backend,

@@ -29,6 +29,7 @@
 pub mod checks;
 pub mod image;
 pub mod path;
+pub mod per_hit;
 pub mod scene_thermal;
 pub mod session;
 pub mod shade;
@@ -58,6 +59,9 @@ fn default_spectral_step_um() -> f64 {
 fn default_facet_samples() -> u32 {
     1
 }
+fn default_per_hit() -> bool {
+    true
+}
 
 /// The `render` section of a scene file (all fields optional).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -82,6 +86,12 @@ pub struct RenderConfig {
     /// `dirsig`, `grid:DZxDA`); default `stratified:64`.
     #[serde(default)]
     pub sky_sampling: crate::exposure::SkySampling,
+    /// Per-hit temperatures (default true): a hit on a facet whose
+    /// exposure is not uniform, or that is large against the pixel
+    /// footprint, gets the temperature of its own solar history
+    /// ([`per_hit`]); false: every hit takes its facet's.
+    #[serde(default = "default_per_hit")]
+    pub per_hit: bool,
 }
 
 impl Default for RenderConfig {
@@ -92,6 +102,7 @@ impl Default for RenderConfig {
             sky_temperature_k: None,
             facet_samples: default_facet_samples(),
             sky_sampling: crate::exposure::SkySampling::default(),
+            per_hit: default_per_hit(),
         }
     }
 }
@@ -107,7 +118,7 @@ impl RenderConfig {
             Error::parse(
                 location.clone().with_field("render"),
                 format!(
-                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling"
+                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling, per_hit"
                 ),
             )
         })?;

@@ -592,7 +592,8 @@ impl Session {
             bands,
             opts,
         )?
-        .with_path(paths);
+        .with_path(paths)
+        .with_pixel_angle(sensor.pixel_angle_rad());
         self.timings.radiometry_setup += t_setup.elapsed();
         let times = StageTimes::default();
         let t0 = Instant::now();
@@ -781,8 +782,10 @@ fn scene_thermal(
     let mut params = SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;
     params.exposure.sky = session.config.sky_sampling;
-    let solved = solve_scene_observed(tracers, scene, times, &params, progress)?;
+    let mut solved = solve_scene_observed(tracers, scene, times, &params, progress)?;
     let n = scene.geometry.facet_count();
+    // The solar history, shared by the images' per-hit states.
+    let solar = std::sync::Arc::new(std::mem::take(&mut solved.exposure.solar));
     let shape = solved.shape_factor().to_vec();
     let mut conditions = Vec::new();
     let mut records = Vec::new();
@@ -791,8 +794,7 @@ fn scene_thermal(
         let t_air = rec.air_temperature_k;
         let record = solved.temperatures.image_records[ti];
         let temps = solved.surface_temperature_k(ti).to_vec();
-        let sun_fraction = solved.sun_fraction(ti);
-        let solar = &solved.exposure.solar;
+        let sun_fraction: Vec<f32> = (0..n).map(|f| solar.sun_fraction(f)[record]).collect();
         let cos_sun: Vec<f32> = (0..n)
             .map(|f| solar.cos_incidence(f)[record].max(0.0))
             .collect();
@@ -830,12 +832,23 @@ fn scene_thermal(
                 sky_longwave_w_m2: rec.sky_longwave_w_m2,
             }),
         };
+        let per_hit = match (session.config.per_hit, &solved.point_response[ti]) {
+            (true, Some(image)) => Some(std::sync::Arc::new(super::per_hit::PerHit::new(
+                solar.clone(),
+                &solved.exposure.facets,
+                image,
+                &solved.sun_directions,
+                super::per_hit::PerHitParams::default(),
+            ))),
+            _ => None,
+        };
         conditions.push(Conditions {
             surface,
             sky,
             sun,
             ground_temperature_k: t_air,
             atmosphere: session.atmosphere_at(&rec)?,
+            per_hit,
         });
         records.push(rec);
     }
