@@ -13,6 +13,7 @@ mod exposure_pipeline;
 mod flux;
 mod fuzz_smoke;
 mod material;
+mod per_hit;
 mod radiometry;
 mod reliability;
 mod render;

@@ -62,6 +62,9 @@ fn default_facet_samples() -> u32 {
 fn default_per_hit() -> bool {
     true
 }
+fn default_per_hit_size_px() -> f32 {
+    per_hit::PerHitParams::default().size_px
+}
 
 /// The `render` section of a scene file (all fields optional).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -92,6 +95,11 @@ pub struct RenderConfig {
     /// ([`per_hit`]); false: every hit takes its facet's.
     #[serde(default = "default_per_hit")]
     pub per_hit: bool,
+    /// The per-hit rule's "large": a facet whose sample spacing exceeds
+    /// this many pixel footprints at the hit (default 16,
+    /// [`per_hit::PerHitParams::size_px`]).
+    #[serde(default = "default_per_hit_size_px")]
+    pub per_hit_size_px: f32,
 }
 
 impl Default for RenderConfig {
@@ -103,6 +111,7 @@ impl Default for RenderConfig {
             facet_samples: default_facet_samples(),
             sky_sampling: crate::exposure::SkySampling::default(),
             per_hit: default_per_hit(),
+            per_hit_size_px: default_per_hit_size_px(),
         }
     }
 }
@@ -118,7 +127,7 @@ impl RenderConfig {
             Error::parse(
                 location.clone().with_field("render"),
                 format!(
-                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling, per_hit"
+                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling, per_hit, per_hit_size_px"
                 ),
             )
         })?;
@@ -147,6 +156,15 @@ impl RenderConfig {
                     format!("{t}: expected a temperature in (0, 400) K"),
                 ));
             }
+        }
+        if !(c.per_hit_size_px.is_finite() && c.per_hit_size_px > 0.0) {
+            return Err(bad(
+                "per_hit_size_px",
+                format!(
+                    "{}: expected a positive number of pixels",
+                    c.per_hit_size_px
+                ),
+            ));
         }
         if !(1..=16).contains(&c.facet_samples) {
             return Err(bad(

@@ -51,14 +51,16 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::scene_thermal::ImageResponse;
-use crate::exposure::{FacetSamples, SolarHistory};
+use crate::exposure::{FacetSamples, SkyView, SolarHistory};
+use crate::thermal::linear::emission_curvature;
+use crate::thermal::scene::PointResponse;
 use crate::trace::{Coherence, Ray, Tracer};
 
 /// Settings of per-hit temperatures.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PerHitParams {
     /// Sample spacing, in pixel footprints, above which a facet is large
-    /// (default 1).
+    /// (default 16: on the bundled town a smaller value makes most ground hits per-hit; see docs/physics/per-hit.md).
     pub size_px: f32,
     /// Shadow rays traced at every `stride`-th record, refined where the
     /// answer changes (default 4).
@@ -68,7 +70,7 @@ pub struct PerHitParams {
 impl Default for PerHitParams {
     fn default() -> Self {
         PerHitParams {
-            size_px: 1.0,
+            size_px: 16.0,
             stride: 4,
         }
     }
@@ -95,9 +97,16 @@ pub struct PerHit {
     block_of: Vec<u32>,
     /// `[block][k]`, K per unit of `s cos θ`.
     rows: Vec<f32>,
+    /// `[block][k]`, K per W m⁻²: the image row of the Green's matrix.
+    green_rows: Vec<f32>,
+    /// The response (whole Green's matrices, reference histories) for the
+    /// second order.
+    response: Arc<PointResponse>,
     /// Per facet: its sample points disagree at some window record.
     mixed: Vec<bool>,
-    /// Per facet: sample spacing `√area / n`, m.
+    /// Per facet: sample spacing `√area / n`, m; 0 for a facet whose
+    /// hemisphere rays hit nothing of the scene (nothing above its horizon
+    /// that could shade part of it).
     spacing: Vec<f32>,
     /// Per facet: unit front normal.
     normal: Vec<Vec3>,
@@ -113,6 +122,7 @@ impl PerHit {
     pub fn new(
         solar: Arc<SolarHistory>,
         facets: &FacetSamples,
+        sky: &SkyView,
         image: &ImageResponse,
         sun_history: &[Vec3],
         params: PerHitParams,
@@ -122,9 +132,11 @@ impl PerHit {
         debug_assert_eq!(r, image.records.len());
         let blocks = resp.sun_rows.len() / (r * resp.images).max(1);
         let mut rows = Vec::with_capacity(blocks * r);
+        let mut green_rows = Vec::with_capacity(blocks * r);
         for b in 0..blocks {
             let o = b * resp.images * r;
             rows.extend_from_slice(&resp.sun_rows[o..o + r]);
+            green_rows.extend_from_slice(&resp.rows[o..o + r]);
         }
         let n = facets.len();
         let per = facets.per_facet.max(1) as f32;
@@ -143,8 +155,21 @@ impl PerHit {
             sun: image.records.iter().map(|&k| sun_history[k]).collect(),
             block_of: resp.block_of.clone(),
             rows,
+            green_rows,
+            response: Arc::new(resp.clone()),
             mixed,
-            spacing: facets.area.iter().map(|a| a.max(0.0).sqrt() / per.sqrt()).collect(),
+            spacing: facets
+                .area
+                .iter()
+                .enumerate()
+                .map(|(f, a)| {
+                    if sky.background(f).is_empty() {
+                        0.0
+                    } else {
+                        a.max(0.0).sqrt() / per.sqrt()
+                    }
+                })
+                .collect(),
             normal: facets.normal.clone(),
             offset_m: facets.offset_m,
             solar,
@@ -190,6 +215,36 @@ impl PerHit {
         (lo, hi)
     }
 
+    /// The second-order term of a point whose `s cos θ` differs from its
+    /// facet's by `diff` `(record, Δ)`, K: the curvature of the emission
+    /// about the reference, `r(δ) = −εσδ²(6T² + 4Tδ + δ²)` with `δ = G·ΔS`
+    /// the first-order change history, through the image row of `G` (as
+    /// the scene solve's second order,
+    /// [`crate::thermal::Linearization::predict`]).
+    fn second_order(&self, block: usize, diff: &[(usize, f32)]) -> f32 {
+        let p = &*self.response;
+        let r = p.records;
+        let g = &p.green[block * r * r..(block + 1) * r * r];
+        let sun = &p.sun[block * r..(block + 1) * r];
+        let mut delta = vec![0.0f32; r];
+        for &(k, d) in diff {
+            let x = d * sun[k];
+            for (o, gk) in delta.iter_mut().zip(&g[k * r..(k + 1) * r]) {
+                *o += x * gk;
+            }
+        }
+        let t_ref = &p.reference_k[block * r..(block + 1) * r];
+        let rad = p.radiative[block] as f64;
+        let row = &self.green_rows[block * r..(block + 1) * r];
+        let mut x = 0.0f64;
+        for t in 0..r {
+            if delta[t] != 0.0 {
+                x += row[t] as f64 * emission_curvature(rad, t_ref[t] as f64, delta[t] as f64);
+            }
+        }
+        x as f32
+    }
+
     /// The states of hits `(facet, point)` (points on the facets' planes)
     /// into `out`, one per hit, tracing their shadow rays with `tracer`.
     pub fn states(&self, tracer: &dyn Tracer, hits: &[(u32, Vec3)], out: &mut Vec<HitState>) {
@@ -199,8 +254,8 @@ impl PerHit {
             return;
         }
         let stride = self.params.stride.max(1) as usize;
-        // Per hit and record: 0 no ray (sun not in front), 1 to trace at
-        // the coarse stage, 2 between coarse ones.
+        // Per hit and record: no ray (the sun not in front of the facet),
+        // lit, shaded, or not traced yet.
         const NONE: u8 = 0;
         const LIT: u8 = 1;
         const SHADED: u8 = 2;
@@ -238,10 +293,12 @@ impl PerHit {
             Ray::new(p + n * (side * self.offset_m), d)
         };
         let trace = |want: &dyn Fn(usize) -> bool, state: &mut [u8]| {
+            // Record by record: one record's rays are parallel and start at
+            // neighbouring points (coherent).
             let mut rays = Vec::new();
             let mut idx = Vec::new();
-            for (j, &(f, p)) in hits.iter().enumerate() {
-                for k in 0..r {
+            for k in 0..r {
+                for (j, &(f, p)) in hits.iter().enumerate() {
                     if want(j * r + k) {
                         rays.push(ray(f as usize, p, k));
                         idx.push(j * r + k);
@@ -249,7 +306,7 @@ impl PerHit {
                 }
             }
             let mut occ = vec![false; rays.len()];
-            tracer.occluded(&rays, Coherence::Incoherent, &mut occ);
+            tracer.occluded(&rays, Coherence::Coherent, &mut occ);
             for (&i, &o) in idx.iter().zip(&occ) {
                 state[i] = if o { SHADED } else { LIT };
             }
@@ -295,6 +352,8 @@ impl PerHit {
                 }
             }
             let mut dt = 0.0f32;
+            // (record, Δ(s cos θ)) where the point's history differs.
+            let mut diff: Vec<(usize, f32)> = Vec::new();
             for (k, &v) in st.iter().enumerate() {
                 if v == NONE {
                     continue;
@@ -302,8 +361,13 @@ impl PerHit {
                 let h = s[self.records[k]].clamp(0.0, 1.0);
                 let own = if v == LIT { 1.0 } else { 0.0 };
                 if own != h {
-                    dt += row[k] * c[self.records[k]].max(0.0) * (own - h);
+                    let d = c[self.records[k]].max(0.0) * (own - h);
+                    dt += row[k] * d;
+                    diff.push((k, d));
                 }
+            }
+            if !diff.is_empty() {
+                dt += self.second_order(b, &diff);
             }
             out.push(HitState {
                 dt_k: dt,

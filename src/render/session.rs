@@ -836,9 +836,13 @@ fn scene_thermal(
             (true, Some(image)) => Some(std::sync::Arc::new(super::per_hit::PerHit::new(
                 solar.clone(),
                 &solved.exposure.facets,
+                &solved.exposure.sky,
                 image,
                 &solved.sun_directions,
-                super::per_hit::PerHitParams::default(),
+                super::per_hit::PerHitParams {
+                    size_px: session.config.per_hit_size_px,
+                    ..super::per_hit::PerHitParams::default()
+                },
             ))),
             _ => None,
         };

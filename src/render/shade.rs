@@ -1190,7 +1190,11 @@ impl<'a> Shader<'a> {
             return None;
         }
         let mut out = Vec::with_capacity(1);
-        ph.states(self.tracer, &[(f as u32, ray.origin + ray.dir * h.t)], &mut out);
+        ph.states(
+            self.tracer,
+            &[(f as u32, ray.origin + ray.dir * h.t)],
+            &mut out,
+        );
         out.pop()
     }
 
@@ -1556,9 +1560,7 @@ impl<'a> Shader<'a> {
         }
         let s = &self.conditions.surface;
         let (t_hit, sun_fraction) = hit_temperature(s, f, state);
-        let (kt, ft) = self
-            .table_position(t_hit)
-            .ok_or(FastMiss::OffTable)?;
+        let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
         let (kg, fg) = self
             .table_position(s.background_k[f] as f64)
             .ok_or(FastMiss::OffTable)?;

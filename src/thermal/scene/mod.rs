@@ -194,6 +194,18 @@ pub struct PointResponse {
     pub block_of: Vec<u32>,
     /// `[block][image][k]`, K per unit of `s·max(cos θ, 0)` at record `k`.
     pub sun_rows: Vec<f32>,
+    /// `[block][image][k]`: the image rows themselves, `∂T(image)/∂S_k`,
+    /// K per W m⁻² (for the second order).
+    pub rows: Vec<f32>,
+    /// `[block][k·R + t]`: the reference's whole Green's matrix of the
+    /// front, `∂T(t)/∂S_k`, K per W m⁻² (for the second order).
+    pub green: Vec<f32>,
+    /// `[block][t]`: the reference's front temperature history, K.
+    pub reference_k: Vec<f32>,
+    /// `[block][k]`: `∂S_k/∂(s cos θ)`, W m⁻².
+    pub sun: Vec<f32>,
+    /// `[block]`: `εσ` of the front, W m⁻² K⁻⁴.
+    pub radiative: Vec<f32>,
 }
 
 impl PointResponse {

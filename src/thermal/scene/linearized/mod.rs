@@ -243,17 +243,30 @@ fn point_response(
 ) -> super::PointResponse {
     let r = groups.sun32.first().map_or(0, Vec::len);
     let mut sun_rows = Vec::with_capacity(refs.len() * images * r);
+    let mut rows = Vec::with_capacity(refs.len() * images * r);
+    let mut green = Vec::with_capacity(refs.len() * r * r);
+    let mut reference_k = Vec::with_capacity(refs.len() * r);
+    let mut suns = Vec::with_capacity(refs.len() * r);
     for (b, rep) in refs.iter().enumerate() {
         let sun = &groups.sun32[groups.of_solved(bins.reference[b])];
         for i in 0..images {
             sun_rows.extend(rep.row_front(i).iter().zip(sun).map(|(g, w)| g * w));
+            rows.extend_from_slice(rep.row_front(i));
         }
+        green.extend_from_slice(&rep.front.from_front);
+        reference_k.extend_from_slice(&rep.front.temperature_k);
+        suns.extend_from_slice(sun);
     }
     super::PointResponse {
         records: r,
         images,
         block_of: (0..n).map(|f| bins.of_facet[f]).collect(),
         sun_rows,
+        rows,
+        green,
+        reference_k,
+        sun: suns,
+        radiative: refs.iter().map(|x| x.front.radiative).collect(),
     }
 }
 
