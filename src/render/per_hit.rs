@@ -276,9 +276,7 @@ impl PerHit {
                 while k + 1 < r && c[self.records[k + 1]] > 0.0 {
                     k += 1;
                 }
-                for t in a..=k {
-                    st[t] = UNKNOWN;
-                }
+                st[a..=k].fill(UNKNOWN);
                 for t in (a..=k).step_by(stride) {
                     co[t] = true;
                 }
