@@ -161,6 +161,7 @@ fn blackbody_plane_reads_its_temperature_in_every_pixel() {
         sun: None,
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
+        per_hit: None,
     };
     let s = sensor(nadir_camera(32, 24, 40.0, 2));
     let (_, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
@@ -205,6 +206,7 @@ fn grey_plane_matches_the_hand_computed_big_equation() {
         }),
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
+        per_hit: None,
     };
     let s = sensor(nadir_camera(8, 8, 10.0, 1));
     let (bands, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
@@ -274,6 +276,7 @@ fn plate_and_wall(wall_k: f32) -> (SceneGeometry, SceneOptics, Conditions) {
         sun: None,
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
+        per_hit: None,
     };
     (geom, optics, cond)
 }
@@ -367,6 +370,7 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
         sun: None,
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
+        per_hit: None,
     };
     let s = sensor(
         json!({"type": "line_scanner", "name": "scan", "ifov_rad": 0.003,
@@ -434,6 +438,7 @@ fn busy_scene() -> (SceneGeometry, SceneOptics, Conditions, Sensor) {
         }),
         ground_temperature_k: 285.0,
         atmosphere: Atmosphere::None,
+        per_hit: None,
     };
     let s = sensor(
         json!({"type": "frame", "name": "busy", "width": 48, "height": 37,
@@ -1140,6 +1145,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
         }),
         ground_temperature_k: 290.0,
         atmosphere,
+        per_hit: None,
     };
     let s = sensor(
         json!({"type": "frame", "name": "cam", "width": 64, "height": 48,
@@ -1361,6 +1367,7 @@ fn perfect_mirror_shows_the_sky_of_the_mirrored_direction() {
         sun: None,
         ground_temperature_k: 294.2,
         atmosphere: atmosphere.clone(),
+        per_hit: None,
     };
     for zenith in [20.0f64, 45.0, 70.0] {
         // A narrow camera looking down at the origin from `zenith`.

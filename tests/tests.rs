@@ -17,6 +17,7 @@ mod fuzz_smoke;
 mod georef;
 mod layers;
 mod material;
+mod per_hit;
 mod radiometry;
 mod reliability;
 mod render;

@@ -57,6 +57,13 @@ pub struct Args {
     /// settings) instead of solving it; the images are the same bit for bit.
     #[arg(long, value_name = "DIR")]
     pub state: Option<PathBuf>,
+    /// Per-hit temperatures: `on` (a hit on a facet whose exposure is not
+    /// uniform, or that is large against the pixel footprint, gets the
+    /// temperature of its own solar history) or `off` (one temperature per
+    /// facet); overrides the scene's `render.per_hit` [default: the
+    /// scene's, else on].
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    pub per_hit: Option<bool>,
     /// No progress bar and no summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -64,6 +71,15 @@ pub struct Args {
     /// the DIRSIG files say (see `irsig import dirsig`); repeat for more.
     #[arg(long, value_name = "DIR")]
     pub search: Vec<std::path::PathBuf>,
+}
+
+/// `on`/`off` (also `true`/`false`).
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" | "true" => Ok(true),
+        "off" | "false" => Ok(false),
+        _ => Err(format!("`{s}`: expected on or off")),
+    }
 }
 
 /// Run `irsig render`.
@@ -133,6 +149,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.geotiff {
         session.config.geotiff = true;
+    }
+    if let Some(p) = args.per_hit {
+        session.config.per_hit = p;
     }
     let options = RunOptions {
         backend: args.backend,

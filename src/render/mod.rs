@@ -29,6 +29,7 @@
 pub mod checks;
 pub mod image;
 pub mod path;
+pub mod per_hit;
 pub mod scene_thermal;
 pub mod sections;
 pub mod session;
@@ -63,6 +64,12 @@ fn default_spectral_step_um() -> f64 {
 fn default_facet_samples() -> u32 {
     1
 }
+fn default_per_hit() -> bool {
+    true
+}
+fn default_per_hit_size_px() -> f32 {
+    per_hit::PerHitParams::default().size_px
+}
 
 /// The `render` section of a scene file (all fields optional).
 #[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
@@ -92,6 +99,17 @@ pub struct RenderConfig {
     /// (default false; see [`write_outputs`]).
     #[serde(default)]
     pub geotiff: bool,
+    /// Per-hit temperatures (default true): a hit on a facet whose
+    /// exposure is not uniform, or that is large against the pixel
+    /// footprint, gets the temperature of its own solar history
+    /// ([`per_hit`]); false: every hit takes its facet's.
+    #[serde(default = "default_per_hit")]
+    pub per_hit: bool,
+    /// The per-hit rule's "large": a facet whose sample spacing exceeds
+    /// this many pixel footprints at the hit (default 16,
+    /// [`per_hit::PerHitParams::size_px`]).
+    #[serde(default = "default_per_hit_size_px")]
+    pub per_hit_size_px: f32,
 }
 
 /// `render.sky_sampling` as written: `stratified:N`, `dirsig` or
@@ -114,6 +132,8 @@ impl Default for RenderConfig {
             facet_samples: default_facet_samples(),
             sky_sampling: crate::exposure::SkySampling::default(),
             geotiff: false,
+            per_hit: default_per_hit(),
+            per_hit_size_px: default_per_hit_size_px(),
         }
     }
 }
@@ -130,7 +150,7 @@ impl RenderConfig {
             location,
             "render",
             "an object with max_bounces, spectral_step_um, sky_temperature_k, facet_samples, \
-             sky_sampling, geotiff",
+             sky_sampling, geotiff, per_hit, per_hit_size_px",
         )?;
         let bad = |field: &str, msg: String| {
             Error::parse(location.clone().with_field(format!("render.{field}")), msg)
@@ -157,6 +177,15 @@ impl RenderConfig {
                     format!("{t}: expected a temperature in (0, 400) K"),
                 ));
             }
+        }
+        if !(c.per_hit_size_px.is_finite() && c.per_hit_size_px > 0.0) {
+            return Err(bad(
+                "per_hit_size_px",
+                format!(
+                    "{}: expected a positive number of pixels",
+                    c.per_hit_size_px
+                ),
+            ));
         }
         if !(1..=16).contains(&c.facet_samples) {
             return Err(bad(

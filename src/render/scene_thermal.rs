@@ -31,7 +31,7 @@ use crate::progress::{NoProgress, Progress, Stage};
 use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
-    FacetThermal, PassStats, SceneInputs, SceneTemperatures, ThermalParams,
+    FacetThermal, PassStats, PointResponse, SceneInputs, SceneTemperatures, ThermalParams,
     solve_facet_temperatures,
 };
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};
@@ -254,6 +254,8 @@ pub struct SceneThermal {
     pub times: Vec<DateTime<FixedOffset>>,
     /// The weather at each record time (interpolated).
     pub records: Vec<WeatherRecord>,
+    /// Unit east-north-up vector toward the sun at each record time.
+    pub sun_directions: Vec<glam::Vec3>,
     /// The image times, as given.
     pub image_times: Vec<DateTime<FixedOffset>>,
     /// Solar history, shape factors and background per facet.
@@ -265,8 +267,23 @@ pub struct SceneThermal {
     pub setup: FacetThermalSetup,
     /// Facets solved with the deep-ground back boundary.
     pub ground_facets: usize,
+    /// Per image time: how its facets' temperatures respond to a point's
+    /// own sunlit history (the linearised method only; per-hit
+    /// temperatures, [`crate::render::per_hit`]).
+    pub point_response: Vec<Option<ImageResponse>>,
     /// Where the time went.
     pub timings: SceneThermalTimings,
+}
+
+/// One image time's [`PointResponse`] over its own window.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageResponse {
+    /// The window's records (indices into [`SceneThermal::times`]), the
+    /// image time last: record `k` of a row is history record
+    /// `records[k]`.
+    pub records: Vec<usize>,
+    /// The facets' responses at the image time (one image row each).
+    pub response: PointResponse,
 }
 
 impl SceneThermal {
@@ -591,18 +608,21 @@ fn solve_traced(
     let t2 = Instant::now();
     progress.start(Stage::Thermal, n as u64);
     progress.item("thermal solve");
-    let temperatures = solve_windows(&exposure, &setup, &history, &params.thermal)?;
+    let (temperatures, point_response) =
+        solve_windows(&exposure, &setup, &history, &params.thermal)?;
     progress.advance(n as u64);
     progress.finish();
     let t3 = Instant::now();
     Ok(SceneThermal {
         times: history.times,
         records: history.records,
+        sun_directions: history.sun,
         image_times: image_times.to_vec(),
         exposure,
         temperatures,
         setup,
         ground_facets,
+        point_response,
         timings: SceneThermalTimings {
             setup: Duration::ZERO,
             rays: Duration::ZERO,
@@ -676,7 +696,8 @@ impl History {
 /// the window). Image times with the same window share one solve; a single
 /// image time whose window is the whole history solves on the exposure as
 /// it is. Returns the temperatures with `image_records` indexing the whole
-/// history, and the passes' statistics summed over the windows.
+/// history, and the passes' statistics summed over the windows; and each
+/// image time's point response over its window.
 ///
 /// # Errors
 /// As [`solve_facet_temperatures`].
@@ -685,17 +706,20 @@ fn solve_windows(
     setup: &FacetThermalSetup,
     history: &History,
     params: &ThermalParams,
-) -> Result<SceneTemperatures> {
+) -> Result<(SceneTemperatures, Vec<Option<ImageResponse>>)> {
     let all = history.times.len();
     let mut out = SceneTemperatures {
         image_records: history.image_records.clone(),
         surface_temperature_k: vec![Vec::new(); history.windows.len()],
         passes: Vec::new(),
+        point_response: None,
     };
-    let mut solved: Vec<(&[usize], Vec<f32>)> = Vec::new();
+    let mut responses: Vec<Option<ImageResponse>> = vec![None; history.windows.len()];
+    let mut solved: Vec<(&[usize], Vec<f32>, Option<ImageResponse>)> = Vec::new();
     for (i, w) in history.windows.iter().enumerate() {
-        if let Some((_, t)) = solved.iter().find(|(v, _)| *v == w.as_slice()) {
+        if let Some((_, t, pr)) = solved.iter().find(|(v, _, _)| *v == w.as_slice()) {
             out.surface_temperature_k[i] = t.clone();
+            responses[i] = pr.clone();
             continue;
         }
         let last = w.len() - 1;
@@ -737,6 +761,10 @@ fn solve_windows(
                 params,
             )?
         };
+        let pr = r.point_response.map(|response| ImageResponse {
+            records: w.clone(),
+            response,
+        });
         let t = r
             .surface_temperature_k
             .into_iter()
@@ -744,9 +772,10 @@ fn solve_windows(
             .unwrap_or_default();
         add_passes(&mut out.passes, &r.passes);
         out.surface_temperature_k[i] = t.clone();
-        solved.push((w.as_slice(), t));
+        responses[i] = pr.clone();
+        solved.push((w.as_slice(), t, pr));
     }
-    Ok(out)
+    Ok((out, responses))
 }
 
 /// Adds one window's pass statistics to the run's (work and time summed,

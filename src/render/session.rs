@@ -696,7 +696,8 @@ impl Session {
             bands,
             opts,
         )?
-        .with_path(paths);
+        .with_path(paths)
+        .with_pixel_angle(sensor.pixel_angle_rad());
         self.timings.radiometry_setup += t_setup.elapsed();
         let times = StageTimes::default();
         let t0 = Instant::now();
@@ -904,10 +905,31 @@ fn scene_thermal(
 ) -> Result<ThermalStates> {
     use super::scene_thermal::solve_scene_observed;
     let params = solve_params(session);
-    let solved = solve_scene_observed(tracers, &session.scene, times, &params, progress)?;
+    let mut solved = solve_scene_observed(tracers, &session.scene, times, &params, progress)?;
     let states = session.facet_states_of(&solved, times)?;
     let mut out = session.conditions(&states)?;
     out.timings = solved.timings;
+    // Per-hit temperatures need what only the solve has (each point's own
+    // solar history is traced at render time against the solve's Green's
+    // functions); a state folder holds per-facet values only.
+    if session.config.per_hit {
+        let solar = std::sync::Arc::new(std::mem::take(&mut solved.exposure.solar));
+        for (c, image) in out.conditions.iter_mut().zip(&solved.point_response) {
+            if let Some(image) = image {
+                c.per_hit = Some(std::sync::Arc::new(super::per_hit::PerHit::new(
+                    solar.clone(),
+                    &solved.exposure.facets,
+                    &solved.exposure.sky,
+                    image,
+                    &solved.sun_directions,
+                    super::per_hit::PerHitParams {
+                        size_px: session.config.per_hit_size_px,
+                        ..super::per_hit::PerHitParams::default()
+                    },
+                )));
+            }
+        }
+    }
     Ok(out)
 }
 
@@ -1017,6 +1039,7 @@ impl Session {
                 sun,
                 ground_temperature_k: t_air,
                 atmosphere: self.atmosphere_at(&rec)?,
+                per_hit: None,
             });
             records.push(rec);
         }

@@ -54,6 +54,7 @@
 use glam::Vec3;
 
 use super::path::PathTables;
+use super::per_hit::{HitState, PerHit};
 use crate::atmosphere::{Atmosphere, SkyConditions};
 use crate::geometry::SceneGeometry;
 use crate::material::Material;
@@ -199,6 +200,9 @@ pub struct Conditions {
     /// The atmosphere: sky radiance for [`Sky::Atmosphere`]; the sensor
     /// path is applied through [`Shader::with_path`].
     pub atmosphere: Atmosphere,
+    /// Per-hit temperatures ([`super::per_hit`]); `None`: every hit takes
+    /// its facet's state.
+    pub per_hit: Option<std::sync::Arc<PerHit>>,
 }
 
 /// What the renderer knows about each facet of the scene.
@@ -828,6 +832,13 @@ struct GreyHit {
 pub struct FastScratch {
     grey: Vec<GreyHit>,
     bands: Vec<f32>,
+    /// Per ray of the batch: index into `states` (`u32::MAX`: the facet's
+    /// state).
+    state_of: Vec<u32>,
+    /// Per-hit states of the batch's hits that have one.
+    states: Vec<HitState>,
+    /// `(facet, point)` of those hits.
+    points: Vec<(u32, Vec3)>,
 }
 
 /// The radiance of rays: per ray, the spectral radiance on every band's
@@ -854,6 +865,8 @@ pub struct Shader<'a> {
     /// view-independent terms of [`grey_facets`] (empty once a path is
     /// set).
     grey_terms: Vec<[f32; 4]>,
+    /// Angular size of a pixel, rad (0: unknown), for the per-hit rule.
+    pixel_angle_rad: f32,
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -969,6 +982,14 @@ impl<'a> Shader<'a> {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
                 (lo.min(t as f64), hi.max(t as f64))
             });
+        // Per-hit temperatures may lie beyond the facets'.
+        let (lo, hi) = match &conditions.per_hit {
+            Some(ph) => {
+                let (a, b) = ph.temperature_bounds(&s.temperature_k);
+                (lo.min(a as f64), hi.max(b as f64))
+            }
+            None => (lo, hi),
+        };
         let table = if lo.is_finite() && total > 0 {
             let t0 = (lo / PLANCK_TABLE_STEP_K).floor() * PLANCK_TABLE_STEP_K;
             let nodes =
@@ -1054,6 +1075,7 @@ impl<'a> Shader<'a> {
             path: None,
             fast,
             fast_path: None,
+            pixel_angle_rad: 0.0,
         })
     }
 
@@ -1130,6 +1152,50 @@ impl<'a> Shader<'a> {
         }
         self.path = path;
         self
+    }
+
+    /// The same shader with the angular size of a pixel (rad), for the
+    /// per-hit rule's pixel footprint ([`super::per_hit`]).
+    pub fn with_pixel_angle(mut self, rad: f64) -> Self {
+        self.pixel_angle_rad = rad as f32;
+        self
+    }
+
+    /// The per-hit states of the hits of a batch whose facets want one
+    /// into `sc` (`state_of`, `states`).
+    fn per_hit_states(&self, rays: &[Ray], hits: &[Option<Hit>], sc: &mut FastScratch) {
+        sc.state_of.clear();
+        sc.states.clear();
+        let Some(ph) = &self.conditions.per_hit else {
+            return;
+        };
+        sc.state_of.resize(rays.len(), u32::MAX);
+        sc.points.clear();
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let Some(h) = hit else { continue };
+            let f = self.facet_of(h);
+            if ph.wants(f, h.t * ray.dir.length(), self.pixel_angle_rad) {
+                sc.state_of[i] = sc.points.len() as u32;
+                sc.points.push((f as u32, ray.origin + ray.dir * h.t));
+            }
+        }
+        ph.states(self.tracer, &sc.points, &mut sc.states);
+    }
+
+    /// The per-hit state of one hit, if its facet wants one.
+    fn hit_state(&self, ray: &Ray, h: &Hit) -> Option<HitState> {
+        let ph = self.conditions.per_hit.as_ref()?;
+        let f = self.facet_of(h);
+        if !ph.wants(f, h.t * ray.dir.length(), self.pixel_angle_rad) {
+            return None;
+        }
+        let mut out = Vec::with_capacity(1);
+        ph.states(
+            self.tracer,
+            &[(f as u32, ray.origin + ray.dir * h.t)],
+            &mut out,
+        );
+        out.pop()
     }
 
     /// Whether a hit on facet `f` spawns secondary rays (specular or
@@ -1226,6 +1292,7 @@ impl<'a> Shader<'a> {
         debug_assert!(hits.len() == n && out.len() >= nb * n);
         sc.grey.clear();
         sc.bands.resize(nb, 0.0);
+        self.per_hit_states(rays, hits, sc);
         // The next pixel-centre ray and its column.
         let (mut next, mut col) = match &truth {
             Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
@@ -1252,9 +1319,24 @@ impl<'a> Shader<'a> {
             };
             let f = self.facet_of(h);
             let range = h.t * ray.dir.length();
+            let state = sc
+                .state_of
+                .get(i)
+                .filter(|&&k| k != u32::MAX)
+                .map(|&k| sc.states[k as usize]);
             if let (true, Some(t)) = (centre, &mut truth) {
-                block.push(t, col, self.truth_of_facet(f, range));
+                block.push(t, col, self.truth_of_hit(f, range, state));
                 (next, col) = t.advance(col);
+            }
+            if let Some(st) = state {
+                if self.fast_general(ray, h, Some(st), &mut sc.bands).is_err() {
+                    slow.push(i);
+                    continue;
+                }
+                for (b, &v) in sc.bands.iter().enumerate() {
+                    out[b * n + i] = v;
+                }
+                continue;
             }
             let n2 = ray.dir.length_squared() * h.ng.length_squared();
             if self.grey[f].mi != u32::MAX && n2 > 0.0 && n2.is_finite() {
@@ -1267,7 +1349,7 @@ impl<'a> Shader<'a> {
                 });
                 continue;
             }
-            if self.fast_general(ray, h, &mut sc.bands).is_err() {
+            if self.fast_general(ray, h, None, &mut sc.bands).is_err() {
                 slow.push(i);
                 continue;
             }
@@ -1420,7 +1502,20 @@ impl<'a> Shader<'a> {
     /// its Planck table node and fraction: within 2·10⁻⁹ K in f64, so the
     /// same f32), from the per-facet arrays otherwise.
     pub fn truth_of(&self, ray: &Ray, h: &Hit) -> [f32; 6] {
-        self.truth_of_facet(self.facet_of(h), h.t * ray.dir.length())
+        let state = self.hit_state(ray, h);
+        self.truth_of_hit(self.facet_of(h), h.t * ray.dir.length(), state)
+    }
+
+    /// [`Shader::truth_of`] of a hit on facet `f` at range `d` (m) with
+    /// its own `state` (per-hit temperatures) or its facet's.
+    #[inline]
+    fn truth_of_hit(&self, f: usize, d: f32, state: Option<HitState>) -> [f32; 6] {
+        let mut v = self.truth_of_facet(f, d);
+        if let Some(st) = state {
+            v[0] = self.conditions.surface.temperature_k[f] + st.dt_k;
+            v[4] = st.sun_fraction;
+        }
+        v
     }
 
     /// [`Shader::truth_of`] of a hit on facet `f` at range `d` (m).
@@ -1452,15 +1547,20 @@ impl<'a> Shader<'a> {
 
     /// [`Shader::fast_primary`] of a hit off the grey path: per band the
     /// grey integrals or the fused spectral sum.
-    fn fast_general(&self, ray: &Ray, h: &Hit, out: &mut [f32]) -> Result<(), FastMiss> {
+    fn fast_general(
+        &self,
+        ray: &Ray,
+        h: &Hit,
+        state: Option<HitState>,
+        out: &mut [f32],
+    ) -> Result<(), FastMiss> {
         let f = self.facet_of(h);
         if self.spawns_secondary(f) {
             return Err(FastMiss::Secondary);
         }
         let s = &self.conditions.surface;
-        let (kt, ft) = self
-            .table_position(s.temperature_k[f] as f64)
-            .ok_or(FastMiss::OffTable)?;
+        let (t_hit, sun_fraction) = hit_temperature(s, f, state);
+        let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
         let (kg, fg) = self
             .table_position(s.background_k[f] as f64)
             .ok_or(FastMiss::OffTable)?;
@@ -1471,7 +1571,7 @@ impl<'a> Shader<'a> {
         let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
-            (s.cos_sun[f] as f64).max(0.0) * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
+            (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
                 / std::f64::consts::PI
         } else {
             0.0
@@ -1751,14 +1851,15 @@ impl<'a> Shader<'a> {
         let theta = cos_view.acos().to_degrees();
         let a0 = (theta.floor() as usize).min(ANGLE_ROWS - 2);
         let ta = theta - a0 as f64;
-        self.planck_into(s.temperature_k[f] as f64, b_t);
+        let (t_hit, sun_fraction) = hit_temperature(s, f, self.hit_state(ray, h));
+        self.planck_into(t_hit, b_t);
         self.planck_into(s.background_k[f] as f64, b_bg);
         let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
         // The sun only lights the face it falls on: for a single-sided facet
         // seen from behind, cos σ of the front face does not apply.
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
-            (s.cos_sun[f] as f64).max(0.0) * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
+            (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
                 / std::f64::consts::PI
         } else {
             0.0
@@ -1783,6 +1884,16 @@ impl<'a> Shader<'a> {
                 out[k] = eps * b_t[k] + rd * (sun + env) + rs * spec + tr * beh;
             }
         }
+    }
+}
+
+/// The temperature (K) and sunlit fraction of a hit on facet `f`: its own
+/// (per-hit `state`) or its facet's.
+#[inline]
+fn hit_temperature(s: &SurfaceState, f: usize, state: Option<HitState>) -> (f64, f32) {
+    match state {
+        Some(st) => ((s.temperature_k[f] + st.dt_k) as f64, st.sun_fraction),
+        None => (s.temperature_k[f] as f64, s.sun_fraction[f]),
     }
 }
 

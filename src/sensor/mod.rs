@@ -691,6 +691,15 @@ impl Sensor {
         }
     }
 
+    /// Angular size of a pixel, rad: `pitch / focal length` at the centre
+    /// of a frame camera, the IFOV of a line scanner.
+    pub fn pixel_angle_rad(&self) -> f64 {
+        match &self.geometry {
+            Geometry::Frame(c) => 1.0 / c.focal_px,
+            Geometry::LineScanner(s) => s.ifov_rad,
+        }
+    }
+
     /// Rays per image row: `width · N²`.
     pub fn rays_per_row(&self) -> usize {
         self.width() * self.oversample() * self.oversample()

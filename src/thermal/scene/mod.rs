@@ -168,6 +168,56 @@ pub struct SceneTemperatures {
     pub surface_temperature_k: Vec<Vec<f32>>,
     /// One entry per pass.
     pub passes: Vec<PassStats>,
+    /// How each facet's image-time temperature responds to a change of its
+    /// sunlit history at one point of it ([`PointResponse`]; the
+    /// linearised method only, `None` for the per-class one).
+    pub point_response: Option<PointResponse>,
+}
+
+/// The response of a facet's front temperature at the image records to a
+/// change of `s·max(cos θ, 0)` (sunlit fraction × cosine of incidence) at
+/// each record, from the Green's function of the facet's reference in the
+/// linearised solve times the property set's `∂S/∂(s cos θ)`
+/// ([`crate::thermal::SourceModel::front_per_sunlit_cos`]): a point of the
+/// facet whose own sunlit history differs from the facet's by `Δ(s cos θ)`
+/// is, to first order, `Σ_k row[k]·Δ(s cos θ)_k` warmer (K) than the
+/// facet. This is what per-hit temperatures use
+/// (`crate::render::per_hit`): one dot product per hit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointResponse {
+    /// Records of the history (the length of a row).
+    pub records: usize,
+    /// Image records (rows per block).
+    pub images: usize,
+    /// Per facet: its block of rows (`u32::MAX`: a fixed facet, no
+    /// response).
+    pub block_of: Vec<u32>,
+    /// `[block][image][k]`, K per unit of `s·max(cos θ, 0)` at record `k`.
+    pub sun_rows: Vec<f32>,
+    /// `[block][image][k]`: the image rows themselves, `∂T(image)/∂S_k`,
+    /// K per W m⁻² (for the second order).
+    pub rows: Vec<f32>,
+    /// `[block][k·R + t]`: the reference's whole Green's matrix of the
+    /// front, `∂T(t)/∂S_k`, K per W m⁻² (for the second order).
+    pub green: Vec<f32>,
+    /// `[block][t]`: the reference's front temperature history, K.
+    pub reference_k: Vec<f32>,
+    /// `[block][k]`: `∂S_k/∂(s cos θ)`, W m⁻².
+    pub sun: Vec<f32>,
+    /// `[block]`: `εσ` of the front, W m⁻² K⁻⁴.
+    pub radiative: Vec<f32>,
+}
+
+impl PointResponse {
+    /// Row of `facet` at image `image` (`None` for a fixed facet).
+    pub fn row(&self, facet: usize, image: usize) -> Option<&[f32]> {
+        let b = *self.block_of.get(facet)?;
+        if b == u32::MAX || image >= self.images {
+            return None;
+        }
+        let o = (b as usize * self.images + image) * self.records;
+        Some(&self.sun_rows[o..o + self.records])
+    }
 }
 
 impl SceneTemperatures {

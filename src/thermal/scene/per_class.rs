@@ -160,6 +160,7 @@ pub(super) fn solve(
         image_records: image_records.to_vec(),
         surface_temperature_k: prev_image.expect("at least one pass"),
         passes,
+        point_response: None,
     })
 }
 

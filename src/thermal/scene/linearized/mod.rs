@@ -223,11 +223,51 @@ pub(super) fn solve(
         });
         prev_image = Some(image.clone());
     }
+    let point_response = point_response(&groups, &refs, &bins, image_records.len(), facets.len());
     Ok(SceneTemperatures {
         image_records: image_records.to_vec(),
         surface_temperature_k: image,
         passes: stats,
+        point_response: Some(point_response),
     })
+}
+
+/// Each reference's image rows times its property set's `∂S/∂(s cos θ)`
+/// ([`super::PointResponse`]), and each facet's reference.
+fn point_response(
+    groups: &Groups,
+    refs: &[Reference],
+    bins: &Bins,
+    images: usize,
+    n: usize,
+) -> super::PointResponse {
+    let r = groups.sun32.first().map_or(0, Vec::len);
+    let mut sun_rows = Vec::with_capacity(refs.len() * images * r);
+    let mut rows = Vec::with_capacity(refs.len() * images * r);
+    let mut green = Vec::with_capacity(refs.len() * r * r);
+    let mut reference_k = Vec::with_capacity(refs.len() * r);
+    let mut suns = Vec::with_capacity(refs.len() * r);
+    for (b, rep) in refs.iter().enumerate() {
+        let sun = &groups.sun32[groups.of_solved(bins.reference[b])];
+        for i in 0..images {
+            sun_rows.extend(rep.row_front(i).iter().zip(sun).map(|(g, w)| g * w));
+            rows.extend_from_slice(rep.row_front(i));
+        }
+        green.extend_from_slice(&rep.front.from_front);
+        reference_k.extend_from_slice(&rep.front.temperature_k);
+        suns.extend_from_slice(sun);
+    }
+    super::PointResponse {
+        records: r,
+        images,
+        block_of: (0..n).map(|f| bins.of_facet[f]).collect(),
+        sun_rows,
+        rows,
+        green,
+        reference_k,
+        sun: suns,
+        radiative: refs.iter().map(|x| x.front.radiative).collect(),
+    }
 }
 
 /// Everything fixed over the passes: the facets, their inputs and
