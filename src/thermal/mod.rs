@@ -172,7 +172,11 @@ pub struct SlabProperties {
     pub thickness_m: f64,
     /// Solar (shortwave) absorptivity `α`, 0–1.
     pub solar_absorptivity: f64,
-    /// Broadband thermal emissivity `ε`, 0–1.
+    /// Broadband **hemispherical** thermal emissivity `ε_h`, 0–1: what the
+    /// surface balance emits and absorbs longwave with.
+    /// [`SlabProperties::from_material`] converts the material's normal
+    /// `thermal_emissivity` once
+    /// ([`crate::radiometry::emissivity::thermal_hemispherical_emissivity`]).
     pub thermal_emissivity: f64,
     /// Self-generated power `P` delivered at the front surface, W m⁻².
     pub self_power_w_m2: f64,
@@ -208,7 +212,9 @@ impl SlabProperties {
         }
     }
 
-    /// Thermal properties of a material; the back boundary follows
+    /// Thermal properties of a material, with its normal
+    /// `thermal_emissivity` turned into the hemispherical one (see the
+    /// field); the back boundary follows
     /// [`BackBoundary::from_exposed_area`] (override with
     /// [`SlabProperties::with_back`]). Errors name the material and the
     /// offending field.
@@ -226,7 +232,10 @@ impl SlabProperties {
             specific_heat_j_kg_k: m.specific_heat_j_kg_k,
             thickness_m: m.thickness_m,
             solar_absorptivity: m.solar_absorptivity,
-            thermal_emissivity: m.thermal_emissivity,
+            // The material's value is normal; the balance emits and absorbs
+            // with the hemispherical one of the renderer's angular model.
+            thermal_emissivity: crate::radiometry::emissivity::thermal_hemispherical_emissivity(m)
+                .map_err(|e| Error::invalid(field("emissivity_curve"), e.to_string()))?,
             self_power_w_m2: m.self_power_w_m2,
             back: BackBoundary::from_exposed_area(m.exposed_area),
             surface: match &m.surface_energy {
