@@ -1097,6 +1097,30 @@ fn source_model_matches_the_balance() {
                     "{a} vs {b}"
                 );
             }
+            // With reflected shortwave: `a` weighs like `s·cos θ`, `b` like αE_d.
+            let a_hist: Vec<f32> = (0..n).map(|k| 0.05 * (k % 3) as f32).collect();
+            let refl = thermal::Reflected {
+                direct: &a_hist,
+                diffuse: 0.15,
+            };
+            let lit = FacetInputs {
+                reflected: refl,
+                ..inputs
+            };
+            let with = thermal::source_history(&props, &forcing, &lit).unwrap();
+            model.front_reflected_into(&sun, &cos, f, refl, &mut front);
+            for (k, (a, b)) in front.iter().zip(&with.front_w_m2).enumerate() {
+                assert!(
+                    (*a as f64 - b).abs() < 1e-3 * b.abs().max(1.0),
+                    "{a} vs {b}"
+                );
+                // The balance adds α·E_r, E_r = E_dn·a + E_d·b.
+                let added = props.solar_absorptivity
+                    * (forcing.direct_normal_w_m2[k] * a_hist[k] as f64
+                        + forcing.diffuse_horizontal_w_m2[k] * 0.15);
+                let d = b - exact.front_w_m2[k];
+                assert!((d - added).abs() < 1e-9 * added.max(1.0), "{d} vs {added}");
+            }
             assert_eq!(model.has_back(), exact.back_w_m2.is_some());
             if let Some(back) = &exact.back_w_m2 {
                 let mut out = vec![0.0f32; n];

@@ -52,7 +52,8 @@ use crate::render::session::Session;
 use crate::render::{Conditions, ShadeOptions, Shader, Sky};
 use crate::thermal::scene::{FacetThermal, ThermalParams};
 use crate::thermal::{
-    self, BackBoundary, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions,
+    self, BackBoundary, Background, Exchange, FacetInputs, Forcing, Reflected, SlabProperties,
+    SolveOptions,
 };
 use crate::trace::{Coherence, Hit, Ray};
 use crate::weather::WeatherRecord;
@@ -527,6 +528,14 @@ impl SceneStudy {
             shape_factor: s.sky.shape_factor[f] as f64,
             back_shape_factor: s.sky.back_shape_factor(f).map(f64::from),
             background,
+            reflected: if s.reflected.facet_count() == 0 {
+                Reflected::NONE
+            } else {
+                Reflected {
+                    direct: s.reflected.direct(f),
+                    diffuse: s.reflected.diffuse[f] as f64,
+                }
+            },
         }
     }
 

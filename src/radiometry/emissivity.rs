@@ -326,7 +326,10 @@ mod tests {
         m.emissivity_curve = None;
         m.thermal_emissivity = 0.96;
         let e = thermal_hemispherical_emissivity(&m).unwrap();
-        assert!((e - dielectric_hemispherical_emissivity(1.5)).abs() < 1e-6, "{e}");
+        assert!(
+            (e - dielectric_hemispherical_emissivity(1.5)).abs() < 1e-6,
+            "{e}"
+        );
         // ε(θ) = 0.9 cos θ-like table: ε_h = 2∫0.9 cos²θ sinθ = 0.6 (to the
         // linear interpolation of the table).
         let angles: Vec<f64> = (0..=90).map(f64::from).collect();

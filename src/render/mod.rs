@@ -82,6 +82,12 @@ pub struct RenderConfig {
     /// `dirsig`, `grid:DZxDA`); default `stratified:64`.
     #[serde(default)]
     pub sky_sampling: crate::exposure::SkySampling,
+    /// Physics of the per-facet thermal inputs, each on by default; switch
+    /// one off for side-by-side checks (`{"reflected_bounces": 0}`,
+    /// `{"hemispherical_emissivity": false}`, …:
+    /// [`scene_thermal::ThermalPhysics`]).
+    #[serde(default)]
+    pub thermal: scene_thermal::ThermalPhysics,
 }
 
 impl Default for RenderConfig {
@@ -92,6 +98,7 @@ impl Default for RenderConfig {
             sky_temperature_k: None,
             facet_samples: default_facet_samples(),
             sky_sampling: crate::exposure::SkySampling::default(),
+            thermal: scene_thermal::ThermalPhysics::default(),
         }
     }
 }
@@ -107,7 +114,7 @@ impl RenderConfig {
             Error::parse(
                 location.clone().with_field("render"),
                 format!(
-                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling"
+                    "{e}: expected max_bounces, spectral_step_um, sky_temperature_k, facet_samples, sky_sampling, thermal"
                 ),
             )
         })?;
@@ -143,6 +150,10 @@ impl RenderConfig {
                 format!("{}: expected 1 to 16", c.facet_samples),
             ));
         }
+        c.thermal.validate().map_err(|e| match e {
+            Error::Invalid { field, message } => bad(&format!("thermal.{field}"), message),
+            other => other,
+        })?;
         Ok(c)
     }
 }

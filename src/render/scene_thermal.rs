@@ -53,6 +53,8 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
             ground_weight: &e.sky.ground_weight,
             background_offsets: &e.sky.offsets,
             background: &e.sky.entries,
+            reflected_direct: &e.reflected.direct,
+            reflected_diffuse: &e.reflected.diffuse,
         }
     }
 }
@@ -69,6 +71,11 @@ pub struct FacetThermalSetup {
     /// Per facet: a shape factor that replaces the traced one in the
     /// thermal solve (a part's `shape_factor` override); may be empty.
     pub shape_factor_override: Vec<Option<f32>>,
+    /// Per facet: the shortwave albedo its neighbours receive reflected
+    /// sunlight from, `1 − α − τ` of its material (solar absorptivity α,
+    /// transmissivity τ; `1 − α` for opaque materials); may be empty
+    /// (then `1 − α` of the property set, 0 for fixed facets).
+    pub albedo: Vec<f32>,
 }
 
 impl FacetThermalSetup {
@@ -81,12 +88,25 @@ impl FacetThermalSetup {
     /// A material outside the slab model's domain, naming the scene file,
     /// the object and the part.
     pub fn from_scene(scene: &Scene) -> Result<Self> {
+        FacetThermalSetup::from_scene_with(scene, &ThermalPhysics::default())
+    }
+
+    /// [`FacetThermalSetup::from_scene`] with the switches of `physics`
+    /// (without [`ThermalPhysics::hemispherical_emissivity`], the property
+    /// sets keep the materials' normal emissivity, for comparisons).
+    ///
+    /// # Errors
+    /// As [`FacetThermalSetup::from_scene`].
+    pub fn from_scene_with(scene: &Scene, physics: &ThermalPhysics) -> Result<Self> {
         let mut props = Vec::new();
         let mut part_kind = Vec::with_capacity(scene.parts.len());
         let mut part_ds = Vec::with_capacity(scene.parts.len());
+        let mut part_albedo = Vec::with_capacity(scene.parts.len());
         for (i, p) in scene.parts.iter().enumerate() {
             let m = scene.part_material(i);
             part_ds.push(m.double_sided);
+            part_albedo
+                .push((1.0 - m.solar_absorptivity - m.transmissivity).clamp(0.0, 1.0) as f32);
             part_kind.push(match p.fixed_temperature_k {
                 Some(t) => FacetThermal::Fixed(t as f32),
                 None => {
@@ -99,6 +119,14 @@ impl FacetThermalSetup {
                             e.to_string(),
                         )
                     })?;
+                    let sp = if physics.hemispherical_emissivity {
+                        sp
+                    } else {
+                        SlabProperties {
+                            thermal_emissivity: m.thermal_emissivity,
+                            ..sp
+                        }
+                    };
                     props.push(sp);
                     FacetThermal::Solve(props.len() as u32 - 1)
                 }
@@ -110,6 +138,7 @@ impl FacetThermalSetup {
             kinds: parts.iter().map(|&p| part_kind[p as usize]).collect(),
             props,
             double_sided: parts.iter().map(|&p| part_ds[p as usize]).collect(),
+            albedo: parts.iter().map(|&p| part_albedo[p as usize]).collect(),
             shape_factor_override: if any_override {
                 parts
                     .iter()
@@ -166,6 +195,23 @@ impl FacetThermalSetup {
         ground
     }
 
+    /// Per facet: its albedo ([`FacetThermalSetup::albedo`], or `1 − α`
+    /// of its property set, 0 for a fixed facet).
+    pub fn facet_albedo(&self) -> Vec<f32> {
+        if !self.albedo.is_empty() {
+            return self.albedo.clone();
+        }
+        self.kinds
+            .iter()
+            .map(|k| match k {
+                FacetThermal::Solve(pi) => {
+                    (1.0 - self.props[*pi as usize].solar_absorptivity).clamp(0.0, 1.0) as f32
+                }
+                FacetThermal::Fixed(_) => 0.0,
+            })
+            .collect()
+    }
+
     /// This setup with the deep-ground back boundary
     /// ([`BackBoundary::GROUND`]) for the facets flagged in `ground` (the
     /// insulated property sets they use get a ground twin).
@@ -203,6 +249,8 @@ pub struct SceneThermalParams {
     /// study of `irsig::analysis` applies the same rule when it re-solves
     /// facets.
     pub ground: bool,
+    /// Which physics of the per-facet inputs are on (all by default).
+    pub physics: ThermalPhysics,
 }
 
 impl Default for SceneThermalParams {
@@ -212,7 +260,68 @@ impl Default for SceneThermalParams {
             exposure: ExposureParams::default(),
             thermal: ThermalParams::default(),
             ground: true,
+            physics: ThermalPhysics::default(),
         }
+    }
+}
+
+/// Physics of the per-facet thermal inputs that a scene may switch off for
+/// side-by-side comparisons (the `render.thermal` section of a scene file;
+/// `docs/physics/reflected-and-wind.md`). All on by default.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ThermalPhysics {
+    /// Bounces of shortwave reflected between facets
+    /// ([`crate::exposure::reflected`]; default
+    /// [`crate::exposure::reflected::BOUNCES`]); 0 switches it off.
+    pub reflected_bounces: u32,
+    /// Albedo of the ground beyond the scene (default
+    /// [`crate::exposure::reflected::GROUND_ALBEDO`]).
+    pub ground_albedo: f32,
+    /// Emit and absorb with the hemispherical emissivity of the renderer's
+    /// angular model (default true); false keeps the materials' normal
+    /// emissivity.
+    pub hemispherical_emissivity: bool,
+}
+
+impl Default for ThermalPhysics {
+    fn default() -> Self {
+        ThermalPhysics {
+            reflected_bounces: crate::exposure::reflected::BOUNCES,
+            ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
+            hemispherical_emissivity: true,
+        }
+    }
+}
+
+impl ThermalPhysics {
+    /// All three off: the model before issue 19 (no reflected shortwave,
+    /// normal emissivity, the weather's wind at every facet).
+    pub const OFF: ThermalPhysics = ThermalPhysics {
+        reflected_bounces: 0,
+        ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
+        hemispherical_emissivity: false,
+    };
+
+    /// Checks the values, naming the field.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for more than 16 bounces or an albedo outside
+    /// `[0, 1]`.
+    pub fn validate(&self) -> Result<()> {
+        if self.reflected_bounces > 16 {
+            return Err(Error::invalid(
+                "reflected_bounces",
+                format!("{}: expected 0 to 16", self.reflected_bounces),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.ground_albedo) {
+            return Err(Error::invalid(
+                "ground_albedo",
+                format!("{}: expected a fraction in [0, 1]", self.ground_albedo),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -385,6 +494,7 @@ pub fn solve_scene_temperatures_observed<'a>(
     let history = History::new(weather, site, image_times, &params.window)?;
     let t1 = Instant::now();
     progress.item("solar history and sky view");
+    params.physics.validate()?;
     let exposure = trace_exposure(
         tracers.exposure,
         geometry,
@@ -392,6 +502,18 @@ pub fn solve_scene_temperatures_observed<'a>(
         &history.sun,
         &params.exposure,
     )?;
+    let exposure = if params.physics.reflected_bounces > 0 {
+        progress.item("reflected shortwave");
+        let albedo = setup.facet_albedo();
+        exposure.with_reflected(
+            &albedo,
+            params.physics.ground_albedo,
+            &history.sun,
+            params.physics.reflected_bounces,
+        )?
+    } else {
+        exposure
+    };
     let (setup, ground_facets) = if params.ground {
         progress.item("ground test");
         let ground = setup.ground_facets(tracers.exact, &exposure.facets);
@@ -532,10 +654,16 @@ fn solve_windows(
                 gather(&exposure.solar.sun_fraction),
                 gather(&exposure.solar.cos_incidence),
             );
+            let refl = if exposure.reflected.direct.is_empty() {
+                Vec::new()
+            } else {
+                gather(&exposure.reflected.direct)
+            };
             let mut inputs = SceneInputs::from(exposure);
             inputs.records = w.len();
             inputs.sun_fraction = &sun;
             inputs.cos_incidence = &cos;
+            inputs.reflected_direct = &refl;
             let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
             let forcing = Forcing::from_records(&records)?;
             solve_facet_temperatures(
@@ -649,7 +777,7 @@ pub fn solve_scene_observed<'a>(
             "the thermal model needs a weather history; add `\"weather\": \"FILE\"`",
         )
     })?;
-    let setup = FacetThermalSetup::from_scene(scene)?;
+    let setup = FacetThermalSetup::from_scene_with(scene, &params.physics)?;
     let times: Vec<DateTime<FixedOffset>> = if image_times.is_empty() {
         vec![scene.time]
     } else {

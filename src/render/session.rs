@@ -781,6 +781,7 @@ fn scene_thermal(
     let mut params = SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;
     params.exposure.sky = session.config.sky_sampling;
+    params.physics = session.config.thermal;
     let solved = solve_scene_observed(tracers, scene, times, &params, progress)?;
     let n = scene.geometry.facet_count();
     let shape = solved.shape_factor().to_vec();

@@ -60,7 +60,7 @@ use rayon::prelude::*;
 
 use self::kernels::accumulate_rows;
 use self::passes::{PassPlan, Slots};
-use self::reference::{FacetState, Reference, sunlit_cos};
+use self::reference::{Diff, FacetState, Reference, sunlit_cos};
 use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
@@ -295,6 +295,7 @@ impl Facets<'_> {
             shape_factor: inputs.shape_factor[facet] as f64,
             back_shape_factor: inputs.back_shape_factor(facet).map(f64::from),
             background: Background::Air,
+            reflected: inputs.reflected(facet),
         }
     }
 
@@ -331,11 +332,14 @@ impl Facets<'_> {
     fn state(&self, facet: usize) -> FacetState<'_> {
         let inputs = self.inputs;
         let f = inputs.shape_factor[facet];
+        let refl = inputs.reflected(facet);
         FacetState {
             f,
             f_back: inputs.back_shape_factor(facet).unwrap_or(1.0 - f),
             sun_fraction: inputs.sun_fraction(facet),
             cos_incidence: inputs.cos_incidence(facet),
+            reflected_direct: refl.direct,
+            b: refl.diffuse as f32,
         }
     }
 }
@@ -386,6 +390,11 @@ struct Groups<'a> {
     back_shape32: Vec<Vec<f32>>,
     /// `αE_dn` (the weight of `s·cos θ`) per group and record (f32).
     sun32: Vec<Vec<f32>>,
+    /// `αE_d` (the weight of the reflected diffuse coefficient `b`) per
+    /// group and record (f32).
+    refl_diffuse32: Vec<Vec<f32>>,
+    /// Daily mean of `αE_d` per group.
+    refl_diffuse_mean: Vec<f64>,
     /// Daily mean of the front sources of `F = 0`, no sun, per group.
     base_mean: Vec<f64>,
     /// Daily mean of `∂S/∂F` per group.
@@ -434,6 +443,14 @@ impl<'a> Groups<'a> {
             .iter()
             .map(|m| f32s(m.front_per_sunlit_cos()))
             .collect();
+        let refl_diffuse32 = models
+            .iter()
+            .map(|m| f32s(m.front_per_reflected_diffuse()))
+            .collect();
+        let refl_diffuse_mean = models
+            .iter()
+            .map(|m| m.front_per_reflected_diffuse().iter().sum::<f64>() / r as f64)
+            .collect();
         // Daily means of the front sources: mean(base) + F·mean(∂S/∂F) +
         // mean(s cos θ · αE_dn).
         let base_mean = models
@@ -455,6 +472,8 @@ impl<'a> Groups<'a> {
             shape32,
             back_shape32,
             sun32,
+            refl_diffuse32,
+            refl_diffuse_mean,
             base_mean,
             shape_mean,
         }
@@ -493,8 +512,10 @@ impl<'a> Groups<'a> {
             .zip(&self.sun32[g])
             .map(|(sc, w)| (sc * w) as f64)
             .sum();
+        let st = facets.state(f);
         self.base_mean[g]
             + facets.inputs.shape_factor[f] as f64 * self.shape_mean[g]
+            + st.b as f64 * self.refl_diffuse_mean[g]
             + sun / r as f64
     }
 
@@ -568,8 +589,8 @@ impl Bins {
                     s.sc.iter_mut()
                         .zip(sunlit_cos(st))
                         .for_each(|(o, v)| *o = v);
-                    let (df, dfb) = (st.f - rep.facet.f, st.f_back - rep.facet.f_back);
-                    let p = |j: usize| rep.probe(j, &s.sc, df, dfb);
+                    let d = Diff::of(&st, &rep.facet);
+                    let p = |j: usize| rep.probe(j, &s.sc, d);
                     (f, [p(rows.first), p(rows.last), p(rows.mean)])
                 },
             )
