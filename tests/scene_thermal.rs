@@ -324,6 +324,7 @@ fn scene_inputs_that_do_not_fit_are_rejected() {
         background: &entries,
         reflected_direct: &[],
         reflected_diffuse: &[],
+        wind: &[],
     };
     let kinds = [FacetThermal::Solve(0); 2];
     let solve = |inputs: SceneInputs| {

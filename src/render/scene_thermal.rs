@@ -33,6 +33,7 @@ use crate::thermal::scene::{
     FacetThermal, PassStats, SceneInputs, SceneTemperatures, ThermalParams,
     solve_facet_temperatures,
 };
+use crate::thermal::wind::{FacetWind, WindProfile};
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};
 use crate::trace::{Coherence, Ray, Tracer};
 use crate::weather::{WeatherHistory, WeatherRecord};
@@ -55,6 +56,7 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
             background: &e.sky.entries,
             reflected_direct: &e.reflected.direct,
             reflected_diffuse: &e.reflected.diffuse,
+            wind: &[],
         }
     }
 }
@@ -282,6 +284,13 @@ pub struct ThermalPhysics {
     /// angular model (default true); false keeps the materials' normal
     /// emissivity.
     pub hemispherical_emissivity: bool,
+    /// Reduce the weather's wind to each facet's height and canyon
+    /// ([`crate::thermal::wind`]; default true); false: the weather's wind
+    /// at every facet.
+    pub facet_wind: bool,
+    /// Roughness length of the site for the wind profile, m (default
+    /// [`crate::thermal::wind::ROUGHNESS_M`]).
+    pub roughness_m: f64,
 }
 
 impl Default for ThermalPhysics {
@@ -290,6 +299,8 @@ impl Default for ThermalPhysics {
             reflected_bounces: crate::exposure::reflected::BOUNCES,
             ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
             hemispherical_emissivity: true,
+            facet_wind: true,
+            roughness_m: crate::thermal::wind::ROUGHNESS_M,
         }
     }
 }
@@ -301,14 +312,20 @@ impl ThermalPhysics {
         reflected_bounces: 0,
         ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
         hemispherical_emissivity: false,
+        facet_wind: false,
+        roughness_m: crate::thermal::wind::ROUGHNESS_M,
     };
 
     /// Checks the values, naming the field.
     ///
     /// # Errors
-    /// [`Error::Invalid`] for more than 16 bounces or an albedo outside
-    /// `[0, 1]`.
+    /// [`Error::Invalid`] for more than 16 bounces, an albedo outside
+    /// `[0, 1]` or a roughness length outside (0, 2 m).
     pub fn validate(&self) -> Result<()> {
+        crate::thermal::wind::WindProfile {
+            roughness_m: self.roughness_m,
+        }
+        .validate(crate::thermal::WIND_HEIGHT_M, crate::thermal::AIR_HEIGHT_M)?;
         if self.reflected_bounces > 16 {
             return Err(Error::invalid(
                 "reflected_bounces",
@@ -524,7 +541,12 @@ pub fn solve_scene_temperatures_observed<'a>(
     };
     let t2 = Instant::now();
     progress.item("thermal solve");
-    let temperatures = solve_windows(&exposure, &setup, &history, &params.thermal)?;
+    let wind = if params.physics.facet_wind {
+        facet_wind(&exposure, &history.forcing, params.physics.roughness_m)
+    } else {
+        Vec::new()
+    };
+    let temperatures = solve_windows(&exposure, &wind, &setup, &history, &params.thermal)?;
     let t3 = Instant::now();
     progress.advance(exposure.facets.len() as u64);
     Ok(SceneThermal {
@@ -614,6 +636,7 @@ impl History {
 /// As [`solve_facet_temperatures`].
 fn solve_windows(
     exposure: &Exposure,
+    wind: &[FacetWind],
     setup: &FacetThermalSetup,
     history: &History,
     params: &ThermalParams,
@@ -632,8 +655,10 @@ fn solve_windows(
         }
         let last = w.len() - 1;
         let r = if w.len() == all {
+            let mut inputs = SceneInputs::from(exposure);
+            inputs.wind = wind;
             solve_facet_temperatures(
-                exposure,
+                inputs,
                 &setup.kinds,
                 &setup.props,
                 &history.forcing,
@@ -664,6 +689,7 @@ fn solve_windows(
             inputs.sun_fraction = &sun;
             inputs.cos_incidence = &cos;
             inputs.reflected_direct = &refl;
+            inputs.wind = wind;
             let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
             let forcing = Forcing::from_records(&records)?;
             solve_facet_temperatures(
@@ -685,6 +711,36 @@ fn solve_windows(
         solved.push((w.as_slice(), t));
     }
     Ok(out)
+}
+
+/// The wind reduction of every facet ([`crate::thermal::wind`]): its
+/// centre's height above the scene's lowest sample point, its tilt and its
+/// mean sky view, under the site roughness `roughness_m`, the forcing's
+/// measurement height and its air height as the lowest height.
+fn facet_wind(exposure: &Exposure, forcing: &Forcing, roughness_m: f64) -> Vec<FacetWind> {
+    let facets = &exposure.facets;
+    let n = facets.len();
+    let centre = |f: usize| {
+        let p = facets.facet_points(f);
+        p.iter().copied().sum::<glam::Vec3>() / p.len().max(1) as f32
+    };
+    let ground = (0..n)
+        .flat_map(|f| facets.facet_points(f).iter().map(|p| p.z))
+        .fold(f32::INFINITY, f32::min);
+    let profile = WindProfile { roughness_m };
+    (0..n)
+        .into_par_iter()
+        .map(|f| {
+            FacetWind::new(
+                &profile,
+                (centre(f).z - ground) as f64,
+                facets.normal[f].z as f64,
+                exposure.sky.mean_shape_factor(f) as f64,
+                forcing.wind_height_m,
+                forcing.air_height_m,
+            )
+        })
+        .collect()
 }
 
 /// Adds one window's pass statistics to the run's (work and time summed,

@@ -65,6 +65,7 @@ pub mod latent;
 pub mod linear;
 pub mod scene;
 pub mod surface;
+pub mod wind;
 
 use crate::error::{Error, Result};
 use crate::material::Material;

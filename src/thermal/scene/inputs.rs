@@ -11,6 +11,7 @@ use glam::Vec3;
 
 use crate::geometry::BackgroundEntry;
 use crate::thermal::Reflected;
+use crate::thermal::wind::FacetWind;
 use crate::{Error, Result};
 
 /// The ray-traced inputs of every facet of a scene, in global facet order:
@@ -54,6 +55,9 @@ pub struct SceneInputs<'a> {
     /// irradiance, per facet ([`crate::thermal::Reflected::diffuse`]);
     /// empty: none.
     pub reflected_diffuse: &'a [f32],
+    /// The reduction of the weather's wind at each facet
+    /// ([`crate::thermal::wind`]); empty: the weather's wind everywhere.
+    pub wind: &'a [FacetWind],
 }
 
 impl<'a> SceneInputs<'a> {
@@ -131,6 +135,23 @@ impl<'a> SceneInputs<'a> {
                     format!("expected one entry per facet ({n}), got {len}"),
                 ));
             }
+        }
+        if !self.wind.is_empty() && self.wind.len() != n {
+            return Err(Error::invalid(
+                "wind",
+                format!(
+                    "expected one entry per facet ({n}) or none, got {}",
+                    self.wind.len()
+                ),
+            ));
+        }
+        if let Some(i) = self.wind.iter().position(|w| {
+            !(w.height.is_finite() && w.height >= 0.0 && w.canyon.is_finite() && w.canyon >= 0.0)
+        }) {
+            return Err(Error::invalid(
+                format!("wind[{i}]"),
+                format!("expected finite factors ≥ 0, got {:?}", self.wind[i]),
+            ));
         }
         if !self.reflected_diffuse.is_empty() && self.reflected_diffuse.len() != n {
             return Err(Error::invalid(

@@ -137,7 +137,11 @@ pub(super) fn solve(
     passes: u32,
     lp: &LinearizedParams,
 ) -> Result<SceneTemperatures> {
-    let PropertySets { props, exchanges } = sets;
+    let PropertySets {
+        props,
+        exchanges,
+        wind_class,
+    } = sets;
     let t_start = Instant::now();
     let facets = Facets {
         inputs,
@@ -153,7 +157,7 @@ pub(super) fn solve(
     };
     let rows = Rows::new(image_records, forcing.len());
     // 1. Groups of equal property sets and their source models.
-    let groups = Groups::new(props, exchanges, kinds, forcing);
+    let groups = Groups::new(props, exchanges, wind_class, kinds, forcing);
     // 2. Per group, the centre facet, linearised.
     let centre_refs: Vec<Option<Reference>> = groups
         .centre_facets(&facets)
@@ -405,6 +409,7 @@ impl<'a> Groups<'a> {
     fn new(
         props: &[SlabProperties],
         exchanges: &[Exchange],
+        wind_class: &[u32],
         kinds: &'a [FacetThermal],
         forcing: &Forcing,
     ) -> Self {
@@ -412,9 +417,12 @@ impl<'a> Groups<'a> {
         let mut group_ids: BTreeMap<Vec<u64>, u32> = BTreeMap::new();
         let of_props: Vec<u32> = props
             .iter()
-            .map(|p| {
+            .zip(wind_class)
+            .map(|(p, &w)| {
                 let next = group_ids.len() as u32;
-                *group_ids.entry(prop_key(p)).or_insert(next)
+                let mut key = prop_key(p);
+                key.push(w as u64);
+                *group_ids.entry(key).or_insert(next)
             })
             .collect();
         let groups = group_ids.len();
