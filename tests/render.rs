@@ -837,6 +837,7 @@ fn session_run_reports_the_facets_and_every_row_to_its_observer() {
         [
             format!("start Thermal {facets}"),
             "item solar history and sky view".to_string(),
+            "item reflected shortwave".to_string(),
             "item ground test".to_string(),
             "item thermal solve".to_string(),
             format!("finish after {facets}"),

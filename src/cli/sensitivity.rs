@@ -34,6 +34,7 @@ pub(crate) const FACET_FLAGS: &[(&str, &str)] = &[
     ("tilt_deg", "--tilt"),
     ("azimuth_deg", "--azimuth"),
     ("shape_factor", "--shape-factor"),
+    ("ground_albedo", "--ground-albedo"),
     ("material", "--material"),
 ];
 

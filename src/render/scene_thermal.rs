@@ -717,7 +717,7 @@ fn solve_windows(
 /// centre's height above the scene's lowest sample point, its tilt and its
 /// mean sky view, under the site roughness `roughness_m`, the forcing's
 /// measurement height and its air height as the lowest height.
-fn facet_wind(exposure: &Exposure, forcing: &Forcing, roughness_m: f64) -> Vec<FacetWind> {
+pub fn facet_wind(exposure: &Exposure, forcing: &Forcing, roughness_m: f64) -> Vec<FacetWind> {
     let facets = &exposure.facets;
     let n = facets.len();
     let centre = |f: usize| {

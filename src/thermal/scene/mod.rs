@@ -212,10 +212,7 @@ pub fn solve_facet_temperatures<'a>(
     let mut scaled: Vec<(u32, Forcing)> = Vec::new();
     for &q in &wind_class {
         if q != WIND_NONE && !scaled.iter().any(|(c, _)| *c == q) {
-            let mut f = forcing.clone();
-            let k = q as f64 * WIND_QUANTUM;
-            f.wind_speed_m_s.iter_mut().for_each(|u| *u *= k);
-            scaled.push((q, f));
+            scaled.push((q, forcing_with_wind_class(forcing, q)));
         }
     }
     let exchanges = props
@@ -269,12 +266,31 @@ struct PropertySets<'a> {
 
 /// Quantum of the factor on the weather's wind that splits a property set
 /// by facet wind ([`SceneInputs::wind`]): facets whose factors round to the
-/// same multiple share one exchange (McAdams' `h` within `3.8·u·0.025`,
-/// 0.4 W m⁻² K⁻¹ at 4 m/s, of the facet's own).
-pub const WIND_QUANTUM: f64 = 0.05;
+/// same multiple share one exchange (McAdams' `h` within `3.8·u·0.01`,
+/// 0.15 W m⁻² K⁻¹ at 4 m/s, of the facet's own; at 0.05 the classes'
+/// steps showed as a 0.04 K azimuthal pattern on open ground whose sky
+/// views differ by sampling noise).
+pub const WIND_QUANTUM: f64 = 0.02;
 
 /// Wind class of a property set that takes the weather's wind as it is.
 const WIND_NONE: u32 = u32::MAX;
+
+/// The wind class of a facet of `props` with wind `wind`: its factor on
+/// the weather's wind ([`FacetWind::factor_for`]) in units of
+/// [`WIND_QUANTUM`], rounded, at least 1.
+pub fn wind_class(wind: &FacetWind, props: &SlabProperties) -> u32 {
+    let x = wind.factor_for(props.surface.is_some());
+    (x / WIND_QUANTUM).round().max(1.0) as u32
+}
+
+/// `forcing` with its wind scaled to wind class `class` ([`wind_class`]):
+/// what the exchange of that class is made from ([`Exchange::new`]).
+pub fn forcing_with_wind_class(forcing: &Forcing, class: u32) -> Forcing {
+    let mut f = forcing.clone();
+    let k = class as f64 * WIND_QUANTUM;
+    f.wind_speed_m_s.iter_mut().for_each(|u| *u *= k);
+    f
+}
 
 /// The property sets of a solve split by wind class: the kinds remapped to
 /// the (property set, wind class) twins, the twins, the class of each (a
@@ -304,8 +320,7 @@ impl WindSets {
             out.kinds.push(match *k {
                 FacetThermal::Solve(pi) => {
                     let p = &props[pi as usize];
-                    let x = inputs.wind[f].factor_for(p.surface.is_some());
-                    let q = (x / WIND_QUANTUM).round().max(1.0) as u32;
+                    let q = wind_class(&inputs.wind[f], p);
                     let next = out.props.len() as u32;
                     let i = *twins.entry((pi, q)).or_insert(next);
                     if i == next {
