@@ -1821,6 +1821,15 @@ fn cli_scene_sensitivity_and_diurnal_run() {
 fn cli_compare_latlon_points_against_a_render() {
     let dir = tempfile::tempdir().unwrap();
     let scene = tiny_scene(dir.path(), None);
+    // The check is of `compare`'s lat/lon → pixel mapping, whose premise is
+    // a uniform ground around each point (a point on a pixel edge may take
+    // the neighbour pixel). The shortwave reflected from the block and the
+    // wind at each facet (issue 19) make the ground triangles by the block
+    // differ by a few hundredths of a kelvin, so they are off here.
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    v["render"] = serde_json::json!({"thermal": {"reflected_bounces": 0, "facet_wind": false}});
+    std::fs::write(&scene, v.to_string()).unwrap();
     let out = dir.path().join("out");
     let (ok, _, err) = run_irsig(&[
         "render".as_ref(),

@@ -40,6 +40,13 @@ pub struct FacetSpec {
     pub azimuth_deg: f64,
     /// Sky shape factor; `None` = `(1 + cos tilt)/2` (an unobstructed plane).
     pub shape_factor: Option<f64>,
+    /// Albedo of the open ground the facet sees over `1 − F` of its
+    /// hemisphere, which reflects the sun and sky onto it (isotropically,
+    /// the ground fully sunlit: [`crate::thermal::Reflected::open_ground`]);
+    /// default [`crate::exposure::reflected::GROUND_ALBEDO`], the value of
+    /// the ground beyond a scene. 0 switches it off. A horizontal facet
+    /// (`F = 1`) sees no ground.
+    pub ground_albedo: f64,
 }
 
 impl Default for FacetSpec {
@@ -48,6 +55,7 @@ impl Default for FacetSpec {
             tilt_deg: 0.0,
             azimuth_deg: 180.0,
             shape_factor: None,
+            ground_albedo: crate::exposure::reflected::GROUND_ALBEDO as f64,
         }
     }
 }
@@ -64,6 +72,10 @@ pub struct OneFacet {
     pub records: Vec<WeatherRecord>,
     sun_fraction: Vec<f32>,
     cos_incidence: Vec<f32>,
+    /// Ground-reflected shortwave per unit direct-normal irradiance.
+    reflected_direct: Vec<f32>,
+    /// Ground-reflected shortwave per unit diffuse-horizontal irradiance.
+    reflected_diffuse: f64,
     /// Sky shape factor used.
     pub shape_factor: f64,
     /// Thermal solver options (spin-up always runs its full cycle count and
@@ -96,14 +108,44 @@ pub fn records_until(
     Ok(out)
 }
 
+/// The geometry of a free-standing facet over the records.
+struct FreeGeometry {
+    sun_fraction: Vec<f32>,
+    cos_incidence: Vec<f32>,
+    shape_factor: f64,
+    /// Ground-reflected shortwave per unit `E_dn`, per record.
+    reflected_direct: Vec<f32>,
+    /// Ground-reflected shortwave per unit `E_d`.
+    reflected_diffuse: f64,
+}
+
+impl FreeGeometry {
+    fn inputs(&self) -> FacetInputs<'_> {
+        FacetInputs {
+            reflected: thermal::Reflected {
+                direct: &self.reflected_direct,
+                diffuse: self.reflected_diffuse,
+            },
+            ..FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor)
+        }
+    }
+}
+
 /// Sunlit fraction and cosine of the solar incidence per record of a
-/// free-standing facet (the sun unshadowed), and its sky shape factor;
-/// the facet's tilt, azimuth and shape factor checked.
+/// free-standing facet (the sun unshadowed), its sky shape factor and the
+/// shortwave reflected onto it by the open ground; the facet's tilt,
+/// azimuth, shape factor and ground albedo checked.
 fn free_facet_geometry(
     records: &[WeatherRecord],
     site: &Site,
     facet: &FacetSpec,
-) -> Result<(Vec<f32>, Vec<f32>, f64)> {
+) -> Result<FreeGeometry> {
+    if !(0.0..=1.0).contains(&facet.ground_albedo) {
+        return Err(Error::invalid(
+            "ground_albedo",
+            format!("{} is not a fraction in 0..=1", facet.ground_albedo),
+        ));
+    }
     if !(facet.tilt_deg.is_finite() && (0.0..=180.0).contains(&facet.tilt_deg)) {
         return Err(Error::invalid(
             "tilt_deg",
@@ -131,13 +173,30 @@ fn free_facet_geometry(
     let normal = glam::DVec3::new(tilt.sin() * az.sin(), tilt.sin() * az.cos(), tilt.cos());
     let mut sun_fraction = Vec::with_capacity(records.len());
     let mut cos_incidence = Vec::with_capacity(records.len());
+    let mut sin_elevation = Vec::with_capacity(records.len());
     for r in records {
         let p = sun::position_standard(site, r.time)?;
-        let cos = normal.dot(p.direction_enu()).clamp(-1.0, 1.0);
+        let d = p.direction_enu();
+        let cos = normal.dot(d).clamp(-1.0, 1.0);
         sun_fraction.push(if p.is_up() && cos > 0.0 { 1.0f32 } else { 0.0 });
         cos_incidence.push(cos as f32);
+        sin_elevation.push(if p.is_up() { d.z } else { 0.0 });
     }
-    Ok((sun_fraction, cos_incidence, shape_factor))
+    let mut reflected_direct = Vec::new();
+    let refl = thermal::Reflected::open_ground(
+        1.0 - shape_factor,
+        facet.ground_albedo,
+        &sin_elevation,
+        &mut reflected_direct,
+    );
+    let reflected_diffuse = refl.diffuse;
+    Ok(FreeGeometry {
+        sun_fraction,
+        cos_incidence,
+        shape_factor,
+        reflected_direct,
+        reflected_diffuse,
+    })
 }
 
 /// A free-standing facet of slab `props` at `site` solved over `records`
@@ -152,12 +211,11 @@ pub fn solve_free_facet(
     facet: &FacetSpec,
     options: &SolveOptions,
 ) -> Result<(thermal::ThermalSolution, f64)> {
-    let (sun_fraction, cos_incidence, shape_factor) = free_facet_geometry(records, site, facet)?;
+    let g = free_facet_geometry(records, site, facet)?;
     let forcing = Forcing::from_records(records)?;
-    let inputs = FacetInputs::new(&sun_fraction, &cos_incidence, shape_factor);
     Ok((
-        thermal::solve(props, &forcing, &inputs, options)?,
-        shape_factor,
+        thermal::solve(props, &forcing, &g.inputs(), options)?,
+        g.shape_factor,
     ))
 }
 
@@ -170,8 +228,7 @@ impl OneFacet {
         options: SolveOptions,
         band: Band,
     ) -> Result<Self> {
-        let (sun_fraction, cos_incidence, shape_factor) =
-            free_facet_geometry(&records, site, facet)?;
+        let g = free_facet_geometry(&records, site, facet)?;
         // Studies difference outputs across parameter values, so the outputs
         // must be smooth in them: a spin-up that stops on a tolerance (a
         // whole day more or less) or a loose Newton tolerance would add
@@ -181,9 +238,11 @@ impl OneFacet {
         options.newton_tolerance_k = options.newton_tolerance_k.min(1e-7);
         Ok(OneFacet {
             records,
-            sun_fraction,
-            cos_incidence,
-            shape_factor,
+            sun_fraction: g.sun_fraction,
+            cos_incidence: g.cos_incidence,
+            reflected_direct: g.reflected_direct,
+            reflected_diffuse: g.reflected_diffuse,
+            shape_factor: g.shape_factor,
             options,
             band,
             site: *site,
@@ -235,7 +294,13 @@ impl OneFacet {
         }
         let props = self.slab(material)?;
         let forcing = Forcing::from_records(weather)?;
-        let inputs = FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor);
+        let inputs = FacetInputs {
+            reflected: thermal::Reflected {
+                direct: &self.reflected_direct,
+                diffuse: self.reflected_diffuse,
+            },
+            ..FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor)
+        };
         Ok(thermal::solve(&props, &forcing, &inputs, &self.options)?.surface_temperature_k)
     }
 

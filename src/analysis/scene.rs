@@ -50,9 +50,12 @@ use crate::render::path::PathTables;
 use crate::render::scene_thermal::{FacetThermalSetup, SceneThermalParams};
 use crate::render::session::Session;
 use crate::render::{Conditions, ShadeOptions, Shader, Sky};
-use crate::thermal::scene::{FacetThermal, ThermalParams};
+use crate::thermal::scene::{
+    FacetThermal, FacetWind, ThermalParams, forcing_with_wind_class, wind_class,
+};
 use crate::thermal::{
-    self, BackBoundary, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions,
+    self, BackBoundary, Background, Exchange, FacetInputs, Forcing, Reflected, SlabProperties,
+    SolveOptions,
 };
 use crate::trace::{Coherence, Hit, Ray};
 use crate::weather::WeatherRecord;
@@ -310,6 +313,8 @@ pub struct SceneStudy {
     history: Vec<WeatherRecord>,
     image_record: usize,
     exposure: Exposure,
+    /// The wind at each facet, as the render's (empty: the weather's).
+    wind: Vec<FacetWind>,
     kinds: Vec<FacetThermal>,
     /// Facets on the ground (the render's rule,
     /// [`FacetThermalSetup::ground_facets`]): an insulated back becomes the
@@ -389,7 +394,8 @@ impl SceneStudy {
             .position(|t| *t == time)
             .ok_or_else(|| Error::Other("image time not on the history grid".into()))?;
         let dirs = sun_directions(&scene.site, &times)?;
-        let setup = FacetThermalSetup::from_scene(scene)?;
+        let physics = session.config.thermal;
+        let setup = FacetThermalSetup::from_scene_with(scene, &physics)?;
         // The same kind of scene as the render's exposure (and, as there,
         // the watertight one for the ground test).
         let own = session.exposure_tracer()?;
@@ -411,6 +417,23 @@ impl SceneStudy {
                 exposure.sky.shape_factor[f] = v;
             }
         }
+        // As the render: the reflected shortwave and the wind at each facet.
+        let exposure = if physics.reflected_bounces > 0 {
+            exposure.with_reflected(
+                &setup.facet_albedo(),
+                physics.ground_albedo,
+                &dirs,
+                physics.reflected_bounces,
+            )?
+        } else {
+            exposure
+        };
+        let wind = if physics.facet_wind {
+            let forcing = Forcing::from_records(&history)?;
+            crate::render::scene_thermal::facet_wind(&exposure, &forcing, physics.roughness_m)
+        } else {
+            Vec::new()
+        };
         let ground = if SceneThermalParams::default().ground {
             setup.ground_facets(session.tracer.as_ref(), &exposure.facets)
         } else {
@@ -457,6 +480,7 @@ impl SceneStudy {
             history,
             image_record,
             exposure,
+            wind,
             kinds,
             ground,
             facet_part,
@@ -527,6 +551,14 @@ impl SceneStudy {
             shape_factor: s.sky.shape_factor[f] as f64,
             back_shape_factor: s.sky.back_shape_factor(f).map(f64::from),
             background,
+            reflected: if s.reflected.facet_count() == 0 {
+                Reflected::NONE
+            } else {
+                Reflected {
+                    direct: s.reflected.direct(f),
+                    diffuse: s.reflected.diffuse[f] as f64,
+                }
+            },
         }
     }
 
@@ -564,6 +596,39 @@ impl SceneStudy {
                 .collect()
         };
         let (own_ex, ground_ex) = (exchanges(&props)?, exchanges(&ground_props)?);
+        // With the wind at each facet: one exchange per (part, ground twin,
+        // wind class) of the solved facets, as the scene solve's classes.
+        let key = |f: usize| -> Option<(usize, bool, u32)> {
+            let part = self.facet_part[f] as usize;
+            let ground = self.ground[f] && ground_props[part].is_some();
+            let p = if ground {
+                ground_props[part].as_ref()
+            } else {
+                props[part].as_ref()
+            }?;
+            Some((part, ground, wind_class(self.wind.get(f)?, p)))
+        };
+        let mut keys: Vec<(usize, bool, u32)> = self
+            .neighbours
+            .iter()
+            .chain(&self.sampled)
+            .filter_map(|&f| key(f))
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let wind_ex: HashMap<(usize, bool, u32), Exchange> = keys
+            .par_iter()
+            .map(|&(part, ground, q)| {
+                let p = if ground {
+                    ground_props[part].as_ref()
+                } else {
+                    props[part].as_ref()
+                }
+                .expect("solved facets have properties");
+                Exchange::new(p, &forcing_with_wind_class(&forcing, q))
+                    .map(|e| ((part, ground, q), e))
+            })
+            .collect::<Result<_>>()?;
         let prop = |f: usize| -> Result<(&SlabProperties, &Exchange)> {
             let part = self.facet_part[f] as usize;
             let own = props[part].as_ref().zip(own_ex[part].as_ref());
@@ -575,7 +640,11 @@ impl SceneStudy {
             } else {
                 own
             };
-            p.ok_or_else(|| Error::Other(format!("facet {f} has a fixed temperature")))
+            let p = p.ok_or_else(|| Error::Other(format!("facet {f} has a fixed temperature")))?;
+            match key(f).and_then(|k| wind_ex.get(&k)) {
+                Some(ex) => Ok((p.0, ex)),
+                None => Ok(p),
+            }
         };
         let pass1: Vec<Vec<f32>> = self
             .neighbours

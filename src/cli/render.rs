@@ -153,6 +153,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = args.per_hit {
         session.config.per_hit = p;
     }
+    if args.state.is_some() && session.config.per_hit {
+        eprintln!(
+            "warning: a state folder holds one temperature per facet: hits take their facet's \
+             (as --per-hit off), which can differ from a render that solves"
+        );
+    }
     let options = RunOptions {
         backend: args.backend,
         times,

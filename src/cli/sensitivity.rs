@@ -34,6 +34,7 @@ pub(crate) const FACET_FLAGS: &[(&str, &str)] = &[
     ("tilt_deg", "--tilt"),
     ("azimuth_deg", "--azimuth"),
     ("shape_factor", "--shape-factor"),
+    ("ground_albedo", "--ground-albedo"),
     ("material", "--material"),
 ];
 
@@ -58,6 +59,11 @@ pub struct FacetArgs {
     /// an unobstructed plane).
     #[arg(long, value_name = "F")]
     pub shape_factor: Option<f64>,
+    /// Albedo of the open ground the facet sees over 1 − F of its
+    /// hemisphere, reflecting sun and sky onto it (0 switches it off; a
+    /// horizontal facet sees no ground).
+    #[arg(long, value_name = "RHO", default_value_t = irsig::exposure::reflected::GROUND_ALBEDO as f64)]
+    pub ground_albedo: f64,
     /// Site as LAT,LON,ALT (degrees north, degrees east, metres); default:
     /// the weather file's site.
     #[arg(long, value_name = "LAT,LON,ALT", allow_hyphen_values = true)]
@@ -89,6 +95,7 @@ impl FacetArgs {
             tilt_deg: self.tilt,
             azimuth_deg: self.azimuth,
             shape_factor: self.shape_factor,
+            ground_albedo: self.ground_albedo,
         }
     }
     /// The solver options: the preset, with --spinup-days.

@@ -27,6 +27,11 @@
 //!   of facets, in their order, and the coherence they declare
 //!   ([`SOLAR_RAY_COHERENCE`], [`SKY_RAY_COHERENCE`]) — for benchmarks of
 //!   the tracers on the exposure stage's own rays (`irsig bench trace`).
+//! - [`reflected_shortwave`]: the sunlight reflected onto each facet by the
+//!   facets and ground its hemisphere rays hit (radiosity over the
+//!   background lists, per unit of the weather's irradiances) →
+//!   [`ReflectedShortwave`]; it needs the facets' albedos, so the caller
+//!   adds it ([`Exposure::with_reflected`]).
 //! - [`compute_exposure`] runs all of it and times it ([`Exposure`]).
 //! - [`history_times`] / [`sun_directions`]: the record times of the
 //!   history window ([`HistoryWindow`], default 24 h at ≤ 15 min, on a grid
@@ -52,6 +57,7 @@
 
 mod facets;
 mod history;
+pub mod reflected;
 pub mod sampling;
 mod sky;
 mod solar;
@@ -63,6 +69,7 @@ use glam::Vec3;
 pub use crate::geometry::BackgroundEntry;
 pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_step, history_times, image_window, sun_directions};
+pub use reflected::{ReflectedShortwave, reflected_shortwave};
 pub use sky::{
     RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view, sky_view_of,
 };
@@ -123,12 +130,14 @@ pub struct ExposureStats {
     pub solar: Duration,
     /// Time tracing the sky view.
     pub sky: Duration,
+    /// Time computing the reflected shortwave.
+    pub reflected: Duration,
 }
 
 impl ExposureStats {
     /// Total time.
     pub fn total(&self) -> Duration {
-        self.setup + self.solar + self.sky
+        self.setup + self.solar + self.sky + self.reflected
     }
 }
 
@@ -141,8 +150,41 @@ pub struct Exposure {
     pub solar: SolarHistory,
     /// Shape factor and background per facet.
     pub sky: SkyView,
+    /// Shortwave reflected onto each facet by what it sees
+    /// ([`reflected_shortwave`]); empty until the caller, who knows the
+    /// facets' albedos, computes it ([`Exposure::with_reflected`]).
+    pub reflected: ReflectedShortwave,
     /// Counts and timings.
     pub stats: ExposureStats,
+}
+
+impl Exposure {
+    /// Adds the reflected shortwave ([`reflected_shortwave`]) for the
+    /// facets' `albedo`, the ground beyond the scene's `ground_albedo`, the
+    /// sun directions the solar history was traced with and `bounces`
+    /// bounces (0: none).
+    ///
+    /// # Errors
+    /// As [`reflected_shortwave`].
+    pub fn with_reflected(
+        mut self,
+        albedo: &[f32],
+        ground_albedo: f32,
+        sun_dirs: &[Vec3],
+        bounces: u32,
+    ) -> Result<Exposure> {
+        let t0 = Instant::now();
+        self.reflected = reflected_shortwave(
+            &self.sky,
+            &self.solar,
+            albedo,
+            ground_albedo,
+            sun_dirs,
+            bounces,
+        )?;
+        self.stats.reflected = t0.elapsed();
+        Ok(self)
+    }
 }
 
 /// Traces the solar history and sky view of every facet of `geometry`.
@@ -197,6 +239,7 @@ pub fn compute_exposure<T: Tracer + ?Sized>(
         facets,
         solar,
         sky,
+        reflected: ReflectedShortwave::default(),
         stats,
     })
 }
@@ -260,6 +303,7 @@ pub fn exposure_of<T: Tracer + ?Sized>(
             setup: Duration::ZERO,
             solar: t2 - t1,
             sky: t3 - t2,
+            reflected: Duration::ZERO,
         },
     ))
 }

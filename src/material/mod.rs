@@ -165,7 +165,11 @@ pub struct Material {
     pub thickness_m: f64,
     /// Solar (shortwave) absorptivity, 0–1.
     pub solar_absorptivity: f64,
-    /// Broadband thermal emissivity, 0–1.
+    /// Broadband thermal emissivity at **normal** view, 0–1 (as DIRSIG's
+    /// `THERMAL_EMISSIVITY`). The renderer applies the angular model of
+    /// [`crate::radiometry::Emissivity`] to it; the thermal model uses the
+    /// hemispherical value of that model
+    /// ([`crate::radiometry::emissivity::thermal_hemispherical_emissivity`]).
     pub thermal_emissivity: f64,
     /// Exposed area (see the material module docs for its semantics).
     pub exposed_area: f64,

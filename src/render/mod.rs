@@ -110,6 +110,12 @@ pub struct RenderConfig {
     /// [`per_hit::PerHitParams::size_px`]).
     #[serde(default = "default_per_hit_size_px")]
     pub per_hit_size_px: f32,
+    /// Physics of the per-facet thermal inputs, each on by default; switch
+    /// one off for side-by-side checks (`{"reflected_bounces": 0}`,
+    /// `{"hemispherical_emissivity": false}`, …:
+    /// [`scene_thermal::ThermalPhysics`]).
+    #[serde(default)]
+    pub thermal: scene_thermal::ThermalPhysics,
 }
 
 /// `render.sky_sampling` as written: `stratified:N`, `dirsig` or
@@ -134,6 +140,7 @@ impl Default for RenderConfig {
             geotiff: false,
             per_hit: default_per_hit(),
             per_hit_size_px: default_per_hit_size_px(),
+            thermal: scene_thermal::ThermalPhysics::default(),
         }
     }
 }
@@ -150,7 +157,7 @@ impl RenderConfig {
             location,
             "render",
             "an object with max_bounces, spectral_step_um, sky_temperature_k, facet_samples, \
-             sky_sampling, geotiff, per_hit, per_hit_size_px",
+             sky_sampling, geotiff, per_hit, per_hit_size_px, thermal",
         )?;
         let bad = |field: &str, msg: String| {
             Error::parse(location.clone().with_field(format!("render.{field}")), msg)
@@ -193,6 +200,10 @@ impl RenderConfig {
                 format!("{}: expected 1 to 16", c.facet_samples),
             ));
         }
+        c.thermal.validate().map_err(|e| match e {
+            Error::Invalid { field, message } => bad(&format!("thermal.{field}"), message),
+            other => other,
+        })?;
         Ok(c)
     }
 }

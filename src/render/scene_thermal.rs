@@ -34,6 +34,7 @@ use crate::thermal::scene::{
     FacetThermal, PassStats, PointResponse, SceneInputs, SceneTemperatures, ThermalParams,
     solve_facet_temperatures,
 };
+use crate::thermal::wind::{FacetWind, WindProfile};
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};
 use crate::trace::{Coherence, Ray, Tracer};
 use crate::weather::{WeatherHistory, WeatherRecord};
@@ -54,6 +55,9 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
             ground_weight: &e.sky.ground_weight,
             background_offsets: &e.sky.offsets,
             background: &e.sky.entries,
+            reflected_direct: &e.reflected.direct,
+            reflected_diffuse: &e.reflected.diffuse,
+            wind: &[],
         }
     }
 }
@@ -70,6 +74,11 @@ pub struct FacetThermalSetup {
     /// Per facet: a shape factor that replaces the traced one in the
     /// thermal solve (a part's `shape_factor` override); may be empty.
     pub shape_factor_override: Vec<Option<f32>>,
+    /// Per facet: the shortwave albedo its neighbours receive reflected
+    /// sunlight from, `1 − α − τ` of its material (solar absorptivity α,
+    /// transmissivity τ; `1 − α` for opaque materials); may be empty
+    /// (then `1 − α` of the property set, 0 for fixed facets).
+    pub albedo: Vec<f32>,
 }
 
 impl FacetThermalSetup {
@@ -82,12 +91,25 @@ impl FacetThermalSetup {
     /// A material outside the slab model's domain, naming the scene file,
     /// the object and the part.
     pub fn from_scene(scene: &Scene) -> Result<Self> {
+        FacetThermalSetup::from_scene_with(scene, &ThermalPhysics::default())
+    }
+
+    /// [`FacetThermalSetup::from_scene`] with the switches of `physics`
+    /// (without [`ThermalPhysics::hemispherical_emissivity`], the property
+    /// sets keep the materials' normal emissivity, for comparisons).
+    ///
+    /// # Errors
+    /// As [`FacetThermalSetup::from_scene`].
+    pub fn from_scene_with(scene: &Scene, physics: &ThermalPhysics) -> Result<Self> {
         let mut props = Vec::new();
         let mut part_kind = Vec::with_capacity(scene.parts.len());
         let mut part_ds = Vec::with_capacity(scene.parts.len());
+        let mut part_albedo = Vec::with_capacity(scene.parts.len());
         for (i, p) in scene.parts.iter().enumerate() {
             let m = scene.part_material(i);
             part_ds.push(m.double_sided);
+            part_albedo
+                .push((1.0 - m.solar_absorptivity - m.transmissivity).clamp(0.0, 1.0) as f32);
             part_kind.push(match p.fixed_temperature_k {
                 Some(t) => FacetThermal::Fixed(t as f32),
                 None => {
@@ -100,6 +122,14 @@ impl FacetThermalSetup {
                             e.to_string(),
                         )
                     })?;
+                    let sp = if physics.hemispherical_emissivity {
+                        sp
+                    } else {
+                        SlabProperties {
+                            thermal_emissivity: m.thermal_emissivity,
+                            ..sp
+                        }
+                    };
                     props.push(sp);
                     FacetThermal::Solve(props.len() as u32 - 1)
                 }
@@ -111,6 +141,7 @@ impl FacetThermalSetup {
             kinds: parts.iter().map(|&p| part_kind[p as usize]).collect(),
             props,
             double_sided: parts.iter().map(|&p| part_ds[p as usize]).collect(),
+            albedo: parts.iter().map(|&p| part_albedo[p as usize]).collect(),
             shape_factor_override: if any_override {
                 parts
                     .iter()
@@ -179,6 +210,23 @@ impl FacetThermalSetup {
         ground
     }
 
+    /// Per facet: its albedo ([`FacetThermalSetup::albedo`], or `1 − α`
+    /// of its property set, 0 for a fixed facet).
+    pub fn facet_albedo(&self) -> Vec<f32> {
+        if !self.albedo.is_empty() {
+            return self.albedo.clone();
+        }
+        self.kinds
+            .iter()
+            .map(|k| match k {
+                FacetThermal::Solve(pi) => {
+                    (1.0 - self.props[*pi as usize].solar_absorptivity).clamp(0.0, 1.0) as f32
+                }
+                FacetThermal::Fixed(_) => 0.0,
+            })
+            .collect()
+    }
+
     /// This setup with the deep-ground back boundary
     /// ([`BackBoundary::GROUND`]) for the facets flagged in `ground` (the
     /// insulated property sets they use get a ground twin).
@@ -216,6 +264,8 @@ pub struct SceneThermalParams {
     /// study of `irsig::analysis` applies the same rule when it re-solves
     /// facets.
     pub ground: bool,
+    /// Which physics of the per-facet inputs are on (all by default).
+    pub physics: ThermalPhysics,
 }
 
 impl Default for SceneThermalParams {
@@ -225,7 +275,83 @@ impl Default for SceneThermalParams {
             exposure: ExposureParams::default(),
             thermal: ThermalParams::default(),
             ground: true,
+            physics: ThermalPhysics::default(),
         }
+    }
+}
+
+/// Physics of the per-facet thermal inputs that a scene may switch off for
+/// side-by-side comparisons (the `render.thermal` section of a scene file;
+/// `docs/physics/reflected-and-wind.md`). All on by default.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ThermalPhysics {
+    /// Bounces of shortwave reflected between facets
+    /// ([`crate::exposure::reflected`]; default
+    /// [`crate::exposure::reflected::BOUNCES`]); 0 switches it off.
+    pub reflected_bounces: u32,
+    /// Albedo of the ground beyond the scene (default
+    /// [`crate::exposure::reflected::GROUND_ALBEDO`]).
+    pub ground_albedo: f32,
+    /// Emit and absorb with the hemispherical emissivity of the renderer's
+    /// angular model (default true); false keeps the materials' normal
+    /// emissivity.
+    pub hemispherical_emissivity: bool,
+    /// Reduce the weather's wind to each facet's height and canyon
+    /// ([`crate::thermal::wind`]; default true); false: the weather's wind
+    /// at every facet.
+    pub facet_wind: bool,
+    /// Roughness length of the site for the wind profile, m (default
+    /// [`crate::thermal::wind::ROUGHNESS_M`]).
+    pub roughness_m: f64,
+}
+
+impl Default for ThermalPhysics {
+    fn default() -> Self {
+        ThermalPhysics {
+            reflected_bounces: crate::exposure::reflected::BOUNCES,
+            ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
+            hemispherical_emissivity: true,
+            facet_wind: true,
+            roughness_m: crate::thermal::wind::ROUGHNESS_M,
+        }
+    }
+}
+
+impl ThermalPhysics {
+    /// All three off: the model before issue 19 (no reflected shortwave,
+    /// normal emissivity, the weather's wind at every facet).
+    pub const OFF: ThermalPhysics = ThermalPhysics {
+        reflected_bounces: 0,
+        ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
+        hemispherical_emissivity: false,
+        facet_wind: false,
+        roughness_m: crate::thermal::wind::ROUGHNESS_M,
+    };
+
+    /// Checks the values, naming the field.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for more than 16 bounces, an albedo outside
+    /// `[0, 1]` or a roughness length outside (0, 2 m).
+    pub fn validate(&self) -> Result<()> {
+        crate::thermal::wind::WindProfile {
+            roughness_m: self.roughness_m,
+        }
+        .validate(crate::thermal::WIND_HEIGHT_M, crate::thermal::AIR_HEIGHT_M)?;
+        if self.reflected_bounces > 16 {
+            return Err(Error::invalid(
+                "reflected_bounces",
+                format!("{}: expected 0 to 16", self.reflected_bounces),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.ground_albedo) {
+            return Err(Error::invalid(
+                "ground_albedo",
+                format!("{}: expected a fraction in [0, 1]", self.ground_albedo),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -415,6 +541,7 @@ pub fn solve_scene_temperatures_observed<'a>(
     let history = History::new(weather, site, image_times, &params.window)?;
     let facets = facet_samples(geometry, setup, &params.exposure)?;
     let t1 = Instant::now();
+    params.physics.validate()?;
     let n = facets.len();
     let rays = trace_range(tracers, &facets, setup, &history, params, 0..n, progress)?;
     let t2 = Instant::now();
@@ -597,7 +724,22 @@ fn solve_traced(
         facets,
         solar,
         sky,
+        reflected: crate::exposure::ReflectedShortwave::default(),
         stats,
+    };
+    // Sunlight reflected between facets: from every facet's traced inputs,
+    // so after all parts are in (no rays of its own).
+    let exposure = if params.physics.reflected_bounces > 0 {
+        progress.item("reflected shortwave");
+        let albedo = setup.facet_albedo();
+        exposure.with_reflected(
+            &albedo,
+            params.physics.ground_albedo,
+            &history.sun,
+            params.physics.reflected_bounces,
+        )?
+    } else {
+        exposure
     };
     let (setup, ground_facets) = if params.ground {
         let count = ground.iter().filter(|&&g| g).count();
@@ -608,8 +750,13 @@ fn solve_traced(
     let t2 = Instant::now();
     progress.start(Stage::Thermal, n as u64);
     progress.item("thermal solve");
+    let wind = if params.physics.facet_wind {
+        facet_wind(&exposure, &history.forcing, params.physics.roughness_m)
+    } else {
+        Vec::new()
+    };
     let (temperatures, point_response) =
-        solve_windows(&exposure, &setup, &history, &params.thermal)?;
+        solve_windows(&exposure, &wind, &setup, &history, &params.thermal)?;
     progress.advance(n as u64);
     progress.finish();
     let t3 = Instant::now();
@@ -703,6 +850,7 @@ impl History {
 /// As [`solve_facet_temperatures`].
 fn solve_windows(
     exposure: &Exposure,
+    wind: &[FacetWind],
     setup: &FacetThermalSetup,
     history: &History,
     params: &ThermalParams,
@@ -724,8 +872,10 @@ fn solve_windows(
         }
         let last = w.len() - 1;
         let r = if w.len() == all {
+            let mut inputs = SceneInputs::from(exposure);
+            inputs.wind = wind;
             solve_facet_temperatures(
-                exposure,
+                inputs,
                 &setup.kinds,
                 &setup.props,
                 &history.forcing,
@@ -746,10 +896,17 @@ fn solve_windows(
                 gather(&exposure.solar.sun_fraction),
                 gather(&exposure.solar.cos_incidence),
             );
+            let refl = if exposure.reflected.direct.is_empty() {
+                Vec::new()
+            } else {
+                gather(&exposure.reflected.direct)
+            };
             let mut inputs = SceneInputs::from(exposure);
             inputs.records = w.len();
             inputs.sun_fraction = &sun;
             inputs.cos_incidence = &cos;
+            inputs.reflected_direct = &refl;
+            inputs.wind = wind;
             let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
             let forcing = Forcing::from_records(&records)?;
             solve_facet_temperatures(
@@ -776,6 +933,36 @@ fn solve_windows(
         solved.push((w.as_slice(), t, pr));
     }
     Ok((out, responses))
+}
+
+/// The wind reduction of every facet ([`crate::thermal::wind`]): its
+/// centre's height above the scene's lowest sample point, its tilt and its
+/// mean sky view, under the site roughness `roughness_m`, the forcing's
+/// measurement height and its air height as the lowest height.
+pub fn facet_wind(exposure: &Exposure, forcing: &Forcing, roughness_m: f64) -> Vec<FacetWind> {
+    let facets = &exposure.facets;
+    let n = facets.len();
+    let centre = |f: usize| {
+        let p = facets.facet_points(f);
+        p.iter().copied().sum::<glam::Vec3>() / p.len().max(1) as f32
+    };
+    let ground = (0..n)
+        .flat_map(|f| facets.facet_points(f).iter().map(|p| p.z))
+        .fold(f32::INFINITY, f32::min);
+    let profile = WindProfile { roughness_m };
+    (0..n)
+        .into_par_iter()
+        .map(|f| {
+            FacetWind::new(
+                &profile,
+                (centre(f).z - ground) as f64,
+                facets.normal[f].z as f64,
+                exposure.sky.mean_shape_factor(f) as f64,
+                forcing.wind_height_m,
+                forcing.air_height_m,
+            )
+        })
+        .collect()
 }
 
 /// Adds one window's pass statistics to the run's (work and time summed,
@@ -829,7 +1016,7 @@ pub fn solve_scene_observed<'a>(
     params: &SceneThermalParams,
     progress: &dyn Progress,
 ) -> Result<SceneThermal> {
-    let (weather, setup, times) = scene_parts(scene, image_times)?;
+    let (weather, setup, times) = scene_parts(scene, image_times, params)?;
     solve_scene_temperatures_observed(
         tracers,
         &scene.geometry,
@@ -858,7 +1045,7 @@ pub fn trace_scene_facets<'a>(
     range: Range<usize>,
     progress: &dyn Progress,
 ) -> Result<FacetRays> {
-    let (weather, setup, times) = scene_parts(scene, image_times)?;
+    let (weather, setup, times) = scene_parts(scene, image_times, params)?;
     let history = History::new(weather, &scene.site, &times, &params.window)?;
     let facets = facet_samples(&scene.geometry, &setup, &params.exposure)?;
     let n = facets.len();
@@ -897,7 +1084,7 @@ pub fn solve_scene_traced(
     parts: Vec<FacetRays>,
     progress: &dyn Progress,
 ) -> Result<SceneThermal> {
-    let (weather, setup, times) = scene_parts(scene, image_times)?;
+    let (weather, setup, times) = scene_parts(scene, image_times, params)?;
     let history = History::new(weather, &scene.site, &times, &params.window)?;
     let facets = facet_samples(&scene.geometry, &setup, &params.exposure)?;
     solve_traced(facets, &setup, history, &times, params, parts, progress)
@@ -908,6 +1095,7 @@ pub fn solve_scene_traced(
 fn scene_parts<'s>(
     scene: &'s Scene,
     image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
 ) -> Result<(
     &'s WeatherHistory,
     FacetThermalSetup,
@@ -919,7 +1107,7 @@ fn scene_parts<'s>(
             "the thermal model needs a weather history; add `\"weather\": \"FILE\"`",
         )
     })?;
-    let setup = FacetThermalSetup::from_scene(scene)?;
+    let setup = FacetThermalSetup::from_scene_with(scene, &params.physics)?;
     let times: Vec<DateTime<FixedOffset>> = if image_times.is_empty() {
         vec![scene.time]
     } else {

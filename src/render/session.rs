@@ -889,6 +889,7 @@ pub(crate) fn solve_params(session: &Session) -> super::scene_thermal::SceneTher
     let mut params = super::scene_thermal::SceneThermalParams::default();
     params.exposure.samples_per_edge = session.config.facet_samples;
     params.exposure.sky = session.config.sky_sampling;
+    params.physics = session.config.thermal;
     params
 }
 

@@ -11,6 +11,7 @@
 //! |------------------------------|------------------------------------|
 //! | absorbed direct solar        | `α · E_dn · s(t) · max(cos θ, 0)`  |
 //! | absorbed diffuse solar       | `α · F · E_d`                      |
+//! | absorbed reflected solar     | `α · E_r`                          |
 //! | absorbed sky longwave        | `ε · F · E_sky`                    |
 //! | absorbed background longwave | `ε · (1 − F) · σ · T_bg⁴`          |
 //! | emission                     | `− ε · σ · T⁴`                     |
@@ -28,8 +29,12 @@
 //! factor (fraction of the hemisphere seen that is sky), `E_d` diffuse
 //! horizontal irradiance (isotropic sky), `E_sky` downwelling sky longwave on
 //! a horizontal surface, `T_bg` temperature of what the rest of the
-//! hemisphere sees (K), `σ` Stefan–Boltzmann constant, `u` wind speed.
-//! Ground-reflected shortwave onto tilted facets is not modelled.
+//! hemisphere sees (K), `σ` Stefan–Boltzmann constant, `u` wind speed,
+//! `E_r` the shortwave reflected onto the facet by the surfaces it sees
+//! (neighbouring facets, the ground; `irsig::exposure::reflected` for a
+//! scene, the ground albedo for a free-standing facet), W m⁻².
+//! `ε` is the hemispherical emissivity
+//! ([`super::SlabProperties::thermal_emissivity`]).
 
 use super::conduction::{STEFAN_BOLTZMANN_W_M2_K4, SurfaceFlux};
 
@@ -78,6 +83,8 @@ pub struct FrontForcing {
     pub cos_incidence: f64,
     /// Sky shape factor, 0–1.
     pub shape_factor: f64,
+    /// Shortwave reflected onto the facet by what it sees, W m⁻².
+    pub reflected_w_m2: f64,
     /// Background (non-sky) temperature, K.
     pub background_temperature_k: f64,
     /// Vapour conductance `ρc_p/(γ(r_a + r_s))` of an evaporating surface,
@@ -95,7 +102,7 @@ pub fn front_flux(f: &FrontForcing, alpha: f64, eps: f64, p_w_m2: f64) -> Surfac
     let s = f.sun_fraction.clamp(0.0, 1.0);
     let cos = f.cos_incidence.max(0.0);
     let direct = alpha * f.direct_normal_w_m2 * s * cos;
-    let diffuse = alpha * f.shape_factor * f.diffuse_horizontal_w_m2;
+    let diffuse = alpha * (f.shape_factor * f.diffuse_horizontal_w_m2 + f.reflected_w_m2);
     let sky = eps * f.shape_factor * f.sky_longwave_w_m2;
     let tb2 = f.background_temperature_k * f.background_temperature_k;
     let background = eps * (1.0 - f.shape_factor) * sigma * tb2 * tb2;

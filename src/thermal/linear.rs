@@ -140,17 +140,21 @@ pub fn source_history_into(
 
 /// The source histories of every facet of one property set under one
 /// weather history, with the air as background, as affine functions of the
-/// facet's inputs: front `S_k = base_k + F·shape_k + s_k·max(cos θ_k, 0)·sun_k`,
-/// exposed back `B_k = back_base_k + F_b·back_shape_k` (W m⁻²). The
-/// coefficients are evaluated from the balance itself
-/// ([`super::balance::front_flux`], [`super::balance::exposed_back_flux`]),
-/// which is affine in `F`, `F_b` and `s·cos θ`; this makes a facet's source
-/// history three operations per record, for scenes of many facets.
+/// facet's inputs: front `S_k = base_k + F·shape_k + (s_k·max(cos θ_k, 0) +
+/// a_k)·sun_k + b·reflected_diffuse_k`, exposed back `B_k = back_base_k +
+/// F_b·back_shape_k` (W m⁻²), with `a_k`, `b` the facet's reflected-shortwave
+/// coefficients ([`super::Reflected`]: the reflected direct sunlight
+/// weighs like the facet's own, `α E_dn`). The coefficients are evaluated
+/// from the balance itself ([`super::balance::front_flux`],
+/// [`super::balance::exposed_back_flux`]), which is affine in `F`, `F_b`,
+/// `s·cos θ`, `a` and `b`; this makes a facet's source history a few
+/// operations per record, for scenes of many facets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SourceModel {
     base: Vec<f64>,
     shape: Vec<f64>,
     sun: Vec<f64>,
+    reflected_diffuse: Vec<f64>,
     back_base: Vec<f64>,
     back_shape: Vec<f64>,
 }
@@ -162,9 +166,13 @@ impl SourceModel {
         let n = forcing.len();
         let one = vec![1.0f32; n];
         let zero = vec![0.0f32; n];
-        let eval = |sun: &[f32], cos: &[f32], f: f64, f_back: f64| {
+        let eval = |sun: &[f32], cos: &[f32], f: f64, f_back: f64, b: f64| {
             let inputs = FacetInputs {
                 back_shape_factor: Some(f_back),
+                reflected: super::Reflected {
+                    direct: &[],
+                    diffuse: b,
+                },
                 ..FacetInputs::new(sun, cos, f)
             };
             let mut front = vec![0.0; n];
@@ -190,14 +198,16 @@ impl SourceModel {
             }
             (front, back)
         };
-        let (s0, b0) = eval(&zero, &zero, 0.0, 0.0);
-        let (s1, b1) = eval(&zero, &zero, 1.0, 1.0);
-        let (s2, _) = eval(&one, &one, 0.0, 0.0);
+        let (s0, b0) = eval(&zero, &zero, 0.0, 0.0, 0.0);
+        let (s1, b1) = eval(&zero, &zero, 1.0, 1.0, 0.0);
+        let (s2, _) = eval(&one, &one, 0.0, 0.0, 0.0);
+        let (s3, _) = eval(&zero, &zero, 0.0, 0.0, 1.0);
         let sub = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>();
         let exposed = matches!(props.back, BackBoundary::Exposed { .. });
         SourceModel {
             shape: sub(&s1, &s0),
             sun: sub(&s2, &s0),
+            reflected_diffuse: sub(&s3, &s0),
             base: s0,
             back_shape: if exposed { sub(&b1, &b0) } else { Vec::new() },
             back_base: if exposed { b0 } else { Vec::new() },
@@ -220,17 +230,39 @@ impl SourceModel {
         &self.sun
     }
 
+    /// `∂S_k/∂b` per record (the absorbed diffuse-horizontal irradiance
+    /// `α E_d`), W m⁻².
+    pub fn front_per_reflected_diffuse(&self) -> &[f64] {
+        &self.reflected_diffuse
+    }
+
     /// `∂B_k/∂F_b` per record (empty without an exposed back), W m⁻².
     pub fn back_per_shape_factor(&self) -> &[f64] {
         &self.back_shape
     }
 
     /// Front source history of a facet (sun fraction, cos θ, shape factor
-    /// `f`) into `out`, W m⁻².
+    /// `f`, no reflected shortwave) into `out`, W m⁻².
     pub fn front_into(&self, sun_fraction: &[f32], cos_incidence: &[f32], f: f64, out: &mut [f32]) {
+        self.front_reflected_into(sun_fraction, cos_incidence, f, super::Reflected::NONE, out);
+    }
+
+    /// [`SourceModel::front_into`] with the reflected shortwave `refl`.
+    pub fn front_reflected_into(
+        &self,
+        sun_fraction: &[f32],
+        cos_incidence: &[f32],
+        f: f64,
+        refl: super::Reflected,
+        out: &mut [f32],
+    ) {
         for k in 0..out.len() {
-            let sc = (sun_fraction[k].clamp(0.0, 1.0) * cos_incidence[k].max(0.0)) as f64;
-            out[k] = (self.base[k] + f * self.shape[k] + sc * self.sun[k]) as f32;
+            let sc = (sun_fraction[k].clamp(0.0, 1.0) * cos_incidence[k].max(0.0)) as f64
+                + refl.direct_at(k);
+            out[k] = (self.base[k]
+                + f * self.shape[k]
+                + sc * self.sun[k]
+                + refl.diffuse * self.reflected_diffuse[k]) as f32;
         }
     }
 

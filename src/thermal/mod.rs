@@ -67,6 +67,7 @@ pub mod latent;
 pub mod linear;
 pub mod scene;
 pub mod surface;
+pub mod wind;
 
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -224,7 +225,11 @@ pub struct SlabProperties {
     pub thickness_m: f64,
     /// Solar (shortwave) absorptivity `α`, 0–1.
     pub solar_absorptivity: f64,
-    /// Broadband thermal emissivity `ε`, 0–1.
+    /// Broadband **hemispherical** thermal emissivity `ε_h`, 0–1: what the
+    /// surface balance emits and absorbs longwave with.
+    /// [`SlabProperties::from_material`] converts the material's normal
+    /// `thermal_emissivity` once
+    /// ([`crate::radiometry::emissivity::thermal_hemispherical_emissivity`]).
     pub thermal_emissivity: f64,
     /// Self-generated power `P` delivered at the front surface, W m⁻².
     pub self_power_w_m2: f64,
@@ -296,7 +301,9 @@ impl SlabProperties {
         }
     }
 
-    /// Thermal properties of a material; the back boundary follows
+    /// Thermal properties of a material, with its normal
+    /// `thermal_emissivity` turned into the hemispherical one (see the
+    /// field); the back boundary follows
     /// [`BackBoundary::from_exposed_area`] (override with
     /// [`SlabProperties::with_back`]). Errors name the material and the
     /// offending field.
@@ -314,7 +321,10 @@ impl SlabProperties {
             specific_heat_j_kg_k: m.specific_heat_j_kg_k,
             thickness_m: m.thickness_m,
             solar_absorptivity: m.solar_absorptivity,
-            thermal_emissivity: m.thermal_emissivity,
+            // The material's value is normal; the balance emits and absorbs
+            // with the hemispherical one of the renderer's angular model.
+            thermal_emissivity: crate::radiometry::emissivity::thermal_hemispherical_emissivity(m)
+                .map_err(|e| Error::invalid(field("emissivity_curve"), e.to_string()))?,
             self_power_w_m2: m.self_power_w_m2,
             back: match &m.back {
                 Some(spec) => BackBoundary::from_spec(spec),
@@ -768,6 +778,55 @@ pub struct FacetInputs<'a> {
     pub back_shape_factor: Option<f64>,
     /// Background temperature.
     pub background: Background<'a>,
+    /// Shortwave reflected onto the facet by what it sees
+    /// ([`Reflected`]; [`Reflected::NONE`] by default).
+    pub reflected: Reflected<'a>,
+}
+
+/// The shortwave reflected onto a facet by the surfaces it sees, per unit
+/// of the weather's irradiances: `E_r(t) = E_dn(t)·direct[t] + E_d(t)·diffuse`
+/// (W m⁻²; the model and its coefficients: `irsig::exposure::reflected`).
+/// A free-standing facet tilted β over open ground of albedo `ρ_g` has
+/// `direct[t] = ρ_g (1 − F) max(sin h(t), 0)` (`h` the sun's elevation) and
+/// `diffuse = ρ_g (1 − F)` ([`Reflected::open_ground`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reflected<'a> {
+    /// Reflected irradiance per unit direct-normal irradiance at each
+    /// record (dimensionless, ≥ 0); empty: none.
+    pub direct: &'a [f32],
+    /// Reflected irradiance per unit diffuse-horizontal irradiance
+    /// (dimensionless, ≥ 0).
+    pub diffuse: f64,
+}
+
+impl<'a> Reflected<'a> {
+    /// No reflected shortwave.
+    pub const NONE: Reflected<'static> = Reflected {
+        direct: &[],
+        diffuse: 0.0,
+    };
+
+    /// The coefficient of the direct-normal irradiance at record `k`.
+    #[inline]
+    pub fn direct_at(&self, k: usize) -> f64 {
+        self.direct.get(k).map_or(0.0, |&v| v as f64)
+    }
+
+    /// The ground seen by a free-standing facet: view factor `ground_view`
+    /// (`1 − F` of an unobstructed plane), albedo `albedo`, the sun's
+    /// elevation sine `sin_elevation[t]` at each record (the coefficients
+    /// written into `direct`, which is returned borrowed).
+    pub fn open_ground(
+        ground_view: f64,
+        albedo: f64,
+        sin_elevation: &[f64],
+        direct: &'a mut Vec<f32>,
+    ) -> Reflected<'a> {
+        let c = (ground_view * albedo).max(0.0);
+        direct.clear();
+        direct.extend(sin_elevation.iter().map(|&z| (c * z.max(0.0)) as f32));
+        Reflected { direct, diffuse: c }
+    }
 }
 
 impl<'a> FacetInputs<'a> {
@@ -780,6 +839,7 @@ impl<'a> FacetInputs<'a> {
             shape_factor,
             back_shape_factor: None,
             background: Background::Air,
+            reflected: Reflected::NONE,
         }
     }
 
@@ -836,6 +896,38 @@ impl<'a> FacetInputs<'a> {
                     format!("expected a fraction in [0, 1], got {v}"),
                 ));
             }
+        }
+        if !self.reflected.direct.is_empty() && self.reflected.direct.len() != n {
+            return Err(Error::invalid(
+                "reflected.direct",
+                format!(
+                    "has {} values; expected one per weather record ({n}) or none",
+                    self.reflected.direct.len()
+                ),
+            ));
+        }
+        if let Some(i) = self
+            .reflected
+            .direct
+            .iter()
+            .position(|v| !(v.is_finite() && *v >= 0.0))
+        {
+            return Err(Error::invalid(
+                format!("reflected.direct[{i}]"),
+                format!(
+                    "expected a finite coefficient ≥ 0, got {}",
+                    self.reflected.direct[i]
+                ),
+            ));
+        }
+        if !(self.reflected.diffuse.is_finite() && self.reflected.diffuse >= 0.0) {
+            return Err(Error::invalid(
+                "reflected.diffuse",
+                format!(
+                    "expected a finite coefficient ≥ 0, got {}",
+                    self.reflected.diffuse
+                ),
+            ));
         }
         match self.background {
             Background::Air => {}
@@ -1129,6 +1221,8 @@ fn front_forcing_at(
         sun_fraction: inputs.sun_fraction[k] as f64,
         cos_incidence: inputs.cos_incidence[k] as f64,
         shape_factor: inputs.shape_factor,
+        reflected_w_m2: forcing.direct_normal_w_m2[k] * inputs.reflected.direct_at(k)
+            + forcing.diffuse_horizontal_w_m2[k] * inputs.reflected.diffuse,
         background_temperature_k: bg,
         vapour_conductance_w_m2_pa: exchange.vapour_conductance_w_m2_pa[k],
         air_vapour_pressure_pa: forcing.vapour_pressure_pa[k],

@@ -10,6 +10,8 @@
 use glam::Vec3;
 
 use crate::geometry::BackgroundEntry;
+use crate::thermal::Reflected;
+use crate::thermal::wind::FacetWind;
 use crate::{Error, Result};
 
 /// The ray-traced inputs of every facet of a scene, in global facet order:
@@ -45,6 +47,17 @@ pub struct SceneInputs<'a> {
     /// The facets each facet sees, with their view factors, facet after
     /// facet.
     pub background: &'a [BackgroundEntry],
+    /// Shortwave reflected onto each facet per unit direct-normal
+    /// irradiance, facet-major `[facet·R + record]`
+    /// ([`crate::thermal::Reflected::direct`]); empty: none.
+    pub reflected_direct: &'a [f32],
+    /// Shortwave reflected onto each facet per unit diffuse-horizontal
+    /// irradiance, per facet ([`crate::thermal::Reflected::diffuse`]);
+    /// empty: none.
+    pub reflected_diffuse: &'a [f32],
+    /// The reduction of the weather's wind at each facet
+    /// ([`crate::thermal::wind`]); empty: the weather's wind everywhere.
+    pub wind: &'a [FacetWind],
 }
 
 impl<'a> SceneInputs<'a> {
@@ -82,6 +95,19 @@ impl<'a> SceneInputs<'a> {
         }
     }
 
+    /// The shortwave reflected onto `facet` ([`crate::thermal::Reflected`]).
+    #[inline]
+    pub fn reflected(&self, facet: usize) -> Reflected<'a> {
+        Reflected {
+            direct: if self.reflected_direct.is_empty() {
+                &[]
+            } else {
+                &self.reflected_direct[facet * self.records..(facet + 1) * self.records]
+            },
+            diffuse: self.reflected_diffuse.get(facet).map_or(0.0, |&b| b as f64),
+        }
+    }
+
     /// The facets seen by `facet`, with their view factors.
     #[inline]
     pub fn background(&self, facet: usize) -> &'a [BackgroundEntry] {
@@ -110,11 +136,38 @@ impl<'a> SceneInputs<'a> {
                 ));
             }
         }
-        for (name, len) in [
-            ("sun_fraction", self.sun_fraction.len()),
-            ("cos_incidence", self.cos_incidence.len()),
+        if !self.wind.is_empty() && self.wind.len() != n {
+            return Err(Error::invalid(
+                "wind",
+                format!(
+                    "expected one entry per facet ({n}) or none, got {}",
+                    self.wind.len()
+                ),
+            ));
+        }
+        if let Some(i) = self.wind.iter().position(|w| {
+            !(w.height.is_finite() && w.height >= 0.0 && w.canyon.is_finite() && w.canyon >= 0.0)
+        }) {
+            return Err(Error::invalid(
+                format!("wind[{i}]"),
+                format!("expected finite factors ≥ 0, got {:?}", self.wind[i]),
+            ));
+        }
+        if !self.reflected_diffuse.is_empty() && self.reflected_diffuse.len() != n {
+            return Err(Error::invalid(
+                "reflected_diffuse",
+                format!(
+                    "expected one entry per facet ({n}) or none, got {}",
+                    self.reflected_diffuse.len()
+                ),
+            ));
+        }
+        for (name, len, optional) in [
+            ("sun_fraction", self.sun_fraction.len(), false),
+            ("cos_incidence", self.cos_incidence.len(), false),
+            ("reflected_direct", self.reflected_direct.len(), true),
         ] {
-            if len != n * self.records {
+            if len != n * self.records && !(optional && len == 0) {
                 return Err(Error::invalid(
                     name,
                     format!(

@@ -8,8 +8,9 @@
 //! # Stages of a pass
 //! 1. **Classes** (`classify`): facets whose inputs coincide are solved
 //!    once. The dedup key is the property set, the quantised shape
-//!    factor(s), the sun-fraction history and the quantised cos-incidence
-//!    history (orientation enters the slab model only through these two),
+//!    factor(s), the sun-fraction history, the reflected-shortwave
+//!    coefficients (to the shape factor's quantum) and the quantised
+//!    cos-incidence history (orientation enters the slab model only through these two),
 //!    and from the second pass on the quantised background-temperature
 //!    history ([`Dedup`]). Each class is solved with the exact inputs of its
 //!    first facet (in facet order). From pass 2 on, facets that see only
@@ -201,6 +202,7 @@ fn solve_classes(
                 shape_factor: ctx.inputs.shape_factor[f] as f64,
                 back_shape_factor: ctx.inputs.back_shape_factor(f).map(f64::from),
                 background,
+                reflected: ctx.inputs.reflected(f),
             };
             let pi = pi as usize;
             let sol = thermal::solve_with(
@@ -350,6 +352,17 @@ impl PassInputs<'_> {
                 .iter()
                 .map(|&s| q(s, dedup.sun_fraction_quantum)),
         );
+        // The reflected shortwave, in units of the sun fraction's quantum
+        // (it weighs like `s·cos θ`: [`thermal::SourceModel`]).
+        let refl = inputs.reflected(facet);
+        if !refl.direct.is_empty() || refl.diffuse > 0.0 {
+            key.push(q(refl.diffuse as f32, dedup.shape_factor_quantum));
+            key.extend(
+                refl.direct
+                    .iter()
+                    .map(|&a| q(a, dedup.shape_factor_quantum)),
+            );
+        }
         match dedup.normal_quantum {
             // cos θ = n·s (|n·s| double-sided, 0 at night or behind) is
             // fixed by the normal: rounding its components to `nq` bounds

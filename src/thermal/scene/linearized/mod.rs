@@ -60,7 +60,7 @@ use rayon::prelude::*;
 
 use self::kernels::accumulate_rows;
 use self::passes::{PassPlan, Slots};
-use self::reference::{FacetState, Reference, sunlit_cos};
+use self::reference::{Diff, FacetState, Reference, sunlit_cos};
 use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
@@ -137,7 +137,11 @@ pub(super) fn solve(
     passes: u32,
     lp: &LinearizedParams,
 ) -> Result<SceneTemperatures> {
-    let PropertySets { props, exchanges } = sets;
+    let PropertySets {
+        props,
+        exchanges,
+        wind_class,
+    } = sets;
     let t_start = Instant::now();
     let facets = Facets {
         inputs,
@@ -153,7 +157,7 @@ pub(super) fn solve(
     };
     let rows = Rows::new(image_records, forcing.len());
     // 1. Groups of equal property sets and their source models.
-    let groups = Groups::new(props, exchanges, kinds, forcing);
+    let groups = Groups::new(props, exchanges, wind_class, kinds, forcing);
     // 2. Per group, the centre facet, linearised.
     let centre_refs: Vec<Option<Reference>> = groups
         .centre_facets(&facets)
@@ -335,6 +339,7 @@ impl Facets<'_> {
             shape_factor: inputs.shape_factor[facet] as f64,
             back_shape_factor: inputs.back_shape_factor(facet).map(f64::from),
             background: Background::Air,
+            reflected: inputs.reflected(facet),
         }
     }
 
@@ -371,11 +376,14 @@ impl Facets<'_> {
     fn state(&self, facet: usize) -> FacetState<'_> {
         let inputs = self.inputs;
         let f = inputs.shape_factor[facet];
+        let refl = inputs.reflected(facet);
         FacetState {
             f,
             f_back: inputs.back_shape_factor(facet).unwrap_or(1.0 - f),
             sun_fraction: inputs.sun_fraction(facet),
             cos_incidence: inputs.cos_incidence(facet),
+            reflected_direct: refl.direct,
+            b: refl.diffuse as f32,
         }
     }
 }
@@ -426,6 +434,11 @@ struct Groups<'a> {
     back_shape32: Vec<Vec<f32>>,
     /// `αE_dn` (the weight of `s·cos θ`) per group and record (f32).
     sun32: Vec<Vec<f32>>,
+    /// `αE_d` (the weight of the reflected diffuse coefficient `b`) per
+    /// group and record (f32).
+    refl_diffuse32: Vec<Vec<f32>>,
+    /// Daily mean of `αE_d` per group.
+    refl_diffuse_mean: Vec<f64>,
     /// Daily mean of the front sources of `F = 0`, no sun, per group.
     base_mean: Vec<f64>,
     /// Daily mean of `∂S/∂F` per group.
@@ -436,6 +449,7 @@ impl<'a> Groups<'a> {
     fn new(
         props: &[SlabProperties],
         exchanges: &[Exchange],
+        wind_class: &[u32],
         kinds: &'a [FacetThermal],
         forcing: &Forcing,
     ) -> Self {
@@ -443,9 +457,12 @@ impl<'a> Groups<'a> {
         let mut group_ids: BTreeMap<Vec<u64>, u32> = BTreeMap::new();
         let of_props: Vec<u32> = props
             .iter()
-            .map(|p| {
+            .zip(wind_class)
+            .map(|(p, &w)| {
                 let next = group_ids.len() as u32;
-                *group_ids.entry(prop_key(p)).or_insert(next)
+                let mut key = prop_key(p);
+                key.push(w as u64);
+                *group_ids.entry(key).or_insert(next)
             })
             .collect();
         let groups = group_ids.len();
@@ -474,6 +491,14 @@ impl<'a> Groups<'a> {
             .iter()
             .map(|m| f32s(m.front_per_sunlit_cos()))
             .collect();
+        let refl_diffuse32 = models
+            .iter()
+            .map(|m| f32s(m.front_per_reflected_diffuse()))
+            .collect();
+        let refl_diffuse_mean = models
+            .iter()
+            .map(|m| m.front_per_reflected_diffuse().iter().sum::<f64>() / r as f64)
+            .collect();
         // Daily means of the front sources: mean(base) + F·mean(∂S/∂F) +
         // mean(s cos θ · αE_dn).
         let base_mean = models
@@ -495,6 +520,8 @@ impl<'a> Groups<'a> {
             shape32,
             back_shape32,
             sun32,
+            refl_diffuse32,
+            refl_diffuse_mean,
             base_mean,
             shape_mean,
         }
@@ -533,8 +560,10 @@ impl<'a> Groups<'a> {
             .zip(&self.sun32[g])
             .map(|(sc, w)| (sc * w) as f64)
             .sum();
+        let st = facets.state(f);
         self.base_mean[g]
             + facets.inputs.shape_factor[f] as f64 * self.shape_mean[g]
+            + st.b as f64 * self.refl_diffuse_mean[g]
             + sun / r as f64
     }
 
@@ -608,8 +637,8 @@ impl Bins {
                     s.sc.iter_mut()
                         .zip(sunlit_cos(st))
                         .for_each(|(o, v)| *o = v);
-                    let (df, dfb) = (st.f - rep.facet.f, st.f_back - rep.facet.f_back);
-                    let p = |j: usize| rep.probe(j, &s.sc, df, dfb);
+                    let d = Diff::of(&st, &rep.facet);
+                    let p = |j: usize| rep.probe(j, &s.sc, d);
                     (f, [p(rows.first), p(rows.last), p(rows.mean)])
                 },
             )

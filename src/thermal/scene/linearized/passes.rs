@@ -9,7 +9,7 @@
 use rayon::prelude::*;
 
 use super::kernels::{columns, curvature, dot, matvec_cols};
-use super::reference::{NodeGreen, Reference, sunlit_cos};
+use super::reference::{Diff, NodeGreen, Reference, sunlit_cos};
 use super::{CHUNK, Facets, Groups, Scratch};
 use crate::thermal;
 use crate::thermal::scene::{FacetThermal, SceneInputs};
@@ -203,14 +203,14 @@ impl PassPlan<'_> {
             return;
         }
         let st = facets.state(f);
-        let (df, dfb) = (st.f - rep.facet.f, st.f_back - rep.facet.f_back);
+        let diff = Diff::of(&st, &rep.facet);
         s.sc.iter_mut()
             .zip(sunlit_cos(st))
             .for_each(|(o, v)| *o = v);
         if !full {
             // Pass 1, image records only.
             for (i, v) in o.iter_mut().enumerate() {
-                *v = rep.front.temperature_k[self.image_records[i]] + rep.probe(i, &s.sc, df, dfb);
+                *v = rep.front.temperature_k[self.image_records[i]] + rep.probe(i, &s.sc, diff);
             }
             return;
         }
@@ -220,7 +220,7 @@ impl PassPlan<'_> {
         let g = self.groups.of_solved(f);
         let sun = &self.groups.sun32[g];
         columns(s.sc.iter().zip(sun).map(|(a, b)| a * b), 1.0, &mut s.cols);
-        let change = Change { df, dfb, bgc };
+        let change = Change { diff, bgc };
         change.history(
             &rep.front,
             rep.has_back,
@@ -305,19 +305,24 @@ impl PassPlan<'_> {
         o: &mut [f32],
     ) {
         let groups = self.groups;
-        let Change { df, dfb, bgc } = change;
+        let Change {
+            diff: Diff { df, dfb, db },
+            bgc,
+        } = change;
         let sun = &groups.sun32[g];
+        let refl = &groups.refl_diffuse32[g];
         let latent = &rep.front.latent;
-        for (k, (((((o, sc), rsc), w), sh), (d, t))) in
+        for (k, ((((((o, sc), rsc), w), sh), rd), (d, t))) in
             s.ds.iter_mut()
                 .zip(&s.sc)
                 .zip(&rep.facet.sc)
                 .zip(sun)
                 .zip(&groups.shape32[g])
+                .zip(refl)
                 .zip(s.d.iter().zip(&rep.front.temperature_k))
                 .enumerate()
         {
-            *o = df * sh + (sc - rsc) * w + curvature(rep.front.radiative, *t, *d);
+            *o = df * sh + db * rd + (sc - rsc) * w + curvature(rep.front.radiative, *t, *d);
             if let Some(&gv) = latent.get(k) {
                 *o += thermal::linear::latent_curvature(gv, f64::from(*t), f64::from(*d)) as f32;
             }
@@ -347,13 +352,12 @@ impl PassPlan<'_> {
     }
 }
 
-/// A facet's source differences from its reference: shape factors, and the
-/// background coefficients `(c_front, c_back)` when it has a background
-/// term.
+/// A facet's source differences from its reference: shape factors and
+/// reflected diffuse coefficient, and the background coefficients
+/// `(c_front, c_back)` when it has a background term.
 #[derive(Clone, Copy)]
 struct Change {
-    df: f32,
-    dfb: f32,
+    diff: Diff,
     bgc: Option<(f32, f32)>,
 }
 
@@ -371,12 +375,18 @@ impl Change {
         cols_bg: &mut Vec<(u32, f32)>,
         y: &mut [f32],
     ) {
-        for ((v, a), b) in y.iter_mut().zip(&node.shape).zip(&node.reference_sun) {
-            *v = self.df * a - b;
+        let Diff { df, dfb, db } = self.diff;
+        for (((v, a), b), rd) in y
+            .iter_mut()
+            .zip(&node.shape)
+            .zip(&node.reference_sun)
+            .zip(&node.reflected_diffuse)
+        {
+            *v = df * a - b + db * rd;
         }
         if has_back {
             for (v, g) in y.iter_mut().zip(&node.back_shape) {
-                *v += self.dfb * g;
+                *v += dfb * g;
             }
         }
         matvec_cols(&node.from_front, cols, y);

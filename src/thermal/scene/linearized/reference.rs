@@ -13,7 +13,7 @@ use super::kernels::dot;
 use crate::thermal::{Linearization, SourceModel};
 
 /// What a facet's sources are made of (see [`SourceModel`]): its shape
-/// factors and its sun histories.
+/// factors, its sun histories and its reflected shortwave.
 #[derive(Clone, Copy)]
 pub(super) struct FacetState<'a> {
     /// Shape factor of the front face.
@@ -24,14 +24,24 @@ pub(super) struct FacetState<'a> {
     pub sun_fraction: &'a [f32],
     /// Cosine of incidence per record.
     pub cos_incidence: &'a [f32],
+    /// Reflected shortwave per unit direct-normal irradiance per record
+    /// (`a`; empty: none).
+    pub reflected_direct: &'a [f32],
+    /// Reflected shortwave per unit diffuse-horizontal irradiance (`b`).
+    pub b: f32,
 }
 
-/// `s·max(cos θ, 0)` at each record.
+/// `s·max(cos θ, 0) + a` at each record: the facet's direct sunlight and
+/// the reflected shortwave that weighs like it (`α E_dn`; [`SourceModel`]).
 pub(super) fn sunlit_cos<'a>(st: FacetState<'a>) -> impl Iterator<Item = f32> + 'a {
+    let refl = st.reflected_direct;
     st.sun_fraction
         .iter()
         .zip(st.cos_incidence)
-        .map(|(s, c)| s.clamp(0.0, 1.0) * c.max(0.0))
+        .enumerate()
+        .map(move |(k, (s, c))| {
+            s.clamp(0.0, 1.0) * c.max(0.0) + refl.get(k).copied().unwrap_or(0.0)
+        })
 }
 
 /// The reference facet's own inputs, from which a facet's differences are
@@ -41,7 +51,9 @@ pub(super) struct RefFacet {
     pub f: f32,
     /// Shape factor of the back face.
     pub f_back: f32,
-    /// `s·max(cos θ, 0)` history.
+    /// Reflected diffuse coefficient `b`.
+    pub b: f32,
+    /// `s·max(cos θ, 0) + a` history.
     pub sc: Vec<f32>,
 }
 
@@ -61,6 +73,8 @@ pub(super) struct NodeGreen {
     pub back_shape: Vec<f32>,
     /// `G·(s cos θ_ref·αE_dn)`, K: the reference's own sun term.
     pub reference_sun: Vec<f32>,
+    /// `G·∂S/∂b` (`G·αE_d`), K per unit of the reflected diffuse coefficient.
+    pub reflected_diffuse: Vec<f32>,
     /// The reference's temperature of this node at each record, K.
     pub temperature_k: Vec<f32>,
     /// Radiative coefficient of this node's emission: `εσ` of the front,
@@ -88,6 +102,8 @@ pub(super) struct Probes {
     pub back_shape: Vec<f32>,
     /// `P_j·(s cos θ_ref·αE_dn)`, K.
     pub reference_sun: Vec<f32>,
+    /// `P_j·∂S/∂b`, K per unit.
+    pub reflected_diffuse: Vec<f32>,
 }
 
 /// A reference facet's linearisation in the layout the per-facet products
@@ -138,6 +154,7 @@ impl Reference {
                 .collect()
         };
         let shape = model.front_per_shape_factor();
+        let refl_diffuse = model.front_per_reflected_diffuse();
         let back_shape = model.back_per_shape_factor();
         let transpose = |g: &[f64]| -> Vec<f32> {
             if g.is_empty() {
@@ -184,6 +201,7 @@ impl Reference {
                 shape: times(&lin.front_from_front, shape),
                 back_shape: times(&lin.front_from_back, back_shape),
                 reference_sun: times(&lin.front_from_front, &ref_sun),
+                reflected_diffuse: times(&lin.front_from_front, refl_diffuse),
                 temperature_k: f32s(&lin.solution.surface_temperature_k),
                 radiative: lin.front_radiative_w_m2_k4 as f32,
                 latent: lin.front_vapour_conductance_w_m2_pa.clone(),
@@ -194,6 +212,7 @@ impl Reference {
                 shape: times(&lin.back_from_front, shape),
                 back_shape: times(&lin.back_from_back, back_shape),
                 reference_sun: times(&lin.back_from_front, &ref_sun),
+                reflected_diffuse: times(&lin.back_from_front, refl_diffuse),
                 temperature_k: f32s(&lin.solution.back_temperature_k),
                 radiative: lin.back_radiative_w_m2_k4 as f32,
                 latent: Vec::new(),
@@ -208,24 +227,30 @@ impl Reference {
                 shape: pf.iter().map(|p| to_f32(dot64(p, shape))).collect(),
                 back_shape: pb.iter().map(|p| to_f32(dot64(p, back_shape))).collect(),
                 reference_sun: pf.iter().map(|p| to_f32(dot64(p, &ref_sun))).collect(),
+                reflected_diffuse: pf.iter().map(|p| to_f32(dot64(p, refl_diffuse))).collect(),
             },
             spinup_change_k: lin.solution.spinup_change_k.unwrap_or(0.0),
             facet: RefFacet {
                 f: st.f,
                 f_back: st.f_back,
+                b: st.b,
                 sc,
             },
         }
     }
 
     /// First-order change of the front temperature at probe `j` (K) of a
-    /// facet with `s·max(cos θ, 0)` history `sc` and shape factors `df`,
-    /// `dfb` from the reference's, with the air as background.
+    /// facet with `s·max(cos θ, 0) + a` history `sc`, shape factors `df`,
+    /// `dfb` and reflected diffuse coefficient `db` from the reference's,
+    /// with the air as background.
     #[inline]
-    pub fn probe(&self, j: usize, sc: &[f32], df: f32, dfb: f32) -> f32 {
+    pub fn probe(&self, j: usize, sc: &[f32], d: Diff) -> f32 {
         let p = &self.probes;
         let r = sc.len();
-        let mut v = dot(&p.sun[j * r..(j + 1) * r], sc) - p.reference_sun[j] + df * p.shape[j];
+        let Diff { df, dfb, db } = d;
+        let mut v = dot(&p.sun[j * r..(j + 1) * r], sc) - p.reference_sun[j]
+            + df * p.shape[j]
+            + db * p.reflected_diffuse[j];
         if self.has_back {
             v += dfb * p.back_shape[j];
         }
@@ -246,6 +271,27 @@ impl Reference {
     pub fn row_back(&self, i: usize) -> &[f32] {
         let r = self.facet.sc.len();
         &self.probes.rows_back[i * r..(i + 1) * r]
+    }
+}
+
+/// A facet's differences from its reference in the scalar inputs: shape
+/// factors of the front and back, reflected diffuse coefficient.
+#[derive(Clone, Copy)]
+pub(super) struct Diff {
+    pub df: f32,
+    pub dfb: f32,
+    pub db: f32,
+}
+
+impl Diff {
+    /// `st`'s differences from the reference `rep`.
+    #[inline]
+    pub fn of(st: &FacetState, rep: &RefFacet) -> Diff {
+        Diff {
+            df: st.f - rep.f,
+            dfb: st.f_back - rep.f_back,
+            db: st.b - rep.b,
+        }
     }
 }
 

@@ -1,0 +1,229 @@
+//! Shortwave reflected between facets: the diffuse (Lambertian) reflection
+//! of direct and diffuse sunlight from the facets and the ground that each
+//! facet's hemisphere rays hit, over the background lists of the sky view.
+//!
+//! # Model
+//! Every surface reflects diffusely with albedo `ρ` (for an opaque
+//! material `1 − α`, α its solar absorptivity). The irradiance of facet `i`
+//! is its own sky and sun irradiance plus what it receives from the
+//! surfaces it sees (radiosity; Modest, *Radiative Heat Transfer*, 3rd ed.,
+//! 2013, ch. 5–6; the view factors are those of the traced background,
+//! `F_ij` = [`BackgroundEntry::weight`]):
+//!
+//! `E_i = E⁰_i + R_i`, `R_i = Σ_j F_ij ρ_j E_j + g_i ρ_g E_ground`
+//!
+//! with `E⁰_i = E_dn s_i max(cos θ_i, 0) + F_i E_d` (direct-normal `E_dn`,
+//! sunlit fraction `s`, incidence `θ`, sky view `F`, diffuse-horizontal
+//! `E_d`), `g_i` the view factor to the ground beyond the scene (open and
+//! sunlit: `E_ground = E_dn max(sin h, 0) + E_d`, `h` the sun's elevation;
+//! it receives nothing back from the scene) and `ρ_g` its albedo. Both
+//! sources scale with `E_dn` and `E_d`, so each facet's reflected
+//! irradiance is
+//!
+//! `R_i(t) = E_dn(t) · a_i(t) + E_d(t) · b_i`
+//!
+//! with a dimensionless per-record history `a_i` (direct) and a constant
+//! `b_i` (diffuse), computed here from geometry and albedo alone, before
+//! the weather is known. `N` bounces iterate `R⁽ᵏ⁾_i = Σ_j F_ij ρ_j (E⁰_j +
+//! R⁽ᵏ⁻¹⁾_j) + g_i ρ_g E_ground` from `R⁽⁰⁾ = 0` (Jacobi): one bounce is the
+//! first term; the series converges geometrically (ratio `≲ max ρ·(1 − F)`).
+//! On the bundled town two bounces are within 0.10 K (mean) of ten on the
+//! walls, whose reflected-shortwave warming is 2.5 K at noon
+//! (`docs/physics/reflected-and-wind.md`).
+//!
+//! Cost per bounce: one sparse product over the background entries per
+//! daytime record (`entries × day records` multiply-adds).
+//!
+//! # Approximations
+//! - Lambertian reflection (no specular glint from glass or water).
+//! - A double-sided facet's background is the mean over its faces (as
+//!   [`super::SkyView`] stores it); what it reflects is its lit face's
+//!   irradiance.
+//!
+//! # What it owns, takes and gives
+//! Owns the reflected-shortwave coefficients. Takes the [`SkyView`], the
+//! [`SolarHistory`], per-facet albedos and the sun's directions (plain
+//! arrays); gives [`ReflectedShortwave`]. Knows no materials (the caller
+//! turns them into albedos) and no weather.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::{SkyView, SolarHistory};
+use crate::{Error, Result};
+
+/// Default albedo of the ground beyond the modelled scene (and the ground a
+/// free-standing facet sees): 0.2, the conventional value for grass and
+/// mixed ground (Duffie & Beckman, *Solar Engineering of Thermal
+/// Processes*, 4th ed., 2013, §2.16 and Table 2.16.1).
+pub const GROUND_ALBEDO: f32 = 0.2;
+
+/// Default bounces of [`reflected_shortwave`] (2: on the bundled town
+/// within 0.10 K mean, 0.20 K RMS of ten bounces on the walls at noon).
+pub const BOUNCES: u32 = 2;
+
+/// The reflected shortwave of every facet, per unit of the weather's
+/// irradiances (module docs): `R_i(t) = E_dn(t) a_i(t) + E_d(t) b_i`, W m⁻².
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReflectedShortwave {
+    /// Records per facet, `R`.
+    pub records: usize,
+    /// `a_i(t)`: reflected irradiance per unit direct-normal irradiance,
+    /// facet-major `[facet·R + record]` (dimensionless).
+    pub direct: Vec<f32>,
+    /// `b_i`: reflected irradiance per unit diffuse-horizontal irradiance,
+    /// per facet (dimensionless).
+    pub diffuse: Vec<f32>,
+}
+
+impl ReflectedShortwave {
+    /// Number of facets.
+    pub fn facet_count(&self) -> usize {
+        self.diffuse.len()
+    }
+
+    /// `a_i` of `facet` at every record.
+    pub fn direct(&self, facet: usize) -> &[f32] {
+        &self.direct[facet * self.records..(facet + 1) * self.records]
+    }
+
+    /// Reflected irradiance of `facet` at `record`, W m⁻², for the
+    /// direct-normal and diffuse-horizontal irradiances there.
+    pub fn irradiance_w_m2(
+        &self,
+        facet: usize,
+        record: usize,
+        direct_normal_w_m2: f64,
+        diffuse_horizontal_w_m2: f64,
+    ) -> f64 {
+        direct_normal_w_m2 * self.direct[facet * self.records + record] as f64
+            + diffuse_horizontal_w_m2 * self.diffuse[facet] as f64
+    }
+}
+
+/// The reflected shortwave of every facet (module docs) after `bounces`
+/// bounces (0: none, all zeros). `albedo` has one value per facet (0 for
+/// facets that reflect nothing, e.g. fixed-temperature ones without a
+/// material); `sun_dirs` one unit vector per record (as the solar history
+/// was traced with).
+///
+/// # Errors
+/// [`Error::Invalid`] for lengths that do not match the sky view and solar
+/// history, or an albedo outside `[0, 1]`.
+pub fn reflected_shortwave(
+    sky: &SkyView,
+    solar: &SolarHistory,
+    albedo: &[f32],
+    ground_albedo: f32,
+    sun_dirs: &[Vec3],
+    bounces: u32,
+) -> Result<ReflectedShortwave> {
+    let n = sky.facet_count();
+    let r = solar.steps;
+    if solar.facet_count() != n || albedo.len() != n || sun_dirs.len() != r {
+        return Err(Error::invalid(
+            "reflected shortwave",
+            format!(
+                "expected {n} facets of sky view, solar history and albedo and {r} sun \
+                 directions, got {}, {} and {}",
+                solar.facet_count(),
+                albedo.len(),
+                sun_dirs.len()
+            ),
+        ));
+    }
+    if let Some((i, a)) = albedo
+        .iter()
+        .chain([&ground_albedo])
+        .enumerate()
+        .find(|(_, a)| !(0.0..=1.0).contains(*a))
+    {
+        return Err(Error::invalid(
+            if i == n {
+                "ground_albedo".to_string()
+            } else {
+                format!("albedo[{i}]")
+            },
+            format!("expected a fraction in [0, 1], got {a}"),
+        ));
+    }
+    let mut out = ReflectedShortwave {
+        records: r,
+        direct: vec![0.0; n * r],
+        diffuse: vec![0.0; n],
+    };
+    if bounces == 0 || n == 0 {
+        return Ok(out);
+    }
+    // Daytime records (the only ones with direct sunlight).
+    let day: Vec<usize> = (0..r).filter(|&k| sun_dirs[k].z > 0.0).collect();
+    let ground_direct: Vec<f32> = day.iter().map(|&k| sun_dirs[k].z).collect();
+    let nd = day.len();
+    // E⁰ per unit E_dn on the day records, facet-major `[f·nd + d]`, and
+    // per unit E_d.
+    let e0_direct: Vec<f32> = (0..n)
+        .into_par_iter()
+        .flat_map_iter(|f| {
+            let (s, c) = (solar.sun_fraction(f), solar.cos_incidence(f));
+            day.iter()
+                .map(move |&k| s[k].clamp(0.0, 1.0) * c[k].max(0.0))
+        })
+        .collect();
+    let e0_diffuse: Vec<f32> = (0..n).map(|f| sky.mean_shape_factor(f)).collect();
+    let mut refl_direct = vec![0.0f32; n * nd];
+    let mut refl_diffuse = vec![0.0f32; n];
+    for _ in 0..bounces {
+        // ρ_j E_j (per unit E_dn per day record, and per unit E_d).
+        let leaving_direct: Vec<f32> = e0_direct
+            .par_chunks(nd.max(1))
+            .zip(refl_direct.par_chunks(nd.max(1)))
+            .zip(albedo.par_iter())
+            .flat_map_iter(|((e, rr), &a)| e.iter().zip(rr).map(move |(e, rr)| a * (e + rr)))
+            .collect();
+        let leaving_diffuse: Vec<f32> = e0_diffuse
+            .iter()
+            .zip(&refl_diffuse)
+            .zip(albedo)
+            .map(|((e, rr), a)| a * (e + rr))
+            .collect();
+        let next_diffuse: Vec<f32> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                sky.ground_weight[i] * ground_albedo
+                    + sky
+                        .background(i)
+                        .iter()
+                        .map(|e| e.weight * leaving_diffuse[e.facet as usize])
+                        .sum::<f32>()
+            })
+            .collect();
+        let mut next_direct = vec![0.0f32; n * nd];
+        if nd > 0 {
+            next_direct
+                .par_chunks_mut(nd)
+                .enumerate()
+                .for_each(|(i, out)| {
+                    let g = sky.ground_weight[i] * ground_albedo;
+                    out.iter_mut()
+                        .zip(&ground_direct)
+                        .for_each(|(o, z)| *o = g * z);
+                    for e in sky.background(i) {
+                        let j = e.facet as usize;
+                        let src = &leaving_direct[j * nd..(j + 1) * nd];
+                        out.iter_mut()
+                            .zip(src)
+                            .for_each(|(o, l)| *o += e.weight * l);
+                    }
+                });
+        }
+        refl_direct = next_direct;
+        refl_diffuse = next_diffuse;
+    }
+    for f in 0..n {
+        for (d, &k) in day.iter().enumerate() {
+            out.direct[f * r + k] = refl_direct[f * nd + d];
+        }
+    }
+    out.diffuse = refl_diffuse;
+    Ok(out)
+}
