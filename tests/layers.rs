@@ -537,9 +537,10 @@ fn construction(layers: &str, back: &str) -> String {
 
 fn has(errs: &[String], line: usize, field: &str, what: &str) {
     assert!(
-        errs.iter().any(
-            |e| e.contains(&format!("m.json:line {line}: field `{field}`")) && e.contains(what)
-        ),
+        errs.iter()
+            .any(|e| e.contains(&format!("m.json:line {line}: column "))
+                && e.contains(&format!(": field `{field}`"))
+                && e.contains(what)),
         "no error at line {line} `{field}` about {what}: {errs:#?}"
     );
 }
@@ -765,10 +766,10 @@ fn scene_bad_back_boundaries_name_file_line_and_field() {
         .collect();
     let has = |line: usize, field: &str, what: &str| {
         assert!(
-            errs.iter().any(
-                |e| e.contains(&format!("scene.json:line {line}: field `{field}`"))
-                    && e.contains(what)
-            ),
+            errs.iter()
+                .any(|e| e.contains(&format!("scene.json:line {line}: column "))
+                    && e.contains(&format!(": field `{field}`"))
+                    && e.contains(what)),
             "no error at line {line} `{field}` about {what}: {errs:#?}"
         );
     };

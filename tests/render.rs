@@ -844,10 +844,10 @@ fn session_run_reports_the_rays_the_thermal_passes_and_every_row_to_its_observer
         [
             format!("start Exposure {}", 2 * facets),
             "item solar history and sky view".to_string(),
-            "item reflected shortwave".to_string(),
             "item ground test".to_string(),
             format!("finish after {}", 2 * facets),
             format!("start Thermal {facets}"),
+            "item reflected shortwave".to_string(),
             "item thermal solve".to_string(),
             format!("finish after {facets}"),
             "start Rows 12".to_string(),

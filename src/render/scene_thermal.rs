@@ -282,7 +282,9 @@ impl Default for SceneThermalParams {
 
 /// Physics of the per-facet thermal inputs that a scene may switch off for
 /// side-by-side comparisons (the `render.thermal` section of a scene file;
-/// `docs/physics/reflected-and-wind.md`). All on by default.
+/// `docs/physics/reflected-and-wind.md`). Reflected shortwave and the
+/// hemispherical emissivity are on by default; the wind at each facet is
+/// off until it is smooth between neighbours (see [`ThermalPhysics::facet_wind`]).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ThermalPhysics {
@@ -298,8 +300,11 @@ pub struct ThermalPhysics {
     /// emissivity.
     pub hemispherical_emissivity: bool,
     /// Reduce the weather's wind to each facet's height and canyon
-    /// ([`crate::thermal::wind`]; default true); false: the weather's wind
-    /// at every facet.
+    /// ([`crate::thermal::wind`]); false (the default): the weather's wind
+    /// at every facet. Off by default because the canyon factor comes from
+    /// each facet's sampled sky view and the solve groups facets in wind
+    /// classes of 0.02: on the town the roof and walls then speckle from
+    /// facet to facet (steps of ≈ 0.2 K), a sampling artefact, not physics.
     pub facet_wind: bool,
     /// Roughness length of the site for the wind profile, m (default
     /// [`crate::thermal::wind::ROUGHNESS_M`]).
@@ -312,7 +317,7 @@ impl Default for ThermalPhysics {
             reflected_bounces: crate::exposure::reflected::BOUNCES,
             ground_albedo: crate::exposure::reflected::GROUND_ALBEDO,
             hemispherical_emissivity: true,
-            facet_wind: true,
+            facet_wind: false,
             roughness_m: crate::thermal::wind::ROUGHNESS_M,
         }
     }
@@ -728,7 +733,10 @@ fn solve_traced(
         stats,
     };
     // Sunlight reflected between facets: from every facet's traced inputs,
-    // so after all parts are in (no rays of its own).
+    // so after all parts are in (no rays of its own); part of the thermal
+    // stage.
+    let t2 = Instant::now();
+    progress.start(Stage::Thermal, n as u64);
     let exposure = if params.physics.reflected_bounces > 0 {
         progress.item("reflected shortwave");
         let albedo = setup.facet_albedo();
@@ -747,8 +755,6 @@ fn solve_traced(
     } else {
         (setup.clone(), 0)
     };
-    let t2 = Instant::now();
-    progress.start(Stage::Thermal, n as u64);
     progress.item("thermal solve");
     let wind = if params.physics.facet_wind {
         facet_wind(&exposure, &history.forcing, params.physics.roughness_m)

@@ -1412,10 +1412,16 @@ impl Loader {
                     if !db.is_empty() {
                         let near = db.similar_names(name);
                         let names = db.materials().iter().map(|m| m.name.as_str());
-                        let hint = match crate::suggest::closest(name, names) {
-                            Some(c) => format!(" (did you mean `{c}`?)"),
-                            None if near.is_empty() => String::new(),
-                            None => format!(" (similar: {})", near.join(", ")),
+                        let best = crate::suggest::closest(name, names);
+                        let others: Vec<&str> =
+                            near.into_iter().filter(|n| Some(*n) != best).collect();
+                        let hint = match (best, others.is_empty()) {
+                            (Some(c), true) => format!(" (did you mean `{c}`?)"),
+                            (Some(c), false) => {
+                                format!(" (did you mean `{c}`? similar: {})", others.join(", "))
+                            }
+                            (None, true) => String::new(),
+                            (None, false) => format!(" (similar: {})", others.join(", ")),
                         };
                         this.err(field, format!("unknown material `{name}`{hint}"));
                     }
