@@ -451,3 +451,80 @@ fn large_triangle_matches_small_facets_across_a_shadow_edge() {
     // the town, docs/performance.md); measured 0.10 K.
     assert!(worst <= 0.15, "{worst} K");
 }
+
+/// End to end through the command line and the written image: a tower on a
+/// two-triangle ground plane, seen from above. With per-hit temperatures
+/// (the default) the rendered `surface_temperature` layer shows the
+/// tower's shadow on the ground north of it; with `--per-hit off` the two
+/// ground triangles carry one value each and the shadow is absent.
+#[test]
+fn rendered_surface_temperature_shows_the_shadow_on_a_two_triangle_ground() {
+    let dir = tempfile::tempdir().unwrap();
+    let repo = crate::util::repo_path("scenes");
+    let scene = serde_json::json!({
+        "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4},
+        "time": "2025-06-21T14:00:00-04:00",
+        "weather": {"file": repo.join("town/weather.csv")},
+        "materials": [repo.join("materials.json")],
+        "objects": [
+            {"name": "ground", "material": "asphalt", "shapes": [{"plane": {"size": [60, 60]}}]},
+            {"name": "tower", "material": "concrete", "shapes": [{"box": {"size": [4, 4, 20], "bottom": false}}]}
+        ],
+        "sensors": [{"type": "frame", "name": "cam", "width": 64, "height": 64, "fov_deg": 11.4,
+                     "position": [0, 0, 300], "look_at": [0, 0, 0], "up": [0, 1, 0],
+                     "bands": [{"name": "lwir", "response": [8.0, 12.0]}],
+                     "truth_layers": ["x", "y", "z"]}]
+    });
+    let path = dir.path().join("scene.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&scene).unwrap()).unwrap();
+    let render = |per_hit: &str| {
+        let out = dir.path().join(per_hit);
+        let o = std::process::Command::new(crate::util::irsig_bin())
+            .args(["render", "--quiet", "--per-hit", per_hit, "-o"])
+            .arg(&out)
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        irsig::output::read_exr(out.join("cam.exr")).unwrap()
+    };
+    // Mean ground surface temperature over pixels whose hit lies in the
+    // box [x0, x1] × [y0, y1] on the ground.
+    let mean = |s: &irsig::output::ImageStack, x0: f32, x1: f32, y0: f32, y1: f32| {
+        let l = |n: &str| s.layer(n).unwrap().data.clone();
+        let (x, y, z, t) = (l("x"), l("y"), l("z"), l("surface_temperature"));
+        let v: Vec<f32> = (0..t.len())
+            .filter(|&k| {
+                z[k].abs() < 1e-3 && (x0..=x1).contains(&x[k]) && (y0..=y1).contains(&y[k])
+            })
+            .map(|k| t[k])
+            .collect();
+        assert!(
+            v.len() >= 4,
+            "{} pixels in [{x0}, {x1}] × [{y0}, {y1}]",
+            v.len()
+        );
+        v.iter().sum::<f32>() / v.len() as f32
+    };
+    // At 14:00 EDT on 21 June in Rochester the sun stands ≈ 68° high a
+    // little west of south: the 20 m tower's shadow reaches ≈ 8 m north.
+    let (shade, lit) = ((-1.0, 1.0, 3.0, 6.0), (-1.0, 1.0, -20.0, -12.0));
+    let on = render("on");
+    let on_shade = mean(&on, shade.0, shade.1, shade.2, shade.3);
+    let on_lit = mean(&on, lit.0, lit.1, lit.2, lit.3);
+    assert!(
+        on_lit - on_shade > 3.0,
+        "per-hit: shadow {on_shade:.2} K, sunlit {on_lit:.2} K"
+    );
+    let off = render("off");
+    let off_shade = mean(&off, shade.0, shade.1, shade.2, shade.3);
+    let off_lit = mean(&off, lit.0, lit.1, lit.2, lit.3);
+    eprintln!(
+        "ground surface temperature, shadow / sunlit: per hit {on_shade:.2} / {on_lit:.2} K, \
+         per facet {off_shade:.2} / {off_lit:.2} K"
+    );
+    assert!(
+        (off_lit - off_shade).abs() < 0.5,
+        "per facet the shadow should not show: {off_shade:.2} K vs {off_lit:.2} K"
+    );
+}
