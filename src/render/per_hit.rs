@@ -221,12 +221,14 @@ impl PerHit {
     /// the first-order change history, through the image row of `G` (as
     /// the scene solve's second order,
     /// [`crate::thermal::Linearization::predict`]).
-    fn second_order(&self, block: usize, diff: &[(usize, f32)]) -> f32 {
+    /// `delta` is scratch space (its contents on entry do not matter).
+    fn second_order(&self, block: usize, diff: &[(usize, f32)], delta: &mut Vec<f32>) -> f32 {
         let p = &*self.response;
         let r = p.records;
         let g = &p.green[block * r * r..(block + 1) * r * r];
         let sun = &p.sun[block * r..(block + 1) * r];
-        let mut delta = vec![0.0f32; r];
+        delta.clear();
+        delta.resize(r, 0.0);
         for &(k, d) in diff {
             let x = d * sun[k];
             for (o, gk) in delta.iter_mut().zip(&g[k * r..(k + 1) * r]) {
@@ -334,6 +336,10 @@ impl PerHit {
             }
         }
         trace(&|i| need[i], &mut state);
+        // Scratch of the per-hit loop: (record, Δ(s cos θ)) where the
+        // point's history differs, and the second order's change history.
+        let mut diff: Vec<(usize, f32)> = Vec::new();
+        let mut delta: Vec<f32> = Vec::new();
         for (j, &(f, _)) in hits.iter().enumerate() {
             let f = f as usize;
             let (s, c) = (self.solar.sun_fraction(f), self.solar.cos_incidence(f));
@@ -350,8 +356,7 @@ impl PerHit {
                 }
             }
             let mut dt = 0.0f32;
-            // (record, Δ(s cos θ)) where the point's history differs.
-            let mut diff: Vec<(usize, f32)> = Vec::new();
+            diff.clear();
             for (k, &v) in st.iter().enumerate() {
                 if v == NONE {
                     continue;
@@ -365,7 +370,7 @@ impl PerHit {
                 }
             }
             if !diff.is_empty() {
-                dt += self.second_order(b, &diff);
+                dt += self.second_order(b, &diff, &mut delta);
             }
             out.push(HitState {
                 dt_k: dt,

@@ -352,6 +352,19 @@ pub fn read_manifest(dir: &Path) -> Result<Option<Manifest>> {
 
 /// The manifest of `dir` checked against `key`: the same scene hash,
 /// facets and times.
+/// The manifest of `dir`, which must exist (`hint`: what to do when it
+/// does not) and belong to `key`'s scene and times.
+fn existing_manifest(dir: &Path, key: &StateKey, hint: &str) -> Result<Manifest> {
+    let manifest = read_manifest(dir)?.ok_or_else(|| {
+        Error::invalid(
+            "state",
+            format!("{} has no {MANIFEST}: {hint}", dir.display()),
+        )
+    })?;
+    check_manifest(dir, &manifest, key)?;
+    Ok(manifest)
+}
+
 fn check_manifest(dir: &Path, m: &Manifest, key: &StateKey) -> Result<()> {
     let path = dir.join(MANIFEST);
     if m.scene_hash != key.scene_hash || m.facets != key.facets {
@@ -519,16 +532,7 @@ pub fn run_pass2(
 ) -> Result<Outcome> {
     check_shard((k, n))?;
     let key = StateKey::of(session, times)?;
-    let manifest = read_manifest(dir)?.ok_or_else(|| {
-        Error::invalid(
-            "state",
-            format!(
-                "{} has no {MANIFEST}: run pass 1 into it first",
-                dir.display()
-            ),
-        )
-    })?;
-    check_manifest(dir, &manifest, &key)?;
+    let manifest = existing_manifest(dir, &key, "run pass 1 into it first")?;
     let Some(m) = manifest.rays_shards else {
         return Err(Error::invalid(
             "state",
@@ -620,16 +624,7 @@ pub fn read_states(
     times: &[DateTime<FixedOffset>],
 ) -> Result<FacetStates> {
     let key = StateKey::of(session, times)?;
-    let manifest = read_manifest(dir)?.ok_or_else(|| {
-        Error::invalid(
-            "state",
-            format!(
-                "{} has no {MANIFEST}: make it with the thermal-scene stage first",
-                dir.display()
-            ),
-        )
-    })?;
-    check_manifest(dir, &manifest, &key)?;
+    let manifest = existing_manifest(dir, &key, "make it with the thermal-scene stage first")?;
     let Some(n) = manifest.state_shards else {
         return Err(Error::invalid(
             "state",

@@ -51,13 +51,7 @@ impl Importer<'_> {
     pub(crate) fn platform(&mut self, path: &Path, motion: Option<&Path>) -> Result<()> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
-        let root = doc.root_element();
-        if !root.tag_name().name().eq_ignore_ascii_case("platform") {
-            return Err(Error::parse(
-                xml::loc(path, root),
-                format!("root `<{}>`: expected `<platform>`", root.tag_name().name()),
-            ));
-        }
+        let root = xml::root(&doc, path, "platform", "")?;
         let pose = match motion {
             Some(m) => self.motion(m)?,
             None => None,
@@ -333,20 +327,7 @@ impl Importer<'_> {
     fn motion(&mut self, path: &Path) -> Result<Option<Pose>> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
-        let root = doc.root_element();
-        if !root
-            .tag_name()
-            .name()
-            .eq_ignore_ascii_case("platformmotion")
-        {
-            return Err(Error::parse(
-                xml::loc(path, root),
-                format!(
-                    "root `<{}>`: expected `<platformmotion>`",
-                    root.tag_name().name()
-                ),
-            ));
-        }
+        let root = xml::root(&doc, path, "platformmotion", "")?;
         let Some(data) = xml::child(root, "data") else {
             self.warn(
                 xml::loc(path, root),

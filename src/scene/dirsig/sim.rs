@@ -307,13 +307,7 @@ impl Importer<'_> {
     pub(crate) fn tasks(&mut self, path: &Path) -> Result<()> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
-        let root = doc.root_element();
-        if !root.tag_name().name().eq_ignore_ascii_case("tasklist") {
-            return Err(Error::parse(
-                xml::loc(path, root),
-                format!("root `<{}>`: expected `<tasklist>`", root.tag_name().name()),
-            ));
-        }
+        let root = xml::root(&doc, path, "tasklist", "")?;
         self.tasks_node(path, root)
     }
 
@@ -387,20 +381,7 @@ impl Importer<'_> {
     pub(crate) fn atm(&mut self, path: &Path) -> Result<()> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
-        let root = doc.root_element();
-        if !root
-            .tag_name()
-            .name()
-            .eq_ignore_ascii_case("atmosphericconditions")
-        {
-            return Err(Error::parse(
-                xml::loc(path, root),
-                format!(
-                    "root `<{}>`: expected `<atmosphericconditions>` (a DIRSIG `.atm`)",
-                    root.tag_name().name()
-                ),
-            ));
-        }
+        let root = xml::root(&doc, path, "atmosphericconditions", " (a DIRSIG `.atm`)")?;
         self.atm_node(path, root)
     }
 

@@ -26,6 +26,28 @@ pub fn parse<'a>(text: &'a str, path: &Path) -> Result<Document<'a>> {
     })
 }
 
+/// The root element of `doc` (read from `path`), which must be `<name>`
+/// (case-insensitive); otherwise an error naming it and what was expected,
+/// followed by `note`.
+pub fn root<'a, 'i>(
+    doc: &'a Document<'i>,
+    path: &Path,
+    name: &str,
+    note: &str,
+) -> Result<Node<'a, 'i>> {
+    let root = doc.root_element();
+    if !root.tag_name().name().eq_ignore_ascii_case(name) {
+        return Err(Error::parse(
+            loc(path, root),
+            format!(
+                "root `<{}>`: expected `<{name}>`{note}",
+                root.tag_name().name()
+            ),
+        ));
+    }
+    Ok(root)
+}
+
 /// The 1-based line of `n`.
 pub fn line(n: Node) -> usize {
     n.document().text_pos_at(n.range().start).row as usize
