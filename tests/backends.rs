@@ -5,8 +5,8 @@
 use glam::{Affine3A, Quat, Vec3};
 use irsig::geometry::procedural::{self, TerrainParams};
 use irsig::geometry::{Instance, SceneGeometry, TriangleMesh};
-use irsig::trace::embree::{Device, EmbreeTracer, RayMode};
-use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer};
+use irsig::trace::embree::{Device, EmbreeTracer, Instancing, RayMode};
+use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer, Watertight};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -184,6 +184,26 @@ fn embree_and_obvhs_agree_on_random_scenes_and_rays() {
     }
 }
 
+/// Every backend over `geom`, plus Embree with real instancing for every
+/// mesh placed more than once (the default flattens small ones, so this
+/// keeps Embree's instance path under test).
+fn every_tracer(geom: &SceneGeometry) -> Vec<(String, Box<dyn Tracer>)> {
+    let mut out: Vec<(String, Box<dyn Tracer>)> = Backend::ALL
+        .iter()
+        .map(|&b| (b.to_string(), trace::build(geom, b).unwrap()))
+        .collect();
+    let instanced = EmbreeTracer::with_instancing(
+        Device::new().unwrap(),
+        geom,
+        RayMode::ByCoherence(Device::new().unwrap().native_packet_width()),
+        Watertight::Yes,
+        Instancing::Always,
+    )
+    .unwrap();
+    out.push(("embree (instancing always)".into(), Box::new(instanced)));
+    out
+}
+
 #[test]
 fn instanced_object_hits_where_its_transformed_copy_would() {
     let geom = soup_scene(5, 1500, 3);
@@ -191,9 +211,8 @@ fn instanced_object_hits_where_its_transformed_copy_would() {
     let flat = SceneGeometry::single(geom.flatten());
     let offsets = geom.facet_offsets();
     let rays = random_rays(&geom, 30_000, 21);
-    for backend in [Backend::Embree, Backend::Obvhs] {
-        let inst = trace::build(&geom, backend).unwrap();
-        let copy = trace::build(&flat, backend).unwrap();
+    for (backend, inst) in every_tracer(&geom) {
+        let copy = trace::build(&flat, Backend::Obvhs).unwrap();
         let hi = trace::intersect_all(inst.as_ref(), &rays, Coherence::Incoherent);
         let hc = trace::intersect_all(copy.as_ref(), &rays, Coherence::Incoherent);
         let mut bad = 0;
@@ -245,8 +264,7 @@ fn box_instance_top_is_hit_at_its_analytic_height() {
         Ray::new(Vec3::new(1101.0, 51.0, 100.0), Vec3::new(0.0, 0.0, -2.0)),
         Ray::new(Vec3::new(120.0, 50.0, 100.0), Vec3::NEG_Z),
     ];
-    for backend in Backend::ALL {
-        let t = trace::build(&geom, backend).unwrap();
+    for (backend, t) in every_tracer(&geom) {
         let mut out = [None; 3];
         t.intersect(&rays, Coherence::Coherent, &mut out);
         let h = out[0].expect("hits the first box");

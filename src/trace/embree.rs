@@ -801,6 +801,32 @@ impl RayMode {
     }
 }
 
+/// Which meshes placed by two or more instances are traced through Embree
+/// instancing (a two-level BVH: the mesh stored once, each ray transformed
+/// into it) rather than flattened (every placement's triangles in world
+/// space in the one top-level BVH, as obvhs always does).
+///
+/// Instancing saves memory but costs traversal speed: on `irsig bench
+/// trace`'s default scene (a 1 M-triangle terrain and 1000 instanced
+/// 12-triangle buildings), the flat scene traced 2–3× more primary and
+/// shadow rays per second than the instanced one
+/// (`scripts/embree-harness/run`, docs/embree.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Instancing {
+    /// Flatten a mesh when all its placements together have at most
+    /// [`FLATTEN_TRIANGLES`] triangles; instance larger ones. The default.
+    #[default]
+    FlattenSmall,
+    /// Every mesh placed more than once is an Embree instance.
+    Always,
+}
+
+/// Flattening budget of [`Instancing::FlattenSmall`]: a mesh whose
+/// placements total at most this many triangles is flattened (≈ 48 bytes
+/// of vertices and indices per triangle plus Embree's BVH, ≈ 0.2 GB at the
+/// budget).
+pub const FLATTEN_TRIANGLES: usize = 2_000_000;
+
 /// Embree tracer over a [`SceneGeometry`].
 pub struct EmbreeTracer {
     /// The top-level scene; it keeps alive every vertex buffer and instanced
@@ -865,6 +891,18 @@ impl EmbreeTracer {
         mode: RayMode,
         watertight: Watertight,
     ) -> Result<Self> {
+        Self::with_instancing(device, geom, mode, watertight, Instancing::FlattenSmall)
+    }
+
+    /// [`EmbreeTracer::with_device`] with the choice of which meshes placed
+    /// more than once become Embree instances ([`Instancing`]).
+    pub fn with_instancing(
+        device: Device,
+        geom: &SceneGeometry,
+        mode: RayMode,
+        watertight: Watertight,
+        instancing: Instancing,
+    ) -> Result<Self> {
         if mode == RayMode::Stream && !STREAM_API {
             return Err(Error::invalid(
                 "ray mode",
@@ -907,8 +945,15 @@ impl EmbreeTracer {
             let mesh = &geom.meshes[inst.mesh];
             let id = u32::try_from(i)
                 .map_err(|_| Error::invalid("instances", "more than 2^32 instances"))?;
-            if uses[inst.mesh] == 1 {
-                // Placed once: attach directly, in world space.
+            let flatten = match instancing {
+                Instancing::FlattenSmall => {
+                    uses[inst.mesh].saturating_mul(mesh.indices.len()) <= FLATTEN_TRIANGLES
+                }
+                Instancing::Always => false,
+            };
+            if uses[inst.mesh] == 1 || flatten {
+                // Placed once, or a small mesh: attach directly, in world
+                // space.
                 let vb = if inst.world_from_object == Affine3A::IDENTITY {
                     VertexBuffer::new(mesh.positions.iter().copied())
                 } else {

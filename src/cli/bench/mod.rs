@@ -133,6 +133,12 @@ struct TraceArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
+    /// Also write the scene's triangles and the four ray sets as raw
+    /// little-endian files into DIR, for an outside harness (e.g.
+    /// `scripts/embree-harness/run`, which traces the same rays with
+    /// Embree's C API); layout in `docs/embree.md`.
+    #[arg(long, value_name = "DIR")]
+    dump: Option<PathBuf>,
 }
 
 /// Run `irsig bench`.
@@ -143,6 +149,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         What::Facets(a) => facets::run(a),
         What::Modes(a) => {
             let (geom, opts) = scene_and_options(&a)?;
+            if let Some(dir) = &a.dump {
+                trace::dump(&geom, &opts, dir)
+                    .with_context(|| format!("--dump {}", dir.display()))?;
+            }
             modes::run(&geom, &opts)
         }
         What::Exposure(a) => {
@@ -201,6 +211,9 @@ fn load_scene(a: &TraceArgs) -> anyhow::Result<SceneGeometry> {
 
 fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     let (geom, opts) = scene_and_options(&a)?;
+    if let Some(dir) = &a.dump {
+        trace::dump(&geom, &opts, dir).with_context(|| format!("--dump {}", dir.display()))?;
+    }
     let (report, info) = trace_bench(&geom, &opts).context("trace benchmark")?;
     let mut out = std::io::stdout().lock();
     if a.json {

@@ -559,3 +559,74 @@ pub fn trace_bench(
     };
     Ok((report, info))
 }
+
+/// Writes `geom`'s triangles and the four ray sets of [`make_ray_sets`]
+/// into `dir` as raw little-endian files, for an outside harness
+/// (`scripts/embree-harness/`; layout in `docs/embree.md`):
+///
+/// * `triangles.f32`: per triangle its three world vertices, 9 × `f32`;
+/// * `CLASS.rays`: per ray origin, direction, `tnear`, `tfar`, 8 × `f32`;
+/// * `CLASS.bounds`: the batches (one tracer call each) as `u64` bounds:
+///   the start of each, then the end of the last;
+/// * `meta.json`: counts, camera size, each class's coherence, watertight.
+pub fn dump(geom: &SceneGeometry, opts: &TraceBenchOptions, dir: &std::path::Path) -> Result<()> {
+    use irsig::output::atomic::write_atomic;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let sets = make_ray_sets(geom, opts)?;
+    let offsets = geom.facet_offsets();
+    let write = |name: &str, bytes: &[u8]| {
+        write_atomic(dir.join(name), |w| {
+            w.write_all(bytes).map_err(|e| Error::io(dir.join(name), e))
+        })
+    };
+    let mut tri = Vec::with_capacity(geom.facet_count() * 36);
+    for inst in 0..offsets.len() - 1 {
+        for prim in 0..offsets[inst + 1] - offsets[inst] {
+            for v in geom.world_triangle(inst, prim) {
+                for c in v.to_array() {
+                    tri.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
+    }
+    write("triangles.f32", &tri)?;
+    let classes = [&sets.primary, &sets.shadow, &sets.hemisphere, &sets.diffuse];
+    let mut meta = serde_json::Map::new();
+    for (name, set) in CLASSES.iter().zip(classes) {
+        let mut rays = Vec::with_capacity(set.rays.len() * 32);
+        for r in &set.rays {
+            for c in r.origin.to_array().into_iter().chain(r.dir.to_array()) {
+                rays.extend_from_slice(&c.to_le_bytes());
+            }
+            rays.extend_from_slice(&r.tnear.to_le_bytes());
+            rays.extend_from_slice(&r.tfar.to_le_bytes());
+        }
+        write(&format!("{name}.rays"), &rays)?;
+        let bounds: Vec<u8> = set
+            .bounds
+            .iter()
+            .flat_map(|&b| (b as u64).to_le_bytes())
+            .collect();
+        write(&format!("{name}.bounds"), &bounds)?;
+        meta.insert(
+            (*name).to_string(),
+            serde_json::json!({
+                "rays": set.rays.len(),
+                "batches": set.bounds.len() - 1,
+                "coherence": format!("{:?}", set.coherence),
+            }),
+        );
+    }
+    meta.insert("triangles".into(), geom.facet_count().into());
+    meta.insert(
+        "camera".into(),
+        serde_json::json!([sets.camera.0, sets.camera.1]),
+    );
+    meta.insert(
+        "watertight".into(),
+        matches!(opts.watertight, Watertight::Yes).into(),
+    );
+    let text = serde_json::to_string_pretty(&meta)
+        .map_err(|e| Error::invalid("meta.json", e.to_string()))?;
+    write("meta.json", text.as_bytes())
+}
