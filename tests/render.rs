@@ -383,7 +383,8 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
     let t = layer(&f, "apparent_temperature");
     let w = s.width();
     for p in points {
-        let uv = s.project(p.as_dvec3()).expect("point is imaged");
+        // Where the written (north-up by default) image shows the point.
+        let uv = s.project_written(p.as_dvec3()).expect("point is imaged");
         let (col, row) = (uv.x.floor() as usize, uv.y.floor() as usize);
         assert!(col < w && row < s.height(), "{p} → {uv}");
         assert!(

@@ -297,9 +297,10 @@ pub struct LineScannerConfig {
     /// Extra truth layers (see [`FrameCameraConfig::truth_layers`]).
     #[serde(default)]
     pub truth_layers: Vec<String>,
-    /// Orientation of the written image: `as_flown` (default: row 0 is the
-    /// first line, column 0 the port end of each line) or `north_up` (see
-    /// [`Orientation::north_up`]).
+    /// Orientation of the written image: `north_up` (default: the first row
+    /// is the northernmost line and the image is not mirrored, see
+    /// [`Orientation::north_up`]) or `as_flown` (row 0 is the first line,
+    /// column 0 the port end of each line: the ground mirrored).
     #[serde(default)]
     pub orientation: ScanOrientation,
 }
@@ -308,11 +309,12 @@ pub struct LineScannerConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ScanOrientation {
-    /// Row 0 is the first line flown, column 0 the port end of each line.
-    #[default]
+    /// Row 0 is the first line flown, column 0 the port end of each line
+    /// (seen from above, the ground mirrored).
     AsFlown,
     /// The first row is the northernmost line, and the image is not
-    /// mirrored ([`Orientation::north_up`]).
+    /// mirrored ([`Orientation::north_up`]). The default.
+    #[default]
     NorthUp,
 }
 
