@@ -582,9 +582,9 @@ mod equation {
         let mut out = vec![0.0; n];
         leaving_radiance(&inputs, &b, &mut out);
         let e_band = b.integrate(&sun);
-        // A 5772 K blackbody has 1.603 % of its flux in 3–5 µm: 21.81 W/m²
-        // of the 1360.8 W/m² solar constant.
-        assert!((e_band - 21.81).abs() < 0.01, "{e_band}");
+        // The ASTM E490 table holds 21.077 W/m² in 3–5 µm of its 1366.03:
+        // 20.996 W/m² at the 1360.8 W/m² solar constant.
+        assert!((e_band - 20.996).abs() < 0.01, "{e_band}");
         assert!(rel(b.integrate(&out), 0.8 * e_band * 0.5 / std::f64::consts::PI) < 1e-12);
     }
 
@@ -661,7 +661,10 @@ fn solar_spectrum_is_astm_e490() {
         let want = e490 * SOLAR_CONSTANT_W_M2 / 1366.1;
         let got = solar_irradiance_toa_at(l);
         assert!((got / want - 1.0).abs() < tol, "{l} µm: {got} vs {want}");
-        println!("{l} µm: {got:.4} vs E490 {want:.4} ({:+.2} %)", 100.0 * (got / want - 1.0));
+        println!(
+            "{l} µm: {got:.4} vs E490 {want:.4} ({:+.2} %)",
+            100.0 * (got / want - 1.0)
+        );
     }
     // 1/d² with the sun–earth distance; nothing below 0.2 µm.
     let g = SpectralGrid::uniform(3.0, 5.0, 0.5).unwrap();
@@ -669,8 +672,9 @@ fn solar_spectrum_is_astm_e490() {
     let far = irsig::radiometry::solar_irradiance_toa(&g, 1.0);
     assert!((near[1] / far[1] - 1.0 / (0.983f64 * 0.983)).abs() < 1e-12);
     assert_eq!(solar_irradiance_toa_at(0.15), 0.0);
-    // In 3–5 µm the measured sun is brighter than the 5772 K blackbody of
-    // the same total (its brightness temperature there is above 5772 K).
+    // In 3–5 µm the measured sun is 3.7 % dimmer than the 5772 K blackbody
+    // of the same total (21.00 vs 21.81 W/m²), within the ~10 % the
+    // blackbody was documented to hold there.
     let b = Band::flat(3.0, 5.0, 0.01).unwrap();
     let sun = b.integrate(&irsig::radiometry::solar_irradiance_toa(b.grid(), 1.0));
     let sigma = Constants::CODATA_2018.stefan_boltzmann_w_m2_k4();
@@ -684,5 +688,5 @@ fn solar_spectrum_is_astm_e490() {
         .collect();
     let bb = b.integrate(&bb);
     println!("3–5 µm: E490 {sun:.2} W/m², 5772 K blackbody {bb:.2} W/m²");
-    assert!(sun > bb && sun < 1.1 * bb, "{sun} vs {bb}");
+    assert!(sun < bb && sun > 0.95 * bb, "{sun} vs {bb}");
 }
