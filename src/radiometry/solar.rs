@@ -87,7 +87,8 @@ pub fn solar_irradiance_toa_at(wavelength_um: f64) -> f64 {
     let t = table();
     let (wl, e) = (&t.wavelength_um, &t.irradiance);
     let n = wl.len();
-    if !(wavelength_um >= wl[0]) {
+    // Below the table, or NaN: no sunlight.
+    if wavelength_um.is_nan() || wavelength_um < wl[0] {
         return 0.0;
     }
     if wavelength_um >= wl[n - 1] {
