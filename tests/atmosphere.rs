@@ -807,8 +807,8 @@ mod standard {
         // the built-in model lacks). The built-in model on the same AFGL
         // tropical profile, without the weather: 8–12 µm within 10 % in τ
         // and in the zenith sky radiance (the goal). 3.5–4.5 µm is
-        // printed and held within 35 % (the goal is 15 %; see
-        // docs/physics/atmosphere.md for what the model still lacks there).
+        // printed and held within 32 % in τ and 30 % in L (the goal is 15 %;
+        // see docs/physics/atmosphere.md for what the model still lacks).
         let a = Atmosphere::standard(Profile::Tropical, 0.0).unwrap();
         let sky = SkyConditions {
             air_temperature_k: 299.7,
@@ -816,7 +816,7 @@ mod standard {
         };
         for (file, lo, hi, tol_tau, tol_l) in [
             ("tape7.LWIRSun", 8.0, 12.0, 0.10, 0.10),
-            ("tape7.MWIRSun", 3.5, 4.5, 0.35, 0.35),
+            ("tape7.MWIRSun", 3.5, 4.5, 0.32, 0.30),
         ] {
             let band = Band::flat(lo, hi, 0.005).unwrap();
             let (tau_m, lu_m) = tape7_band(file, &band);
@@ -833,6 +833,28 @@ mod standard {
             );
             assert!(rel(tau_b, tau_m) < tol_tau, "{file}: τ {tau_b} vs {tau_m}");
             assert!(rel(lu_b, lu_m) < tol_l, "{file}: L {lu_b} vs {lu_m}");
+        }
+        // Where the MWIR differences are: band-mean τ in sub-bands. The CO₂
+        // and N₂O lines place the 4.3 µm band's edges: 4.15–4.2 µm (the R
+        // branch beyond the head, sub-Lorentzian wings) within 0.1 of
+        // MODTRAN's τ̄, 4.2–4.5 µm nearly opaque. 3.5–4.15 µm stays too
+        // transparent (H₂O/HDO/CH₄ lines, aerosol, the 4 µm water continuum
+        // are not modelled): printed, held only loosely.
+        for (lo, hi, tol) in [
+            (3.5, 3.8, 0.3),
+            (3.8, 4.15, 0.2),
+            (4.15, 4.2, 0.1),
+            (4.2, 4.5, 0.1),
+        ] {
+            let band = Band::flat(lo, hi, 0.005).unwrap();
+            let (tau_m, _) = tape7_band("tape7.MWIRSun", &band);
+            let p = a.look_up(&sky, 0.0, band.grid()).unwrap();
+            let tau_b = band.mean(&p.transmittance);
+            println!("{lo}–{hi} µm: MODTRAN τ̄ {tau_m:.3}, built-in {tau_b:.3}");
+            assert!(
+                (tau_b - tau_m).abs() < tol,
+                "{lo}–{hi} µm: τ {tau_b} vs {tau_m}"
+            );
         }
     }
 

@@ -13,7 +13,7 @@
 //! 2 km scale height (a tropical column of ~4 g/cm² at 300 K, 80 % RH).
 //! CO₂ well mixed at 420 ppmv.
 //!
-//! **Absorption.** Spectral on the caller's grid, three terms:
+//! **Absorption.** Spectral on the caller's grid:
 //! 1. Water-vapour self/foreign continuum after Roberts, Selby & Biberman
 //!    (1976), Appl. Opt. 15, 2085 (as in LOWTRAN 5, Kneizys et al. 1980):
 //!    optical depth C_s(ν,T)·u·(e + γ(p − e)), u in g/cm², e and p in atm,
@@ -25,25 +25,30 @@
 //! 2. Molecular bands with Edwards' exponential wide-band model (Edwards 1976,
 //!    Adv. Heat Transfer 12, 115; parameters as tabulated in Modest,
 //!    *Radiative Heat Transfer*, 3rd ed., table 11.3): H₂O 6.3 µm
-//!    (ν_c 1600 cm⁻¹, α₀ 41.2 cm⁻¹/(g m⁻²), ω₀ 56.4 cm⁻¹, β₀ 0.09427),
-//!    CO₂ 15 µm (667, 19.0, 12.7, 0.06157) and CO₂ 4.3 µm (upper band head
-//!    2410, 110, 11.2, 0.24723). Mean line strength-to-spacing
-//!    k̄(ν) = (α/ω)·exp(−2|ν − ν_c|/ω) (symmetric bands) or (α/ω)·exp(−(ν_u − ν)/ω)
-//!    (band head), ω = ω₀√(T/100 K); narrow-band transmittance in the Malkmus
-//!    form τ = exp(−(β/2)(√(1 + 4X/β) − 1)), X = Σ k̄·u along the path and β
-//!    the amount-weighted line-overlap parameter (Curtis–Godson scaling),
-//!    β = β₀√(100 K/T)·P_e, P_e = (p/1 atm)(1 + (b − 1)x)ⁿ with Edwards'
-//!    self-broadening b and exponent n.
-//!    The water rotational band (> 16 µm) is not modelled: its far wing in
-//!    the window is part of the continuum above.
-//!    Further bands: O₃ 9.6 µm (AFGL profiles only) and N₂O 4.5 µm (see
-//!    [`BANDS`] for parameters and sources).
-//! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
+//!    (ν_c 1600 cm⁻¹, α₀ 41.2 cm⁻¹/(g m⁻²), ω₀ 56.4 cm⁻¹, β₀ 0.09427) and
+//!    CO₂ 15 µm (667, 19.0, 12.7, 0.06157). Mean line strength-to-spacing
+//!    k̄(ν) = (α/ω)·exp(−2|ν − ν_c|/ω), ω = ω₀√(T/100 K); narrow-band
+//!    transmittance in the Malkmus form τ = exp(−(β/2)(√(1 + 4X/β) − 1)),
+//!    X = Σ k̄·u along the path and β the amount-weighted line-overlap
+//!    parameter (Curtis–Godson scaling), β = β₀√(100 K/T)·P_e,
+//!    P_e = (p/1 atm)(1 + (b − 1)x)ⁿ with Edwards' self-broadening b and
+//!    exponent n. The water rotational band (> 16 µm) is not modelled: its
+//!    far wing in the window is part of the continuum above. O₃ 9.6 µm
+//!    (AFGL profiles only) likewise (see [`BANDS`] for parameters and
+//!    sources).
+//! 3. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) and
+//!    N₂O 4.5 µm from their lines ([`super::lines`]): positions and
+//!    intensities from the molecular constants at each layer's temperature,
+//!    Malkmus parameters from the lines in each wavelength's window (the
+//!    same Curtis–Godson path sums), and the far wings of the other lines,
+//!    sub-Lorentzian after Perrin & Hartmann (1989), as a continuum.
+//! 4. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
-//! 4. Not modelled: CO/CH₄/HDO lines, the 3–5 µm water continuum beyond
-//!    Roberts' exponential term, aerosols and scattering. On the AFGL
-//!    tropical profile the zenith path is within 7 % of MODTRAN in 8–12 µm
-//!    and 31 % too transparent in 3.5–4.5 µm (docs/physics/atmosphere.md).
+//! 5. Not modelled: H₂O, HDO and CH₄ lines in 3–4.2 µm, N₂O's weak 3.9 and
+//!    4.06 µm bands, CO, the 3–5 µm water continuum beyond Roberts'
+//!    exponential term, aerosols and scattering. On the AFGL tropical
+//!    profile the zenith path is within 7 % of MODTRAN in 8–12 µm; in
+//!    3.5–4.5 µm see docs/physics/atmosphere.md for the remaining difference.
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
@@ -60,6 +65,7 @@
 //! longwave E_sky/π.
 
 use super::PathSpectra;
+use super::lines;
 use super::profile::Profile;
 use crate::radiometry::{Planck, SpectralGrid};
 use crate::weather::WeatherRecord;
@@ -233,9 +239,9 @@ struct WideBand {
     n: f64,
 }
 
-/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, CO₂ 4.3 µm, O₃ 9.6 µm,
-/// N₂O 4.5 µm.
-const BANDS: [WideBand; 5] = [
+/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, O₃ 9.6 µm (the 4.3 µm
+/// CO₂ and 4.5 µm N₂O bands are line-by-line band models, [`super::lines`]).
+const BANDS: [WideBand; 3] = [
     WideBand {
         nu_cm: 1600.0,
         head: false,
@@ -254,15 +260,6 @@ const BANDS: [WideBand; 5] = [
         water: false,
         n: 0.7,
     },
-    WideBand {
-        nu_cm: 2410.0,
-        head: true,
-        alpha: 110.0,
-        omega0: 11.2,
-        beta0: 0.24723,
-        water: false,
-        n: 0.8,
-    },
     // O₃ 9.6 µm (ν₃ at 1042 cm⁻¹): band strength 376 cm⁻² atm⁻¹ at STP
     // = 17.6 cm⁻¹/(g m⁻²), bandwidth parameter 30 cm⁻¹ at stratospheric
     // temperatures (ω₀ = 30/√2.2), mean line spacing 0.1 cm⁻¹ and air
@@ -277,19 +274,6 @@ const BANDS: [WideBand; 5] = [
         beta0: 4.32,
         water: false,
         n: 1.0,
-    },
-    // N₂O 4.5 µm (ν₃ at 2224 cm⁻¹): band strength 1.0·10⁻¹⁷ cm⁻¹/(molecule
-    // cm⁻²) (HITRAN; Toth 1991, Appl. Opt. 30, 5289) = 13.7 cm⁻¹/(g m⁻²);
-    // width, overlap and pressure exponent those of the CO₂ 15 µm band
-    // above (a linear triatomic with nearly the same rotational constant).
-    WideBand {
-        nu_cm: 2224.0,
-        head: false,
-        alpha: 13.7,
-        omega0: 12.7,
-        beta0: 0.06157,
-        water: false,
-        n: 0.7,
     },
 ];
 
@@ -541,6 +525,10 @@ impl BuiltinAtmosphere {
         let mut cont = vec![0.0; n];
         let mut x = vec![[0.0f64; BANDS.len()]; n];
         let mut xb = vec![[0.0f64; BANDS.len()]; n];
+        let line_bands = lines::co2_n2o_bands();
+        let windows = lines::LineWindows::new(line_bands, &nu);
+        let mut xl = vec![vec![0.0f64; line_bands.len()]; n];
+        let mut xlb = vec![vec![0.0f64; line_bands.len()]; n];
         // Fixed segment boundaries k·step from the sensor, so a longer path
         // shares all the segments of a shorter one (exact monotonicity).
         let mut s0 = 0.0;
@@ -554,14 +542,21 @@ impl BuiltinAtmosphere {
             let e_atm = st.water_pa / ATM_PA;
             let p_atm = st.pressure_pa / ATM_PA;
             let broad = e_atm + 0.002 * (p_atm - e_atm);
-            let amounts = [
-                st.water_g_m3 * ds,
-                st.co2_g_m3 * ds,
-                st.co2_g_m3 * ds,
-                st.o3_g_m3 * ds,
-                st.n2o_g_m3 * ds,
-            ];
+            let amounts = [st.water_g_m3 * ds, st.co2_g_m3 * ds, st.o3_g_m3 * ds];
             let betas = BANDS.each_ref().map(|b| b.beta(&st));
+            let line_layers: Vec<(lines::LayerBand, f64)> = (0..line_bands.len())
+                .filter(|&b| windows.active(b))
+                .map(|b| {
+                    let amount = match line_bands[b].band().gas {
+                        lines::Gas::Co2 => st.co2_g_m3 * ds,
+                        lines::Gas::N2o => st.n2o_g_m3 * ds,
+                    };
+                    (
+                        lines::layer_parameters(line_bands, &windows, b, t, p_atm),
+                        amount,
+                    )
+                })
+                .collect();
             // N₂ density in amagat (number density / Loschmidt's at 273.15 K, 1 atm).
             let n2 = N2_FRACTION * (st.pressure_pa - st.water_pa) / ATM_PA * 273.15 / t;
             let n2_path = n2 * n2 * ds * 100.0;
@@ -574,6 +569,15 @@ impl BuiltinAtmosphere {
                     xb[i][b] += ku * betas[b];
                     if x[i][b] > 0.0 {
                         t_lines *= malkmus(x[i][b], xb[i][b] / x[i][b]);
+                    }
+                }
+                for (b, (lb, amount)) in line_layers.iter().enumerate() {
+                    cont[i] += lb.wing[i] * amount;
+                    let ku = lb.kbar[i] * amount;
+                    xl[i][b] += ku;
+                    xlb[i][b] += ku * lb.beta[i];
+                    if xl[i][b] > 0.0 {
+                        t_lines *= malkmus(xl[i][b], xlb[i][b] / xl[i][b]);
                     }
                 }
                 let new_tau = ((-cont[i]).exp() * t_lines).min(tau[i]);

@@ -25,6 +25,7 @@
 //! a view direction.
 
 pub mod builtin;
+pub mod lines;
 pub mod lut;
 pub mod profile;
 pub mod table;

@@ -1,5 +1,5 @@
-//! The per-hit radiance ("big equation"), spectral on a band grid, and the
-//! solar spectrum at the top of the atmosphere.
+//! The per-hit radiance ("big equation"), spectral on a band grid; the
+//! solar spectrum at the top of the atmosphere is in [`super::solar`].
 //!
 //! For a facet at temperature T seen at view zenith θ (from its normal), with
 //! spectral emissivity ε(λ, θ), transmissivity t (grey) and reflectance
@@ -26,31 +26,18 @@
 //! ray sees the sky, not the solar disc). Units: spectral radiance
 //! W·m⁻²·sr⁻¹·µm⁻¹, irradiance W·m⁻²·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
 
-use super::band::{Band, SpectralGrid};
-use super::planck::{Constants, Planck};
+use super::band::Band;
 
 /// Solar constant (total solar irradiance at 1 AU), W/m²: Kopp & Lean 2011,
 /// Geophys. Res. Lett. 38, L01706 (1360.8 ± 0.5).
 pub const SOLAR_CONSTANT_W_M2: f64 = 1360.8;
 /// Effective temperature of the solar photosphere, K (blackbody of the same
-/// total flux; IAU 2015 nominal value 5772 K).
+/// total flux; IAU 2015 nominal value 5772 K). The top-of-atmosphere
+/// spectrum is the measured one ([`super::solar`]); this is for the grey
+/// spreading of a broadband irradiance where no spectrum applies.
 pub const SUN_TEMPERATURE_K: f64 = 5772.0;
 
-/// Solar spectral irradiance at the top of the atmosphere on a surface normal
-/// to the sun, W·m⁻²·µm⁻¹: a 5772 K blackbody scaled to the solar constant,
-/// E(λ) = S₀ · πB(λ, T☉)/(σT☉⁴) / d², d the sun–earth distance in AU. Within
-/// ~10 % of measured spectra in 3–14 µm (the sun's brightness temperature
-/// there is 5000–6000 K), which is the band-level accuracy this model claims.
-pub fn solar_irradiance_toa(grid: &SpectralGrid, distance_au: f64) -> Vec<f64> {
-    let planck = Planck::default();
-    let sigma = Constants::CODATA_2018.stefan_boltzmann_w_m2_k4();
-    let scale = SOLAR_CONSTANT_W_M2 * std::f64::consts::PI
-        / (sigma * SUN_TEMPERATURE_K.powi(4) * distance_au * distance_au);
-    grid.wavelengths_um()
-        .iter()
-        .map(|&l| scale * planck.radiance(l, SUN_TEMPERATURE_K))
-        .collect()
-}
+pub use super::solar::solar_irradiance_toa;
 
 /// The reflectance split of a facet at one wavelength.
 #[derive(Debug, Clone, Copy, PartialEq)]

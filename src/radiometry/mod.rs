@@ -12,6 +12,8 @@
 //!   fall-off toward grazing view.
 //! - [`equation`]: the per-hit leaving radiance ([`leaving_radiance`], the
 //!   "big equation") and the sensor-reaching band radiance ([`at_sensor`]).
+//! - [`solar`]: the top-of-atmosphere solar spectrum (ASTM E490 table,
+//!   scaled to the solar constant).
 //!
 //! Internal units: wavelength µm, temperature K, spectral radiance
 //! W·m⁻²·sr⁻¹·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
@@ -25,6 +27,7 @@ pub mod emissivity;
 pub mod equation;
 pub mod planck;
 pub mod response;
+pub mod solar;
 
 pub use band::{Band, DEFAULT_STEP_UM, SpectralGrid};
 pub use emissivity::{AngularFalloff, Emissivity, fresnel_emissivity};
