@@ -470,20 +470,25 @@ fn stock_on_site(name: &str, d: &FluxDataset) -> StockResult {
             le_o += le;
             h_o += h;
             nd += 1;
-            if let (Some(rn), Some(g), Some(t_meas)) =
-                (r.net_radiation_w_m2, r.ground_heat_w_m2, r.surface_temperature_k)
-            {
+            if let (Some(rn), Some(g), Some(t_meas)) = (
+                r.net_radiation_w_m2,
+                r.ground_heat_w_m2,
+                r.surface_temperature_k,
+            ) {
                 let le_k = ex.vapour_conductance_w_m2_pa[i]
                     * (saturation_vapour_pressure_pa(t_s) - forcing.vapour_pressure_pa[i]);
                 let h_k = ex.sensible_w_m2_k[i] * (t_s - w.air_temperature_k);
                 let eps = props.thermal_emissivity;
                 let rn_k = props.solar_absorptivity * w.global_horizontal_w_m2
                     + eps * (w.sky_longwave_w_m2 - STEFAN_BOLTZMANN_W_M2_K4 * t_s.powi(4));
-                let bowen = if h + le != 0.0 { (rn - g) / (h + le) } else { 1.0 };
+                let bowen = if h + le != 0.0 {
+                    (rn - g) / (h + le)
+                } else {
+                    1.0
+                };
                 dc.h_closed += h * bowen;
                 dc.le_closed += le * bowen;
-                dc.h_model_at_measured_t +=
-                    ex.sensible_w_m2_k[i] * (t_meas - w.air_temperature_k);
+                dc.h_model_at_measured_t += ex.sensible_w_m2_k[i] * (t_meas - w.air_temperature_k);
                 dc.g_model += rn_k - h_k - le_k;
                 dc.g_measured += g;
                 dc.rn_model += rn_k;

@@ -675,8 +675,9 @@ fn linearized_solve_matches_the_exact_solve_with_latent_heat() {
 /// slab, wall and fence, each property set split by orientation class (the
 /// ground facing up, the wall and fence vertical), the linearised solve
 /// within the default's checked accuracy of the per-facet exact solve (RMS
-/// 0.01 K, max 0.05 K); and the wall's exchange is the vertical class's,
-/// not the ground's.
+/// 0.01 K, max 0.05 K: DOE-2 sets get the second-order correction, without
+/// which the steel fence was 0.078 K off); and the wall's exchange is the
+/// vertical class's, not the ground's.
 #[test]
 fn linearized_solve_matches_the_exact_solve_with_doe2_convection() {
     use irsig::material::ConvectionSpec;
@@ -726,6 +727,12 @@ fn linearized_solve_matches_the_exact_solve_with_doe2_convection() {
             &exact.surface_temperature_k[i],
         );
         eprintln!("DOE-2, image record {record}: RMS {rms:.4} K, max {max:.4} K");
+    }
+    for (i, _) in images.iter().enumerate() {
+        let (rms, max) = rms_max(
+            &fast.surface_temperature_k[i],
+            &exact.surface_temperature_k[i],
+        );
         assert!(rms < 0.01 && max < 0.05, "RMS {rms} max {max}");
     }
     // The brick wall's exchange as a vertical surface differs from the one

@@ -741,11 +741,14 @@ fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
             irsig::radiometry::fresnel_emissivity(0.95, t)
         });
     let (f, sigma) = (0.75, STEFAN_BOLTZMANN_W_M2_K4);
-    let h = 5.7 + 3.8 * wind;
+    // The default DOE-2 convection of a concrete-rough surface tilted 60°
+    // (cos Σ = 0.5), at the facet's own ΔT: the one-facet reference surface
+    // is the facet itself at night.
+    let h = |t: f64| irsig::thermal::convection::doe2_w_m2_k(t - t_air, 0.5, wind, 1.52);
     let expected = bisect(
         |t| {
             eps * f * sky + eps * (1.0 - f) * sigma * t_air.powi(4) - eps * sigma * t.powi(4)
-                + h * (t_air - t)
+                + h(t) * (t_air - t)
         },
         200.0,
         400.0,
@@ -1518,7 +1521,10 @@ fn dry_surfaces_with_doe2_convection_close_their_energy_balance() {
         &opts,
     )
     .unwrap();
-    let (t_new, t_old) = (sol.surface_temperature_k[noon], old.surface_temperature_k[noon]);
+    let (t_new, t_old) = (
+        sol.surface_temperature_k[noon],
+        old.surface_temperature_k[noon],
+    );
     eprintln!("noon: DOE-2 {t_new:.2} K, McAdams {t_old:.2} K");
     assert!(t_new > t_old + 1.0, "DOE-2 {t_new} McAdams {t_old}");
 }

@@ -155,7 +155,10 @@ pub struct MaterialEntry {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface_energy: Option<crate::material::SurfaceEnergySpec>,
     /// How a dry surface convects (default DOE-2, medium rough).
-    #[serde(default, skip_serializing_if = "crate::material::ConvectionSpec::is_default")]
+    #[serde(
+        default,
+        skip_serializing_if = "crate::material::ConvectionSpec::is_default"
+    )]
     pub convection: crate::material::ConvectionSpec,
     /// Where the values come from.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -122,7 +122,12 @@ pub fn doe2_w_m2_k(delta_k: f64, cos_tilt: f64, wind_m_s: f64, multiplier: f64) 
 
 /// The convection coefficient of a dry surface under `spec`, W m⁻² K⁻¹
 /// (arguments as [`doe2_w_m2_k`]; McAdams takes the wind alone).
-pub fn coefficient_w_m2_k(spec: &ConvectionSpec, delta_k: f64, cos_tilt: f64, wind_m_s: f64) -> f64 {
+pub fn coefficient_w_m2_k(
+    spec: &ConvectionSpec,
+    delta_k: f64,
+    cos_tilt: f64,
+    wind_m_s: f64,
+) -> f64 {
     match spec.model {
         ConvectionModel::Doe2 => {
             doe2_w_m2_k(delta_k, cos_tilt, wind_m_s, spec.roughness.multiplier())
@@ -172,7 +177,10 @@ mod tests {
         ];
         for (dt, cos, want) in cases {
             let got = natural_w_m2_k(dt, cos);
-            assert!((got - want).abs() < 1e-12, "ΔT {dt} cos {cos}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 1e-12,
+                "ΔT {dt} cos {cos}: {got} vs {want}"
+            );
         }
         assert!((natural_w_m2_k(10.0, 1.0) - 3.2748).abs() < 1e-4);
         assert!((natural_w_m2_k(-10.0, 1.0) - 1.6371).abs() < 1e-4);
@@ -226,7 +234,10 @@ mod tests {
             model: ConvectionModel::Doe2,
             roughness: SurfaceRoughness::VerySmooth,
         };
-        assert_eq!(coefficient_w_m2_k(&spec, 3.0, 0.5, 2.0), doe2_w_m2_k(3.0, 0.5, 2.0, 1.0));
+        assert_eq!(
+            coefficient_w_m2_k(&spec, 3.0, 0.5, 2.0),
+            doe2_w_m2_k(3.0, 0.5, 2.0, 1.0)
+        );
         assert_eq!(
             coefficient_w_m2_k(&ConvectionSpec::MCADAMS, 3.0, 0.5, 2.0),
             5.7 + 7.6

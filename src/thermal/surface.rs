@@ -4,7 +4,7 @@
 //! A material with a [`LandSurface`] exchanges heat with the air through the
 //! aerodynamic resistance `r_a` (log profile with the surface's roughness,
 //! stability-corrected; [`crate::thermal::latent::Aerodynamic`]) instead of
-//! McAdams' wind coefficient, and loses latent heat through `r_a + r_s`
+//! a dry surface's convection ([`super::convection`]), and loses latent heat through `r_a + r_s`
 //! (Penman–Monteith written at the surface temperature, FAO-56 eq. 3;
 //! [`crate::thermal::SurfaceFlux`]). Vegetation adds a **skin**: a canopy
 //! layer of small heat capacity `C_c` coupled to the soil column below by a

@@ -284,7 +284,10 @@ pub fn solve_facet_temperatures<'a>(
     let set_class: Vec<u32> = wind_class
         .iter()
         .zip(&orientation)
-        .map(|(&q, &o)| q.wrapping_mul(convection::ORIENTATION_CLASSES).wrapping_add(o))
+        .map(|(&q, &o)| {
+            q.wrapping_mul(convection::ORIENTATION_CLASSES)
+                .wrapping_add(o)
+        })
         .collect();
     let wind_class = set_class;
     match &params.method {
