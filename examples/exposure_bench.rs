@@ -87,6 +87,7 @@ fn main() -> anyhow::Result<()> {
             self_power_w_m2: 0.0,
             back: BackBoundary::GROUND,
             surface: None,
+            convection: irsig::material::ConvectionSpec::MCADAMS,
             layers: irsig::thermal::Layers::NONE,
         };
         let brick = SlabProperties {
@@ -99,6 +100,7 @@ fn main() -> anyhow::Result<()> {
             self_power_w_m2: 0.0,
             back: BackBoundary::BUILDING,
             surface: None,
+            convection: irsig::material::ConvectionSpec::MCADAMS,
             layers: irsig::thermal::Layers::NONE,
         };
         let offsets = geo.facet_offsets();

@@ -42,6 +42,7 @@ fn main() {
         self_power_w_m2: 0.0,
         back,
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers: irsig::thermal::Layers::NONE,
     };
     let aluminium = SlabProperties {

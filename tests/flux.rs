@@ -407,7 +407,26 @@ struct StockResult {
     /// Daytime means (global SW > 20 W/m², records with both measured):
     /// (modelled LE, measured LE, modelled H, measured H), W/m².
     day_fluxes: (f64, f64, f64, f64),
+    /// Daytime means over the same records, W/m²: measured H and LE with
+    /// the energy-balance residual shared at the measured Bowen ratio
+    /// (`H·(Rn − G)/(H + LE)`, the closure-corrected fluxes; records with
+    /// measured Rn and G), the model's H at the *measured* surface
+    /// temperature (`h·(T_meas − T_air)`, the model's own exchange), the
+    /// modelled and measured G and net radiation.
+    day_closed: DayClosed,
     n: usize,
+}
+
+/// Daytime means of [`StockResult::day_closed`], W/m².
+#[derive(Debug, Default)]
+struct DayClosed {
+    h_closed: f64,
+    le_closed: f64,
+    h_model_at_measured_t: f64,
+    g_model: f64,
+    g_measured: f64,
+    rn_model: f64,
+    rn_measured: f64,
 }
 
 /// The stock material `name` of `scenes/materials.json`, a horizontal
@@ -417,7 +436,7 @@ struct StockResult {
 fn stock_on_site(name: &str, d: &FluxDataset) -> StockResult {
     use irsig::analysis::facet::{FacetSpec, solve_free_facet};
     use irsig::thermal::latent::psychrometrics::saturation_vapour_pressure_pa;
-    use irsig::thermal::{Exchange, Forcing, SolveOptions};
+    use irsig::thermal::{Exchange, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SolveOptions};
 
     let props = util::stock_props(name);
     let (history, _) = d.weather(0..d.len()).unwrap();
@@ -435,6 +454,8 @@ fn stock_on_site(name: &str, d: &FluxDataset) -> StockResult {
     let (mut model, mut truth, mut air) = (Vec::new(), Vec::new(), Vec::new());
     let mut by_hour = [(0.0f64, 0usize); 24];
     let (mut le_m, mut le_o, mut h_m, mut h_o, mut nd) = (0.0, 0.0, 0.0, 0.0, 0usize);
+    let mut dc = DayClosed::default();
+    let mut nc = 0usize;
     for i in d.second_half() {
         let r = &d.records()[i];
         let w = &history.records()[i];
@@ -449,6 +470,31 @@ fn stock_on_site(name: &str, d: &FluxDataset) -> StockResult {
             le_o += le;
             h_o += h;
             nd += 1;
+            if let (Some(rn), Some(g), Some(t_meas)) = (
+                r.net_radiation_w_m2,
+                r.ground_heat_w_m2,
+                r.surface_temperature_k,
+            ) {
+                let le_k = ex.vapour_conductance_w_m2_pa[i]
+                    * (saturation_vapour_pressure_pa(t_s) - forcing.vapour_pressure_pa[i]);
+                let h_k = ex.sensible_w_m2_k[i] * (t_s - w.air_temperature_k);
+                let eps = props.thermal_emissivity;
+                let rn_k = props.solar_absorptivity * w.global_horizontal_w_m2
+                    + eps * (w.sky_longwave_w_m2 - STEFAN_BOLTZMANN_W_M2_K4 * t_s.powi(4));
+                let bowen = if h + le != 0.0 {
+                    (rn - g) / (h + le)
+                } else {
+                    1.0
+                };
+                dc.h_closed += h * bowen;
+                dc.le_closed += le * bowen;
+                dc.h_model_at_measured_t += ex.sensible_w_m2_k[i] * (t_meas - w.air_temperature_k);
+                dc.g_model += rn_k - h_k - le_k;
+                dc.g_measured += g;
+                dc.rn_model += rn_k;
+                dc.rn_measured += rn;
+                nc += 1;
+            }
         }
         let Some(t) = r.surface_temperature_k else {
             continue;
@@ -461,7 +507,20 @@ fn stock_on_site(name: &str, d: &FluxDataset) -> StockResult {
         by_hour[hour].1 += 1;
     }
     let nd = nd.max(1) as f64;
+    let nc = nc.max(1) as f64;
+    for v in [
+        &mut dc.h_closed,
+        &mut dc.le_closed,
+        &mut dc.h_model_at_measured_t,
+        &mut dc.g_model,
+        &mut dc.g_measured,
+        &mut dc.rn_model,
+        &mut dc.rn_measured,
+    ] {
+        *v /= nc;
+    }
     StockResult {
+        day_closed: dc,
         rmse: stats::rmse(&model, &truth).unwrap(),
         bias: stats::bias(&model, &truth).unwrap(),
         spearman: stats::spearman(&model, &truth).unwrap(),
@@ -498,6 +557,20 @@ fn stock_materials_on_measured_forcing() {
                 r.spearman,
                 r.n,
                 hours.join(" ")
+            );
+            let c = &r.day_closed;
+            println!(
+                "{:?}: stock {name}, daytime: H closure-corrected (Bowen) {:.0} W/m², LE \
+                 closure-corrected {:.0}; model H at the measured surface temperature {:.0}; \
+                 G model {:.0} vs measured {:.0}; Rn model {:.0} vs measured {:.0} W/m²",
+                d.site(),
+                c.h_closed,
+                c.le_closed,
+                c.h_model_at_measured_t,
+                c.g_model,
+                c.g_measured,
+                c.rn_model,
+                c.rn_measured
             );
             if name == "crop" {
                 assert!(

@@ -60,6 +60,7 @@ fn wall_props(back: BackBoundary) -> SlabProperties {
         self_power_w_m2: 0.0,
         back,
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers,
     }
 }

@@ -110,6 +110,7 @@ fn material() -> impl Strategy<Value = Material> {
             emissivity_curve: None,
             double_sided: false,
             surface_energy: None,
+            convection: Default::default(),
             layers: Vec::new(),
             back: None,
         })

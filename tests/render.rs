@@ -40,6 +40,7 @@ fn material(name: &str, id: u32, emissivity: f64, specular: f64) -> Material {
         emissivity_curve: None,
         double_sided: false,
         surface_energy: None,
+        convection: Default::default(),
         layers: Vec::new(),
         back: None,
     }

@@ -236,6 +236,7 @@ fn solve_energy_budget_closes() {
             self_power_w_m2: 0.0,
             back,
             surface: None,
+            convection: irsig::material::ConvectionSpec::MCADAMS,
             layers: irsig::thermal::Layers::NONE,
         };
         let mut opts = SolveOptions::default();
@@ -309,6 +310,7 @@ fn steady_state_is_root_of_surface_balance() {
             self_power_w_m2: 25.0,
             back,
             surface: None,
+            convection: irsig::material::ConvectionSpec::MCADAMS,
             layers: irsig::thermal::Layers::NONE,
         };
         let expected = match back {
@@ -366,6 +368,7 @@ fn panel_and_wall() -> (SlabProperties, SlabProperties) {
         self_power_w_m2: 0.0,
         back: BackBoundary::BOTH_FACES,
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers: irsig::thermal::Layers::NONE,
     };
     let wall = SlabProperties {
@@ -547,6 +550,7 @@ fn coarse_grids_conserve_energy_and_reach_steady_state() {
             film_coefficient_w_m2_k: 8.0,
         },
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers: irsig::thermal::Layers::NONE,
     };
     let sigma = STEFAN_BOLTZMANN_W_M2_K4;
@@ -602,6 +606,7 @@ fn invalid_inputs_name_the_field() {
         self_power_w_m2: 0.0,
         back: BackBoundary::Insulated,
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers: irsig::thermal::Layers::NONE,
     };
     let opts = SolveOptions::default();
@@ -736,11 +741,14 @@ fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
             irsig::radiometry::fresnel_emissivity(0.95, t)
         });
     let (f, sigma) = (0.75, STEFAN_BOLTZMANN_W_M2_K4);
-    let h = 5.7 + 3.8 * wind;
+    // The default DOE-2 convection of a concrete-rough surface tilted 60°
+    // (cos Σ = 0.5), at the facet's own ΔT: the one-facet reference surface
+    // is the facet itself at night.
+    let h = |t: f64| irsig::thermal::convection::doe2_w_m2_k(t - t_air, 0.5, wind, 1.52);
     let expected = bisect(
         |t| {
             eps * f * sky + eps * (1.0 - f) * sigma * t_air.powi(4) - eps * sigma * t.powi(4)
-                + h * (t_air - t)
+                + h(t) * (t_air - t)
         },
         200.0,
         400.0,
@@ -894,6 +902,7 @@ fn concrete_with_backs() -> Vec<SlabProperties> {
         self_power_w_m2: 0.0,
         back: BackBoundary::Insulated,
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers: irsig::thermal::Layers::NONE,
     };
     vec![
@@ -1057,6 +1066,7 @@ fn ground_column_conducts_to_the_deep_soil() {
             depth_m: Some(depth),
         },
         surface: None,
+        convection: irsig::material::ConvectionSpec::MCADAMS,
         layers: irsig::thermal::Layers::NONE,
     };
     let opts = SolveOptions {
@@ -1440,6 +1450,83 @@ fn surfaces_that_evaporate_close_their_energy_balance() {
                 .max(1.0);
         assert!(closure < 1e-6, "{name}: energy closure {closure}");
     }
+}
+
+/// Dry surfaces with the default DOE-2 convection
+/// (`irsig::thermal::convection`): a concrete slab facing up, vertical and
+/// facing down closes its energy balance every step (1e-6 relative); the
+/// horizontal one's exchange is DOE-2's coefficient at its own surface
+/// temperature (the reference surface is the facet itself: the fixed point
+/// converged); convection alone (no radiation folded in) leaves it hotter
+/// at noon than McAdams' combined coefficient does.
+#[test]
+fn dry_surfaces_with_doe2_convection_close_their_energy_balance() {
+    use irsig::material::ConvectionSpec;
+    use irsig::thermal::Exchange;
+    use irsig::thermal::convection::doe2_w_m2_k;
+    let (mut forcing, cos) = one_clear_day();
+    let n = forcing.len();
+    for (k, c) in cos.iter().enumerate() {
+        forcing.global_horizontal_w_m2[k] =
+            forcing.diffuse_horizontal_w_m2[k] + forcing.direct_normal_w_m2[k] * f64::from(*c);
+    }
+    let sun = vec![1.0f32; n];
+    let opts = SolveOptions::default();
+    let mut props = concrete_with_backs()[0];
+    props.convection = ConvectionSpec::default();
+    let noon = (0..n)
+        .max_by(|&a, &b| forcing.direct_normal_w_m2[a].total_cmp(&forcing.direct_normal_w_m2[b]))
+        .unwrap();
+    for normal_z in [1.0, 0.0, -1.0] {
+        let f = 0.5 * (1.0 + normal_z);
+        let c: Vec<f32> = cos.iter().map(|&c| c * normal_z as f32).collect();
+        let inputs = FacetInputs::new(&sun, &c, f);
+        let sol = thermal::solve_facing(&props, &forcing, &inputs, &opts, normal_z).unwrap();
+        let e = sol.energy;
+        let closure = (e.front_in_j_m2 + e.back_in_j_m2 - e.stored_change_j_m2).abs()
+            / e.front_in_j_m2
+                .abs()
+                .max(e.stored_change_j_m2.abs())
+                .max(1.0);
+        eprintln!(
+            "DOE-2, cos Σ {normal_z}: noon {:.2} K (air {:.2} K), closure {closure:.1e}",
+            sol.surface_temperature_k[noon], forcing.air_temperature_k[noon]
+        );
+        assert!(closure < 1e-6, "cos Σ {normal_z}: energy closure {closure}");
+    }
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let ex = Exchange::new(&props, &forcing).unwrap();
+    let sol = thermal::solve(&props, &forcing, &inputs, &opts).unwrap();
+    for k in 0..n {
+        let own = doe2_w_m2_k(
+            sol.surface_temperature_k[k] - forcing.air_temperature_k[k],
+            1.0,
+            forcing.wind_speed_m_s[k],
+            1.52,
+        );
+        assert!(
+            (ex.sensible_w_m2_k[k] - own).abs() < 0.02 * own.max(1.0),
+            "record {k}: exchange {} vs DOE-2 at the surface {own}",
+            ex.sensible_w_m2_k[k]
+        );
+    }
+    let mcadams = ConvectionSpec::MCADAMS;
+    let old = thermal::solve(
+        &irsig::thermal::SlabProperties {
+            convection: mcadams,
+            ..props
+        },
+        &forcing,
+        &inputs,
+        &opts,
+    )
+    .unwrap();
+    let (t_new, t_old) = (
+        sol.surface_temperature_k[noon],
+        old.surface_temperature_k[noon],
+    );
+    eprintln!("noon: DOE-2 {t_new:.2} K, McAdams {t_old:.2} K");
+    assert!(t_new > t_old + 1.0, "DOE-2 {t_new} McAdams {t_old}");
 }
 
 /// Rain wets a surface, which evaporates and cools, dries, and returns to

@@ -214,7 +214,13 @@ pub fn solve_free_facet(
     let g = free_facet_geometry(records, site, facet)?;
     let forcing = Forcing::from_records(records)?;
     Ok((
-        thermal::solve(props, &forcing, &g.inputs(), options)?,
+        thermal::solve_facing(
+            props,
+            &forcing,
+            &g.inputs(),
+            options,
+            facet.tilt_deg.to_radians().cos(),
+        )?,
         g.shape_factor,
     ))
 }

@@ -154,6 +154,12 @@ pub struct MaterialEntry {
     /// dry surface.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface_energy: Option<crate::material::SurfaceEnergySpec>,
+    /// How a dry surface convects (default DOE-2, medium rough).
+    #[serde(
+        default,
+        skip_serializing_if = "crate::material::ConvectionSpec::is_default"
+    )]
+    pub convection: crate::material::ConvectionSpec,
     /// Where the values come from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<MaterialSource>,
@@ -241,6 +247,7 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
             emissivity_curve: curve,
             double_sided: e.double_sided,
             surface_energy: e.surface_energy,
+            convection: e.convection,
             layers,
             back: e.back,
         };

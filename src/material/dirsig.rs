@@ -486,6 +486,7 @@ pub fn read_mat_with(
             emissivity_curve: curve,
             double_sided,
             surface_energy: None,
+            convection: Default::default(),
             layers: Vec::new(),
             back: None,
         };

@@ -48,7 +48,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Location, Result};
 use crate::math::{bracket, interp1d, lerp};
 pub use construction::{BackSpec, InteriorSpec, LayerEntry, MaterialLayer};
-pub use surface::{SurfaceEnergySpec, SurfaceKind};
+pub use surface::{
+    ConvectionModel, ConvectionSpec, SurfaceEnergySpec, SurfaceKind, SurfaceRoughness,
+};
 
 /// A spectral emissivity curve, optionally angle-dependent.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, JsonSchema)]
@@ -183,9 +185,14 @@ pub struct Material {
     pub emissivity_curve: Option<EmissivityCurve>,
     /// Whether both faces of a facet are front faces.
     pub double_sided: bool,
-    /// How the surface evaporates (`None`: a dry surface with McAdams'
-    /// convection).
+    /// How the surface evaporates (`None`: a dry surface, convecting as
+    /// `convection` says).
     pub surface_energy: Option<SurfaceEnergySpec>,
+    /// How the surface convects heat to the air when it is dry
+    /// ([`ConvectionSpec`]; ignored with `surface_energy`, whose exchange
+    /// is the aerodynamic resistance).
+    #[serde(default, skip_serializing_if = "ConvectionSpec::is_default")]
+    pub convection: ConvectionSpec,
     /// The construction's layers from the outer face (empty: a single slab
     /// of the properties above). With layers, `conductivity_w_m_k`,
     /// `density_kg_m3` and `specific_heat_j_kg_k` are the outer layer's and

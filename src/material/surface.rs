@@ -26,6 +26,84 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+/// How a dry surface (one without a `surface_energy` block) convects heat
+/// to the air: the material's `"convection"` entry,
+/// `{"model": "doe2", "roughness": "medium_rough"}` by default. The models
+/// and their sources are in [`crate::thermal::convection`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConvectionSpec {
+    /// The model (default `doe2`).
+    #[serde(default)]
+    pub model: ConvectionModel,
+    /// The surface's roughness class (DOE-2's multiplier on the forced
+    /// part; default `medium_rough`, concrete).
+    #[serde(default)]
+    pub roughness: SurfaceRoughness,
+}
+
+impl ConvectionSpec {
+    /// McAdams' `5.7 + 3.8u` (DIRSIG parity).
+    pub const MCADAMS: ConvectionSpec = ConvectionSpec {
+        model: ConvectionModel::Mcadams,
+        roughness: SurfaceRoughness::MediumRough,
+    };
+
+    /// Whether this is the default (omitted when a material is written).
+    pub fn is_default(&self) -> bool {
+        *self == ConvectionSpec::default()
+    }
+}
+
+/// The convection model of a dry surface ([`ConvectionSpec`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ConvectionModel {
+    /// DOE-2 (EnergyPlus Engineering Reference): Walton's natural
+    /// convection by orientation and ΔT with the MoWiTT forced part,
+    /// convection only.
+    #[default]
+    Doe2,
+    /// McAdams' `h = 5.7 + 3.8u`, which includes some radiation: with it
+    /// the radiative exchange is counted twice (kept for DIRSIG parity).
+    Mcadams,
+}
+
+/// Roughness classes of the DOE-2 model (EnergyPlus Engineering
+/// Reference, "Roughness multipliers", after Walton 1981), with an example
+/// material each.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceRoughness {
+    /// Stucco; R_f = 2.17.
+    VeryRough,
+    /// Brick; R_f = 1.67.
+    Rough,
+    /// Concrete; R_f = 1.52.
+    #[default]
+    MediumRough,
+    /// Clear pine; R_f = 1.13.
+    MediumSmooth,
+    /// Smooth plaster; R_f = 1.11.
+    Smooth,
+    /// Glass; R_f = 1.00.
+    VerySmooth,
+}
+
+impl SurfaceRoughness {
+    /// DOE-2's roughness multiplier R_f (type docs).
+    pub fn multiplier(self) -> f64 {
+        match self {
+            SurfaceRoughness::VeryRough => 2.17,
+            SurfaceRoughness::Rough => 1.67,
+            SurfaceRoughness::MediumRough => 1.52,
+            SurfaceRoughness::MediumSmooth => 1.13,
+            SurfaceRoughness::Smooth => 1.11,
+            SurfaceRoughness::VerySmooth => 1.00,
+        }
+    }
+}
+
 /// What kind of evaporating surface (module table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]

@@ -15,7 +15,7 @@
 //! | absorbed sky longwave        | `ε · F · E_sky`                    |
 //! | absorbed background longwave | `ε · (1 − F) · σ · T_bg⁴`          |
 //! | emission                     | `− ε · σ · T⁴`                     |
-//! | convection                   | `h(u) · (T_air − T)`               |
+//! | convection                   | `h · (T_air − T)`                  |
 //! | self-generated power         | `P`                                |
 //! | latent heat (evaporation)    | `− g_v · (e°(T) − e_a)`            |
 //!
@@ -29,7 +29,10 @@
 //! factor (fraction of the hemisphere seen that is sky), `E_d` diffuse
 //! horizontal irradiance (isotropic sky), `E_sky` downwelling sky longwave on
 //! a horizontal surface, `T_bg` temperature of what the rest of the
-//! hemisphere sees (K), `σ` Stefan–Boltzmann constant, `u` wind speed,
+//! hemisphere sees (K), `σ` Stefan–Boltzmann constant, `h` the convection
+//! coefficient of the material's exchange ([`super::Exchange`]: DOE-2 or
+//! McAdams for a dry surface, [`super::convection`]; `ρc_p/r_a` for one
+//! that evaporates),
 //! `E_r` the shortwave reflected onto the facet by the surfaces it sees
 //! (neighbouring facets, the ground; `irsig::exposure::reflected` for a
 //! scene, the ground albedo for a free-standing facet), W m⁻².

@@ -51,7 +51,7 @@
 //!     conductivity_w_m_k: 1.4, density_kg_m3: 2300.0, specific_heat_j_kg_k: 880.0,
 //!     thickness_m: 0.2, solar_absorptivity: 0.7, thermal_emissivity: 0.9,
 //!     self_power_w_m2: 0.0, back: BackBoundary::Insulated, surface: None,
-//!     layers: thermal::Layers::NONE,
+//!     convection: Default::default(), layers: thermal::Layers::NONE,
 //! };
 //! let sun = [1.0f32, 1.0];
 //! let cos = [0.8f32, 0.8];
@@ -63,6 +63,7 @@
 pub mod balance;
 pub mod conduction;
 pub mod construction;
+pub mod convection;
 pub mod latent;
 pub mod linear;
 pub mod scene;
@@ -70,7 +71,7 @@ pub mod surface;
 pub mod wind;
 
 use crate::error::{Error, Result};
-use crate::material::Material;
+use crate::material::{ConvectionSpec, Material};
 use crate::weather::WeatherRecord;
 pub use balance::{INTERIOR_AIR_K, INTERIOR_FILM_W_M2_K, mcadams_h_w_m2_k};
 pub use conduction::{
@@ -236,8 +237,11 @@ pub struct SlabProperties {
     /// What the back face touches.
     pub back: BackBoundary,
     /// How the front surface exchanges heat and vapour with the air (None:
-    /// dry, McAdams' convection; [`surface`]).
+    /// dry, convecting as `convection` says; [`surface`]).
     pub surface: Option<LandSurface>,
+    /// How the front convects while it is dry and has no `surface`
+    /// ([`convection`]; DOE-2 by default, McAdams for DIRSIG parity).
+    pub convection: ConvectionSpec,
     /// The construction's layers from the outer face ([`Layers::NONE`]: a
     /// homogeneous slab of the properties above). With layers, the column
     /// is the layers: `conductivity`, `density` and `specific_heat` above
@@ -339,6 +343,7 @@ impl SlabProperties {
                 })?),
                 None => None,
             },
+            convection: m.convection,
             layers: Layers::new(
                 &m.layers
                     .iter()
@@ -1295,9 +1300,25 @@ pub fn solve(
     inputs: &FacetInputs,
     opts: &SolveOptions,
 ) -> Result<ThermalSolution> {
+    solve_facing(props, forcing, inputs, opts, 1.0)
+}
+
+/// [`solve`] for a facet whose unit normal has z-component `normal_z`
+/// (`cos` of its tilt): the orientation sets the natural convection of a
+/// dry surface ([`Exchange::facing`]); [`solve`] is a horizontal facet.
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_facing(
+    props: &SlabProperties,
+    forcing: &Forcing,
+    inputs: &FacetInputs,
+    opts: &SolveOptions,
+    normal_z: f64,
+) -> Result<ThermalSolution> {
     props.validate()?;
     forcing.validate()?;
-    let exchange = Exchange::new(props, forcing)?;
+    let exchange = Exchange::facing(props, forcing, normal_z)?;
     solve_with(props, forcing, &exchange, inputs, opts)
 }
 

@@ -4,7 +4,7 @@
 //! A material with a [`LandSurface`] exchanges heat with the air through the
 //! aerodynamic resistance `r_a` (log profile with the surface's roughness,
 //! stability-corrected; [`crate::thermal::latent::Aerodynamic`]) instead of
-//! McAdams' wind coefficient, and loses latent heat through `r_a + r_s`
+//! a dry surface's convection ([`super::convection`]), and loses latent heat through `r_a + r_s`
 //! (Penman–Monteith written at the surface temperature, FAO-56 eq. 3;
 //! [`crate::thermal::SurfaceFlux`]). Vegetation adds a **skin**: a canopy
 //! layer of small heat capacity `C_c` coupled to the soil column below by a
@@ -44,7 +44,7 @@
 use super::latent::{
     Aerodynamic, AirState, InputError, JarvisStewart, SurfaceEnergy, SurfaceResistance,
 };
-use super::{FacetInputs, Forcing, SlabProperties, SolveOptions, mcadams_h_w_m2_k};
+use super::{FacetInputs, Forcing, SlabProperties, SolveOptions, convection, mcadams_h_w_m2_k};
 use crate::error::{Error, Result};
 use crate::material::{SurfaceEnergySpec, SurfaceKind};
 
@@ -310,57 +310,122 @@ impl Exchange {
         }
     }
 
-    /// The exchange of `props` under `forcing` (module docs): McAdams for a
-    /// dry material; for a [`LandSurface`], the fixed point of the open
-    /// reference surface's stability. Deterministic: a fixed number of
-    /// passes with fixed solver options.
+    /// The exchange of `props` under `forcing` for a horizontal surface
+    /// facing up ([`Exchange::facing`] with `normal_z = 1`).
+    ///
+    /// # Errors
+    /// As [`Exchange::facing`].
+    pub fn new(props: &SlabProperties, forcing: &Forcing) -> Result<Exchange> {
+        Exchange::facing(props, forcing, 1.0)
+    }
+
+    /// The exchange of `props` under `forcing` (module docs) for facets
+    /// whose normal has z-component `normal_z`: McAdams for a dry McAdams
+    /// material (no reference solve); for a dry DOE-2 material
+    /// ([`super::convection`]), the fixed point of the natural convection
+    /// of the open reference surface of the facets' orientation class
+    /// ([`super::convection::orientation_class`]; tilted with the class's
+    /// `cos Σ`, unshaded, seeing `(1 + cos Σ)/2` of the sky, the sun at
+    /// the mean incidence over all azimuths, no reflected shortwave); for
+    /// a [`LandSurface`] (whatever `normal_z`), the fixed point of the
+    /// horizontal open reference surface's stability. Deterministic: a
+    /// fixed number of passes with fixed solver options.
     ///
     /// # Errors
     /// Humidity or pressure of a record outside the physical range the
     /// psychrometrics accept (naming `records[k].field`).
-    pub fn new(props: &SlabProperties, forcing: &Forcing) -> Result<Exchange> {
+    pub fn facing(props: &SlabProperties, forcing: &Forcing, normal_z: f64) -> Result<Exchange> {
         let rain = forcing.precipitation_mm.iter().any(|&p| p > 0.0);
-        if props.surface.is_none() && !rain {
+        let mcadams = props.convection.model == crate::material::ConvectionModel::Mcadams;
+        if props.surface.is_none() && mcadams && !rain {
             return Ok(Exchange::mcadams(forcing));
         }
+        let cos_tilt = if props.surface.is_some() {
+            1.0
+        } else {
+            convection::class_cos_tilt(convection::orientation_class(normal_z))
+        };
         let n = forcing.len();
         let sun = vec![1.0f32; n];
+        let sin_tilt = (1.0 - cos_tilt * cos_tilt).max(0.0).sqrt();
         let cos: Vec<f32> = (0..n)
             .map(|k| {
                 let dni = forcing.direct_normal_w_m2[k];
                 let direct_h = (forcing.global_horizontal_w_m2[k]
                     - forcing.diffuse_horizontal_w_m2[k])
                     .max(0.0);
-                if dni > 1.0 {
-                    (direct_h / dni).clamp(0.0, 1.0) as f32
-                } else {
-                    0.0
+                if dni <= 1.0 {
+                    return 0.0;
                 }
+                let sin_h = (direct_h / dni).clamp(0.0, 1.0);
+                if sin_tilt == 0.0 {
+                    return (cos_tilt * sin_h).max(0.0) as f32;
+                }
+                // Mean over the azimuths of max(cos i, 0).
+                let cos_h = (1.0 - sin_h * sin_h).max(0.0).sqrt();
+                let m = 72;
+                let sum: f64 = (0..m)
+                    .map(|j| {
+                        let phi = (j as f64 + 0.5) * std::f64::consts::TAU / m as f64;
+                        (cos_tilt * sin_h + sin_tilt * cos_h * phi.cos()).max(0.0)
+                    })
+                    .sum();
+                (sum / m as f64) as f32
             })
             .collect();
-        let inputs = FacetInputs::new(&sun, &cos, 1.0);
+        let inputs = FacetInputs::new(&sun, &cos, 0.5 * (1.0 + cos_tilt));
         let opts = SolveOptions::default();
         let mut surface_k = forcing.air_temperature_k.clone();
-        let mut ex = Exchange::at_temperatures(props, forcing, &surface_k)?;
+        let mut ex = Exchange::at_temperatures_facing(props, forcing, &surface_k, cos_tilt)?;
         for _ in 0..EXCHANGE_PASSES {
             let p = super::prepare(props, forcing, &inputs, &ex);
             surface_k =
                 super::solve_prepared(props, forcing, &p, &opts, None).surface_temperature_k;
-            ex = Exchange::at_temperatures(props, forcing, &surface_k)?;
+            ex = Exchange::at_temperatures_facing(props, forcing, &surface_k, cos_tilt)?;
         }
         Ok(ex)
     }
 
-    /// The exchange of `props` with the surface at `surface_k[k]` (K) at
-    /// each record, wetted by the forcing's rain ([`WetStore`]).
+    /// [`Exchange::at_temperatures_facing`] of a horizontal surface facing
+    /// up.
+    ///
+    /// # Errors
+    /// As [`Exchange::at_temperatures_facing`].
     pub fn at_temperatures(
         props: &SlabProperties,
         forcing: &Forcing,
         surface_k: &[f64],
     ) -> Result<Exchange> {
+        Exchange::at_temperatures_facing(props, forcing, surface_k, 1.0)
+    }
+
+    /// The exchange of `props` with the surface at `surface_k[k]` (K) at
+    /// each record, a dry one tilted with `cos_tilt` (`cos Σ`, 1 facing
+    /// up), wetted by the forcing's rain ([`WetStore`]).
+    ///
+    /// # Errors
+    /// Humidity or pressure of a record out of range (naming it).
+    pub fn at_temperatures_facing(
+        props: &SlabProperties,
+        forcing: &Forcing,
+        surface_k: &[f64],
+        cos_tilt: f64,
+    ) -> Result<Exchange> {
         let n = forcing.len();
         let mut ex = match &props.surface {
-            None => Exchange::mcadams(forcing),
+            None => Exchange {
+                sensible_w_m2_k: (0..n)
+                    .map(|k| {
+                        convection::coefficient_w_m2_k(
+                            &props.convection,
+                            surface_k[k] - forcing.air_temperature_k[k],
+                            cos_tilt,
+                            forcing.wind_speed_m_s[k],
+                        )
+                    })
+                    .collect(),
+                vapour_conductance_w_m2_pa: vec![0.0; n],
+            },
             Some(surface) => {
                 let energy = surface
                     .energy(forcing.wind_height_m, forcing.air_height_m)

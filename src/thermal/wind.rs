@@ -2,7 +2,7 @@
 //! [`super::Forcing::wind_height_m`], 10 m by default) reduced to the
 //! facet's height by a logarithmic profile and, in street canyons, by the
 //! canyon's sheltering — what the convection of a dry surface
-//! ([`super::mcadams_h_w_m2_k`]) and the aerodynamic resistance of an
+//! ([`super::convection`]) and the aerodynamic resistance of an
 //! evaporating one ([`super::surface`]) see.
 //!
 //! # Model
@@ -163,7 +163,7 @@ impl FacetWind {
     }
 
     /// The factor on the weather's wind for a surface: `L·C` for a dry one
-    /// (McAdams' convection takes the wind at the facet), `C` alone for an
+    /// (its convection takes the wind at the facet), `C` alone for an
     /// `evaporating` one (its aerodynamic resistance reduces the
     /// measurement-height wind with its own log profile).
     pub fn factor_for(&self, evaporating: bool) -> f64 {

@@ -554,6 +554,7 @@ impl<'o> Importer<'o> {
                     layers: Vec::new(),
                     back: None,
                     surface_energy: None,
+                    convection: Default::default(),
                     source: Some(MaterialSource::Text(format!(
                         "DIRSIG {} line {} (ID {}), THERM units converted to SI",
                         path.display(),
@@ -597,6 +598,7 @@ impl<'o> Importer<'o> {
                         layers: Vec::new(),
                         back: None,
                         surface_energy: None,
+                        convection: Default::default(),
                         source: Some(MaterialSource::Text(format!(
                             "DIRSIG {} line {} (ID {}); {PLACEHOLDER_NOTE}",
                             path.display(),

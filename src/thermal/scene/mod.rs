@@ -48,7 +48,7 @@ pub use per_class::Dedup;
 use rayon::prelude::*;
 
 pub use crate::thermal::wind::FacetWind;
-use crate::thermal::{self, Exchange, Forcing, SlabProperties, SolveOptions};
+use crate::thermal::{self, Exchange, Forcing, SlabProperties, SolveOptions, convection};
 use crate::{Error, Result};
 
 /// How a facet's temperature is obtained.
@@ -257,6 +257,7 @@ pub fn solve_facet_temperatures<'a>(
         kinds,
         props,
         wind_class,
+        orientation,
     } = WindSets::new(inputs, kinds, props);
     let (kinds, props) = (&kinds[..], &props[..]);
     let mut scaled: Vec<(u32, Forcing)> = Vec::new();
@@ -268,16 +269,27 @@ pub fn solve_facet_temperatures<'a>(
     let exchanges = props
         .par_iter()
         .zip(&wind_class)
+        .zip(&orientation)
         .enumerate()
-        .map(|(i, (p, &q))| {
+        .map(|(i, ((p, &q), &o))| {
             let f = match scaled.iter().find(|(c, _)| *c == q) {
                 Some((_, f)) => f,
                 None => forcing,
             };
-            Exchange::new(p, f)
+            Exchange::facing(p, f, convection::class_cos_tilt(o))
                 .map_err(|e| Error::Other(format!("thermal exchange of property set {i}: {e}")))
         })
         .collect::<Result<Vec<_>>>()?;
+    // Twins of one property set differ by wind and orientation class.
+    let set_class: Vec<u32> = wind_class
+        .iter()
+        .zip(&orientation)
+        .map(|(&q, &o)| {
+            q.wrapping_mul(convection::ORIENTATION_CLASSES)
+                .wrapping_add(o)
+        })
+        .collect();
+    let wind_class = set_class;
     match &params.method {
         ThermalMethod::Linearized(lp) => linearized::solve(
             inputs,
@@ -310,7 +322,9 @@ pub fn solve_facet_temperatures<'a>(
 struct PropertySets<'a> {
     props: &'a [SlabProperties],
     exchanges: &'a [Exchange],
-    /// Wind class of each property set ([`WindSets`]).
+    /// Class of each property set: its wind and orientation classes
+    /// ([`WindSets`]) in one number; sets of equal properties and class
+    /// share an exchange.
     wind_class: &'a [u32],
 }
 
@@ -342,40 +356,52 @@ pub fn forcing_with_wind_class(forcing: &Forcing, class: u32) -> Forcing {
     f
 }
 
-/// The property sets of a solve split by wind class: the kinds remapped to
-/// the (property set, wind class) twins, the twins, the class of each (a
-/// multiple of [`WIND_QUANTUM`]; [`WIND_NONE`] without facet wind).
+/// The orientation class of a facet of `props` with unit normal
+/// z-component `normal_z` ([`convection::orientation_class`]): the facet's
+/// own for a dry DOE-2 material, whose natural convection depends on it;
+/// the class of a horizontal surface for the others.
+pub fn orientation_class(normal_z: f64, props: &SlabProperties) -> u32 {
+    let oriented =
+        props.surface.is_none() && props.convection.model == crate::material::ConvectionModel::Doe2;
+    convection::orientation_class(if oriented { normal_z } else { 1.0 })
+}
+
+/// The property sets of a solve split by wind and orientation class: the
+/// kinds remapped to the (property set, wind class, orientation class)
+/// twins, the twins, the wind class of each (a multiple of
+/// [`WIND_QUANTUM`]; [`WIND_NONE`] without facet wind) and its orientation
+/// class ([`orientation_class`]).
 struct WindSets {
     kinds: Vec<FacetThermal>,
     props: Vec<SlabProperties>,
     wind_class: Vec<u32>,
+    orientation: Vec<u32>,
 }
 
 impl WindSets {
     fn new(inputs: &SceneInputs, kinds: &[FacetThermal], props: &[SlabProperties]) -> WindSets {
-        if inputs.wind.is_empty() {
-            return WindSets {
-                kinds: kinds.to_vec(),
-                props: props.to_vec(),
-                wind_class: vec![WIND_NONE; props.len()],
-            };
-        }
-        let mut twins: std::collections::BTreeMap<(u32, u32), u32> = Default::default();
+        let mut twins: std::collections::BTreeMap<(u32, u32, u32), u32> = Default::default();
         let mut out = WindSets {
             kinds: Vec::with_capacity(kinds.len()),
             props: Vec::new(),
             wind_class: Vec::new(),
+            orientation: Vec::new(),
         };
         for (f, k) in kinds.iter().enumerate() {
             out.kinds.push(match *k {
                 FacetThermal::Solve(pi) => {
                     let p = &props[pi as usize];
-                    let q = wind_class(&inputs.wind[f], p);
+                    let q = match inputs.wind.get(f) {
+                        Some(w) => wind_class(w, p),
+                        None => WIND_NONE,
+                    };
+                    let o = orientation_class(inputs.normal[f].z as f64, p);
                     let next = out.props.len() as u32;
-                    let i = *twins.entry((pi, q)).or_insert(next);
+                    let i = *twins.entry((pi, q, o)).or_insert(next);
                     if i == next {
                         out.props.push(*p);
                         out.wind_class.push(q);
+                        out.orientation.push(o);
                     }
                     FacetThermal::Solve(i)
                 }

@@ -185,12 +185,19 @@ impl PassPlan<'_> {
         let has_slot = self.slots.of_facet[f] != u32::MAX;
         let bgc = self.background_term(pass, f, s);
         // The second order: asked for, or for a surface that evaporates (the
-        // curvature of e°(T) is not negligible) unless the facet lies near
-        // its reference and its background is small.
+        // curvature of e°(T) is not negligible) or convects with DOE-2 (its
+        // small convection lets facets stray further from their reference,
+        // where the curvature of T⁴ shows), unless the facet lies near its
+        // reference and its background is small.
         // (The background is scanned only where it decides.)
+        let curved = !rep.front.latent.is_empty()
+            || matches!(facets.kinds[f], FacetThermal::Solve(i)
+                if facets.props[i as usize].surface.is_none()
+                    && facets.props[i as usize].convection.model
+                        == crate::material::ConvectionModel::Doe2);
         let second = pass.second
             || (pass.last
-                && !rep.front.latent.is_empty()
+                && curved
                 && !(self.near[f]
                     && bgc.is_none_or(|(cf, cb)| {
                         let c = cf.abs().max(cb.abs());
