@@ -1537,7 +1537,12 @@ fn obj_plain_fast_path_equals_the_reference_reader() {
             text.push_str(&format!("v {} {} {}\n", q.x, q.y, q.z));
         }
         for t in &m.indices {
-            text.push_str(&format!("f {} {} {}\n", t[0] + base, t[1] + base, t[2] + base));
+            text.push_str(&format!(
+                "f {} {} {}\n",
+                t[0] + base,
+                t[1] + base,
+                t[2] + base
+            ));
         }
         base += m.positions.len() as u32;
     }

@@ -167,7 +167,14 @@ pub fn load_obj_plain(text: &str) -> Option<Vec<ObjGroup>> {
                 if !(raw.starts_with('o') || raw.starts_with('g')) {
                     return None;
                 }
-                finish(&name, &mut positions, &mut indices, &mut local, &mut used, &mut out);
+                finish(
+                    &name,
+                    &mut positions,
+                    &mut indices,
+                    &mut local,
+                    &mut used,
+                    &mut out,
+                );
                 name = raw[1..].trim().to_string();
                 if name.is_empty() {
                     name = "unnamed_object".to_string();
@@ -176,7 +183,14 @@ pub fn load_obj_plain(text: &str) -> Option<Vec<ObjGroup>> {
             Some(_) => return None,
         }
     }
-    finish(&name, &mut positions, &mut indices, &mut local, &mut used, &mut out);
+    finish(
+        &name,
+        &mut positions,
+        &mut indices,
+        &mut local,
+        &mut used,
+        &mut out,
+    );
     Some(out)
 }
 
