@@ -1491,7 +1491,7 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
 
 /// The one-pass reader of plain-geometry OBJ text equals the reference
 /// reader (pre-scan + tobj) group for group, vertex for vertex, bit for bit:
-/// groups by `o`/`g` (an empty name, none before the first), triangles,
+/// groups by `o`/`g` (an empty name, faces before the first), triangles,
 /// quads and polygons fanned, negative indices, vertices shared between
 /// groups (each group gets its own copies, in first-use order), comments.
 #[test]

@@ -86,7 +86,8 @@ pub fn load_obj_plain(text: &str) -> Option<Vec<ObjGroup>> {
     let mut out: Vec<ObjGroup> = Vec::new();
     // The group being read: name, its vertices (global → local index),
     // positions and triangles.
-    let mut name = String::new();
+    // `tobj`'s name for faces before any `o`/`g`.
+    let mut name = String::from("unnamed_object");
     let mut local: Vec<u32> = Vec::new();
     let mut positions: Vec<Vec3> = Vec::new();
     let mut indices: Vec<[u32; 3]> = Vec::new();
@@ -106,7 +107,6 @@ pub fn load_obj_plain(text: &str) -> Option<Vec<ObjGroup>> {
         if indices.is_empty() {
             return;
         }
-        let name = if name.is_empty() { "unnamed" } else { name };
         out.push(ObjGroup {
             name: name.to_string(),
             material_name: None,
