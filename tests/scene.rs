@@ -1488,3 +1488,142 @@ f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
         "{w:?}"
     );
 }
+
+/// The one-pass reader of plain-geometry OBJ text equals the reference
+/// reader (pre-scan + tobj) group for group, vertex for vertex, bit for bit:
+/// groups by `o`/`g` (an empty name, faces before the first), triangles,
+/// quads and polygons fanned, negative indices, vertices shared between
+/// groups (each group gets its own copies, in first-use order), comments.
+#[test]
+fn obj_plain_fast_path_equals_the_reference_reader() {
+    let p = Path::new("plain.obj");
+    let texts = [
+        // Faces before any group; a vertex reused by the next group.
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.5\nf 1 2 3\n# comment\n\no second\nf 2 4 3\n",
+        // Quads, a pentagon, negative indices, repeated vertices, `g` and
+        // an empty `o`, exponents and signs.
+        "o a\nv -1.5e1 0 +2\nv 10 0 0\nv 10 10 0\nv 0 10 0.125\nv 5 15 1\n\
+         f 1 2 3 4\nf -5 -4 -3 -2 -1\ng b\nf 4 3 5\nf 5 4 3\no\nf 1 3 5\n",
+        // Windows line ends and tabs.
+        "o w\r\nv 0\t0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 3 2 1\r\n",
+    ];
+    for (k, text) in texts.iter().enumerate() {
+        let fast = irsig::scene::obj::load_obj_plain(text)
+            .unwrap_or_else(|| panic!("text {k}: not taken by the fast path"));
+        let slow = irsig::scene::obj::load_obj_reference(text, p).unwrap();
+        assert_eq!(fast.len(), slow.len(), "text {k}: group count");
+        for (f, s) in fast.iter().zip(&slow) {
+            assert_eq!(f.name, s.name, "text {k}");
+            assert_eq!(f.material_name, s.material_name, "text {k}");
+            assert_eq!(f.mesh.indices, s.mesh.indices, "text {k} group {}", f.name);
+            let bits = |v: &[glam::Vec3]| -> Vec<[u32; 3]> {
+                v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+            };
+            assert_eq!(bits(&f.mesh.positions), bits(&s.mesh.positions), "text {k}");
+        }
+    }
+    // The generated scene of `irsig bench facets` (terrain and buildings,
+    // one `o` each, world coordinates), as that command writes it.
+    let geo = irsig::geometry::procedural::generate(
+        &irsig::geometry::procedural::TerrainParams::with_triangles(20_000, 3),
+    );
+    let mut text = String::new();
+    let mut base = 1;
+    for (i, inst) in geo.instances.iter().enumerate() {
+        let m = &geo.meshes[inst.mesh];
+        text.push_str(&format!("o part{i}\n"));
+        for q in &m.positions {
+            let q = inst.world_from_object.transform_point3(*q);
+            text.push_str(&format!("v {} {} {}\n", q.x, q.y, q.z));
+        }
+        for t in &m.indices {
+            text.push_str(&format!(
+                "f {} {} {}\n",
+                t[0] + base,
+                t[1] + base,
+                t[2] + base
+            ));
+        }
+        base += m.positions.len() as u32;
+    }
+    let fast = irsig::scene::obj::load_obj_plain(&text).expect("plain geometry");
+    let slow = irsig::scene::obj::load_obj_reference(&text, p).unwrap();
+    assert!(fast.len() > 1 && fast.len() == slow.len());
+    for (f, s) in fast.iter().zip(&slow) {
+        assert_eq!(f.name, s.name);
+        assert_eq!(f.mesh.indices, s.mesh.indices);
+        assert_eq!(f.mesh.positions, s.mesh.positions);
+    }
+    // Anything else goes to the reference reader: materials, texture
+    // coordinates and normals, `v` with a weight, malformed or
+    // out-of-range faces (whose errors the reference reader words).
+    for other in [
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n",
+        "v 0 0 0 2\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n",
+        "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+        "s off\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    ] {
+        assert!(
+            irsig::scene::obj::load_obj_plain(other).is_none(),
+            "taken by the fast path: {other:?}"
+        );
+    }
+    // And the errors are still the reference reader's, with the line.
+    let e = irsig::scene::obj::load_obj_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", p)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line 4"), "{e}");
+}
+
+/// The closed-mesh test behind the inward-normals warning: a unit cube
+/// with every face's vertices repeated (as OBJ exporters write it) is
+/// closed with volume +1 m³ (−1 m³ wound inward); without one face, or
+/// with one face doubled, it is not closed.
+#[test]
+fn closed_signed_volume_of_a_cube_welded_by_position() {
+    use glam::Vec3;
+    let c = |i: u32| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
+    // Quads counter-clockwise from outside, as corner numbers (bit 0 = x,
+    // bit 1 = y, bit 2 = z).
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mesh = |faces: &[[u32; 4]], flip: bool| {
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for q in faces {
+            let b = positions.len() as u32;
+            positions.extend(q.iter().map(|&i| c(i)));
+            let (t1, t2) = ([b, b + 1, b + 2], [b, b + 2, b + 3]);
+            for mut t in [t1, t2] {
+                if flip {
+                    t.swap(1, 2);
+                }
+                indices.push(t);
+            }
+        }
+        (positions, indices)
+    };
+    let (p, i) = mesh(&quads, false);
+    let v = irsig::scene::closed_signed_volume(&p, &i).expect("closed");
+    assert!((v - 1.0).abs() < 1e-12, "{v}");
+    let (p, i) = mesh(&quads, true);
+    let v = irsig::scene::closed_signed_volume(&p, &i).expect("closed");
+    assert!((v + 1.0).abs() < 1e-12, "{v}");
+    let (p, i) = mesh(&quads[..5], false);
+    assert_eq!(irsig::scene::closed_signed_volume(&p, &i), None);
+    let mut doubled = quads.to_vec();
+    doubled.push(quads[0]);
+    let (p, i) = mesh(&doubled, false);
+    assert_eq!(irsig::scene::closed_signed_volume(&p, &i), None);
+}

@@ -541,14 +541,52 @@ pub fn solve_scene_temperatures_observed<'a>(
     params: &SceneThermalParams,
     progress: &dyn Progress,
 ) -> Result<SceneThermal> {
-    let tracers = tracers.into();
+    solve_scene_inner(
+        None,
+        tracers.into(),
+        geometry,
+        setup,
+        weather,
+        site,
+        image_times,
+        params,
+        progress,
+    )
+}
+
+/// [`solve_scene_temperatures_observed`], where `owned`, when given, is
+/// the exposure's tracer (it replaces `tracers.exposure`) and is dropped
+/// once the rays are traced: the thermal passes, the stage's peak memory,
+/// run without its BVH.
+#[allow(clippy::too_many_arguments)]
+fn solve_scene_inner(
+    owned: Option<Box<dyn Tracer + '_>>,
+    tracers: FacetTracers<'_>,
+    geometry: &SceneGeometry,
+    setup: &FacetThermalSetup,
+    weather: &WeatherHistory,
+    site: &Site,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    progress: &dyn Progress,
+) -> Result<SceneThermal> {
     let t0 = Instant::now();
     let history = History::new(weather, site, image_times, &params.window)?;
     let facets = facet_samples(geometry, setup, &params.exposure)?;
     let t1 = Instant::now();
     params.physics.validate()?;
     let n = facets.len();
-    let rays = trace_range(tracers, &facets, setup, &history, params, 0..n, progress)?;
+    let rays = {
+        let tracers = match owned.as_deref() {
+            Some(exposure) => FacetTracers {
+                exposure,
+                exact: tracers.exact,
+            },
+            None => tracers,
+        };
+        trace_range(tracers, &facets, setup, &history, params, 0..n, progress)?
+    };
+    drop(owned);
     let t2 = Instant::now();
     let mut out = solve_traced(
         facets,
@@ -709,10 +747,18 @@ fn solve_traced(
                 ),
             ));
         }
+        // The first part is moved, not copied: a scene traced in one piece
+        // would otherwise hold its solar history and sky view twice here.
+        if next == 0 {
+            solar = p.solar;
+            sky = p.sky;
+            ground = p.ground;
+        } else {
+            solar.append(p.solar);
+            sky.append(p.sky);
+            ground.extend(p.ground);
+        }
         next = p.range.end;
-        solar.append(p.solar);
-        sky.append(p.sky);
-        ground.extend(p.ground);
         stats.solar_rays += p.stats.solar_rays;
         stats.sky_rays += p.stats.sky_rays;
         stats.solar += p.stats.solar;
@@ -1025,6 +1071,34 @@ pub fn solve_scene_observed<'a>(
     let (weather, setup, times) = scene_parts(scene, image_times, params)?;
     solve_scene_temperatures_observed(
         tracers,
+        &scene.geometry,
+        &setup,
+        weather,
+        &scene.site,
+        &times,
+        params,
+        progress,
+    )
+}
+
+/// [`solve_scene_observed`] with the exposure's own tracer handed over
+/// (`exposure`; `None`: `exact` traces every ray): it is dropped as soon
+/// as the rays are traced, so that the thermal passes run without its BVH.
+///
+/// # Errors
+/// As [`solve_scene`].
+pub fn solve_scene_handing_over(
+    exposure: Option<Box<dyn Tracer + '_>>,
+    exact: &dyn Tracer,
+    scene: &Scene,
+    image_times: &[DateTime<FixedOffset>],
+    params: &SceneThermalParams,
+    progress: &dyn Progress,
+) -> Result<SceneThermal> {
+    let (weather, setup, times) = scene_parts(scene, image_times, params)?;
+    solve_scene_inner(
+        exposure,
+        exact.into(),
         &scene.geometry,
         &setup,
         weather,

@@ -25,7 +25,6 @@ use serde::Deserialize;
 
 use super::image::{Finished, RowBand, StageTimes, finish_at, render_rows};
 use super::path::PathTables;
-use super::scene_thermal::FacetTracers;
 use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput, SurfaceState};
 use super::state::{FacetStates, FacetTimeState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
@@ -546,11 +545,7 @@ impl Session {
     ) -> Result<ThermalStates> {
         let own = self.exposure_tracer()?;
         let t0 = Instant::now();
-        let tracers = FacetTracers {
-            exposure: own.as_deref().unwrap_or(self.tracer.as_ref()),
-            exact: self.tracer.as_ref(),
-        };
-        let states = scene_thermal(self, tracers, times, progress)?;
+        let states = scene_thermal(self, own, times, progress)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += states.timings.thermal;
         Ok(states)
@@ -574,19 +569,15 @@ impl Session {
         };
         let own = self.exposure_tracer()?;
         let t0 = Instant::now();
-        let tracers = FacetTracers {
-            exposure: own.as_deref().unwrap_or(self.tracer.as_ref()),
-            exact: self.tracer.as_ref(),
-        };
         let params = solve_params(self);
-        let solved = super::scene_thermal::solve_scene_observed(
-            tracers,
+        let solved = super::scene_thermal::solve_scene_handing_over(
+            own,
+            self.tracer.as_ref(),
             &self.scene,
             &times,
             &params,
             progress,
         )?;
-        drop(own);
         let states = self.facet_states_of(&solved, &times)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += solved.timings.thermal;
@@ -596,7 +587,7 @@ impl Session {
     /// The tracer for the exposure's rays (solar history, sky view): rays
     /// from interior sample points in generic directions, which need no
     /// watertight tests ([`Watertight::No`]; the ground test stays on
-    /// [`Session::tracer`], see [`FacetTracers`]). A second Embree scene
+    /// [`Session::tracer`], see [`super::scene_thermal::FacetTracers`]). A second Embree scene
     /// over the same geometry (built in about the time of the first, and
     /// dropped by the caller), whose shadow rays are ≈ 1.4× faster; `None`
     /// with obvhs, whose tests are the same either way. Its build time
@@ -900,13 +891,20 @@ pub(crate) fn solve_params(session: &Session) -> super::scene_thermal::SceneTher
 /// sun's incidence, the background temperatures, the sky and the sun.
 fn scene_thermal(
     session: &Session,
-    tracers: FacetTracers<'_>,
+    exposure: Option<Box<dyn Tracer>>,
     times: &[DateTime<FixedOffset>],
     progress: &dyn Progress,
 ) -> Result<ThermalStates> {
-    use super::scene_thermal::solve_scene_observed;
+    use super::scene_thermal::solve_scene_handing_over;
     let params = solve_params(session);
-    let mut solved = solve_scene_observed(tracers, &session.scene, times, &params, progress)?;
+    let mut solved = solve_scene_handing_over(
+        exposure,
+        session.tracer.as_ref(),
+        &session.scene,
+        times,
+        &params,
+        progress,
+    )?;
     let states = session.facet_states_of(&solved, times)?;
     let mut out = session.conditions(&states)?;
     out.timings = solved.timings;

@@ -34,6 +34,7 @@ use std::path::{Path, PathBuf};
 
 use chrono::{DateTime, FixedOffset};
 use glam::{Affine3A, Quat, Vec3};
+use rayon::slice::ParallelSliceMut;
 use serde::Serialize;
 use serde_json::Value;
 
@@ -156,16 +157,23 @@ pub fn closed_signed_volume(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<
     if indices.is_empty() {
         return None;
     }
-    // Weld by exact position: OBJ and glTF often repeat a vertex per face.
-    let mut id: HashMap<[u32; 3], u32> = HashMap::new();
-    let weld: Vec<u32> = positions
-        .iter()
-        .map(|p| {
-            let n = id.len() as u32;
-            *id.entry(p.to_array().map(f32::to_bits)).or_insert(n)
-        })
-        .collect();
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    // Weld by exact position (OBJ and glTF often repeat a vertex per face):
+    // vertices sorted by their coordinates' bits, equal runs share an id.
+    let key = |i: u32| positions[i as usize].to_array().map(f32::to_bits);
+    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
+    order.par_sort_unstable_by_key(|&i| key(i));
+    let mut weld = vec![0u32; positions.len()];
+    let mut id = 0u32;
+    for (k, &i) in order.iter().enumerate() {
+        if k > 0 && key(i) != key(order[k - 1]) {
+            id += 1;
+        }
+        weld[i as usize] = id;
+    }
+    drop(order);
+    // Every edge (welded, unordered) of the non-degenerate triangles must
+    // occur exactly twice: sorted, each run has length 2.
+    let mut edges: Vec<u64> = Vec::with_capacity(3 * indices.len());
     for t in indices {
         let w = t.map(|i| weld[i as usize]);
         if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
@@ -173,10 +181,14 @@ pub fn closed_signed_volume(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<
         }
         for k in 0..3 {
             let (a, b) = (w[k], w[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            edges.push(u64::from(a.min(b)) << 32 | u64::from(a.max(b)));
         }
     }
-    if edges.is_empty() || edges.values().any(|&c| c != 2) {
+    if edges.is_empty() {
+        return None;
+    }
+    edges.par_sort_unstable();
+    if edges.chunk_by(|a, b| a == b).any(|run| run.len() != 2) {
         return None;
     }
     let v: f64 = indices
