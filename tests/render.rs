@@ -163,6 +163,7 @@ fn blackbody_plane_reads_its_temperature_in_every_pixel() {
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     let s = sensor(nadir_camera(32, 24, 40.0, 2));
     let (_, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
@@ -187,7 +188,9 @@ fn blackbody_plane_reads_its_temperature_in_every_pixel() {
 #[test]
 fn grey_plane_matches_the_hand_computed_big_equation() {
     // ε = 0.5 at 310 K; F = 0.6 of a 250 K sky, the rest a 290 K background;
-    // sunlit (fraction 0.8) at cos σ = 0.7 under DNI 800 W/m².
+    // the facet sunlit (fraction 0.8) at cos σ = 0.7 under DNI 800 W/m²:
+    // its sample points disagree, so each hit traces its own shadow ray,
+    // which finds the sun (nothing shades the plane): fraction 1.
     let geom = geometry(vec![ground("plane", 0.0, 0.0, 1000.0, 0.0)]);
     let optics = optics(&geom, vec![material("grey", 3, 0.5, 0.0)], &[0]);
     let mut surface = state(&geom, &[310.0]);
@@ -208,13 +211,14 @@ fn grey_plane_matches_the_hand_computed_big_equation() {
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     let s = sensor(nadir_camera(8, 8, 10.0, 1));
     let (bands, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
     let eps_of = Emissivity::from_material(&optics.materials[0]).unwrap();
     for (band, name) in bands.iter().zip(["LWIR", "MWIR"]) {
         // Hand computation with band integrals of blackbodies:
-        // L = ε B(T) + (1−ε)[E_s cos σ f/π + F L_sky + (1−F) B(T_bg)], the
+        // L = ε B(T) + (1−ε)[E_s cos σ/π + F L_sky + (1−F) B(T_bg)], the
         // sun a 5772 K blackbody scaled to the DNI, ε = ε(θ) of the pixel's
         // view zenith (grey, Fresnel fall-off).
         let b = |t: f64| band.blackbody_radiance(t);
@@ -224,7 +228,7 @@ fn grey_plane_matches_the_hand_computed_big_equation() {
             let eps = eps_of.eval(10.0, view_zenith_deg(&s, i % 8, i / 8));
             let expected = eps * b(310.0)
                 + (1.0 - eps)
-                    * (e_sun * 0.7 * 0.8 / std::f64::consts::PI + 0.6 * b(t_sky) + 0.4 * b(290.0));
+                    * (e_sun * 0.7 / std::f64::consts::PI + 0.6 * b(t_sky) + 0.4 * b(290.0));
             let rel = (l as f64 - expected).abs() / expected;
             assert!(rel < 2e-5, "{name}: {l} vs {expected} (rel {rel:e})");
         }
@@ -278,6 +282,7 @@ fn plate_and_wall(wall_k: f32) -> (SceneGeometry, SceneOptics, Conditions) {
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     (geom, optics, cond)
 }
@@ -372,6 +377,7 @@ fn line_scanner_images_ground_points_where_its_geometry_predicts() {
         ground_temperature_k: 280.0,
         atmosphere: Atmosphere::None,
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     let s = sensor(
         json!({"type": "line_scanner", "name": "scan", "ifov_rad": 0.003,
@@ -441,6 +447,7 @@ fn busy_scene() -> (SceneGeometry, SceneOptics, Conditions, Sensor) {
         ground_temperature_k: 285.0,
         atmosphere: Atmosphere::None,
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     let s = sensor(
         json!({"type": "frame", "name": "busy", "width": 48, "height": 37,
@@ -1149,6 +1156,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
         ground_temperature_k: 290.0,
         atmosphere,
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     let s = sensor(
         json!({"type": "frame", "name": "cam", "width": 64, "height": 48,
@@ -1158,7 +1166,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
                      {"name": "MWIR", "response": [3.0, 5.0]}]}),
     );
     let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
-    let paths = PathTables::new(&cond.atmosphere, &s, &bands, 150.0, 400.0)
+    let paths = PathTables::new(&cond.atmosphere, &s, &bands, 150.0, 400.0, (0.0, 30.0))
         .unwrap()
         .expect("a path atmosphere");
     let tracer = trace::build(&geom, Backend::Embree).unwrap();
@@ -1180,7 +1188,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
         let nl = shader.spectrum_len();
         let mut spectra = vec![0.0; rays.len() * nl];
         shader.shade_primary(&rays, &hits, &mut spectra);
-        let (mut fast, mut secondary, mut misses) = (0, 0, 0);
+        let (mut fast, mut secondary, mut misses, mut glint) = (0, 0, 0, 0);
         let mut worst = 0.0f64;
         let mut out = [0f32; 2];
         let mut angles = std::collections::BTreeSet::new();
@@ -1198,6 +1206,10 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
                     }
                     Err(FastMiss::Secondary) => {
                         secondary += 1;
+                        continue;
+                    }
+                    Err(FastMiss::Glint) => {
+                        glint += 1;
                         continue;
                     }
                     Err(e) => panic!("ray {i}: {e:?}"),
@@ -1232,7 +1244,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
                 layers: &mut layers,
             }),
         );
-        assert_eq!(slow.len(), secondary);
+        assert_eq!(slow.len(), secondary + glint);
         for c in 0..cols {
             let i = 1 + 3 * c;
             let want = match &hits[i] {
@@ -1263,8 +1275,10 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
         // (the fin and window are specular only when bounces remain).
         assert!(fast > 4000 && misses > 0, "{fast} fast, {misses} misses");
         assert!(angles.len() >= 6, "view angles (10° bins) {angles:?}");
+        // (Without bounces the window still glints: the reference.)
         if bounces == 0 {
             assert_eq!(secondary, 0);
+            assert!(glint > 100, "{glint}");
         } else {
             assert!(secondary > 100, "{secondary}");
         }
@@ -1371,6 +1385,7 @@ fn perfect_mirror_shows_the_sky_of_the_mirrored_direction() {
         ground_temperature_k: 294.2,
         atmosphere: atmosphere.clone(),
         per_hit: None,
+        wind_speed_m_s: 0.0,
     };
     for zenith in [20.0f64, 45.0, 70.0] {
         // A narrow camera looking down at the origin from `zenith`.
@@ -1452,4 +1467,314 @@ fn spectral_sunlight_follows_the_sun_path_transmittance() {
         .position(|&l| l >= 3.8)
         .unwrap();
     assert!(tau[k] > 0.7, "{}", tau[k]);
+}
+
+/// A box of half-size `h` (x, y) from the ground to `top`, its five
+/// visible faces facing out.
+fn tower(h: f32, top: f32) -> Vec<TriangleMesh> {
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    vec![
+        quad(
+            "top",
+            [p(-h, -h, top), p(h, -h, top), p(h, h, top), p(-h, h, top)],
+        ),
+        quad(
+            "east",
+            [p(h, -h, 0.0), p(h, h, 0.0), p(h, h, top), p(h, -h, top)],
+        ),
+        quad(
+            "west",
+            [p(-h, h, 0.0), p(-h, -h, 0.0), p(-h, -h, top), p(-h, h, top)],
+        ),
+        quad(
+            "north",
+            [p(h, h, 0.0), p(-h, h, 0.0), p(-h, h, top), p(h, h, top)],
+        ),
+        quad(
+            "south",
+            [p(-h, -h, 0.0), p(h, -h, 0.0), p(h, -h, top), p(-h, -h, top)],
+        ),
+    ]
+}
+
+#[test]
+fn a_shadowed_point_reflects_no_sun_and_a_lit_one_all_of_it() {
+    use irsig::trace::{Coherence, Ray};
+    // A 40 m tower on a ground of ε = 0.5 (r = 0.5: the reflected sun is a
+    // large part of its MWIR radiance), the sun 45° up in the east: the
+    // tower's shadow covers x ∈ (−45, −5), |y| < 5. The ground facets'
+    // sample points disagree (sunlit fraction 0.5), so each hit traces its
+    // own shadow ray: a point in the shadow sees no sun (the render without
+    // sun), one outside it all of it (the ground at fraction 1) — not half.
+    let mut meshes = vec![ground("ground", 0.0, 0.0, 200.0, 0.0)];
+    meshes.extend(tower(5.0, 40.0));
+    let geom = geometry(meshes);
+    let optics = optics(
+        &geom,
+        vec![
+            material("ground", 1, 0.5, 0.0),
+            material("tower", 2, 0.9, 0.0),
+        ],
+        &[0, 1, 1, 1, 1, 1],
+    );
+    let sun_dir = Vec3::new(1.0, 0.0, 1.0).normalize();
+    let conditions = |fraction: f32, sun: bool| {
+        let mut surface = state(&geom, &[305.0, 300.0, 300.0, 300.0, 300.0, 300.0]);
+        for f in 0..2 {
+            surface.sun_fraction[f] = fraction;
+            surface.cos_sun[f] = sun_dir.z;
+        }
+        surface.background_k.fill(290.0);
+        Conditions {
+            surface,
+            sky: Sky::Blackbody {
+                temperature_k: 250.0,
+            },
+            sun: sun.then_some(SunInput {
+                direction: sun_dir,
+                direct_normal_w_m2: 800.0,
+            }),
+            ground_temperature_k: 290.0,
+            atmosphere: Atmosphere::None,
+            per_hit: None,
+            wind_speed_m_s: 0.0,
+        }
+    };
+    let s = sensor(nadir_camera(8, 8, 10.0, 1));
+    let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
+    let tracer = trace::build(&geom, Backend::Embree).unwrap();
+    // Straight down onto the shadow (x = −25) and the lit ground (x = 25).
+    let rays = [
+        Ray::new(Vec3::new(-25.0, 0.0, 100.0), Vec3::NEG_Z),
+        Ray::new(Vec3::new(25.0, 0.0, 100.0), Vec3::NEG_Z),
+    ];
+    let hits = trace::intersect_all(tracer.as_ref(), &rays, Coherence::Coherent);
+    // Band radiances of both rays by the fast path and by the spectral
+    // reference (they must agree), and the sun-fraction truth.
+    let radiance = |c: &Conditions| -> Vec<[f64; 2]> {
+        let shader = Shader::new(tracer.as_ref(), &geom, &optics, c, &bands, OPTS).unwrap();
+        let nl = shader.spectrum_len();
+        let mut spectra = vec![0.0; rays.len() * nl];
+        shader.shade_primary(&rays, &hits, &mut spectra);
+        (0..rays.len())
+            .map(|i| {
+                let h = hits[i].expect("the ground");
+                let mut fast = [0f32; 2];
+                shader.fast_primary(&rays[i], &h, &mut fast).unwrap();
+                let mut v = [0.0; 2];
+                for (b, v) in v.iter_mut().enumerate() {
+                    *v = shader.band_radiance(b, &spectra[i * nl..(i + 1) * nl]);
+                    let rel = (fast[b] as f64 - *v).abs() / *v;
+                    assert!(rel < 1e-5, "ray {i} band {b}: fast {} vs {v}", fast[b]);
+                }
+                v
+            })
+            .collect()
+    };
+    let half = radiance(&conditions(0.5, true));
+    let dark = radiance(&conditions(0.5, false));
+    let full = radiance(&conditions(1.0, true));
+    for b in 0..2 {
+        let rel = |x: f64, y: f64| (x - y).abs() / y;
+        assert!(
+            rel(half[0][b], dark[0][b]) < 1e-9,
+            "band {b}: shadowed point {} vs no sun {}",
+            half[0][b],
+            dark[0][b]
+        );
+        assert!(
+            rel(half[1][b], full[1][b]) < 1e-9,
+            "band {b}: lit point {} vs full sun {}",
+            half[1][b],
+            full[1][b]
+        );
+    }
+    // The sun's term is large in the MWIR: the checks above can fail.
+    assert!(
+        half[1][1] > 1.2 * dark[1][1],
+        "{:?} vs {:?}",
+        half[1],
+        dark[1]
+    );
+    // The truth layer reports the points' own visibility.
+    let c = conditions(0.5, true);
+    let shader = Shader::new(tracer.as_ref(), &geom, &optics, &c, &bands, OPTS).unwrap();
+    assert_eq!(shader.truth_of(&rays[0], &hits[0].unwrap())[4], 0.0);
+    assert_eq!(shader.truth_of(&rays[1], &hits[1].unwrap())[4], 1.0);
+}
+
+#[test]
+fn glint_on_a_water_plane_lies_in_the_mirror_direction_of_the_computed_sun() {
+    use irsig::material::SurfaceEnergySpec;
+    use irsig::render::glint::{SUN_ANGULAR_RADIUS_RAD, cox_munk_slope_variance};
+    use irsig::sun::{Site, parse_time, position_standard};
+    use irsig::trace::{Coherence, Ray};
+    // The sun of a June morning in Colorado (NREL SPA), a calm pond (ε 0.9
+    // at normal view, all of its reflection specular) at 295 K under a
+    // 250 K sky, a camera 100 m up looking near the mirror point.
+    let site = Site::new(40.0, -105.0, 1600.0).unwrap();
+    let time = parse_time("2024-06-21T09:30:00-06:00").unwrap();
+    let sun = position_standard(&site, time).unwrap();
+    let sd = sun.direction_enu().as_vec3();
+    assert!(sd.z > 0.3, "sun up: {sd}");
+    let mut water = material("water", 5, 0.9, 1.0);
+    water.surface_energy = Some(serde_json::from_value(json!({"kind": "water"})).unwrap());
+    let _: &Option<SurfaceEnergySpec> = &water.surface_energy;
+    let geom = geometry(vec![ground("pond", 0.0, 0.0, 5000.0, 0.0)]);
+    let optics = optics(&geom, vec![water], &[0]);
+    let cond = Conditions {
+        surface: state(&geom, &[295.0]),
+        sky: Sky::Blackbody {
+            temperature_k: 250.0,
+        },
+        sun: Some(SunInput {
+            direction: sd,
+            direct_normal_w_m2: 800.0,
+        }),
+        ground_temperature_k: 290.0,
+        atmosphere: Atmosphere::None,
+        per_hit: None,
+        wind_speed_m_s: 0.0,
+    };
+    // The mirror point: where the view direction is the sun's reflected
+    // about the vertical.
+    let cam = Vec3::new(0.0, 0.0, 100.0);
+    let v = Vec3::new(-sd.x, -sd.y, sd.z);
+    let p = cam - v * (cam.z / v.z);
+    // Look off the mirror point so the glint is not simply the centre.
+    let look = p + Vec3::new(12.0, -8.0, 0.0);
+    let s = sensor(
+        json!({"type": "frame", "name": "cam", "width": 64, "height": 48,
+        "fov_deg": 40.0, "position": [cam.x, cam.y, cam.z], "look_at": [look.x, look.y, 0.0],
+        "up": [0.0, 0.0, 1.0], "oversample": 1,
+        "bands": [{"name": "MWIR", "response": [3.0, 5.0]}]}),
+    );
+    let (bands, f) = render(&geom, &optics, &cond, &s, Backend::Embree);
+    let img = layer(&f, "MWIR_radiance");
+    let (w, h) = (s.width(), s.height());
+    let brightest = (0..w * h)
+        .max_by(|&a, &b| img[a].total_cmp(&img[b]))
+        .unwrap();
+    // The pixel whose centre ray meets the plane nearest the mirror point.
+    let mut rays = Vec::new();
+    let mut best = (f32::INFINITY, 0);
+    for row in 0..h {
+        s.rays_for_row(row, &mut rays);
+        for (col, r) in rays.iter().enumerate() {
+            if r.dir.z < 0.0 {
+                let q = r.origin + r.dir * (-r.origin.z / r.dir.z);
+                let d = (q - p).length();
+                if d < best.0 {
+                    best = (d, row * w + col);
+                }
+            }
+        }
+        rays.clear();
+    }
+    let (bc, br) = (brightest % w, brightest / w);
+    let (ec, er) = (best.1 % w, best.1 / w);
+    assert!(
+        bc.abs_diff(ec) <= 1 && br.abs_diff(er) <= 1,
+        "brightest pixel ({bc}, {br}), mirror point at ({ec}, {er})"
+    );
+    assert!((ec, er) != (w / 2, h / 2), "the mirror point is off centre");
+    let mut sorted = img.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    assert!(
+        img[brightest] > 3.0 * sorted[sorted.len() / 2],
+        "a bright glint"
+    );
+
+    // Its size: at the mirror point L = ε B(T) + (1 − ε)[L_sky + E_s·D/(4 cos θ_o)]
+    // with D = 1/(π m²) (h = n), m² Cox–Munk's calm sea plus the sun's disc.
+    let tracer = trace::build(&geom, Backend::Embree).unwrap();
+    let shader = Shader::new(tracer.as_ref(), &geom, &optics, &cond, &bands, OPTS).unwrap();
+    let ray = [Ray::new(cam, (p - cam).normalize())];
+    let hit = trace::intersect_all(tracer.as_ref(), &ray, Coherence::Coherent);
+    let mut spectrum = vec![0.0; shader.spectrum_len()];
+    shader.shade_primary(&ray, &hit, &mut spectrum);
+    let got = shader.band_radiance(0, &spectrum);
+    let band = &bands[0];
+    let cos_o = v.z as f64;
+    let eps = Emissivity::from_material(&optics.materials[0])
+        .unwrap()
+        .eval(4.0, cos_o.acos().to_degrees());
+    let m2 = cox_munk_slope_variance(0.0) + SUN_ANGULAR_RADIUS_RAD.powi(2) / 8.0;
+    let lobe = 1.0 / (std::f64::consts::PI * m2 * 4.0 * cos_o);
+    let sigma = 5.670374419e-8;
+    let e_sun =
+        800.0 * std::f64::consts::PI * band.blackbody_radiance(5772.0) / (sigma * 5772f64.powi(4));
+    let expected = eps * band.blackbody_radiance(295.0)
+        + (1.0 - eps) * (band.blackbody_radiance(250.0) + e_sun * lobe);
+    let rel = (got - expected).abs() / expected;
+    assert!(rel < 1e-3, "glint {got} vs {expected} W/m²/sr");
+}
+
+#[test]
+fn a_rooftop_gets_the_path_to_its_own_height_as_irsig_atmosphere_prints_it() {
+    use irsig::atmosphere::Profile;
+    use irsig::render::path::PathTables;
+    // A nadir camera 1000 m up (US Standard atmosphere, 8–12 µm): a roof
+    // 50 m up, straight below, is 950 m away; the ground 1000 m.
+    let atmosphere = Atmosphere::standard(Profile::UsStandard, 0.0).unwrap();
+    let band = Band::flat(8.0, 12.0, irsig::radiometry::DEFAULT_STEP_UM).unwrap();
+    let cam = |kind: &str| {
+        let mut c = json!({"type": kind, "name": "cam", "width": 16, "height": 16,
+            "fov_deg": 20.0, "position": [0.0, 0.0, 1000.0], "look_at": [0.0, 0.0, 0.0],
+            "up": [0.0, 1.0, 0.0], "bands": [{"name": "LWIR", "response": [8.0, 12.0]}]});
+        if kind == "line_scanner" {
+            c = json!({"type": "line_scanner", "name": "scan", "ifov_rad": 0.003,
+                "scan_angle_deg": 40.0, "samples_per_line": 16, "lines": 4,
+                "scan_rate_hz": 10.0, "altitude_m": 1000.0, "ground_speed_m_s": 50.0,
+                "heading_deg": 0.0, "start": [0.0, 0.0], "oversample": 1,
+                "bands": [{"name": "LWIR", "response": [8.0, 12.0]}]});
+        }
+        sensor(c)
+    };
+    let cli = |target: &str| -> (f64, f64) {
+        let out = irsig(&[
+            "atmosphere",
+            "--profile",
+            "us-standard",
+            "--band",
+            "8-12",
+            "--sensor-altitude",
+            "1000",
+            "--target-altitude",
+            target,
+            "--zenith",
+            "0",
+            "--json",
+        ]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (
+            v["transmittance"].as_f64().unwrap(),
+            v["path_radiance_w_m2_sr"].as_f64().unwrap(),
+        )
+    };
+    let (roof_tau, roof_lu) = cli("50");
+    let (ground_tau, _) = cli("0");
+    assert!(roof_tau > ground_tau, "{roof_tau} vs {ground_tau}");
+    for kind in ["frame", "line_scanner"] {
+        let s = cam(kind);
+        let t = PathTables::new(
+            &atmosphere,
+            &s,
+            std::slice::from_ref(&band),
+            0.0,
+            300.0,
+            (0.0, 60.0),
+        )
+        .unwrap()
+        .expect("a path atmosphere");
+        assert!(t.heights_m.len() >= 3, "{:?}", t.heights_m);
+        let (tau, lu) = t.at(0, 950.0, 50.0);
+        let (tau, lu) = (band.mean(&tau), band.integrate(&lu));
+        let rel = |a: f64, b: f64| (a - b).abs() / b;
+        assert!(rel(tau, roof_tau) < 1e-3, "{kind}: τ {tau} vs {roof_tau}");
+        assert!(rel(lu, roof_lu) < 1e-3, "{kind}: L_u {lu} vs {roof_lu}");
+        // The ground below keeps its own (longer, more opaque) path.
+        let (g, _) = t.at(0, 1000.0, 0.0);
+        assert!(rel(band.mean(&g), ground_tau) < 1e-3);
+    }
 }

@@ -178,6 +178,7 @@ fn shade(
         bands,
         session.scene.site.altitude_m,
         size as f64,
+        crate::render::path::scene_heights(&session.scene.geometry),
     )?;
     let shader = Shader::new(
         session.tracer.as_ref(),

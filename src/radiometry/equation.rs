@@ -22,8 +22,8 @@
 //! and the sensor sees L·τ₂ + L_u, integrated over the band response
 //! ([`at_sensor`]). When no specular ray was traced (bounce budget spent)
 //! L_spec defaults to the diffuse environment F·L_sky + (1 − F)·L_bg. The
-//! sun's specular glint is a delta and is left out (the integrator's specular
-//! ray sees the sky, not the solar disc). Units: spectral radiance
+//! sun's glint through a specular surface's roughness lobe is the renderer's
+//! ([`crate::render::glint`]); this form leaves it out. Units: spectral radiance
 //! W·m⁻²·sr⁻¹·µm⁻¹, irradiance W·m⁻²·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
 
 use super::band::Band;

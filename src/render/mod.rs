@@ -27,6 +27,7 @@
 //! [`crate::progress::Progress`] observer, errors name fields).
 
 pub mod checks;
+pub mod glint;
 pub mod image;
 pub mod path;
 pub mod per_hit;

@@ -6,30 +6,46 @@ use crate::radiometry::Band;
 use crate::sensor::{Geometry, Sensor};
 
 /// Atmospheric path transmittance τ₂ and path radiance L_u from the sensor
-/// to a hit, tabulated per band against the slant range (targets at the
-/// site's ground level; flat-earth geometry, see [`crate::atmosphere`]) and
-/// interpolated linearly in range.
+/// to a hit, tabulated per band against the hit's height above the ground
+/// datum (the scene's z, m) and the slant range, and interpolated
+/// bilinearly (range, then height). Every node is
+/// [`Atmosphere::path`] of its (sensor altitude, target altitude, range):
+/// the path `irsig atmosphere --sensor-altitude … --target-altitude …
+/// --range …` prints (flat-earth geometry, see [`crate::atmosphere`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathTables {
     /// Ranges of the nodes, m (increasing, from 0).
     pub ranges_m: Vec<f64>,
-    /// Per band, per node: (τ₂(λ), L_u(λ)) on the band's grid.
+    /// Target heights of the nodes above the ground datum (scene z), m
+    /// (increasing; one node for a flat scene).
+    pub heights_m: Vec<f64>,
+    /// Per band, per node (height `a`, range `i` at `a · ranges + i`):
+    /// (τ₂(λ), L_u(λ)) on the band's grid.
     pub bands: Vec<Vec<(Vec<f64>, Vec<f64>)>>,
 }
 
 impl PathTables {
     /// Nodes of the range table.
     const NODES: usize = 48;
+    /// Largest spacing of the height nodes, m. τ₂ and L_u vary with the
+    /// target's height on the scale of the water-vapour scale height
+    /// (≈ 2 km), so linear interpolation over 25 m errs by
+    /// ≈ (25 m)²/8 / (2 km)² ≈ 2·10⁻⁵ relative.
+    const HEIGHT_STEP_M: f64 = 25.0;
+    /// Most height nodes.
+    const MAX_HEIGHTS: usize = 64;
 
     /// Tables for `sensor` (`None` for no atmosphere: τ₂ = 1, L_u = 0,
     /// nothing to apply). `scene_size_m` bounds the ranges beyond the
-    /// sensor's height.
+    /// sensor's height; `heights_m` (lowest, highest) the heights above
+    /// the ground datum of what the sensor can hit (the scene's z extent).
     pub fn new(
         atmosphere: &Atmosphere,
         sensor: &Sensor,
         bands: &[Band],
         ground_altitude_m: f64,
         scene_size_m: f64,
+        heights_m: (f64, f64),
     ) -> Result<Option<PathTables>> {
         if matches!(atmosphere, Atmosphere::None) {
             return Ok(None);
@@ -42,30 +58,79 @@ impl PathTables {
         let ranges_m: Vec<f64> = (0..Self::NODES)
             .map(|i| max_range * (i as f64 / (Self::NODES - 1) as f64).powi(2))
             .collect();
+        let (lo, hi) = heights_m;
+        let (lo, hi) = if lo.is_finite() && hi.is_finite() && hi >= lo {
+            (lo, hi)
+        } else {
+            (0.0, 0.0)
+        };
+        let steps = ((hi - lo) / Self::HEIGHT_STEP_M)
+            .ceil()
+            .clamp(0.0, (Self::MAX_HEIGHTS - 1) as f64) as usize;
+        let heights: Vec<f64> = if steps == 0 {
+            vec![lo]
+        } else {
+            (0..=steps)
+                .map(|a| lo + (hi - lo) * a as f64 / steps as f64)
+                .collect()
+        };
         let sensor_alt = ground_altitude_m + height;
-        let bands = bands
-            .iter()
-            .map(|b| {
-                ranges_m
+        let path = |b: &Band, target: f64, r: f64| -> Result<(Vec<f64>, Vec<f64>)> {
+            let p = atmosphere.path(
+                &PathGeometry {
+                    sensor_altitude_m: sensor_alt,
+                    target_altitude_m: target,
+                    range_m: r,
+                },
+                b.grid(),
+            )?;
+            Ok((p.transmittance, p.path_radiance))
+        };
+        let mut tables = Vec::with_capacity(bands.len());
+        for b in bands {
+            let mut nodes = Vec::with_capacity(heights.len() * ranges_m.len());
+            for &z in &heights {
+                let target = ground_altitude_m + z;
+                // Ranges below the height difference `d` cannot reach a
+                // target at this height. Their nodes lie on the line
+                // through the vertical path (range d) and the first node
+                // beyond it, so that interpolating between the last of
+                // them and that node gives the vertical path exactly at d
+                // (τ₂ clamped to [0, 1], L_u to ≥ 0 further out).
+                let d = (sensor_alt - target).abs();
+                let first = ranges_m.partition_point(|&r| r < d).min(ranges_m.len() - 1);
+                let reach: Vec<(Vec<f64>, Vec<f64>)> = ranges_m[first..]
                     .iter()
-                    .map(|&r| {
-                        let p = atmosphere.path(
-                            &PathGeometry {
-                                sensor_altitude_m: sensor_alt,
-                                target_altitude_m: ground_altitude_m,
-                                // Nodes nearer than the sensor's height above the
-                                // ground are unreachable for ground targets: clamp
-                                // them to the shortest possible (vertical) path.
-                                range_m: r.max((sensor_alt - ground_altitude_m).abs()),
-                            },
-                            b.grid(),
-                        )?;
-                        Ok((p.transmittance, p.path_radiance))
-                    })
-                    .collect::<Result<Vec<_>>>()
-            })
-            .collect::<Result<Vec<_>>>()?;
-        Ok(Some(PathTables { ranges_m, bands }))
+                    .map(|&r| path(b, target, r.max(d)))
+                    .collect::<Result<_>>()?;
+                if first > 0 {
+                    let (t_d, l_d) = path(b, target, d)?;
+                    let (t_1, l_1) = &reach[0];
+                    let r1 = ranges_m[first];
+                    for &r in &ranges_m[..first] {
+                        let s = if r1 > d { (r - d) / (r1 - d) } else { 0.0 };
+                        let line = |x0: &[f64], x1: &[f64], lo: f64, hi: f64| -> Vec<f64> {
+                            x0.iter()
+                                .zip(x1)
+                                .map(|(a, b)| (a + s * (b - a)).clamp(lo, hi))
+                                .collect()
+                        };
+                        nodes.push((
+                            line(&t_d, t_1, 0.0, 1.0),
+                            line(&l_d, l_1, 0.0, f64::INFINITY),
+                        ));
+                    }
+                }
+                nodes.extend(reach);
+            }
+            tables.push(nodes);
+        }
+        let bands = tables;
+        Ok(Some(PathTables {
+            ranges_m,
+            heights_m: heights,
+            bands,
+        }))
     }
 
     /// The nodes bracketing range `r` (m): `(i, t)` with `r` at fraction
@@ -76,16 +141,82 @@ impl PathTables {
         (i, ((r - x[i - 1]) / (x[i] - x[i - 1])).clamp(0.0, 1.0))
     }
 
-    /// Apply the path of range `r` to band `b`'s leaving spectrum in place:
-    /// `L ← L·τ₂ + L_u`.
-    pub fn apply(&self, b: usize, r: f64, spectrum: &mut [f64]) {
+    /// The height nodes bracketing height `z` (m above the ground datum):
+    /// `(a, t)` with `z` at fraction `t` (clamped to [0, 1]) from node `a`
+    /// to node `a + 1`; `(0, 0)` with one node.
+    pub fn locate_height(&self, z: f64) -> (usize, f64) {
+        let x = &self.heights_m;
+        if x.len() < 2 {
+            return (0, 0.0);
+        }
+        let a = x
+            .partition_point(|&v| v <= z)
+            .saturating_sub(1)
+            .min(x.len() - 2);
+        (a, ((z - x[a]) / (x[a + 1] - x[a])).clamp(0.0, 1.0))
+    }
+
+    /// Index of the node at height node `a`, range node `i`.
+    #[inline]
+    pub fn node(&self, a: usize, i: usize) -> usize {
+        a * self.ranges_m.len() + i
+    }
+
+    /// τ₂ and L_u of band `b` at range `r` (m) and target height `z` (m
+    /// above the ground datum), interpolated as [`PathTables::apply`].
+    pub fn at(&self, b: usize, r: f64, z: f64) -> (Vec<f64>, Vec<f64>) {
+        let n = self.bands[b][0].0.len();
+        let mut tau = vec![0.0; n];
+        let mut lu = vec![0.0; n];
+        self.each(b, r, z, |j, t, l| {
+            tau[j] = t;
+            lu[j] = l;
+        });
+        (tau, lu)
+    }
+
+    /// Call `f(j, τ₂, L_u)` for every wavelength `j` of band `b` at range
+    /// `r`, height `z`: linear in range at each bracketing height node,
+    /// then linear in height.
+    fn each(&self, b: usize, r: f64, z: f64, mut f: impl FnMut(usize, f64, f64)) {
         let (i, t) = self.locate(r);
-        let (t0, l0) = &self.bands[b][i - 1];
-        let (t1, l1) = &self.bands[b][i];
-        for (j, v) in spectrum.iter_mut().enumerate() {
-            let tau = t0[j] + t * (t1[j] - t0[j]);
-            let lu = l0[j] + t * (l1[j] - l0[j]);
-            *v = *v * tau + lu;
+        let (a, u) = self.locate_height(z);
+        let lerp = |x: f64, y: f64, s: f64| x + s * (y - x);
+        let at = |a: usize| {
+            let (t0, l0) = &self.bands[b][self.node(a, i - 1)];
+            let (t1, l1) = &self.bands[b][self.node(a, i)];
+            (t0, l0, t1, l1)
+        };
+        let (t0, l0, t1, l1) = at(a);
+        if self.heights_m.len() < 2 {
+            for j in 0..t0.len() {
+                f(j, lerp(t0[j], t1[j], t), lerp(l0[j], l1[j], t));
+            }
+            return;
+        }
+        let (s0, m0, s1, m1) = at(a + 1);
+        for j in 0..t0.len() {
+            let tau = lerp(lerp(t0[j], t1[j], t), lerp(s0[j], s1[j], t), u);
+            let lu = lerp(lerp(l0[j], l1[j], t), lerp(m0[j], m1[j], t), u);
+            f(j, tau, lu);
         }
     }
+
+    /// Apply the path of range `r` (m) to a target at height `z` (m above
+    /// the ground datum) to band `b`'s leaving spectrum in place:
+    /// `L ← L·τ₂ + L_u`.
+    pub fn apply(&self, b: usize, r: f64, z: f64, spectrum: &mut [f64]) {
+        self.each(b, r, z, |j, tau, lu| {
+            spectrum[j] = spectrum[j] * tau + lu;
+        });
+    }
+}
+
+/// The heights above the ground datum (lowest, highest) of a scene's
+/// geometry, m: the height range of [`PathTables::new`]; `(0, 0)` for an
+/// empty scene.
+pub fn scene_heights(geometry: &crate::geometry::SceneGeometry) -> (f64, f64) {
+    geometry
+        .bounds()
+        .map_or((0.0, 0.0), |(lo, hi)| (lo.z as f64, hi.z as f64))
 }

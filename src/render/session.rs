@@ -678,6 +678,7 @@ impl Session {
             bands,
             self.scene.site.altitude_m,
             size as f64,
+            super::path::scene_heights(&self.scene.geometry),
         )?;
         let shader = Shader::new(
             self.tracer.as_ref(),
@@ -1039,6 +1040,7 @@ impl Session {
                 ground_temperature_k: t_air,
                 atmosphere: self.atmosphere_at(&rec)?,
                 per_hit: None,
+                wind_speed_m_s: rec.wind_speed_m_s,
             });
             records.push(rec);
         }

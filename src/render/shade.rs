@@ -13,15 +13,19 @@
 //!      + r_d·E_s(λ)·cos σ·f_sun / π                direct sun (diffuse part)
 //!      + r_d·[F·L_sky(λ) + (1 − F)·B(λ, T_bg)]     sky and background
 //!      + r_s·L_spec(λ)                             radiance along the mirror ray
+//!      + r_s·E_s(λ)·v·D(h)/(4 cos θ)               the sun through the glint lobe
 //!      + t·L_behind(λ)                             radiance along the continuing ray
 //! ```
 //!
-//! `F` is the facet's sky shape factor, `f_sun` its sunlit fraction,
+//! `F` is the facet's sky shape factor, `f_sun` the hit's sunlit fraction
+//! (its own shadow ray where that matters, [`sun_ray_facets`]; `v` that
+//! ray's answer, 0 or 1, and `D(h)/(4 cos θ)` the lobe of [`super::glint`]),
 //! `cos σ` the cosine of the solar incidence, `T_bg` the radiative mean
 //! temperature of what it sees below the sky. `L_spec` and `L_behind` are
 //! traced (the same equation at the next hit) while the bounce budget lasts;
 //! past it, both take the diffuse environment `F·L_sky + (1 − F)·B(T_bg)`.
-//! The solar glint (a delta in the mirror direction) is left out.
+//! Misses see the sky only, so the mirror ray and the glint lobe do not
+//! count the sun twice.
 //!
 //! Rays that leave the scene see the sky radiance arriving from their own
 //! direction when they point above the horizon (`dir.z ≥ 0`;
@@ -203,6 +207,9 @@ pub struct Conditions {
     /// Per-hit temperatures ([`super::per_hit`]); `None`: every hit takes
     /// its facet's state.
     pub per_hit: Option<std::sync::Arc<PerHit>>,
+    /// Wind speed, m/s: the roughness of water's glint lobe
+    /// ([`super::glint::cox_munk_slope_variance`]).
+    pub wind_speed_m_s: f64,
 }
 
 /// What the renderer knows about each facet of the scene.
@@ -414,6 +421,9 @@ pub enum FastMiss {
     Secondary,
     /// A temperature lies off the tabulated Planck function.
     OffTable,
+    /// The material reflects the sun through a glint lobe
+    /// ([`super::glint`]).
+    Glint,
 }
 
 impl PlanckTable {
@@ -508,7 +518,8 @@ struct GreyFacet {
     fg: f32,
     /// Sky shape factor F.
     big_f: f32,
-    /// Diffuse-reflected sun on the lit face: `(1 − s)·cos σ·f_sun/π`.
+    /// Diffuse-reflected sun on the lit face: `(1 − s)·cos σ·f_sun/π`
+    /// (`f_sun = 1` for a facet whose hits trace a shadow ray).
     sd: f32,
     /// Sunlit fraction f_sun.
     sun_fraction: f32,
@@ -528,6 +539,80 @@ impl GreyFacet {
     };
 }
 
+/// Relative size below which a hit's reflected sun is left to its facet's
+/// sunlit fraction: where the diffusely reflected sun at full sun,
+/// `(1 − s)·r_max·cos σ·Σw·E_s/π`, is below this fraction of the facet's
+/// least emitted band radiance `ε_min·Σw·B(T)` in every band, a wrong
+/// sunlit fraction changes the pixel by less than 10⁻³ of its radiance
+/// (≈ 0.06 K at 300 K in 8–12 µm, ≈ 0.025 K in 3–5 µm: below a typical
+/// NEdT), and no shadow ray is traced.
+pub const SUN_RAY_THRESHOLD: f64 = 1e-3;
+
+/// Per facet: whether a hit on it takes its own sun visibility (a shadow
+/// ray from the hit point toward the sun) instead of the facet's sunlit
+/// fraction. Facets of materials with a glint lobe (`glint_m2[mi] > 0`)
+/// always do while the sun faces them; others when their sample points
+/// disagree at the image time (`0 < f_sun < 1`: the facet's fraction is
+/// right for no point of it) and the reflected sun matters
+/// ([`SUN_RAY_THRESHOLD`]). A facet whose sample points agree keeps their
+/// answer (a shadow edge between its sample points is taken as absent;
+/// [`super::per_hit`] traces its own rays for facets large against the
+/// pixel footprint).
+fn sun_ray_facets(
+    optics: &SceneOptics,
+    conditions: &Conditions,
+    bands: &[BandTables],
+    fast: &[FastBand],
+    table: &PlanckTable,
+    glint_m2: &[f64],
+) -> Vec<bool> {
+    use rayon::prelude::*;
+    let s = &conditions.surface;
+    let sun_up = bands.iter().any(|t| t.sun.iter().any(|&e| e > 0.0));
+    if !sun_up {
+        return vec![false; s.len()];
+    }
+    // Per material, per band: (1 − s)·max r and min ε over angles and
+    // wavelengths, and Σw·E_s/π.
+    let bounds: Vec<Vec<(f64, f64, f64)>> = optics
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(mi, m)| {
+            let tr = m.transmissivity.clamp(0.0, 1.0);
+            let sd = 1.0 - m.specular_fraction.clamp(0.0, 1.0);
+            bands
+                .iter()
+                .map(|t| {
+                    let lo = t.eps[mi].iter().fold(f64::INFINITY, |a, &e| a.min(e));
+                    let r_max = (1.0 - lo - tr).max(0.0);
+                    let sun = t.band.integrate(&t.sun) / std::f64::consts::PI;
+                    (sd * r_max, lo, sun)
+                })
+                .collect()
+        })
+        .collect();
+    (0..s.len())
+        .into_par_iter()
+        .map(|f| {
+            let mi = optics.facet_material[f] as usize;
+            if glint_m2[mi] > 0.0 {
+                return true;
+            }
+            let (fs, cos) = (s.sun_fraction[f], s.cos_sun[f] as f64);
+            if !(fs > 0.0 && fs < 1.0 && cos > 0.0) {
+                return false;
+            }
+            let Some((k, x)) = table.position(s.temperature_k[f] as f64) else {
+                return true;
+            };
+            bounds[mi].iter().zip(fast).any(|(&(r, eps, sun), fb)| {
+                r * cos * sun >= SUN_RAY_THRESHOLD * eps * fb.plain.planck_at(k, x)
+            })
+        })
+        .collect()
+}
+
 /// The per-facet records of the grey path and, for renders without a
 /// sensor path, each grey facet's view-independent terms per band (built
 /// once per image, in parallel): `[Σw·B(T), env, sd·Σw·E_s, t·env]` with
@@ -539,6 +624,8 @@ fn grey_facets(
     options: &ShadeOptions,
     fast: &[FastBand],
     table: &PlanckTable,
+    sun_ray: &[bool],
+    glint_m2: &[f64],
 ) -> (Vec<GreyFacet>, Vec<[f32; 4]>) {
     use rayon::prelude::*;
     let s = &conditions.surface;
@@ -551,7 +638,10 @@ fn grey_facets(
         .map(|(mi, m)| {
             let secondary =
                 options.max_bounces > 0 && (m.specular_fraction > 0.0 || m.transmissivity > 0.0);
-            nb > 0 && !secondary && fast.iter().all(|fb| fb.grey[mi].is_some())
+            nb > 0
+                && !secondary
+                && glint_m2[mi] <= 0.0
+                && fast.iter().all(|fb| fb.grey[mi].is_some())
         })
         .collect();
     // Node indices are stored in 16 bits.
@@ -575,9 +665,14 @@ fn grey_facets(
                 return;
             };
             let m = &optics.materials[mi];
-            let sun_front = (s.cos_sun[f] as f64).max(0.0)
-                * (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
-                / std::f64::consts::PI;
+            // A facet whose hits trace their own shadow ray: the sun at full
+            // strength, the hit's visibility applied per hit.
+            let fs = if sun_ray[f] {
+                1.0
+            } else {
+                (s.sun_fraction[f] as f64).clamp(0.0, 1.0)
+            };
+            let sun_front = (s.cos_sun[f] as f64).max(0.0) * fs / std::f64::consts::PI;
             let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_front;
             let big_f = s.shape_factor[f] as f64;
             let tr = m.transmissivity.clamp(0.0, 1.0);
@@ -617,8 +712,16 @@ fn grey_facets(
 struct GreyTables {
     /// Bands.
     bands: usize,
-    /// Range nodes (at least 2).
+    /// Path nodes (at least 2): height nodes × range nodes, node
+    /// `a · range_nodes + i` ([`PathTables::node`]).
     nodes: usize,
+    /// Range nodes per height node.
+    range_nodes: usize,
+    /// Heights of the height nodes above the ground datum, m (one node:
+    /// no height interpolation).
+    heights: Vec<f32>,
+    /// `1 / (heights[a + 1] − heights[a])`.
+    inv_height_spacing: Vec<f32>,
     /// Ranges of the nodes, m (empty without a path: every hit is at
     /// node 1, fraction 0).
     ranges: Vec<f32>,
@@ -648,6 +751,7 @@ impl GreyTables {
         fast: &[FastBand],
         nodes: &[Vec<(&Integrals, f64)>],
         ranges: &[f64],
+        heights: &[f64],
         materials: &[Material],
     ) -> Self {
         let nb = nodes.len();
@@ -692,9 +796,14 @@ impl GreyTables {
             Some(&last) if last > 0.0 => (ranges.len() - 1) as f32 / last.sqrt(),
             _ => 0.0,
         };
+        let heights: Vec<f32> = heights.iter().map(|&x| x as f32).collect();
+        let inv_height_spacing = heights.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
         GreyTables {
             bands: nb,
             nodes: r,
+            range_nodes: if ranges.is_empty() { r } else { ranges.len() },
+            heights,
+            inv_height_spacing,
             ranges,
             inv_spacing,
             sqrt_scale,
@@ -727,6 +836,22 @@ impl GreyTables {
             i -= 1;
         }
         (i, ((r - x[i - 1]) * self.inv_spacing[i]).clamp(0.0, 1.0))
+    }
+
+    /// The height nodes bracketing height `z` (m): `(a, u)` with `z` at
+    /// fraction `u` (clamped to [0, 1]) from node `a` to `a + 1`, as
+    /// [`PathTables::locate_height`]; `(0, 0)` with one node.
+    #[inline(always)]
+    fn locate_height(&self, z: f32) -> (usize, f32) {
+        let x = &self.heights;
+        if x.len() < 2 {
+            return (0, 0.0);
+        }
+        let mut a = 0;
+        while a + 2 < x.len() && x[a + 1] <= z {
+            a += 1;
+        }
+        (a, ((z - x[a]) * self.inv_height_spacing[a]).clamp(0.0, 1.0))
     }
 }
 
@@ -825,12 +950,43 @@ struct GreyHit {
     theta: f32,
     /// Slant range, m.
     range: f32,
+    /// Height of the hit above the ground datum (scene z), m.
+    z: f32,
+    /// The hit's own shadow ray found the sun blocked.
+    shaded: bool,
+}
+
+/// A hit's sun visibility in [`SunRays::vis`]: its facet's sunlit fraction
+/// (or its per-hit state's).
+const VIS_FACET: u8 = 2;
+
+/// The shadow rays of a batch's hits ([`Shader::sun_visibility`]).
+#[derive(Debug, Default)]
+struct SunRays {
+    /// Per ray of the batch: 0 shaded, 1 lit, [`VIS_FACET`].
+    vis: Vec<u8>,
+    rays: Vec<Ray>,
+    idx: Vec<u32>,
+    occluded: Vec<bool>,
+}
+
+impl SunRays {
+    /// The visibility of ray `i` as a sunlit fraction, if it traced one.
+    #[inline]
+    fn of(&self, i: usize) -> Option<f32> {
+        match self.vis.get(i) {
+            Some(0) => Some(0.0),
+            Some(1) => Some(1.0),
+            _ => None,
+        }
+    }
 }
 
 /// Working memory of [`Shader::shade_fast`], reused from call to call.
 #[derive(Debug, Default)]
 pub struct FastScratch {
     grey: Vec<GreyHit>,
+    sun: SunRays,
     bands: Vec<f32>,
     /// Per ray of the batch: index into `states` (`u32::MAX`: the facet's
     /// state).
@@ -867,6 +1023,14 @@ pub struct Shader<'a> {
     grey_terms: Vec<[f32; 4]>,
     /// Angular size of a pixel, rad (0: unknown), for the per-hit rule.
     pixel_angle_rad: f32,
+    /// Unit vector toward the sun while it lights the bands (`None`: no
+    /// reflected sun).
+    sun_dir: Option<Vec3>,
+    /// Per facet: hits trace their own shadow ray ([`sun_ray_facets`]).
+    sun_ray: Vec<bool>,
+    /// Per material: the Beckmann `m²` of its glint lobe (0: no glint;
+    /// [`super::glint`]).
+    glint_m2: Vec<f64>,
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -1052,12 +1216,30 @@ impl<'a> Shader<'a> {
                 }
             })
             .collect();
-        let (grey, grey_terms) = grey_facets(optics, conditions, &options, &fast, &table);
+        let sun_dir = conditions
+            .sun
+            .map(|s| s.direction.normalize_or_zero())
+            .filter(|_| tables.iter().any(|t| t.sun.iter().any(|&e| e > 0.0)));
+        let glint_m2: Vec<f64> = optics
+            .materials
+            .iter()
+            .map(|m| {
+                if sun_dir.is_some() && m.specular_fraction > 0.0 {
+                    super::glint::lobe_slope_variance(m, conditions.wind_speed_m_s)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let sun_ray = sun_ray_facets(optics, conditions, &tables, &fast, &table, &glint_m2);
+        let (grey, grey_terms) = grey_facets(
+            optics, conditions, &options, &fast, &table, &sun_ray, &glint_m2,
+        );
         let plain: Vec<Vec<(&Integrals, f64)>> = fast
             .iter()
             .map(|fb| vec![(&fb.plain, 0.0), (&fb.plain, 0.0)])
             .collect();
-        let grey_tables = GreyTables::new(&fast, &plain, &[], &optics.materials);
+        let grey_tables = GreyTables::new(&fast, &plain, &[], &[], &optics.materials);
         Ok(Shader {
             grey,
             grey_tables,
@@ -1076,6 +1258,9 @@ impl<'a> Shader<'a> {
             fast,
             fast_path: None,
             pixel_angle_rad: 0.0,
+            sun_dir,
+            sun_ray,
+            glint_m2,
         })
     }
 
@@ -1145,8 +1330,13 @@ impl<'a> Shader<'a> {
                 .zip(&fp.path_radiance)
                 .map(|(ig, lu)| ig.iter().zip(lu.iter().copied()).collect())
                 .collect();
-            self.grey_tables =
-                GreyTables::new(&self.fast, &nodes, &p.ranges_m, &self.optics.materials);
+            self.grey_tables = GreyTables::new(
+                &self.fast,
+                &nodes,
+                &p.ranges_m,
+                &p.heights_m,
+                &self.optics.materials,
+            );
             // The per-facet terms hold for the plain weights only.
             self.grey_terms = Vec::new();
         }
@@ -1196,6 +1386,60 @@ impl<'a> Shader<'a> {
             &mut out,
         );
         out.pop()
+    }
+
+    /// The sun visibility of a batch's hits into `sr.vis`: one shadow ray
+    /// toward the sun from each hit on a facet of [`sun_ray_facets`] whose
+    /// seen face the sun lights (and which has no per-hit state, `has_state`:
+    /// that state carries its own), traced together (parallel rays from
+    /// neighbouring points: [`Coherence::Coherent`]); the origin is lifted
+    /// off the surface by [`ShadeOptions::offset_m`] on the sun's side.
+    fn sun_visibility(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        has_state: impl Fn(usize) -> bool,
+        sr: &mut SunRays,
+    ) {
+        sr.vis.clear();
+        sr.rays.clear();
+        sr.idx.clear();
+        let Some(sun) = self.sun_dir else { return };
+        sr.vis.resize(rays.len(), VIS_FACET);
+        let s = &self.conditions.surface;
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let Some(h) = hit else { continue };
+            let f = self.facet_of(h);
+            if !self.sun_ray[f] || has_state(i) {
+                continue;
+            }
+            let mi = self.optics.facet_material[f] as usize;
+            let dn = h.ng.dot(ray.dir);
+            let diffuse_lit =
+                s.cos_sun[f] > 0.0 && (dn < 0.0 || self.optics.materials[mi].double_sided);
+            let sn = h.ng.dot(sun);
+            // The glint lobe of the seen face needs the sun on its side.
+            let glint_lit = self.glint_m2[mi] > 0.0 && dn * sn < 0.0;
+            if !(diffuse_lit || glint_lit) {
+                continue;
+            }
+            let n = h.ng.normalize_or(Vec3::Z);
+            let side = if sn >= 0.0 { 1.0 } else { -1.0 };
+            let p = ray.origin + ray.dir * h.t;
+            sr.rays
+                .push(Ray::new(p + n * (side * self.options.offset_m), sun));
+            sr.idx.push(i as u32);
+        }
+        if sr.rays.is_empty() {
+            return;
+        }
+        sr.occluded.clear();
+        sr.occluded.resize(sr.rays.len(), false);
+        self.tracer
+            .occluded(&sr.rays, Coherence::Coherent, &mut sr.occluded);
+        for (&i, &o) in sr.idx.iter().zip(&sr.occluded) {
+            sr.vis[i as usize] = u8::from(!o);
+        }
     }
 
     /// Whether a hit on facet `f` spawns secondary rays (specular or
@@ -1256,6 +1500,8 @@ impl<'a> Shader<'a> {
             Ok(())
         } else if self.spawns_secondary(self.facet_of(h)) {
             Err(FastMiss::Secondary)
+        } else if self.glint_m2[self.optics.facet_material[self.facet_of(h)] as usize] > 0.0 {
+            Err(FastMiss::Glint)
         } else {
             Err(FastMiss::OffTable)
         }
@@ -1293,6 +1539,11 @@ impl<'a> Shader<'a> {
         sc.grey.clear();
         sc.bands.resize(nb, 0.0);
         self.per_hit_states(rays, hits, sc);
+        {
+            let state_of = &sc.state_of;
+            let has_state = |i: usize| state_of.get(i).is_some_and(|&k| k != u32::MAX);
+            self.sun_visibility(rays, hits, has_state, &mut sc.sun);
+        }
         // The next pixel-centre ray and its column.
         let (mut next, mut col) = match &truth {
             Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
@@ -1324,12 +1575,20 @@ impl<'a> Shader<'a> {
                 .get(i)
                 .filter(|&&k| k != u32::MAX)
                 .map(|&k| sc.states[k as usize]);
+            let vis = sc.sun.of(i);
             if let (true, Some(t)) = (centre, &mut truth) {
-                block.push(t, col, self.truth_of_hit(f, range, state));
+                let mut v = self.truth_of_hit(f, range, state);
+                if let Some(x) = vis {
+                    v[4] = x;
+                }
+                block.push(t, col, v);
                 (next, col) = t.advance(col);
             }
             if let Some(st) = state {
-                if self.fast_general(ray, h, Some(st), &mut sc.bands).is_err() {
+                if self
+                    .fast_general(ray, h, Some(st), None, &mut sc.bands)
+                    .is_err()
+                {
                     slow.push(i);
                     continue;
                 }
@@ -1346,10 +1605,12 @@ impl<'a> Shader<'a> {
                     dn: ray.dir.dot(h.ng),
                     theta: n2,
                     range,
+                    z: ray.origin.z + ray.dir.z * h.t,
+                    shaded: vis == Some(0.0),
                 });
                 continue;
             }
-            if self.fast_general(ray, h, None, &mut sc.bands).is_err() {
+            if self.fast_general(ray, h, None, vis, &mut sc.bands).is_err() {
                 slow.push(i);
                 continue;
             }
@@ -1393,7 +1654,7 @@ impl<'a> Shader<'a> {
         let th = hit.theta;
         // θ ≥ 0: truncation is the floor.
         let a0 = (th as usize).min(ANGLE_ROWS - 2);
-        let lit = hit.dn < 0.0 || self.grey_tables.double_sided[mi];
+        let lit = (hit.dn < 0.0 || self.grey_tables.double_sided[mi]) && !hit.shaded;
         (mi, a0, th - a0 as f32, lit)
     }
 
@@ -1449,6 +1710,9 @@ impl<'a> Shader<'a> {
         let gt = &self.grey_tables;
         let (nb, nodes) = (gt.bands, gt.nodes);
         let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
+        // Next height node: `range_nodes` nodes on (none with one height).
+        let two = gt.heights.len() >= 2;
+        let hstep = if two { gt.range_nodes } else { 0 };
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let g = &self.grey[hit.facet as usize];
@@ -1458,7 +1722,8 @@ impl<'a> Shader<'a> {
             let a0 = (th as usize).min(ANGLE_ROWS - 2);
             let ta = th - a0 as f32;
             let (ri, rx) = gt.locate(hit.range);
-            let sd = if hit.dn < 0.0 || gt.double_sided[mi] {
+            let (ai, ax) = gt.locate_height(hit.z);
+            let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
                 g.sd
             } else {
                 0.0
@@ -1468,26 +1733,32 @@ impl<'a> Shader<'a> {
             let (ft, fg) = (g.ft, g.fg);
             // Entry offsets: emissivity at angle rows a0, a0 + 1 (+nb);
             // Planck rows k, k + 1 (+nodes·nb) at range nodes ri − 1, ri
-            // (+nb); sky, sun, path at node ri − 1 (+0, +nb, +2nb) and ri
-            // (+3nb).
+            // (+nb) of height node ai (+hstep·nb: ai + 1); sky, sun, path
+            // at node ri − 1 (+0, +nb, +2nb) and ri (+3nb).
             let e = (mi * ANGLE_ROWS + a0) * nb;
             let (kt, kg) = (g.kt as usize, g.kg as usize);
-            let t0 = (kt * nodes + ri - 1) * nb;
-            let g0 = (kg * nodes + ri - 1) * nb;
+            let n0 = ai * gt.range_nodes + ri - 1;
+            let t0 = (kt * nodes + n0) * nb;
+            let g0 = (kg * nodes + n0) * nb;
             let up = nodes * nb;
-            let q = 3 * (ri - 1) * nb;
+            let q = 3 * n0 * nb;
+            let (hp, hq) = (hstep * nb, 3 * hstep * nb);
             for b in 0..nb {
                 let eps = ep[e + b] + ta * (ep[e + nb + b] - ep[e + b]);
-                // Temperature first, then range, as the reference.
-                let bilerp = |o: usize, f: f32| {
-                    let v0 = pl[o + b] + f * (pl[o + up + b] - pl[o + b]);
-                    let v1 = pl[o + nb + b] + f * (pl[o + up + nb + b] - pl[o + nb + b]);
-                    v0 + rx * (v1 - v0)
+                // Temperature first, then range, then height, as the
+                // reference.
+                let at = |h: usize, hq: usize| {
+                    grey_node(pl, nd, [up, nb, b], [t0 + h, g0 + h, q + hq], [ft, fg, rx])
                 };
-                let bt = bilerp(t0, ft);
-                let bg = bilerp(g0, fg);
-                let node = |o: usize| nd[q + o + b] + rx * (nd[q + o + 3 * nb + b] - nd[q + o + b]);
-                let (sky, sun, lu) = (node(0), node(nb), node(2 * nb));
+                let [mut bt, mut bg, mut sky, mut sun, mut lu] = at(0, 0);
+                if two {
+                    let [bt1, bg1, sky1, sun1, lu1] = at(hp, hq);
+                    bt += ax * (bt1 - bt);
+                    bg += ax * (bg1 - bg);
+                    sky += ax * (sky1 - sky);
+                    sun += ax * (sun1 - sun);
+                    lu += ax * (lu1 - lu);
+                }
                 let r = (1.0 - eps - tr).max(0.0);
                 let env = big_f * sky + one_f * bg;
                 out[b * n + i] = eps * bt + r * (env + sd * sun) + tr * env + lu;
@@ -1501,9 +1772,23 @@ impl<'a> Shader<'a> {
     /// grey-path record where it has one (the temperature recovered from
     /// its Planck table node and fraction: within 2·10⁻⁹ K in f64, so the
     /// same f32), from the per-facet arrays otherwise.
+    /// The sun fraction is the hit's own where it has a per-hit state or
+    /// traces a shadow ray ([`sun_ray_facets`]).
     pub fn truth_of(&self, ray: &Ray, h: &Hit) -> [f32; 6] {
         let state = self.hit_state(ray, h);
-        self.truth_of_hit(self.facet_of(h), h.t * ray.dir.length(), state)
+        let mut v = self.truth_of_hit(self.facet_of(h), h.t * ray.dir.length(), state);
+        let mut sun = SunRays::default();
+        let hit = [Some(*h)];
+        self.sun_visibility(
+            std::slice::from_ref(ray),
+            &hit,
+            |_| state.is_some(),
+            &mut sun,
+        );
+        if let Some(x) = sun.of(0) {
+            v[4] = x;
+        }
+        v
     }
 
     /// [`Shader::truth_of`] of a hit on facet `f` at range `d` (m) with
@@ -1547,24 +1832,30 @@ impl<'a> Shader<'a> {
 
     /// [`Shader::fast_primary`] of a hit off the grey path: per band the
     /// grey integrals or the fused spectral sum.
+    /// `vis`: the hit's own sun visibility (its shadow ray), if traced.
     fn fast_general(
         &self,
         ray: &Ray,
         h: &Hit,
         state: Option<HitState>,
+        vis: Option<f32>,
         out: &mut [f32],
     ) -> Result<(), FastMiss> {
         let f = self.facet_of(h);
         if self.spawns_secondary(f) {
             return Err(FastMiss::Secondary);
         }
+        let mi = self.optics.facet_material[f] as usize;
+        if self.glint_m2[mi] > 0.0 {
+            return Err(FastMiss::Glint);
+        }
         let s = &self.conditions.surface;
         let (t_hit, sun_fraction) = hit_temperature(s, f, state);
+        let sun_fraction = vis.unwrap_or(sun_fraction);
         let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
         let (kg, fg) = self
             .table_position(s.background_k[f] as f64)
             .ok_or(FastMiss::OffTable)?;
-        let mi = self.optics.facet_material[f] as usize;
         let m = &self.optics.materials[mi];
         let (_, nrm, d) = self.hit_frame(ray, h);
         let (a0, ta) = angle_row(-d.dot(nrm));
@@ -1578,8 +1869,15 @@ impl<'a> Shader<'a> {
         };
         let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_w;
         let tr = m.transmissivity.clamp(0.0, 1.0);
+        // The path nodes: range node i − 1 → i at fraction x, of height
+        // node a (and a + 1 at fraction u when the table has two or more).
         let node = match (&self.path, &self.fast_path) {
-            (Some(p), Some(_)) => Some(p.locate((h.t * ray.dir.length()) as f64)),
+            (Some(p), Some(_)) => {
+                let (i, x) = p.locate((h.t * ray.dir.length()) as f64);
+                let (a, u) = p.locate_height((ray.origin.z + ray.dir.z * h.t) as f64);
+                let next = (p.heights_m.len() >= 2).then(|| p.node(a + 1, i - 1));
+                Some((p.node(a, i - 1), x, next, u))
+            }
             _ => None,
         };
         for (b, fb) in self.fast.iter().enumerate() {
@@ -1588,17 +1886,28 @@ impl<'a> Shader<'a> {
                 let eps = g[a0] + ta * (g[a0 + 1] - g[a0]);
                 let r = (1.0 - eps - tr).max(0.0);
                 let (bt, bg, sky, sun, lu) = match (node, &self.fast_path) {
-                    (Some((i, x)), Some(fp)) => {
-                        let (p, q) = (&fp.integrals[b][i - 1], &fp.integrals[b][i]);
-                        let lerp = |a: f64, b: f64| a + x * (b - a);
-                        let u = &fp.path_radiance[b];
-                        (
-                            lerp(p.planck_at(kt, ft), q.planck_at(kt, ft)),
-                            lerp(p.planck_at(kg, fg), q.planck_at(kg, fg)),
-                            lerp(p.sky, q.sky),
-                            lerp(p.sun, q.sun),
-                            lerp(u[i - 1], u[i]),
-                        )
+                    (Some((n0, x, next, u)), Some(fp)) => {
+                        let lerp = |a: f64, b: f64, x: f64| a + x * (b - a);
+                        // Linear in range at the height node of `n0`.
+                        let at = |n0: usize| {
+                            let (p, q) = (&fp.integrals[b][n0], &fp.integrals[b][n0 + 1]);
+                            let w = &fp.path_radiance[b];
+                            [
+                                lerp(p.planck_at(kt, ft), q.planck_at(kt, ft), x),
+                                lerp(p.planck_at(kg, fg), q.planck_at(kg, fg), x),
+                                lerp(p.sky, q.sky, x),
+                                lerp(p.sun, q.sun, x),
+                                lerp(w[n0], w[n0 + 1], x),
+                            ]
+                        };
+                        let mut v = at(n0);
+                        if let Some(n1) = next {
+                            let v1 = at(n1);
+                            for (a, b) in v.iter_mut().zip(v1) {
+                                *a = lerp(*a, b, u);
+                            }
+                        }
+                        (v[0], v[1], v[2], v[3], v[4])
                     }
                     _ => {
                         let p = &fb.plain;
@@ -1613,37 +1922,42 @@ impl<'a> Shader<'a> {
             let nl = fb.len;
             let e = &fb.eps[mi];
             let row = |k: usize| &fb.planck[k * nl..(k + 1) * nl];
-            let (q0, q1, fr, lu) = match (node, &self.fast_path) {
-                (Some((i, x)), Some(fp)) => {
-                    let u = &fp.path_radiance[b];
-                    (
-                        &fp.weighted_tau[b][i - 1][..],
-                        &fp.weighted_tau[b][i][..],
-                        x as f32,
-                        u[i - 1] + x * (u[i] - u[i - 1]),
-                    )
-                }
-                _ => (&fb.w[..], &fb.w[..], 0.0, 0.0),
+            // The fused sum with path weights `w·τ₂` linear in range
+            // between `q0` and `q1`, plus the band path radiance.
+            let sum_with = |q0: &[f32], q1: &[f32], fr: f32| {
+                band_sum(
+                    &BandStreams {
+                        e0: &e[a0 * nl..(a0 + 1) * nl],
+                        e1: &e[(a0 + 1) * nl..(a0 + 2) * nl],
+                        t0: row(kt),
+                        t1: row(kt + 1),
+                        g0: row(kg),
+                        g1: row(kg + 1),
+                        q0,
+                        q1,
+                        sky: &fb.sky,
+                        sun: &fb.sun,
+                    },
+                    [ta as f32, ft as f32, fg as f32, fr],
+                    big_f as f32,
+                    sd as f32,
+                    tr as f32,
+                ) as f64
             };
-            let sum = band_sum(
-                &BandStreams {
-                    e0: &e[a0 * nl..(a0 + 1) * nl],
-                    e1: &e[(a0 + 1) * nl..(a0 + 2) * nl],
-                    t0: row(kt),
-                    t1: row(kt + 1),
-                    g0: row(kg),
-                    g1: row(kg + 1),
-                    q0,
-                    q1,
-                    sky: &fb.sky,
-                    sun: &fb.sun,
-                },
-                [ta as f32, ft as f32, fg as f32, fr],
-                big_f as f32,
-                sd as f32,
-                tr as f32,
-            );
-            out[b] = (sum as f64 + lu) as f32;
+            out[b] = match (node, &self.fast_path) {
+                (Some((n0, x, next, u)), Some(fp)) => {
+                    let at = |n0: usize| {
+                        let (q, w) = (&fp.weighted_tau[b], &fp.path_radiance[b]);
+                        sum_with(&q[n0], &q[n0 + 1], x as f32) + w[n0] + x * (w[n0 + 1] - w[n0])
+                    };
+                    let v = at(n0);
+                    match next {
+                        Some(n1) => v + u * (at(n1) - v),
+                        None => v,
+                    }
+                }
+                _ => sum_with(&fb.w, &fb.w, 0.0),
+            } as f32;
         }
         Ok(())
     }
@@ -1664,9 +1978,10 @@ impl<'a> Shader<'a> {
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
             let Some(h) = hit else { continue };
             let range = (h.t * ray.dir.length()) as f64;
+            let z = (ray.origin.z + ray.dir.z * h.t) as f64;
             for (b, t) in self.bands.iter().enumerate() {
                 let s = &mut out[i * n + t.start..i * n + t.start + t.band.len()];
-                p.apply(b, range, s);
+                p.apply(b, range, z, s);
             }
         }
     }
@@ -1786,6 +2101,18 @@ impl<'a> Shader<'a> {
                 refl[i] = k;
             }
         }
+        let mut sun = SunRays::default();
+        let has_state = |i: usize| {
+            let (Some(ph), Some(h)) = (&self.conditions.per_hit, &hits[i]) else {
+                return false;
+            };
+            ph.wants(
+                self.facet_of(h),
+                h.t * rays[i].dir.length(),
+                self.pixel_angle_rad,
+            )
+        };
+        self.sun_visibility(rays, hits, has_state, &mut sun);
         let mut b_t = vec![0.0; n];
         let mut b_bg = vec![0.0; n];
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
@@ -1798,7 +2125,8 @@ impl<'a> Shader<'a> {
                 (refl[i] != usize::MAX).then(|| &sec_spec[refl[i] * n..(refl[i] + 1) * n]);
             let behind =
                 (trans[i] != usize::MAX).then(|| &sec_spec[trans[i] * n..(trans[i] + 1) * n]);
-            self.leaving_into(ray, h, spec_in, behind, &mut b_t, &mut b_bg, o);
+            let lit = sun.of(i);
+            self.leaving_into(ray, h, lit, spec_in, behind, &mut b_t, &mut b_bg, o);
         }
     }
 
@@ -1831,11 +2159,15 @@ impl<'a> Shader<'a> {
         (p, nrm, d)
     }
 
+    /// The spectral radiance leaving hit `h` toward the origin of `ray`
+    /// (the module docs' equation, with the glint of [`super::glint`]);
+    /// `vis` the hit's own sun visibility where it traced a shadow ray.
     #[allow(clippy::too_many_arguments)]
     fn leaving_into(
         &self,
         ray: &Ray,
         h: &Hit,
+        vis: Option<f32>,
         spec_in: Option<&[f64]>,
         behind: Option<&[f64]>,
         b_t: &mut [f64],
@@ -1852,6 +2184,15 @@ impl<'a> Shader<'a> {
         let a0 = (theta.floor() as usize).min(ANGLE_ROWS - 2);
         let ta = theta - a0 as f64;
         let (t_hit, sun_fraction) = hit_temperature(s, f, self.hit_state(ray, h));
+        let sun_fraction = vis.unwrap_or(sun_fraction);
+        // The glint lobe toward the viewer: the hit's own visibility (a
+        // specular facet always traces it while the sun faces it).
+        let glint = match (self.sun_dir, vis) {
+            (Some(sd), Some(v)) if self.glint_m2[mi] > 0.0 && v > 0.0 => {
+                super::glint::glint_lobe_sr(self.glint_m2[mi], nrm, -d, sd)
+            }
+            _ => 0.0,
+        };
         self.planck_into(t_hit, b_t);
         self.planck_into(s.background_k[f] as f64, b_bg);
         let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
@@ -1879,7 +2220,7 @@ impl<'a> Shader<'a> {
                 let rs = spec_frac * r;
                 let env = big_f * t.sky[j] + (1.0 - big_f) * b_bg[k];
                 let sun = t.sun[j] * sun_w;
-                let spec = spec_in.map_or(env, |v| v[k]);
+                let spec = spec_in.map_or(env, |v| v[k]) + t.sun[j] * glint;
                 let beh = behind.map_or(env, |v| v[k]);
                 out[k] = eps * b_t[k] + rd * (sun + env) + rs * spec + tr * beh;
             }
@@ -1895,6 +2236,35 @@ fn hit_temperature(s: &SurfaceState, f: usize, state: Option<HitState>) -> (f64,
         Some(st) => ((s.temperature_k[f] + st.dt_k) as f64, st.sun_fraction),
         None => (s.temperature_k[f] as f64, s.sun_fraction[f]),
     }
+}
+
+/// One height node's grey-path terms of band `b` ([`Shader::grey_pass`]):
+/// `[Σq·B(T), Σq·B(T_bg), Σq·L_sky, Σq·E_s, Σw·L_u]`, the Planck
+/// integrals linear in temperature (fractions `ft`, `fg` from the entries
+/// at `t0`, `g0`; the next temperature node `up` on) and all linear in
+/// range (fraction `rx`; the next range node `nb` on, the node terms at
+/// `q`, `3·nb` on).
+#[inline(always)]
+fn grey_node(
+    pl: &[f32],
+    nd: &[f32],
+    [up, nb, b]: [usize; 3],
+    [t0, g0, q]: [usize; 3],
+    [ft, fg, rx]: [f32; 3],
+) -> [f32; 5] {
+    let bilerp = |o: usize, f: f32| {
+        let v0 = pl[o + b] + f * (pl[o + up + b] - pl[o + b]);
+        let v1 = pl[o + nb + b] + f * (pl[o + up + nb + b] - pl[o + nb + b]);
+        v0 + rx * (v1 - v0)
+    };
+    let node = |o: usize| nd[q + o + b] + rx * (nd[q + o + 3 * nb + b] - nd[q + o + b]);
+    [
+        bilerp(t0, ft),
+        bilerp(g0, fg),
+        node(0),
+        node(nb),
+        node(2 * nb),
+    ]
 }
 
 /// The spectral rows one band of [`Shader::fast_primary`] reads (all of
