@@ -134,38 +134,32 @@ impl RaySet {
         self.bounds.par_windows(2).map(|w| w[0]..w[1])
     }
 
-    /// Closest hits, batch by batch in parallel.
-    pub fn intersect(&self, tracer: &dyn Tracer) -> Vec<Option<Hit>> {
-        let mut out = vec![None; self.rays.len()];
-        let outs: Vec<Vec<Option<Hit>>> = self
-            .batches()
-            .map(|r| {
-                let mut o = vec![None; r.len()];
-                tracer.intersect(&self.rays[r], self.coherence, &mut o);
-                o
-            })
-            .collect();
-        for (r, o) in self.bounds.windows(2).zip(outs) {
-            out[r[0]..r[1]].copy_from_slice(&o);
+    /// `out` cut into one slice per batch.
+    fn batch_slices<'a, T>(&self, mut out: &'a mut [T]) -> Vec<&'a mut [T]> {
+        assert_eq!(out.len(), self.rays.len(), "one answer per ray");
+        let mut slices = Vec::with_capacity(self.bounds.len());
+        for w in self.bounds.windows(2) {
+            let (head, rest) = std::mem::take(&mut out).split_at_mut(w[1] - w[0]);
+            slices.push(head);
+            out = rest;
         }
-        out
+        slices
     }
 
-    /// Occlusion, batch by batch in parallel.
-    pub fn occluded(&self, tracer: &dyn Tracer) -> Vec<bool> {
-        let mut out = vec![false; self.rays.len()];
-        let outs: Vec<Vec<bool>> = self
-            .batches()
-            .map(|r| {
-                let mut o = vec![false; r.len()];
-                tracer.occluded(&self.rays[r], self.coherence, &mut o);
-                o
-            })
-            .collect();
-        for (r, o) in self.bounds.windows(2).zip(outs) {
-            out[r[0]..r[1]].copy_from_slice(&o);
-        }
-        out
+    /// Closest hits into `out` (one per ray), batch by batch in parallel,
+    /// each batch straight into its own part of `out` (as the renderer's
+    /// rows write into their buffers: no allocation or copy is timed).
+    pub fn intersect_into(&self, tracer: &dyn Tracer, out: &mut [Option<Hit>]) {
+        self.batches()
+            .zip(self.batch_slices(out))
+            .for_each(|(r, o)| tracer.intersect(&self.rays[r], self.coherence, o));
+    }
+
+    /// Occlusion into `out`, as [`RaySet::intersect_into`].
+    pub fn occluded_into(&self, tracer: &dyn Tracer, out: &mut [bool]) {
+        self.batches()
+            .zip(self.batch_slices(out))
+            .for_each(|(r, o)| tracer.occluded(&self.rays[r], self.coherence, o));
     }
 }
 
@@ -457,10 +451,15 @@ pub fn trace_bench(
 ) -> Result<(TraceBenchReport, TraceBenchInfo)> {
     let sets = make_ray_sets(geom, opts)?;
     let classes = [&sets.primary, &sets.shadow, &sets.hemisphere, &sets.diffuse];
-    // Shadow rays are occlusion queries, the rest closest hits.
-    let run = |t: &dyn Tracer, c: usize| match c {
-        1 => Answers::Occluded(classes[c].occluded(t)),
-        _ => Answers::Hits(classes[c].intersect(t)),
+    // Shadow rays are occlusion queries, the rest closest hits; the answer
+    // buffers are allocated before the clock starts (`run` fills them).
+    let fresh = |c: usize| match c {
+        1 => Answers::Occluded(vec![false; classes[c].rays.len()]),
+        _ => Answers::Hits(vec![None; classes[c].rays.len()]),
+    };
+    let run = |t: &dyn Tracer, c: usize, a: &mut Answers| match a {
+        Answers::Occluded(o) => classes[c].occluded_into(t, o),
+        Answers::Hits(h) => classes[c].intersect_into(t, h),
     };
     let mut tracers: Vec<(Box<dyn Tracer>, BackendResult)> = Vec::new();
     for b in Backend::ALL {
@@ -479,8 +478,9 @@ pub fn trace_bench(
     for _ in 0..opts.rounds.max(1) {
         for ((t, res), out) in tracers.iter_mut().zip(last.iter_mut()) {
             for (c, set) in classes.iter().enumerate() {
+                let mut a = out[c].take().unwrap_or_else(|| fresh(c));
                 let t0 = Instant::now();
-                let a = run(t.as_ref(), c);
+                run(t.as_ref(), c, &mut a);
                 let m = mrays(set.rays.len(), t0.elapsed().as_secs_f64());
                 let best = res.mrays_s(c);
                 *best = best.max(m);
