@@ -65,6 +65,15 @@ impl Importer<'_> {
         let lat = xml::req_number(path, loc_node, "latitude")?;
         let lon = xml::req_number(path, loc_node, "longitude")?;
         let alt = xml::opt_number(path, loc_node, "altitude")?.unwrap_or(0.0);
+        for (name, v, max) in [("latitude", lat, 90.0), ("longitude", lon, 180.0)] {
+            if v.abs() > max {
+                let at = xml::child(loc_node, name).unwrap_or(loc_node);
+                return Err(Error::parse(
+                    xml::loc(path, at),
+                    format!("{name} {v}°: expected −{max}..={max} (degrees, east positive)"),
+                ));
+            }
+        }
         self.site = Some(SiteSpec {
             latitude_deg: lat,
             longitude_deg: lon,
