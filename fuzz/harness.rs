@@ -436,9 +436,11 @@ MATERIAL_ENTRY {
 }
 ",
     ),
+    // One curve: 91 angular weights (0..=90°, falling off near grazing), then the
+    // new-format spectrum (µm, TAB-separated as in Rendered.ai's files).
     (
         "scene/materials/e.ems",
-        "1\nCURVE_BEGIN\n3.0\t0.90\n8.0\t0.93\n14.0\t0.95\nCURVE_END\n",
+        "1\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n1.0\n0.99\n0.98\n0.96\n0.93\n0.89\n0.83\n0.74\n0.61\n0.42\n0.2\n0.0\nCURVE_BEGIN\n3.0\t0.90\n8.0\t0.93\n14.0\t0.95\n",
     ),
     (
         "scene/geometry/l.glist",

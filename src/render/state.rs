@@ -690,11 +690,10 @@ fn file_is_complete(
     let Ok(f) = std::fs::File::open(path) else {
         return false;
     };
-    let Ok(reader) = arrow_ipc::reader::FileReader::try_new(f, None) else {
+    let Ok((meta, _)) = decode_ipc(f, false) else {
         return false;
     };
     let want = file_metadata(kind, key, shard, range);
-    let meta = reader.schema().metadata().clone();
     want.iter().all(|(k, v)| meta.get(k) == Some(v))
 }
 
@@ -710,6 +709,39 @@ fn write_batch(path: &Path, batch: &RecordBatch) -> Result<()> {
     })
 }
 
+/// An Arrow IPC file's schema metadata and (`with_batches`) its record
+/// batches; the error says
+/// what is malformed. arrow-ipc 59 panics on some malformed files instead of
+/// returning an error (a schema field of type `NONE`; a boolean null bitmap
+/// shorter than its column; a buffer slice beyond the body; found by the
+/// `state` fuzz target): the panic is caught and reported as a malformed file
+/// (the default hook still prints the panic's own message).
+fn decode_ipc(
+    f: std::fs::File,
+    with_batches: bool,
+) -> std::result::Result<(HashMap<String, String>, Vec<RecordBatch>), String> {
+    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let reader = arrow_ipc::reader::FileReader::try_new(f, None)
+            .map_err(|e| format!("not an Arrow IPC file: {e}"))?;
+        let meta = reader.schema().metadata().clone();
+        if !with_batches {
+            return Ok((meta, Vec::new()));
+        }
+        let batches = reader
+            .map(|b| b.map_err(|e| e.to_string()))
+            .collect::<std::result::Result<Vec<_>, String>>()?;
+        Ok((meta, batches))
+    }));
+    decoded.unwrap_or_else(|p| {
+        let why = p
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| p.downcast_ref::<&str>().copied())
+            .unwrap_or("the Arrow reader failed");
+        Err(format!("malformed Arrow IPC file: {why}"))
+    })
+}
+
 /// Read the one record batch of `path`, checking its metadata.
 fn read_batch(
     path: &Path,
@@ -720,9 +752,7 @@ fn read_batch(
 ) -> Result<RecordBatch> {
     let bad = |m: String| Error::invalid("state", format!("{}: {m}", path.display()));
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = arrow_ipc::reader::FileReader::try_new(f, None)
-        .map_err(|e| bad(format!("not an Arrow IPC file: {e}")))?;
-    let meta = reader.schema().metadata().clone();
+    let (meta, batches) = decode_ipc(f, true).map_err(bad)?;
     let want = file_metadata(kind, key, shard, range);
     for field in [
         "irsig.format",
@@ -738,10 +768,6 @@ fn read_batch(
                 want[field]
             )));
         }
-    }
-    let mut batches = Vec::new();
-    for b in reader {
-        batches.push(b.map_err(|e| bad(e.to_string()))?);
     }
     let schema = batches
         .first()
