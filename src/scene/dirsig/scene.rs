@@ -36,10 +36,14 @@ impl Importer<'_> {
             return Ok(());
         }
         self.scene_seen = true;
+        // Absolute: `$SCENE_DIR/…` expands to a path that must not be joined to the
+        // scene's folder a second time when the scene was named relative to the
+        // working directory.
         let dir = path
             .parent()
             .map(Path::to_path_buf)
             .unwrap_or_else(|| PathBuf::from("."));
+        let dir = std::path::absolute(&dir).unwrap_or(dir);
         let vars = [("SCENE_DIR", dir.as_path())];
         let folder = |n: Option<Node>| {
             n.map(|n| PathBuf::from(Importer::expand(&xml::text(n), &vars)))
