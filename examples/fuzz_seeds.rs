@@ -19,7 +19,8 @@ fn main() -> ExitCode {
     };
     let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (name, _) in harness::TARGETS {
-        let seeds = harness::seeds(name, repo);
+        let mut seeds = harness::seeds(name, repo);
+        seeds.extend(harness::extra_seeds(name, repo));
         if seeds.is_empty() {
             eprintln!("warning: no seeds for {name} (its seed files are under ../shared/data)");
         }

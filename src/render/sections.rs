@@ -66,12 +66,7 @@ fn parse_unplaced(scene: &Scene) -> Result<Sections> {
     let mut bands = Vec::new();
     for (i, v) in scene.sensors.iter().enumerate() {
         let field = format!("sensors[{i}]");
-        let c: SensorConfig = typed(
-            v,
-            &file,
-            &field,
-            "a sensor with \"type\": \"frame\" or \"line_scanner\"",
-        )?;
+        let c = sensor_config(v, &file, &field)?;
         let loc = file.clone().with_field(&field);
         let s = Sensor::from_config(&c, &loc)?;
         if sensors.iter().any(|o| o.name == s.name) {
@@ -136,6 +131,47 @@ pub(crate) fn typed<T: DeserializeOwned>(
         }
         Error::parse(file.clone().with_field(path), message)
     })
+}
+
+/// Sensor `v` (at JSON path `field`) as a [`SensorConfig`]: its `type` read
+/// first, then the variant's own struct from the other keys, so that an error
+/// names the key inside the sensor (`sensors[0].width`, with its line and
+/// column). Deserialised as the internally tagged enum, serde buffers the
+/// sensor's content and the key's path is lost. An unknown or missing `type`
+/// goes through the enum, whose error lists (and suggests) the types.
+///
+/// # Errors
+/// [`Error::Parse`] as [`typed`].
+fn sensor_config(v: &serde_json::Value, file: &Location, field: &str) -> Result<SensorConfig> {
+    let obj = v.as_object();
+    let tag = obj
+        .and_then(|m| m.get("type"))
+        .and_then(serde_json::Value::as_str);
+    let body = || {
+        let mut m = obj.cloned().unwrap_or_default();
+        m.remove("type");
+        serde_json::Value::Object(m)
+    };
+    match tag {
+        Some("frame") => Ok(SensorConfig::Frame(typed(
+            &body(),
+            file,
+            field,
+            "a frame camera (`\"type\": \"frame\"`)",
+        )?)),
+        Some("line_scanner") => Ok(SensorConfig::LineScanner(typed(
+            &body(),
+            file,
+            field,
+            "a line scanner (`\"type\": \"line_scanner\"`)",
+        )?)),
+        _ => typed(
+            v,
+            file,
+            field,
+            "a sensor with \"type\": \"frame\" or \"line_scanner\"",
+        ),
+    }
 }
 
 /// The key of a `serde` "unknown field `k`" message.

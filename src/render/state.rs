@@ -690,11 +690,10 @@ fn file_is_complete(
     let Ok(f) = std::fs::File::open(path) else {
         return false;
     };
-    let Ok(reader) = arrow_ipc::reader::FileReader::try_new(f, None) else {
+    let Ok((meta, _)) = decode_ipc(f, false) else {
         return false;
     };
     let want = file_metadata(kind, key, shard, range);
-    let meta = reader.schema().metadata().clone();
     want.iter().all(|(k, v)| meta.get(k) == Some(v))
 }
 
@@ -710,6 +709,39 @@ fn write_batch(path: &Path, batch: &RecordBatch) -> Result<()> {
     })
 }
 
+/// An Arrow IPC file's schema metadata and (`with_batches`) its record
+/// batches; the error says
+/// what is malformed. arrow-ipc 59 panics on some malformed files instead of
+/// returning an error (a schema field of type `NONE`; a boolean null bitmap
+/// shorter than its column; a buffer slice beyond the body; found by the
+/// `state` fuzz target): the panic is caught and reported as a malformed file
+/// (the default hook still prints the panic's own message).
+fn decode_ipc(
+    f: std::fs::File,
+    with_batches: bool,
+) -> std::result::Result<(HashMap<String, String>, Vec<RecordBatch>), String> {
+    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let reader = arrow_ipc::reader::FileReader::try_new(f, None)
+            .map_err(|e| format!("not an Arrow IPC file: {e}"))?;
+        let meta = reader.schema().metadata().clone();
+        if !with_batches {
+            return Ok((meta, Vec::new()));
+        }
+        let batches = reader
+            .map(|b| b.map_err(|e| e.to_string()))
+            .collect::<std::result::Result<Vec<_>, String>>()?;
+        Ok((meta, batches))
+    }));
+    decoded.unwrap_or_else(|p| {
+        let why = p
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| p.downcast_ref::<&str>().copied())
+            .unwrap_or("the Arrow reader failed");
+        Err(format!("malformed Arrow IPC file: {why}"))
+    })
+}
+
 /// Read the one record batch of `path`, checking its metadata.
 fn read_batch(
     path: &Path,
@@ -720,9 +752,7 @@ fn read_batch(
 ) -> Result<RecordBatch> {
     let bad = |m: String| Error::invalid("state", format!("{}: {m}", path.display()));
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = arrow_ipc::reader::FileReader::try_new(f, None)
-        .map_err(|e| bad(format!("not an Arrow IPC file: {e}")))?;
-    let meta = reader.schema().metadata().clone();
+    let (meta, batches) = decode_ipc(f, true).map_err(bad)?;
     let want = file_metadata(kind, key, shard, range);
     for field in [
         "irsig.format",
@@ -738,10 +768,6 @@ fn read_batch(
                 want[field]
             )));
         }
-    }
-    let mut batches = Vec::new();
-    for b in reader {
-        batches.push(b.map_err(|e| bad(e.to_string()))?);
     }
     let schema = batches
         .first()
@@ -800,7 +826,23 @@ fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> 
             format!("{}: column `{name}` has nulls", path.display()),
         ));
     }
+    check_finite(path, name, a.values())?;
     Ok(a.values().to_vec())
+}
+
+/// Every value of column `name` is finite: a NaN or an infinity would pass
+/// silently into the thermal solve or the image.
+fn check_finite(path: &Path, name: &str, v: &[f32]) -> Result<()> {
+    match v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        Some((i, x)) => Err(Error::invalid(
+            "state",
+            format!(
+                "{}: column `{name}` holds {x} at row {i}: expected a finite number",
+                path.display()
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 fn check_facet_ids(batch: &RecordBatch, path: &Path, range: &Range<usize>) -> Result<()> {
@@ -835,8 +877,14 @@ fn time_column(quantity: &str, i: usize) -> String {
     format!("{quantity}_{i}")
 }
 
-/// Write the facet states `states` (shard `k` of `n`) to `path`.
-fn write_states(
+/// Write the facet states `states` (shard `k` of `n`, facets
+/// `states.first..`) to `path`, atomically: one state file of a folder
+/// ([`run_all`] and [`run_pass2`] name and write them; public for tools and
+/// the fuzz harness's seeds).
+///
+/// # Errors
+/// Writing the file.
+pub fn write_states(
     path: &Path,
     key: &StateKey,
     shard: (usize, usize),
@@ -873,7 +921,15 @@ fn write_states(
     write_batch(path, &batch)
 }
 
-fn read_state_file(
+/// Read one state file (`state-K-of-N.arrow`) on its own: shard `shard` of
+/// `key`'s scene, facets `range` ([`read_states`] reads a whole folder;
+/// public for tools and the fuzz harness).
+///
+/// # Errors
+/// Not an Arrow IPC file, metadata of another scene, times or split, rows
+/// other than `range`, a missing, mistyped or null column, a non-finite
+/// value: each naming the file (and the column).
+pub fn read_state_file(
     path: &Path,
     key: &StateKey,
     shard: (usize, usize),
@@ -898,8 +954,17 @@ fn read_state_file(
     })
 }
 
-/// Write pass 1's rays of a shard to `path`.
-fn write_rays(path: &Path, key: &StateKey, shard: (usize, usize), rays: &FacetRays) -> Result<()> {
+/// Write pass 1's rays of a shard to `path`, atomically (public for tools
+/// and the fuzz harness's seeds).
+///
+/// # Errors
+/// Writing the file.
+pub fn write_rays(
+    path: &Path,
+    key: &StateKey,
+    shard: (usize, usize),
+    rays: &FacetRays,
+) -> Result<()> {
     let range = rays.range.clone();
     let steps = rays.solar.steps;
     let sky = &rays.sky;
@@ -965,8 +1030,14 @@ fn write_rays(path: &Path, key: &StateKey, shard: (usize, usize), rays: &FacetRa
     write_batch(path, &batch)
 }
 
-/// Read pass 1's rays of a shard from `path`.
-fn read_rays(
+/// Read pass 1's rays of a shard from `path` (`rays-K-of-N.arrow`): shard
+/// `shard` of `key`'s scene, facets `range` (public for tools and the fuzz
+/// harness).
+///
+/// # Errors
+/// As [`read_state_file`]; also background facets beyond the scene's and
+/// lists of mismatched lengths.
+pub fn read_rays(
     path: &Path,
     key: &StateKey,
     shard: (usize, usize),
@@ -979,9 +1050,11 @@ fn read_rays(
     let back = column(&batch, path, "back_shape_factor")?
         .as_primitive_opt::<Float32Type>()
         .ok_or_else(|| bad("column `back_shape_factor` is not float32".into()))?;
-    let back_shape_factor = (0..nf)
+    let back_shape_factor: Vec<Option<f32>> = (0..nf)
         .map(|i| (!back.is_null(i)).then(|| back.value(i)))
         .collect();
+    let backs: Vec<f32> = back_shape_factor.iter().flatten().copied().collect();
+    check_finite(path, "back_shape_factor", &backs)?;
     let on_ground = column(&batch, path, "on_ground")?
         .as_boolean_opt()
         .ok_or_else(|| bad("column `on_ground` is not boolean".into()))?;
@@ -1010,6 +1083,7 @@ fn read_rays(
     let weights = weights
         .as_primitive_opt::<Float32Type>()
         .ok_or_else(|| bad("`background_weight` does not hold float32".into()))?;
+    check_finite(path, "background_weight", weights.values())?;
     if let Some(&f) = facets.values().iter().find(|&&f| f as usize >= key.facets) {
         return Err(bad(format!(
             "background facet {f} is beyond the scene's {} facets",
@@ -1036,7 +1110,9 @@ fn read_rays(
             .values()
             .as_primitive_opt::<Float32Type>()
             .ok_or_else(|| bad(format!("`{name}` does not hold float32")))?;
-        Ok((steps, v.values()[start..start + nf * steps].to_vec()))
+        let v = &v.values()[start..start + nf * steps];
+        check_finite(path, name, v)?;
+        Ok((steps, v.to_vec()))
     };
     let (steps, sun_fraction) = history("sun_fraction")?;
     let (steps2, cos_incidence) = history("cos_incidence")?;

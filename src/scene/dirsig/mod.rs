@@ -684,6 +684,18 @@ impl<'o> Importer<'o> {
         at: &Placement,
         from: &Location,
     ) -> Result<()> {
+        // Nested lists multiply their placements: huge (finite) values can overflow.
+        let det = at.m.determinant();
+        if !(at.m.is_finite() && det.is_finite() && det > 0.0) {
+            return Err(Error::parse(
+                from.clone(),
+                format!(
+                    "the placement (this instance within its lists) has determinant {det}: \
+                     expected a finite transform with scales > 0 (no zero, mirroring or \
+                     overflowing scale or translation)"
+                ),
+            ));
+        }
         let key = format!("{geo:?}|{:?}|{:?}|{unit:?}", mats.lib, mats.assign);
         let k = match self.object_by_key.get(&key) {
             Some(&k) => k,
@@ -936,7 +948,14 @@ impl<'o> Importer<'o> {
             .expect("valid midnight");
         let hour = (time - midnight).num_seconds() as f64 / 3600.0;
         let days = ((span_h - hour) / 24.0).floor().max(0.0) as i64;
-        let start = midnight - chrono::TimeDelta::days(days);
+        let start = chrono::TimeDelta::try_days(days)
+            .and_then(|d| midnight.checked_sub_signed(d))
+            .ok_or_else(|| {
+                Error::parse(
+                    Location::file(w).at_line(1),
+                    format!("`.wth` header `{head}`: {span_h} hours reach beyond the calendar"),
+                )
+            })?;
         Ok(WeatherSpec {
             file,
             start: Some(start.to_rfc3339()),

@@ -269,6 +269,16 @@ impl Importer<'_> {
         let up = r * DVec3::new(0.0, 1.0, 0.0);
         let range = pose.position.z.abs().max(1.0);
         let target = pose.position + look * range;
+        if !(target.is_finite() && up.is_finite()) {
+            return Err(Error::parse(
+                xml::loc(path, fp),
+                format!(
+                    "the platform at {} looks at a point beyond finite numbers: expected a \
+                     position within the scene's range",
+                    pose.position
+                ),
+            ));
+        }
         let name = xml::attr(fp, "name")
             .map(sanitize)
             .unwrap_or_else(|| "camera".into());

@@ -36,10 +36,14 @@ impl Importer<'_> {
             return Ok(());
         }
         self.scene_seen = true;
+        // Absolute: `$SCENE_DIR/…` expands to a path that must not be joined to the
+        // scene's folder a second time when the scene was named relative to the
+        // working directory.
         let dir = path
             .parent()
             .map(Path::to_path_buf)
             .unwrap_or_else(|| PathBuf::from("."));
+        let dir = std::path::absolute(&dir).unwrap_or(dir);
         let vars = [("SCENE_DIR", dir.as_path())];
         let folder = |n: Option<Node>| {
             n.map(|n| PathBuf::from(Importer::expand(&xml::text(n), &vars)))
@@ -65,6 +69,15 @@ impl Importer<'_> {
         let lat = xml::req_number(path, loc_node, "latitude")?;
         let lon = xml::req_number(path, loc_node, "longitude")?;
         let alt = xml::opt_number(path, loc_node, "altitude")?.unwrap_or(0.0);
+        for (name, v, max) in [("latitude", lat, 90.0), ("longitude", lon, 180.0)] {
+            if v.abs() > max {
+                let at = xml::child(loc_node, name).unwrap_or(loc_node);
+                return Err(Error::parse(
+                    xml::loc(path, at),
+                    format!("{name} {v}°: expected −{max}..={max} (degrees, east positive)"),
+                ));
+            }
+        }
         self.site = Some(SiteSpec {
             latitude_deg: lat,
             longitude_deg: lon,

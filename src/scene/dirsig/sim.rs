@@ -207,7 +207,7 @@ impl Importer<'_> {
                 other => self.warn(at(&p), format!("plugin `{other}` is not imported; dropped")),
             }
         }
-        self.run_files(files)
+        self.run_files(path, files)
     }
 
     /// Import a DIRSIG4 `.sim` (`<simulation>`).
@@ -264,14 +264,14 @@ impl Importer<'_> {
         if let Some(n) = inline_atm {
             self.atm_node(path, n)?;
         }
-        self.run_files(files)
+        self.run_files(path, files)
     }
 
     /// Read the files a simulation names, in dependency order.
-    fn run_files(&mut self, f: SimFiles) -> Result<()> {
+    fn run_files(&mut self, sim: &Path, f: SimFiles) -> Result<()> {
         let Some((scene, at)) = f.scene else {
             return Err(Error::parse(
-                Location::default().with_field("scene"),
+                Location::file(sim).with_field("scene"),
                 "the simulation names no scene",
             ));
         };
@@ -351,9 +351,15 @@ impl Importer<'_> {
                         "a relative datetime needs the task list's `<reference>` datetime",
                     )
                 })?;
-                Ok(Some(
-                    r + chrono::TimeDelta::milliseconds((s * 1000.0).round() as i64),
-                ))
+                chrono::TimeDelta::try_milliseconds((s * 1000.0).round() as i64)
+                    .and_then(|d| r.checked_add_signed(d))
+                    .map(Some)
+                    .ok_or_else(|| {
+                        Error::parse(
+                            xml::loc(path, d),
+                            format!("{s} s after the reference time is beyond the calendar"),
+                        )
+                    })
             } else {
                 parse_abs(d).map(Some)
             }

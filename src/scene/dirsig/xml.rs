@@ -140,10 +140,13 @@ pub fn triple(path: &Path, n: Node, default: f64) -> Result<[f64; 3]> {
         let v: Vec<f64> = t
             .split(|c: char| c == ',' || c.is_whitespace())
             .filter(|s| !s.is_empty())
-            .map(str::parse)
+            .map(|s| s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or(()))
             .collect::<std::result::Result<_, _>>()
-            .map_err(|_| {
-                Error::parse(loc(path, n), format!("expected three numbers, found `{t}`"))
+            .map_err(|()| {
+                Error::parse(
+                    loc(path, n),
+                    format!("expected three finite numbers, found `{t}`"),
+                )
             })?;
         return match v.len() {
             0 => Ok([default; 3]),
