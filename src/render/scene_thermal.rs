@@ -367,8 +367,12 @@ pub struct SceneThermalTimings {
     pub setup: Duration,
     /// Ray tracing (solar history and sky view).
     pub rays: Duration,
-    /// Thermal passes.
+    /// Thermal stage: sunlight reflected between facets and the thermal
+    /// passes.
     pub thermal: Duration,
+    /// Of [`SceneThermalTimings::thermal`]: sunlight reflected between
+    /// facets ([`crate::exposure::ReflectedShortwave`]).
+    pub reflected: Duration,
 }
 
 impl SceneThermalTimings {
@@ -795,6 +799,7 @@ fn solve_traced(
     } else {
         exposure
     };
+    let reflected = t2.elapsed();
     let (setup, ground_facets) = if params.ground {
         let count = ground.iter().filter(|&&g| g).count();
         (setup.with_ground(&ground), count)
@@ -826,6 +831,7 @@ fn solve_traced(
             setup: Duration::ZERO,
             rays: Duration::ZERO,
             thermal: t3 - t2,
+            reflected,
         },
     })
 }

@@ -309,6 +309,8 @@ pub struct Timings {
     /// Of [`Timings::thermal`]: the thermal passes alone (the slab model
     /// over every facet, without the per-facet rays).
     pub thermal_solve: Duration,
+    /// Of [`Timings::thermal_solve`]: sunlight reflected between facets.
+    pub reflected_shortwave: Duration,
     /// Per image time and sensor: the shading tables (spectra, emissivity
     /// and Planck tables, band integrals, per-facet terms, path table).
     pub radiometry_setup: Duration,
@@ -548,6 +550,7 @@ impl Session {
         let states = scene_thermal(self, own, times, progress)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += states.timings.thermal;
+        self.timings.reflected_shortwave += states.timings.reflected;
         Ok(states)
     }
 
@@ -581,6 +584,7 @@ impl Session {
         let states = self.facet_states_of(&solved, &times)?;
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += solved.timings.thermal;
+        self.timings.reflected_shortwave += solved.timings.reflected;
         Ok(states)
     }
 

@@ -573,6 +573,7 @@ pub fn run_pass2(
     let solved = solve_scene_traced(&session.scene, &times, &params, parts, progress)?;
     session.timings.thermal += t0.elapsed();
     session.timings.thermal_solve += solved.timings.thermal;
+    session.timings.reflected_shortwave += solved.timings.reflected;
     let states = session.facet_states_of(&solved, &times)?;
     drop(solved);
     write_states(&path, &key, (k, n), &states.slice(range))?;

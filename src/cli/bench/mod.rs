@@ -329,8 +329,11 @@ struct RenderReport {
     load_s: f64,
     bvh_build_s: f64,
     rays_thermal_s: f64,
-    /// Of `rays_thermal_s`: the thermal passes (slab model) alone.
+    /// Of `rays_thermal_s`: the thermal stage (reflected shortwave and the
+    /// slab model's passes), without the per-facet rays.
     thermal_solve_s: f64,
+    /// Of `thermal_solve_s`: sunlight reflected between facets.
+    reflected_shortwave_s: f64,
     /// Shading tables and per-facet terms (per image time and sensor).
     radiometry_setup_s: f64,
     ray_generation_s: f64,
@@ -367,6 +370,7 @@ fn timings_since(a: &Timings, b: &Timings) -> Timings {
         bvh_build: a.bvh_build - b.bvh_build,
         thermal: a.thermal - b.thermal,
         thermal_solve: a.thermal_solve - b.thermal_solve,
+        reflected_shortwave: a.reflected_shortwave - b.reflected_shortwave,
         radiometry_setup: a.radiometry_setup - b.radiometry_setup,
         ray_generation: a.ray_generation - b.ray_generation,
         primary_trace: a.primary_trace - b.primary_trace,
@@ -477,6 +481,7 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         bvh_build_s: secs(t.bvh_build),
         rays_thermal_s: secs(t.thermal),
         thermal_solve_s: secs(t.thermal_solve),
+        reflected_shortwave_s: secs(t.reflected_shortwave),
         radiometry_setup_s: secs(t.radiometry_setup),
         ray_generation_s: secs(t.ray_generation),
         primary_trace_s: secs(t.primary_trace),
@@ -522,6 +527,7 @@ fn run_render(a: RenderArgs) -> anyhow::Result<()> {
         ("BVH build", r.bvh_build_s),
         ("per-facet rays + thermal", r.rays_thermal_s),
         ("  of which thermal solve", r.thermal_solve_s),
+        ("    of which reflected shortwave", r.reflected_shortwave_s),
         ("radiometry setup", r.radiometry_setup_s),
         ("primary ray generation", r.ray_generation_s),
         ("primary trace", r.primary_trace_s),
