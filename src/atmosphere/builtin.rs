@@ -13,7 +13,9 @@
 //! 2 km scale height (a tropical column of ~4 g/cm² at 300 K, 80 % RH).
 //! CO₂ well mixed at 420 ppmv.
 //!
-//! **Absorption.** Spectral on the caller's grid:
+//! **Absorption.** Spectral on the caller's grid; items 1 and 2 below
+//! 2000 cm⁻¹ (λ > 5 µm), item 3 from 2000 cm⁻¹ up, items 4 and 5
+//! everywhere:
 //! 1. Water-vapour self/foreign continuum after Roberts, Selby & Biberman
 //!    (1976), Appl. Opt. 15, 2085 (as in LOWTRAN 5, Kneizys et al. 1980):
 //!    optical depth C_s(ν,T)·u·(e + γ(p − e)), u in g/cm², e and p in atm,
@@ -36,19 +38,21 @@
 //!    far wing in the window is part of the continuum above. O₃ 9.6 µm
 //!    (AFGL profiles only) likewise (see [`BANDS`] for parameters and
 //!    sources).
-//! 3. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) and
-//!    N₂O 4.5 µm from their lines ([`super::lines`]): positions and
-//!    intensities from the molecular constants at each layer's temperature,
-//!    Malkmus parameters from the lines in each wavelength's window (the
-//!    same Curtis–Godson path sums), and the far wings of the other lines,
-//!    sub-Lorentzian after Perrin & Hartmann (1989), as a continuum.
-//! 4. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
+//! 3. LOWTRAN 7's band models of H₂O, CO₂ (outside the 4.3 µm lines of
+//!    item 4), O₃, N₂O, CO and CH₄ and its CKD water-vapour continuum
+//!    ([`super::lowtran`], Kneizys et al. 1988, AFGL-TR-88-0177), with CH₄
+//!    1.7, CO 0.15 and N₂O 0.32 ppmv well mixed.
+//! 4. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) from
+//!    its lines ([`super::lines`]): positions and intensities from the
+//!    molecular constants at each layer's temperature, Malkmus parameters
+//!    from the lines in each wavelength's window (the same Curtis–Godson
+//!    path sums), and the far wings of the other lines, sub-Lorentzian after
+//!    Perrin & Hartmann (1989), as a continuum.
+//! 5. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
-//! 5. Not modelled: H₂O, HDO and CH₄ lines in 3–4.2 µm, N₂O's weak 3.9 and
-//!    4.06 µm bands, CO, the 3–5 µm water continuum beyond Roberts'
-//!    exponential term, aerosols and scattering. On the AFGL tropical
-//!    profile the zenith path is within 7 % of MODTRAN in 8–12 µm; in
-//!    3.5–4.5 µm see docs/physics/atmosphere.md for the remaining difference.
+//! 6. Not modelled: aerosols and scattering. On the AFGL tropical profile
+//!    the zenith path is within 7 % of MODTRAN in 8–12 µm and 4 % in
+//!    3.5–4.5 µm (docs/physics/atmosphere.md has the comparisons).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
@@ -247,8 +251,9 @@ struct WideBand {
     n: f64,
 }
 
-/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, O₃ 9.6 µm (the 4.3 µm
-/// CO₂ and 4.5 µm N₂O bands are line-by-line band models, [`super::lines`]).
+/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, O₃ 9.6 µm, used below
+/// [`lowtran::LOWTRAN_FROM_CM`] (the 4.3 µm CO₂ band is a line-by-line band
+/// model, [`super::lines`]; from 2000 cm⁻¹ up LOWTRAN 7, [`super::lowtran`]).
 const BANDS: [WideBand; 3] = [
     WideBand {
         nu_cm: 1600.0,
@@ -344,7 +349,8 @@ fn n2_cia(nu: f64) -> f64 {
     }
 }
 
-/// Roberts et al. (1976) self-continuum coefficient, (g cm⁻²)⁻¹ atm⁻¹.
+/// Roberts et al. (1976) self-continuum coefficient, (g cm⁻²)⁻¹ atm⁻¹;
+/// zero from [`lowtran::LOWTRAN_FROM_CM`] up (LOWTRAN 7's continuum there).
 #[inline]
 fn continuum_cs(nu: f64, t: f64) -> f64 {
     if nu >= lowtran::LOWTRAN_FROM_CM {
@@ -590,6 +596,7 @@ impl BuiltinAtmosphere {
             if band_model.active() {
                 lowtran::scaled_amounts(&mut w_bm, &lt_amounts, p_atm, t);
             }
+            let ln_w_bm = lowtran::ln_amounts(&w_bm);
             let n_w = per_m3(st.water_g_m3, M_H2O_G_MOL);
             let rho0 = 273.15 / 296.0;
             let col_w = n_w * ds * 1e-4 * 1e-20 / rho0;
@@ -602,7 +609,7 @@ impl BuiltinAtmosphere {
                     + n2_cia(nu[i]) * n2_path
                     + (c296 + w260 * c260) * self_w
                     + cf * foreign_w;
-                let mut t_lines = band_model.transmittance(i, &w_bm);
+                let mut t_lines = band_model.transmittance(i, &ln_w_bm);
                 for b in 0..BANDS.len() {
                     let ku = BANDS[b].kbar(nu[i], t) * amounts[b];
                     x[i][b] += ku;

@@ -28,9 +28,9 @@
 //!
 //! **Water-vapour continuum** (LOWTRAN 7 subroutine TRANS; the CKD continuum
 //! of S. A. Clough, F. X. Kneizys and R. W. Davies, Atmos. Res. 23, 229,
-//! 1989): optical depth per layer
-//! 10⁻²⁰·[(C_s(296)R₂₉₆ + w·(C_s(260)R₂₆₀ − C_s(296)R₂₉₆))·N·ρ_w/ρ₀
-//! + (C_f(296) + F(ν))·R₂₉₆·N·ρ_f/ρ₀], with N the layer's water molecules
+//! 1989): optical depth per layer 10⁻²⁰·(S·N·ρ_w/ρ₀ + G·N·ρ_f/ρ₀), with
+//! the self term S = C_s(296)R₂₉₆ + w·(C_s(260)R₂₆₀ − C_s(296)R₂₉₆) and the
+//! foreign term G = (C_f(296) + F(ν))·R₂₉₆; N the layer's water molecules
 //! per cm², ρ_w and ρ_f the densities of water and of the other air in
 //! Loschmidt units (2.6868·10¹⁹ cm⁻³), ρ₀ = 273.15/296, the radiation term
 //! R_T = ν·tanh(hcν/2kT) (cm⁻¹), w = (296 − T)/36 clamped to 0–1, the
@@ -154,7 +154,11 @@ fn parse_csv<const N: usize>(text: &str, name: &str) -> (f64, Vec<[f64; N]>) {
         } else if step.is_nan() {
             step = nu - prev;
         } else {
-            assert!((nu - prev - step).abs() < 1e-9, "{name} line {}: spacing", k + 1);
+            assert!(
+                (nu - prev - step).abs() < 1e-9,
+                "{name} line {}: spacing",
+                k + 1
+            );
         }
         prev = nu;
         let mut row = [f64::NAN; N];
@@ -225,7 +229,7 @@ pub fn continuum(nu: f64) -> [f64; 3] {
 pub struct BandModelGrid {
     /// Per grid cell: the range of its samples in `samples`.
     cells: Vec<(usize, usize)>,
-    /// Per sample: for each absorbing gas, (C, a, index into [`REGIONS`]).
+    /// Per sample: for each absorbing gas, (ln C, a, index into [`REGIONS`]).
     samples: Vec<Vec<(f64, f64, usize)>>,
 }
 
@@ -263,7 +267,8 @@ impl BandModelGrid {
                         })
                         .filter_map(|(j, reg)| {
                             let cp = t.bm[k][reg.gas as usize];
-                            cp.is_finite().then(|| (10f64.powf(cp), reg.a, j))
+                            cp.is_finite()
+                                .then_some((cp * std::f64::consts::LN_10, reg.a, j))
                         })
                         .collect();
                     samples.push(gases);
@@ -279,10 +284,12 @@ impl BandModelGrid {
         !self.samples.is_empty()
     }
 
-    /// Transmittance of grid cell `i` for the scaled amounts `w` (per entry
-    /// of [`REGIONS`], accumulated with [`scaled_amounts`]): the mean over
-    /// its samples of Π exp(−(C·W̃)^a); 1 for a cell without samples.
-    pub fn transmittance(&self, i: usize, w: &[f64; REGIONS.len()]) -> f64 {
+    /// Transmittance of grid cell `i` for the scaled amounts whose natural
+    /// logarithms are `ln_w` (per entry of [`REGIONS`], accumulated with
+    /// [`scaled_amounts`], see [`ln_amounts`]): the mean over its samples of
+    /// Π exp(−(C·W̃)^a), (C·W̃)^a = exp(a·(ln C + ln W̃)); 1 for a cell
+    /// without samples.
+    pub fn transmittance(&self, i: usize, ln_w: &[f64; REGIONS.len()]) -> f64 {
         let (lo, hi) = self.cells[i];
         if hi == lo {
             return 1.0;
@@ -292,16 +299,19 @@ impl BandModelGrid {
             .map(|g| {
                 let od: f64 = g
                     .iter()
-                    .map(|&(c, a, j)| {
-                        let x = c * w[j];
-                        if x > 0.0 { x.powf(a) } else { 0.0 }
-                    })
+                    .map(|&(ln_c, a, j)| (a * (ln_c + ln_w[j])).exp())
                     .sum();
                 (-od).exp()
             })
             .sum();
         sum / (hi - lo) as f64
     }
+}
+
+/// The natural logarithms of the scaled amounts `w` (−∞ for none), for
+/// [`BandModelGrid::transmittance`].
+pub fn ln_amounts(w: &[f64; REGIONS.len()]) -> [f64; REGIONS.len()] {
+    w.map(f64::ln)
 }
 
 /// Add one layer's scaled amounts to `w` (per entry of [`REGIONS`]): `amounts`
@@ -338,11 +348,11 @@ mod tests {
         // within the table have a C′.
         for (k, row) in t.bm.iter().enumerate() {
             let s = 2000.0 + 5.0 * k as f64;
-            for g in 0..GASES {
+            for (g, cp) in row.iter().enumerate() {
                 let in_region = REGIONS
                     .iter()
                     .any(|r| r.gas as usize == g && s >= r.lo && s <= r.hi);
-                assert_eq!(row[g].is_finite(), in_region, "gas {g} at {s}");
+                assert_eq!(cp.is_finite(), in_region, "gas {g} at {s}");
             }
         }
     }
@@ -352,17 +362,21 @@ mod tests {
         // One sample cell: τ = exp(−(C·W)^a) exactly; W = 0 gives 1.
         let g = BandModelGrid::new(&[2700.0], &[5.0]);
         let mut w = [0.0; REGIONS.len()];
-        assert_eq!(g.transmittance(0, &w), 1.0);
+        assert_eq!(g.transmittance(0, &ln_amounts(&w)), 1.0);
         scaled_amounts(&mut w, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, 273.15);
         // At 1 atm and 273.15 K the scaled amount is the amount.
         assert!((w[1] - 1.0).abs() < 1e-12);
         let cp = tables().bm[140][0];
         let want = (-(10f64.powf(cp)).powf(0.5495)).exp();
-        assert!((g.transmittance(0, &w) - want).abs() < 1e-12);
+        assert!((g.transmittance(0, &ln_amounts(&w)) - want).abs() < 1e-12);
         // Nothing below 5 µm's wavenumber, nor CO₂ inside the line range.
         assert!(!BandModelGrid::new(&[1900.0], &[5.0]).active());
         let co2 = BandModelGrid::new(&[2300.0], &[5.0]);
-        assert!(co2.samples[0].iter().all(|&(_, _, j)| REGIONS[j].gas != Gas::Co2));
+        assert!(
+            co2.samples[0]
+                .iter()
+                .all(|&(_, _, j)| REGIONS[j].gas != Gas::Co2)
+        );
     }
 
     #[test]
