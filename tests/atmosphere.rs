@@ -201,8 +201,11 @@ mod builtin {
         for (lo, hi) in [(8.0, 14.0), (3.0, 5.0)] {
             let band = Band::flat(lo, hi, 0.02).unwrap();
             let atmos = |rh| Atmosphere::Builtin(BuiltinAtmosphere::new(met(rh)).unwrap());
-            // Zero range: τ = 1 and L_u = 0 exactly; 1 cm: close to it (the
-            // CO₂ 4.3 µm band centre absorbs measurably even over 1 cm).
+            // Zero range: τ = 1 and L_u = 0 exactly; 1 cm: close to it, and
+            // 1 mm closer (the CO₂ 4.3 µm band centre absorbs measurably even
+            // over 1 cm, and LOWTRAN 7's band models, exp(−(CW)^a) with
+            // a ≈ 0.55 for water, lose ~0.1 % of 3–5 µm there: the power
+            // law's slope is infinite at W = 0).
             let a = atmos(0.6);
             let g0 = PathGeometry {
                 sensor_altitude_m: 101.5,
@@ -216,9 +219,18 @@ mod builtin {
             };
             let (t, l) = band_values(&a, &g1, &band);
             assert!(
-                t > 0.999 && l < 1e-3 * band.blackbody_radiance(295.0),
+                t > 0.998 && l < 2e-3 * band.blackbody_radiance(295.0),
                 "{t} {l}"
             );
+            let (t_mm, l_mm) = band_values(
+                &a,
+                &PathGeometry {
+                    range_m: 0.001,
+                    ..g0
+                },
+                &band,
+            );
+            assert!(t_mm > t && l_mm < l, "{t_mm} {l_mm} vs {t} {l}");
             // Range: horizontal near the ground, and slant down from 2 km.
             for slant in [false, true] {
                 let mut last = (1.0, 0.0);
@@ -805,10 +817,10 @@ mod standard {
         // tape7.LWIRSun / tape7.MWIRSun: MODTRAN, tropical model atmosphere,
         // looking up from the ground at zenith (23 km rural aerosol, which
         // the built-in model lacks). The built-in model on the same AFGL
-        // tropical profile, without the weather: 8–12 µm within 10 % in τ
-        // and in the zenith sky radiance (the issue's goal). 3.5–4.5 µm is
-        // printed and held within 32 % in τ and 30 % in L (the goal is 15 %;
-        // see docs/physics/atmosphere.md for what the model still lacks).
+        // tropical profile, without the weather: within the issue's goals,
+        // 10 % in 8–12 µm and 15 % in 3.5–4.5 µm, in τ̄ and in the zenith
+        // sky radiance (MODTRAN's includes scattered sunlight, 11 % of it in
+        // 3.5–4.5 µm; the built-in model has no scattering).
         let a = Atmosphere::standard(Profile::Tropical, 0.0).unwrap();
         let sky = SkyConditions {
             air_temperature_k: 299.7,
@@ -816,7 +828,7 @@ mod standard {
         };
         for (file, lo, hi, tol_tau, tol_l) in [
             ("tape7.LWIRSun", 8.0, 12.0, 0.10, 0.10),
-            ("tape7.MWIRSun", 3.5, 4.5, 0.32, 0.30),
+            ("tape7.MWIRSun", 3.5, 4.5, 0.15, 0.15),
         ] {
             let band = Band::flat(lo, hi, 0.005).unwrap();
             let (tau_m, lu_m) = tape7_band(file, &band);
@@ -834,28 +846,84 @@ mod standard {
             assert!(rel(tau_b, tau_m) < tol_tau, "{file}: τ {tau_b} vs {tau_m}");
             assert!(rel(lu_b, lu_m) < tol_l, "{file}: L {lu_b} vs {lu_m}");
         }
-        // Where the MWIR differences are: band-mean τ in sub-bands. The CO₂
-        // and N₂O lines place the 4.3 µm band's edges: 4.15–4.2 µm (the R
-        // branch beyond the head, sub-Lorentzian wings) within 0.1 of
-        // MODTRAN's τ̄, 4.2–4.5 µm nearly opaque. 3.5–4.15 µm stays too
-        // transparent (H₂O/HDO/CH₄ lines, aerosol, the 4 µm water continuum
-        // are not modelled): printed, held only loosely.
-        for (lo, hi, tol) in [
-            (3.5, 3.8, 0.3),
-            (3.8, 4.15, 0.2),
-            (4.15, 4.2, 0.1),
-            (4.2, 4.5, 0.1),
-        ] {
+        // Where the MWIR differences are: band-mean τ in sub-bands, each
+        // within 0.1 of MODTRAN's (docs/physics/atmosphere.md has the table).
+        for (lo, hi) in [(3.5, 3.8), (3.8, 4.15), (4.15, 4.2), (4.2, 4.5)] {
             let band = Band::flat(lo, hi, 0.005).unwrap();
             let (tau_m, _) = tape7_band("tape7.MWIRSun", &band);
             let p = a.look_up(&sky, 0.0, band.grid()).unwrap();
             let tau_b = band.mean(&p.transmittance);
             println!("{lo}–{hi} µm: MODTRAN τ̄ {tau_m:.3}, built-in {tau_b:.3}");
             assert!(
-                (tau_b - tau_m).abs() < tol,
+                (tau_b - tau_m).abs() < 0.1,
                 "{lo}–{hi} µm: τ {tau_b} vs {tau_m}"
             );
         }
+    }
+
+    #[test]
+    #[ignore = "needs ../shared/data"]
+    fn the_other_modtran_runs_compare_with_the_builtin_model() {
+        // tape7-05: US Standard, ground to 100 km at 20° zenith, 2050–2100
+        // cm⁻¹ (CO₂, CO, O₃ and H₂O lines of 4.8 µm); tape7-01b: tropical,
+        // a 1 km horizontal path at the ground, 655–750 cm⁻¹ (the CO₂
+        // 15 µm band's edge); tape7-02c: tropical, ground to 100 km at 89.5°,
+        // 655–715 cm⁻¹ (opaque: the sky there is a blackbody at the air's
+        // temperature). MODTRAN's L is PTH_THRML + SOL_SCAT.
+        let cases: [(&str, Profile, f64, f64, f64); 2] = [
+            ("tape7-05", Profile::UsStandard, 20.0, 2050.0, 2100.0),
+            ("tape7-02c", Profile::Tropical, 89.5, 655.0, 715.0),
+        ];
+        for (file, profile, zenith, v1, v2) in cases {
+            let a = Atmosphere::standard(profile, 0.0).unwrap();
+            let t_air = profile.level(0.0).temperature_k;
+            let sky = SkyConditions {
+                air_temperature_k: t_air,
+                sky_longwave_w_m2: f64::NAN,
+            };
+            let band = Band::flat(1e4 / v2, 1e4 / v1, 0.002).unwrap();
+            let (tau_m, lu_m) = tape7_band(file, &band);
+            let p = a.look_up(&sky, zenith, band.grid()).unwrap();
+            let (tau_b, lu_b) = (
+                band.mean(&p.transmittance),
+                band.integrate(&p.path_radiance),
+            );
+            println!(
+                "{file}: MODTRAN τ̄ {tau_m:.3} L {lu_m:.4}; built-in τ̄ {tau_b:.3} L {lu_b:.4} \
+                 ({:+.1} %, {:+.1} %)",
+                100.0 * (tau_b / tau_m - 1.0),
+                100.0 * (lu_b / lu_m - 1.0)
+            );
+            assert!(
+                (tau_b - tau_m).abs() < 0.15 * tau_m.max(0.05),
+                "{file}: τ {tau_b} vs {tau_m}"
+            );
+            assert!(rel(lu_b, lu_m) < 0.15, "{file}: L {lu_b} vs {lu_m}");
+        }
+        // tape7-01b, transmittance mode: the 1 km horizontal path.
+        let a = Atmosphere::standard(Profile::Tropical, 0.0).unwrap();
+        let band = Band::flat(1e4 / 750.0, 1e4 / 655.0, 0.002).unwrap();
+        let (tau_m, _) = {
+            let t = Tape7::read(util::shared_data("modtran").join("tape7-01b")).unwrap();
+            let (wl, tau) = t.transmittance_um();
+            (
+                band.mean(&band.grid().resample_mean(&wl, &tau, 0.02).unwrap()),
+                (),
+            )
+        };
+        let p = a
+            .path(
+                &PathGeometry {
+                    sensor_altitude_m: 0.0,
+                    target_altitude_m: 0.0,
+                    range_m: 1000.0,
+                },
+                band.grid(),
+            )
+            .unwrap();
+        let tau_b = band.mean(&p.transmittance);
+        println!("tape7-01b: MODTRAN τ̄ {tau_m:.3}; built-in τ̄ {tau_b:.3}");
+        assert!((tau_b - tau_m).abs() < 0.1, "τ {tau_b} vs {tau_m}");
     }
 
     #[test]

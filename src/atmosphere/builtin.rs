@@ -13,7 +13,9 @@
 //! 2 km scale height (a tropical column of ~4 g/cm² at 300 K, 80 % RH).
 //! CO₂ well mixed at 420 ppmv.
 //!
-//! **Absorption.** Spectral on the caller's grid:
+//! **Absorption.** Spectral on the caller's grid; items 1 and 2 below
+//! 2000 cm⁻¹ (λ > 5 µm), item 3 from 2000 cm⁻¹ up, items 4 and 5
+//! everywhere:
 //! 1. Water-vapour self/foreign continuum after Roberts, Selby & Biberman
 //!    (1976), Appl. Opt. 15, 2085 (as in LOWTRAN 5, Kneizys et al. 1980):
 //!    optical depth C_s(ν,T)·u·(e + γ(p − e)), u in g/cm², e and p in atm,
@@ -36,19 +38,21 @@
 //!    far wing in the window is part of the continuum above. O₃ 9.6 µm
 //!    (AFGL profiles only) likewise (see [`BANDS`] for parameters and
 //!    sources).
-//! 3. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) and
-//!    N₂O 4.5 µm from their lines ([`super::lines`]): positions and
-//!    intensities from the molecular constants at each layer's temperature,
-//!    Malkmus parameters from the lines in each wavelength's window (the
-//!    same Curtis–Godson path sums), and the far wings of the other lines,
-//!    sub-Lorentzian after Perrin & Hartmann (1989), as a continuum.
-//! 4. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
+//! 3. LOWTRAN 7's band models of H₂O, CO₂ (outside the 4.3 µm lines of
+//!    item 4), O₃, N₂O, CO and CH₄ and its CKD water-vapour continuum
+//!    ([`super::lowtran`], Kneizys et al. 1988, AFGL-TR-88-0177), with CH₄
+//!    1.7, CO 0.15 and N₂O 0.32 ppmv well mixed.
+//! 4. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) from
+//!    its lines ([`super::lines`]): positions and intensities from the
+//!    molecular constants at each layer's temperature, Malkmus parameters
+//!    from the lines in each wavelength's window (the same Curtis–Godson
+//!    path sums), and the far wings of the other lines, sub-Lorentzian after
+//!    Perrin & Hartmann (1989), as a continuum.
+//! 5. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
-//! 5. Not modelled: H₂O, HDO and CH₄ lines in 3–4.2 µm, N₂O's weak 3.9 and
-//!    4.06 µm bands, CO, the 3–5 µm water continuum beyond Roberts'
-//!    exponential term, aerosols and scattering. On the AFGL tropical
-//!    profile the zenith path is within 7 % of MODTRAN in 8–12 µm; in
-//!    3.5–4.5 µm see docs/physics/atmosphere.md for the remaining difference.
+//! 6. Not modelled: aerosols and scattering. On the AFGL tropical profile
+//!    the zenith path is within 7 % of MODTRAN in 8–12 µm and 4 % in
+//!    3.5–4.5 µm (docs/physics/atmosphere.md has the comparisons).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
@@ -66,6 +70,7 @@
 
 use super::PathSpectra;
 use super::lines;
+use super::lowtran;
 use super::profile::Profile;
 use crate::radiometry::{Planck, SpectralGrid};
 use crate::weather::WeatherRecord;
@@ -110,6 +115,13 @@ const M_N2O_G_MOL: f64 = 44.01;
 /// N₂O volume mixing ratio, ppmv (well mixed; the AFGL profiles' 0.32 in
 /// the troposphere).
 const N2O_PPMV: f64 = 0.32;
+/// CH₄ and CO volume mixing ratios, ppmv, well mixed: the tropospheric
+/// values of the AFGL model atmospheres (Anderson et al. 1986, tables
+/// 1a–1f: CH₄ 1.7; CO 0.15 near the ground, falling with height — the
+/// ground value is used throughout).
+const CH4_PPMV: f64 = 1.7;
+const CO_PPMV: f64 = 0.15;
+const AVOGADRO: f64 = 6.022_140_76e23;
 /// N₂ volume mixing ratio of dry air.
 const N2_FRACTION: f64 = 0.7808;
 /// Integrated absorption of the N₂ collision-induced fundamental band,
@@ -239,8 +251,9 @@ struct WideBand {
     n: f64,
 }
 
-/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, O₃ 9.6 µm (the 4.3 µm
-/// CO₂ and 4.5 µm N₂O bands are line-by-line band models, [`super::lines`]).
+/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, O₃ 9.6 µm, used below
+/// [`lowtran::LOWTRAN_FROM_CM`] (the 4.3 µm CO₂ band is a line-by-line band
+/// model, [`super::lines`]; from 2000 cm⁻¹ up LOWTRAN 7, [`super::lowtran`]).
 const BANDS: [WideBand; 3] = [
     WideBand {
         nu_cm: 1600.0,
@@ -280,6 +293,9 @@ const BANDS: [WideBand; 3] = [
 impl WideBand {
     /// Mean k̄ (m²/g) at wavenumber ν and temperature T.
     fn kbar(&self, nu: f64, t: f64) -> f64 {
+        if nu >= lowtran::LOWTRAN_FROM_CM {
+            return 0.0;
+        }
         let omega = self.omega0 * (t / 100.0).sqrt();
         let x = if self.head {
             if nu > self.nu_cm {
@@ -333,9 +349,13 @@ fn n2_cia(nu: f64) -> f64 {
     }
 }
 
-/// Roberts et al. (1976) self-continuum coefficient, (g cm⁻²)⁻¹ atm⁻¹.
+/// Roberts et al. (1976) self-continuum coefficient, (g cm⁻²)⁻¹ atm⁻¹;
+/// zero from [`lowtran::LOWTRAN_FROM_CM`] up (LOWTRAN 7's continuum there).
 #[inline]
 fn continuum_cs(nu: f64, t: f64) -> f64 {
+    if nu >= lowtran::LOWTRAN_FROM_CM {
+        return 0.0;
+    }
     let a = if nu <= 1250.0 { 4.18 } else { 0.0 };
     (a + 5578.0 * (-7.87e-3 * nu).exp()) * (1800.0 * (1.0 / t - 1.0 / 296.0)).exp()
 }
@@ -525,8 +545,11 @@ impl BuiltinAtmosphere {
         let mut cont = vec![0.0; n];
         let mut x = vec![[0.0f64; BANDS.len()]; n];
         let mut xb = vec![[0.0f64; BANDS.len()]; n];
-        let line_bands = lines::co2_n2o_bands();
+        let line_bands = lines::co2_bands();
         let windows = lines::LineWindows::new(line_bands, &nu);
+        let band_model = lowtran::BandModelGrid::new(&nu, &lines::window_widths(&nu));
+        let h2o_cont: Vec<[f64; 3]> = nu.iter().map(|&v| lowtran::continuum(v)).collect();
+        let mut w_bm = [0.0f64; lowtran::REGIONS.len()];
         let mut xl = vec![vec![0.0f64; line_bands.len()]; n];
         let mut xlb = vec![vec![0.0f64; line_bands.len()]; n];
         // Fixed segment boundaries k·step from the sensor, so a longer path
@@ -547,22 +570,46 @@ impl BuiltinAtmosphere {
             let line_layers: Vec<(lines::LayerBand, f64)> = (0..line_bands.len())
                 .filter(|&b| windows.active(b))
                 .map(|b| {
-                    let amount = match line_bands[b].band().gas {
-                        lines::Gas::Co2 => st.co2_g_m3 * ds,
-                        lines::Gas::N2o => st.n2o_g_m3 * ds,
-                    };
                     (
                         lines::layer_parameters(line_bands, &windows, b, t, p_atm),
-                        amount,
+                        st.co2_g_m3 * ds,
                     )
                 })
                 .collect();
             // N₂ density in amagat (number density / Loschmidt's at 273.15 K, 1 atm).
             let n2 = N2_FRACTION * (st.pressure_pa - st.water_pa) / ATM_PA * 273.15 / t;
             let n2_path = n2 * n2 * ds * 100.0;
+            // LOWTRAN 7 (ν ≥ 2000 cm⁻¹): the layer's amounts, g/cm² of water
+            // and atm·cm of the other gases, and its water continuum
+            // factors (module docs of `lowtran`).
+            let n_air = st.pressure_pa * AVOGADRO / (R_GAS * t);
+            let atm_cm = |n_m3: f64| n_m3 * ds / (lowtran::LOSCHMIDT_M3 * 0.01);
+            let per_m3 = |g_m3: f64, m: f64| g_m3 / m * AVOGADRO;
+            let lt_amounts = [
+                u_w_cm2,
+                atm_cm(per_m3(st.co2_g_m3, M_CO2_G_MOL)),
+                atm_cm(per_m3(st.o3_g_m3, M_O3_G_MOL)),
+                atm_cm(per_m3(st.n2o_g_m3, M_N2O_G_MOL)),
+                atm_cm(CO_PPMV * 1e-6 * n_air),
+                atm_cm(CH4_PPMV * 1e-6 * n_air),
+            ];
+            if band_model.active() {
+                lowtran::scaled_amounts(&mut w_bm, &lt_amounts, p_atm, t);
+            }
+            let ln_w_bm = lowtran::ln_amounts(&w_bm);
+            let n_w = per_m3(st.water_g_m3, M_H2O_G_MOL);
+            let rho0 = 273.15 / 296.0;
+            let col_w = n_w * ds * 1e-4 * 1e-20 / rho0;
+            let self_w = col_w * n_w / lowtran::LOSCHMIDT_M3;
+            let foreign_w = col_w * (n_air - n_w).max(0.0) / lowtran::LOSCHMIDT_M3;
+            let w260 = ((296.0 - t) / 36.0).clamp(0.0, 1.0);
             for i in 0..n {
-                cont[i] += continuum_cs(nu[i], t) * u_w_cm2 * broad + n2_cia(nu[i]) * n2_path;
-                let mut t_lines = 1.0;
+                let [c296, c260, cf] = h2o_cont[i];
+                cont[i] += continuum_cs(nu[i], t) * u_w_cm2 * broad
+                    + n2_cia(nu[i]) * n2_path
+                    + (c296 + w260 * c260) * self_w
+                    + cf * foreign_w;
+                let mut t_lines = band_model.transmittance(i, &ln_w_bm);
                 for b in 0..BANDS.len() {
                     let ku = BANDS[b].kbar(nu[i], t) * amounts[b];
                     x[i][b] += ku;

@@ -1,6 +1,7 @@
 //! Vibration–rotation bands of linear molecules built from their molecular
 //! constants, as narrow-band Malkmus parameters: the CO₂ 4.3 µm band (with
-//! ¹³CO₂ and the first hot band) and N₂O 4.5 µm.
+//! ¹³CO₂ and the first hot band). (N₂O 4.5 µm and the other 3–5 µm
+//! absorbers are LOWTRAN 7's band models, [`super::lowtran`].)
 //!
 //! **Lines.** A Σ–Σ parallel band of a linear molecule has P and R branches
 //! (Herzberg, *Molecular Spectra and Molecular Structure* I, 2nd ed. 1950,
@@ -51,8 +52,6 @@ const J_MAX: u32 = 160;
 pub enum Gas {
     /// CO₂ (all isotopologues; the band's intensity is per CO₂ molecule).
     Co2,
-    /// N₂O.
-    N2o,
 }
 
 /// A parallel vibration–rotation band of a linear molecule.
@@ -87,18 +86,17 @@ pub struct LinearBand {
 const CO2_V3_INTENSITY: f64 = 110.0 * 1e4 * 44.01 / AVOGADRO;
 
 /// The bands: ¹²C¹⁶O₂ ν₃ (00⁰1–00⁰0), its first hot band (01¹1–01¹0) and
-/// ¹³C¹⁶O₂ ν₃; N₂O ν₃. Constants: band origins and rotational constants
+/// ¹³C¹⁶O₂ ν₃. Constants: band origins and rotational constants
 /// from Herzberg, *Molecular Spectra and Molecular Structure* II (1945) and
 /// Rothman & Young 1981 (J. Quant. Spectrosc. Radiat. Transfer 25, 505);
 /// the hot band's intensity is the fundamental's times the population of
 /// 01¹0 (degeneracy 2, 667.4 cm⁻¹) — the ν₃ transition moment hardly
 /// depends on the bending quantum (harmonic approximation); ¹³CO₂ is the
 /// fundamental times its natural abundance, 1.106 %. Widths: air-broadened
-/// CO₂ and N₂O lines, 0.07 cm⁻¹/atm at mid J with exponent 0.75 (HITRAN
+/// CO₂ lines, 0.07 cm⁻¹/atm at mid J with exponent 0.75 (HITRAN
 /// averages; Rothman et al. 2013, J. Quant. Spectrosc. Radiat. Transfer
-/// 130, 4). N₂O ν₃ intensity 1.0·10⁻¹⁷ cm⁻¹/(molecule cm⁻²) (Toth 1991,
-/// Appl. Opt. 30, 5289).
-pub const BANDS: [LinearBand; 4] = [
+/// 130, 4).
+pub const BANDS: [LinearBand; 3] = [
     LinearBand {
         gas: Gas::Co2,
         molar_mass: 44.01,
@@ -135,22 +133,10 @@ pub const BANDS: [LinearBand; 4] = [
         gamma_296: 0.07,
         gamma_exponent: 0.75,
     },
-    LinearBand {
-        gas: Gas::N2o,
-        molar_mass: 44.01,
-        origin: 2223.757,
-        b_lower: 0.419_01,
-        b_upper: 0.415_55,
-        intensity_296: 1.0e-17,
-        lower_energy: 0.0,
-        even_j: false,
-        gamma_296: 0.075,
-        gamma_exponent: 0.75,
-    },
 ];
 
 /// The lines of every band of [`BANDS`], generated once.
-pub fn co2_n2o_bands() -> &'static [BandLines] {
+pub fn co2_bands() -> &'static [BandLines] {
     static B: std::sync::OnceLock<Vec<BandLines>> = std::sync::OnceLock::new();
     B.get_or_init(|| BANDS.iter().map(|&b| BandLines::new(b)).collect())
 }
@@ -234,8 +220,7 @@ impl BandLines {
 /// χ(Δ) = 1 for |Δ| ≤ 3 cm⁻¹, exp(−B₁(|Δ| − 3)) to 30 cm⁻¹,
 /// exp(−27B₁ − B₂(|Δ| − 30)) to 120 cm⁻¹ and exp(−27B₁ − 90B₂ − B₃(|Δ| − 120))
 /// beyond, B₁ = 0.0888, B₂ = 0.0526, B₃ = 0.0232 cm. It sets where the
-/// 4.3 µm band's absorption ends beyond its head; applied to N₂O alike (a
-/// linear molecule of the same size in the same bath gas).
+/// 4.3 µm band's absorption ends beyond its head.
 pub fn chi_factor(delta_cm: f64) -> f64 {
     const B1: f64 = 0.0888;
     const B2: f64 = 0.0526;
@@ -274,7 +259,7 @@ impl LineWindows {
 
 /// Window width around each wavenumber of `nu` (cm⁻¹, any order): the
 /// grid cell, at least [`MIN_WINDOW_CM`].
-fn window_widths(nu: &[f64]) -> Vec<f64> {
+pub fn window_widths(nu: &[f64]) -> Vec<f64> {
     let n = nu.len();
     (0..n)
         .map(|i| {

@@ -26,6 +26,7 @@
 
 pub mod builtin;
 pub mod lines;
+pub mod lowtran;
 pub mod lut;
 pub mod profile;
 pub mod table;
