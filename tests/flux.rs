@@ -449,7 +449,7 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
     use irsig::thermal::latent::psychrometrics::saturation_vapour_pressure_pa;
     use irsig::thermal::{Exchange, Forcing, STEFAN_BOLTZMANN_W_M2_K4, SolveOptions};
 
-    let props = props.clone();
+    let props = *props;
     let (history, _) = d.weather(0..d.len()).unwrap();
     let site = d.site().site();
     let (sol, _) = solve_free_facet(

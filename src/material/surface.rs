@@ -521,11 +521,20 @@ impl SurfaceEnergySpec {
             if let Some(prev) = last
                 && x.date <= prev
             {
-                p.push(("phenology", format!("{} after {prev}: the dates must increase", x.date)));
+                p.push((
+                    "phenology",
+                    format!("{} after {prev}: the dates must increase", x.date),
+                ));
             }
             last = Some(x.date);
             if let Some(h) = x.canopy_height_m {
-                check(&mut p, "phenology.canopy_height_m", h, h > 0.0, "a height > 0 m");
+                check(
+                    &mut p,
+                    "phenology.canopy_height_m",
+                    h,
+                    h > 0.0,
+                    "a height > 0 m",
+                );
             }
             if let Some(l) = x.leaf_area_index {
                 check(

@@ -13,8 +13,8 @@
 
 use super::aerodynamic::{CanopyKb, kb_inverse_su2001};
 use super::{
-    Aerodynamic, AirState, CanopyConditions, InputError, JarvisStewart, TurbulentExchange, in_range,
-    positive,
+    Aerodynamic, AirState, CanopyConditions, InputError, JarvisStewart, TurbulentExchange,
+    in_range, positive,
 };
 
 /// What resists vapour leaving the surface (the r_s of Penman–Monteith).
