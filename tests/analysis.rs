@@ -865,6 +865,8 @@ fn the_registry_lists_every_parameter_and_the_list_is_a_params_file() {
     // Rows: physical bounds inside the domain; set then get returns the value.
     let mut dry = db.get("asphalt").unwrap().clone();
     let mut wet = db.get("crop").unwrap().clone();
+    // With kB⁻¹ from the canopy, so that its leaf width is a parameter.
+    wet.surface_energy.as_mut().unwrap().heat_roughness = irsig::material::HeatRoughness::Su2001;
     for row in registry::MATERIAL_PARAMETERS {
         // The surface-energy rows on a material that has the block.
         let m = if row.name.starts_with("surface_energy.") {

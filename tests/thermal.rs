@@ -1404,6 +1404,37 @@ fn cli_thermal_stock_library_and_typical_year_epw() {
 
 use crate::util::stock_props as stock;
 
+/// A stock material, or `"NAME su2001"` with kB⁻¹ from its canopy (Su et
+/// al. 2001), or `"NAME growing …"` with a canopy growing from 0.2 m and
+/// LAI 0.5 to 1.2 m and LAI 4 over the first day of the forcing (which
+/// starts at 1970-01-01 00:00 UTC).
+fn stock_variant(name: &str) -> SlabProperties {
+    use irsig::material::{HeatRoughness, Phenology, PhenologyPoint};
+    let mut words = name.split(' ');
+    let db = irsig::material::stock::stock().unwrap();
+    let mut m = db.get(words.next().unwrap()).unwrap().clone();
+    for w in words {
+        let s = m.surface_energy.as_mut().unwrap();
+        match w {
+            "su2001" => s.heat_roughness = HeatRoughness::Su2001,
+            "growing" => {
+                let pt = |date: &str, h: f64, lai: f64| PhenologyPoint {
+                    date: date.parse().unwrap(),
+                    canopy_height_m: Some(h),
+                    leaf_area_index: Some(lai),
+                };
+                s.phenology = Phenology::try_from(vec![
+                    pt("1970-01-01", 0.2, 0.5),
+                    pt("1970-01-02", 1.2, 4.0),
+                ])
+                .unwrap();
+            }
+            _ => panic!("{w}"),
+        }
+    }
+    SlabProperties::from_material(&m).unwrap()
+}
+
 /// Surfaces that evaporate, on the synthetic clear days: the latent flux
 /// is positive by day and takes a large part of the absorbed sunlight; the
 /// surface energy balance closes every step (front energy in = change of
@@ -1423,8 +1454,17 @@ fn surfaces_that_evaporate_close_their_energy_balance() {
     let sun = vec![1.0f32; n];
     let inputs = FacetInputs::new(&sun, &cos, 1.0);
     let opts = SolveOptions::default();
-    for name in ["grass", "crop", "water", "bare_soil", "deciduous_canopy"] {
-        let props = stock(name);
+    for name in [
+        "grass",
+        "crop",
+        "water",
+        "bare_soil",
+        "deciduous_canopy",
+        "crop su2001",
+        "bare_soil su2001",
+        "crop growing su2001",
+    ] {
+        let props = stock_variant(name);
         let ex = Exchange::new(&props, &forcing).unwrap();
         let sol = thermal::solve(&props, &forcing, &inputs, &opts).unwrap();
         let noon = (0..n)

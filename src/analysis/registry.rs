@@ -307,6 +307,18 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         "Oke (1987) Boundary Layer Climates, Table 2.2: water ≈ 1e-4 m to forest ≈ 1–2 m"
     ),
     surface_param!(
+        "leaf_width_m",
+        "m",
+        0.005,
+        0.3,
+        POSITIVE,
+        |s| (s.heat_roughness == crate::material::HeatRoughness::Su2001).then(|| s.leaf_width()),
+        |s, v| if v != s.leaf_width() {
+            s.leaf_width_m = Some(v)
+        },
+        "characteristic leaf dimension for kB⁻¹ (su2001): grass blades ≈ 5 mm to broad leaves ≈ 0.3 m (Campbell & Norman 1998, Introduction to Environmental Biophysics, ch. 7)"
+    ),
+    surface_param!(
         "skin_conductance_w_m2_k",
         "W/(m²·K)",
         3.0,

@@ -104,6 +104,128 @@ impl SurfaceRoughness {
     }
 }
 
+/// Most dated entries of a [`Phenology`].
+pub const MAX_PHENOLOGY: usize = 16;
+
+/// One dated state of a growing canopy (`surface_energy.phenology[i]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PhenologyPoint {
+    /// The date, `YYYY-MM-DD` (taken at 00:00 UTC).
+    #[schemars(with = "String")]
+    pub date: chrono::NaiveDate,
+    /// Canopy height on that date, m (None: the block's `canopy_height_m`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub canopy_height_m: Option<f64>,
+    /// Leaf area index on that date, m² m⁻² (None: the block's
+    /// `leaf_area_index`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leaf_area_index: Option<f64>,
+}
+
+/// A canopy that grows through the run (`surface_energy.phenology`): up
+/// to [`MAX_PHENOLOGY`] dated heights and leaf area indices in increasing
+/// date order, interpolated linearly in time and held at the first and
+/// last entries outside them. Empty: the canopy is constant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Phenology {
+    len: usize,
+    points: [Option<PhenologyPoint>; MAX_PHENOLOGY],
+}
+
+impl Phenology {
+    /// The dated entries, in the file's order.
+    pub fn points(&self) -> impl Iterator<Item = &PhenologyPoint> {
+        self.points[..self.len].iter().flatten()
+    }
+
+    /// Whether no entry is given (a constant canopy).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Height and LAI at `unix_s` (seconds since 1970-01-01 UTC), each
+    /// interpolated linearly between the dates that give it, `default_*`
+    /// where no entry gives it.
+    pub fn at(&self, unix_s: f64, default_height_m: f64, default_lai: f64) -> (f64, f64) {
+        let series = |get: fn(&PhenologyPoint) -> Option<f64>, default: f64| {
+            let pts: Vec<(f64, f64)> = self
+                .points()
+                .filter_map(|p| {
+                    let t = p.date.and_hms_opt(0, 0, 0)?.and_utc().timestamp() as f64;
+                    Some((t, get(p)?))
+                })
+                .collect();
+            match pts.as_slice() {
+                [] => default,
+                [(_, v)] => *v,
+                _ => {
+                    let j = pts.partition_point(|&(t, _)| t <= unix_s);
+                    if j == 0 {
+                        pts[0].1
+                    } else if j == pts.len() {
+                        pts[j - 1].1
+                    } else {
+                        let ((t0, v0), (t1, v1)) = (pts[j - 1], pts[j]);
+                        v0 + (v1 - v0) * (unix_s - t0) / (t1 - t0)
+                    }
+                }
+            }
+        };
+        (
+            series(|p| p.canopy_height_m, default_height_m),
+            series(|p| p.leaf_area_index, default_lai),
+        )
+    }
+}
+
+impl TryFrom<Vec<PhenologyPoint>> for Phenology {
+    type Error = String;
+    fn try_from(v: Vec<PhenologyPoint>) -> Result<Phenology, String> {
+        if v.len() > MAX_PHENOLOGY {
+            return Err(format!(
+                "{} entries; at most {MAX_PHENOLOGY} dates are supported",
+                v.len()
+            ));
+        }
+        let mut p = Phenology {
+            len: v.len(),
+            ..Phenology::default()
+        };
+        for (slot, x) in p.points.iter_mut().zip(v) {
+            *slot = Some(x);
+        }
+        Ok(p)
+    }
+}
+
+impl Serialize for Phenology {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.points())
+    }
+}
+
+impl<'de> Deserialize<'de> for Phenology {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Phenology, D::Error> {
+        let v = Vec::<PhenologyPoint>::deserialize(d)?;
+        Phenology::try_from(v).map_err(serde::de::Error::custom)
+    }
+}
+
+/// How the roughness length for heat z_oh of an evaporating surface is
+/// found (`surface_energy.heat_roughness`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum HeatRoughness {
+    /// FAO-56: z_oh = z_om / 10 (kB⁻¹ = ln 10 = 2.3), whatever the cover.
+    #[default]
+    Fao56,
+    /// Su et al. (2001): kB⁻¹ from the leaf area, canopy height, leaf
+    /// width and wind at each record (full canopy 1–3, sparse canopy
+    /// higher, bare soil 4–7; `crate::thermal::latent::aerodynamic`).
+    Su2001,
+}
+
 /// What kind of evaporating surface (module table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
@@ -170,6 +292,21 @@ pub struct SurfaceEnergySpec {
     /// under 2 m, 20 above).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub skin_conductance_w_m2_k: Option<f64>,
+    /// How z_oh is found (default `fao56`, z_om/10; `su2001`: from the
+    /// canopy's cover, [`HeatRoughness`]).
+    #[serde(default, skip_serializing_if = "is_fao56")]
+    pub heat_roughness: HeatRoughness,
+    /// Characteristic leaf width, m (`su2001` only; default 0.04, the
+    /// leaf dimension of the Noah-MP vegetation table).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leaf_width_m: Option<f64>,
+    /// A canopy that grows: dated heights and leaf area indices
+    /// ([`Phenology`]; default none: constant). The canopy's roughness,
+    /// displacement, stomatal conductance and kB⁻¹ follow it; its heat
+    /// capacity and rain store keep the block's `leaf_area_index`.
+    #[serde(default, skip_serializing_if = "Phenology::is_empty")]
+    #[schemars(with = "Vec<PhenologyPoint>")]
+    pub phenology: Phenology,
     /// Whether the canopy is a layer over the material's slab (default: true
     /// for a canopy). A tree crown modelled as a thin leaf slab with an
     /// exposed back sets `false`: the leaves are the slab.
@@ -177,6 +314,9 @@ pub struct SurfaceEnergySpec {
     pub skin: Option<bool>,
 }
 
+fn is_fao56(h: &HeatRoughness) -> bool {
+    *h == HeatRoughness::Fao56
+}
 fn default_rs_min() -> f64 {
     100.0
 }
@@ -243,6 +383,11 @@ impl SurfaceEnergySpec {
     pub fn canopy_capacity(&self) -> f64 {
         self.canopy_heat_capacity_j_m2_k
             .unwrap_or(1200.0 * self.leaf_area_index + 2000.0)
+    }
+
+    /// Characteristic leaf width, m (field docs).
+    pub fn leaf_width(&self) -> f64 {
+        self.leaf_width_m.unwrap_or(0.04)
     }
 
     /// Canopy–soil conductance, W m⁻² K⁻¹ (ECMWF IFS Cy47r3 Part IV Table
@@ -365,6 +510,51 @@ impl SurfaceEnergySpec {
                 "> 0 J/(m²·K)",
             );
         }
+        if !self.phenology.is_empty() && self.kind != SurfaceKind::Canopy {
+            p.push((
+                "phenology",
+                "only a canopy grows (kind \"canopy\")".to_string(),
+            ));
+        }
+        let mut last: Option<chrono::NaiveDate> = None;
+        for x in self.phenology.points() {
+            if let Some(prev) = last
+                && x.date <= prev
+            {
+                p.push((
+                    "phenology",
+                    format!("{} after {prev}: the dates must increase", x.date),
+                ));
+            }
+            last = Some(x.date);
+            if let Some(h) = x.canopy_height_m {
+                check(
+                    &mut p,
+                    "phenology.canopy_height_m",
+                    h,
+                    h > 0.0,
+                    "a height > 0 m",
+                );
+            }
+            if let Some(l) = x.leaf_area_index {
+                check(
+                    &mut p,
+                    "phenology.leaf_area_index",
+                    l,
+                    l > 0.0 && l <= 15.0,
+                    "a leaf area index in (0, 15] m²/m² (a canopy needs leaves)",
+                );
+            }
+        }
+        if let Some(w) = self.leaf_width_m {
+            check(&mut p, "leaf_width_m", w, w > 0.0, "a width > 0 m");
+        }
+        if self.heat_roughness == HeatRoughness::Su2001 && self.kind == SurfaceKind::Water {
+            p.push((
+                "heat_roughness",
+                "su2001 is for vegetation and soil; open water keeps fao56".to_string(),
+            ));
+        }
         if let Some(c) = self.skin_conductance_w_m2_k {
             check(
                 &mut p,
@@ -420,5 +610,96 @@ mod tests {
             serde_json::from_str::<SurfaceEnergySpec>(r#"{"kind": "lava"}"#).is_err(),
             "unknown kind"
         );
+    }
+
+    /// A growing canopy: dated heights and LAI interpolate linearly in
+    /// time, hold outside the dates, and round-trip through JSON; an entry
+    /// may give one of the two (the other keeps the block's value).
+    #[test]
+    fn phenology_interpolates_between_its_dates() {
+        let g = parse(
+            r#"{"kind": "canopy", "canopy_height_m": 1.0, "leaf_area_index": 3,
+                "heat_roughness": "su2001",
+                "phenology": [
+                  {"date": "2011-07-05", "canopy_height_m": 0.15, "leaf_area_index": 1},
+                  {"date": "2011-07-26", "canopy_height_m": 0.45},
+                  {"date": "2011-08-19", "canopy_height_m": 0.975, "leaf_area_index": 5}
+                ]}"#,
+        );
+        assert!(g.problems().is_empty(), "{:?}", g.problems());
+        let day = |d: &str| {
+            chrono::NaiveDate::parse_from_str(d, "%Y-%m-%d")
+                .unwrap()
+                .and_hms_opt(0, 0, 0)
+                .unwrap()
+                .and_utc()
+                .timestamp() as f64
+        };
+        let ph = g.phenology;
+        assert_eq!(ph.at(day("2011-07-01"), 1.0, 3.0), (0.15, 1.0));
+        assert_eq!(ph.at(day("2011-09-01"), 1.0, 3.0), (0.975, 5.0));
+        let (h, lai) = ph.at(day("2011-07-26"), 1.0, 3.0);
+        assert!((h - 0.45).abs() < 1e-12, "{h}");
+        // LAI from its own dates only: 1 on 5 Jul → 5 on 19 Aug (45 days).
+        assert!((lai - (1.0 + 4.0 * 21.0 / 45.0)).abs() < 1e-12, "{lai}");
+        // Half a day after 26 Jul: h moves by half a day's share of 0.525 m / 24 d.
+        let (h, _) = ph.at(day("2011-07-26") + 43_200.0, 1.0, 3.0);
+        assert!((h - (0.45 + 0.525 * 0.5 / 24.0)).abs() < 1e-12, "{h}");
+        let back: SurfaceEnergySpec =
+            serde_json::from_str(&serde_json::to_string(&g).unwrap()).unwrap();
+        assert_eq!(back, g);
+        // No phenology: the defaults.
+        assert_eq!(Phenology::default().at(0.0, 0.7, 2.0), (0.7, 2.0));
+    }
+
+    #[test]
+    fn bad_phenology_and_leaf_width_name_their_field() {
+        let fields = |s: &str| -> Vec<&'static str> {
+            parse(s).problems().into_iter().map(|(f, _)| f).collect()
+        };
+        let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3"#;
+        assert!(
+            fields(&format!(
+                r#"{{{base}, "phenology": [{{"date": "2011-08-01"}}, {{"date": "2011-07-01"}}]}}"#
+            ))
+            .contains(&"phenology")
+        );
+        assert!(
+            fields(&format!(
+                r#"{{{base}, "phenology": [{{"date": "2011-08-01", "leaf_area_index": -1}}]}}"#
+            ))
+            .contains(&"phenology.leaf_area_index")
+        );
+        assert!(
+            fields(&format!(
+                r#"{{{base}, "phenology": [{{"date": "2011-08-01", "canopy_height_m": 0}}]}}"#
+            ))
+            .contains(&"phenology.canopy_height_m")
+        );
+        assert!(
+            fields(r#"{"kind": "bare_soil", "phenology": [{"date": "2011-08-01"}]}"#)
+                .contains(&"phenology")
+        );
+        assert!(fields(&format!(r#"{{{base}, "leaf_width_m": 0}}"#)).contains(&"leaf_width_m"));
+        assert!(
+            fields(r#"{"kind": "water", "heat_roughness": "su2001"}"#).contains(&"heat_roughness")
+        );
+        // A date that is not one, or too many dates: a parse error.
+        assert!(
+            serde_json::from_str::<SurfaceEnergySpec>(&format!(
+                r#"{{{base}, "phenology": [{{"date": "2011-13-01"}}]}}"#
+            ))
+            .is_err()
+        );
+        let many: Vec<String> = (1..=17)
+            .map(|d| format!(r#"{{"date": "2011-07-{d:02}"}}"#))
+            .collect();
+        let e = serde_json::from_str::<SurfaceEnergySpec>(&format!(
+            r#"{{{base}, "phenology": [{}]}}"#,
+            many.join(",")
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("at most 16"), "{e}");
     }
 }

@@ -527,6 +527,9 @@ pub struct Forcing {
     /// interior schedules, [`InteriorAir::Hourly`]; 0 for
     /// [`Forcing::constant`]).
     pub start_second_of_day: f64,
+    /// Time of the first record, seconds since 1970-01-01 00:00 UTC (for
+    /// a canopy's dated phenology; 0 for [`Forcing::constant`]).
+    pub start_unix_s: f64,
 }
 
 /// Default height of a weather file's wind, m: the WMO standard anemometer
@@ -577,6 +580,7 @@ impl Forcing {
                 let c = t.time();
                 c.num_seconds_from_midnight() as f64 + c.nanosecond() as f64 * 1e-9
             }),
+            start_unix_s: t0.map_or(0.0, |t| t.timestamp_millis() as f64 * 1e-3),
         };
         f.validate()?;
         Ok(f)
@@ -615,6 +619,7 @@ impl Forcing {
             wind_height_m: WIND_HEIGHT_M,
             air_height_m: AIR_HEIGHT_M,
             start_second_of_day: 0.0,
+            start_unix_s: 0.0,
         }
     }
 

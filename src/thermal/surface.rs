@@ -41,12 +41,13 @@
 //! [`Exchange`], used by the slab solve's front law. Knows nothing of
 //! scenes, facets' geometry or files.
 
+use super::latent::aerodynamic::CanopyKb;
 use super::latent::{
     Aerodynamic, AirState, InputError, JarvisStewart, SurfaceEnergy, SurfaceResistance,
 };
 use super::{FacetInputs, Forcing, SlabProperties, SolveOptions, convection, mcadams_h_w_m2_k};
 use crate::error::{Error, Result};
-use crate::material::{SurfaceEnergySpec, SurfaceKind};
+use crate::material::{HeatRoughness, Phenology, SurfaceEnergySpec, SurfaceKind};
 
 /// Passes of the stability fixed point of [`Exchange::new`]. Each pass is
 /// one solve of the open reference surface; the third changes the surface
@@ -86,6 +87,18 @@ pub struct LandSurface {
     pub soil_moisture_m3_m3: f64,
     /// The canopy skin of vegetation (None: the slab's front is the surface).
     pub skin: Option<Skin>,
+    /// The canopy whose kB⁻¹ sets z_oh at each record (Su et al. 2001;
+    /// None: z_oh = z_om/10).
+    pub canopy_kb: Option<CanopyKb>,
+    /// A canopy that grows (empty: constant); its dated heights and leaf
+    /// area indices replace `canopy_height_m` and the LAI at each record
+    /// ([`LandSurface::on`]).
+    pub phenology: Phenology,
+    /// Canopy height h, m (0 without a canopy).
+    pub canopy_height_m: f64,
+    /// Whether d and z_om follow the canopy height (FAO-56: d = 2/3 h,
+    /// z_om = 0.123 h) rather than a given `roughness_length_m`.
+    pub roughness_from_height: bool,
 }
 
 impl LandSurface {
@@ -122,7 +135,21 @@ impl LandSurface {
             capacity_j_m2_k: spec.canopy_capacity(),
             conductance_w_m2_k: spec.skin_conductance(),
         });
+        let canopy_kb = (spec.heat_roughness == HeatRoughness::Su2001).then(|| CanopyKb {
+            leaf_area_index: if spec.kind == SurfaceKind::Canopy {
+                spec.leaf_area_index
+            } else {
+                0.0
+            },
+            canopy_height_m: spec.canopy_height_m.unwrap_or(0.0),
+            leaf_width_m: spec.leaf_width(),
+        });
         Ok(LandSurface {
+            canopy_kb,
+            phenology: spec.phenology,
+            canopy_height_m: spec.canopy_height_m.unwrap_or(0.0),
+            roughness_from_height: spec.kind == SurfaceKind::Canopy
+                && spec.roughness_length_m.is_none(),
             displacement_height_m: d,
             roughness_length_m: z0,
             measurement_height_m: spec.measurement_height_m,
@@ -151,7 +178,41 @@ impl LandSurface {
             None => (wind_height_m.max(floor), air_height_m.max(floor)),
         };
         let aero = Aerodynamic::new(zw, za, d, z0, 0.1 * z0)?;
-        SurfaceEnergy::new(aero, self.resistance, self.soil_moisture_m3_m3)
+        let e = SurfaceEnergy::new(aero, self.resistance, self.soil_moisture_m3_m3)?;
+        match self.canopy_kb {
+            Some(c) => e.with_canopy_kb(c),
+            None => Ok(e),
+        }
+    }
+
+    /// The surface at `unix_s` (seconds since 1970-01-01 UTC): with its
+    /// phenology's height and leaf area index then (itself without one).
+    /// The height sets d = 2/3 h and z_om = 0.123 h (FAO-56) unless the
+    /// material gives its roughness; the LAI sets the stomatal resistance
+    /// `r_s,min/LAI` and kB⁻¹.
+    pub fn on(&self, unix_s: f64) -> LandSurface {
+        if self.phenology.is_empty() {
+            return *self;
+        }
+        let lai0 = match self.resistance {
+            SurfaceResistance::Canopy(js) => js.leaf_area_index,
+            _ => 0.0,
+        };
+        let (h, lai) = self.phenology.at(unix_s, self.canopy_height_m, lai0);
+        let mut s = *self;
+        s.canopy_height_m = h;
+        if self.roughness_from_height {
+            s.displacement_height_m = 2.0 / 3.0 * h;
+            s.roughness_length_m = 0.123 * h;
+        }
+        if let SurfaceResistance::Canopy(js) = &mut s.resistance {
+            js.leaf_area_index = lai;
+        }
+        if let Some(c) = &mut s.canopy_kb {
+            c.leaf_area_index = lai;
+            c.canopy_height_m = h;
+        }
+        s
     }
 
     /// Checks the skin; errors name the field.
@@ -427,15 +488,22 @@ impl Exchange {
                 vapour_conductance_w_m2_pa: vec![0.0; n],
             },
             Some(surface) => {
-                let energy = surface
-                    .energy(forcing.wind_height_m, forcing.air_height_m)
-                    .map_err(|e| {
-                        Error::invalid(format!("surface_energy.{}", e.field()), e.to_string())
-                    })?;
+                let energy_of = |s: &LandSurface| {
+                    s.energy(forcing.wind_height_m, forcing.air_height_m)
+                        .map_err(|e| {
+                            Error::invalid(format!("surface_energy.{}", e.field()), e.to_string())
+                        })
+                };
+                let constant = energy_of(surface)?;
                 let mut sensible = Vec::with_capacity(n);
                 let mut vapour = Vec::with_capacity(n);
                 for (k, &t) in surface_k.iter().enumerate().take(n) {
-                    let (h, g) = LandSurface::exchange_at(&energy, forcing, k, t)?;
+                    let (h, g) = if surface.phenology.is_empty() {
+                        LandSurface::exchange_at(&constant, forcing, k, t)?
+                    } else {
+                        let now = surface.on(forcing.start_unix_s + forcing.times_s[k]);
+                        LandSurface::exchange_at(&energy_of(&now)?, forcing, k, t)?
+                    };
                     sensible.push(h);
                     vapour.push(g);
                 }

@@ -11,8 +11,10 @@
 //! exchange stays a fixed law within a step and the slab's Newton solve
 //! sees only `e°(T)` as new nonlinearity.
 
+use super::aerodynamic::{CanopyKb, kb_inverse_su2001};
 use super::{
-    Aerodynamic, AirState, CanopyConditions, InputError, JarvisStewart, TurbulentExchange, in_range,
+    Aerodynamic, AirState, CanopyConditions, InputError, JarvisStewart, TurbulentExchange,
+    in_range, positive,
 };
 
 /// What resists vapour leaving the surface (the r_s of Penman–Monteith).
@@ -64,6 +66,10 @@ pub struct SurfaceEnergy {
     /// Volumetric water content of the root zone θ, m³ m⁻³ (constant: no
     /// soil water budget).
     pub soil_moisture_m3_m3: f64,
+    /// The canopy whose kB⁻¹ sets the roughness length for heat at each
+    /// record ([`kb_inverse_su2001`]); None: the aerodynamic geometry's
+    /// fixed z_oh (FAO-56: z_om/10, kB⁻¹ = 2.3).
+    pub canopy_kb: Option<CanopyKb>,
 }
 
 impl SurfaceEnergy {
@@ -85,7 +91,52 @@ impl SurfaceEnergy {
             aerodynamic,
             resistance,
             soil_moisture_m3_m3,
+            canopy_kb: None,
         })
+    }
+
+    /// The same surface with the roughness length for heat of each record
+    /// from the canopy's kB⁻¹ (Su et al. 2001, [`kb_inverse_su2001`])
+    /// instead of the fixed z_oh of its geometry.
+    ///
+    /// # Errors
+    /// [`InputError`] naming the field: a leaf area index < 0, a leaf width
+    /// ≤ 0, or a canopy height ≤ 0 with leaves.
+    pub fn with_canopy_kb(mut self, canopy: CanopyKb) -> Result<SurfaceEnergy, InputError> {
+        super::non_negative("leaf_area_index", canopy.leaf_area_index)?;
+        positive("leaf_width_m", canopy.leaf_width_m)?;
+        if canopy.leaf_area_index > 0.0 {
+            positive("canopy_height_m", canopy.canopy_height_m)?;
+        }
+        self.canopy_kb = Some(canopy);
+        Ok(self)
+    }
+
+    /// The aerodynamic geometry at one record: the fixed one, or with
+    /// z_oh = z_om·exp(−kB⁻¹) from the canopy ([`SurfaceEnergy::with_canopy_kb`]).
+    pub fn aerodynamic_at(&self, air: &AirState, wind_speed_m_s: f64) -> Aerodynamic {
+        let a = self.aerodynamic;
+        let Some(canopy) = &self.canopy_kb else {
+            return a;
+        };
+        let kb = kb_inverse_su2001(
+            canopy,
+            wind_speed_m_s,
+            a.wind_height_m(),
+            a.displacement_height_m(),
+            a.roughness_momentum_m(),
+            air.temperature_k(),
+            air.pressure_pa(),
+        );
+        // z_oh ≤ z_om < z − d: the geometry stays valid.
+        Aerodynamic::new(
+            a.wind_height_m(),
+            a.air_height_m(),
+            a.displacement_height_m(),
+            a.roughness_momentum_m(),
+            a.roughness_momentum_m() * (-kb).exp(),
+        )
+        .unwrap_or(a)
     }
 
     /// The exchange with `air` at wind speed `wind_speed_m_s` and global
@@ -103,7 +154,7 @@ impl SurfaceEnergy {
         shortwave_down_w_m2: f64,
         surface_temperature_k: f64,
     ) -> Result<TurbulentExchange, InputError> {
-        let r_a = self.aerodynamic.resistance_s_m(
+        let r_a = self.aerodynamic_at(&air, wind_speed_m_s).resistance_s_m(
             wind_speed_m_s,
             surface_temperature_k,
             air.temperature_k(),
