@@ -1,6 +1,16 @@
 //! Per-hit radiance: the "big equation" on each band's spectral grid, with
 //! secondary rays for specular reflection and transmission.
 //!
+//! Stages, data flowing one way (one file each): `hit` (frame, view
+//! zenith, per-hit state) → `surface` (temperature and B(λ, T),
+//! emissivity, the grey path's facet records) → `sources` (sky, ground
+//! beyond, sun and its per-hit visibility, glint) → `path` (τ₂ and L_u
+//! folded into the band weights) → `band` (the band radiance at the
+//! sensor). `spectral` drives them for the reference — each hit's inputs
+//! handed to [`crate::radiometry::leaving_radiance`], the one
+//! implementation of the equation below — and `fast` for the fast
+//! primary paths tested against it; `truth` writes the truth layers.
+//!
 //! For a hit on a facet at temperature `T`, seen at view zenith `θ` from the
 //! normal facing the ray, with spectral emissivity `ε(λ, θ)`, grey
 //! transmissivity `t` and specular fraction `s` (Kirchhoff: reflectance
@@ -53,7 +63,9 @@
 //! per-band integrals over the Planck table (`Σ w·τ₂·B(T_k)`, `Σ w·τ₂·L_sky`,
 //! `Σ w·τ₂·E_s`). Both use the same interpolations as the spectral
 //! reference ([`Shader::shade`] + [`Shader::band_radiance`]), so they agree
-//! with it to rounding (≤ 6·10⁻⁷ relative measured in `tests/render.rs`).
+//! with it to rounding; `tests/render.rs` checks ≤ 10⁻⁵ relative against
+//! the reference equation with exact Planck radiances on random inputs
+//! (`docs/physics/radiometry.md`, the tolerance table).
 
 mod band;
 mod conditions;

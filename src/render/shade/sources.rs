@@ -202,6 +202,13 @@ impl SunRays {
 }
 
 impl Shader<'_> {
+    /// Whether hits on facet `f` take their own sun visibility from a
+    /// shadow ray ([`sun_ray_facets`]) instead of the facet's sunlit
+    /// fraction.
+    pub fn traces_sun_ray(&self, f: usize) -> bool {
+        self.sun_ray[f]
+    }
+
     /// The sun visibility of a batch's hits into `sr.vis`: one shadow ray
     /// toward the sun from each hit on a facet of [`sun_ray_facets`] whose
     /// seen face the sun lights (and which has no per-hit state, `has_state`:

@@ -6,6 +6,7 @@ use super::Shader;
 use super::hit::ANGLE_ROWS;
 use super::sources::SunRays;
 use super::surface::hit_temperature;
+use crate::radiometry::{SurfaceInputs, leaving_radiance};
 use crate::trace::{Coherence, Hit, Ray};
 
 impl Shader<'_> {
@@ -86,8 +87,7 @@ impl Shader<'_> {
             )
         };
         self.sun_visibility(rays, hits, has_state, &mut sun);
-        let mut b_t = vec![0.0; n];
-        let mut b_bg = vec![0.0; n];
+        let mut scratch = LeavingScratch::new(n);
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
             let o = &mut out[i * n..(i + 1) * n];
             let Some(h) = hit else {
@@ -99,13 +99,15 @@ impl Shader<'_> {
             let behind =
                 (trans[i] != usize::MAX).then(|| &sec_spec[trans[i] * n..(trans[i] + 1) * n]);
             let lit = sun.of(i);
-            self.leaving_into(ray, h, lit, spec_in, behind, &mut b_t, &mut b_bg, o);
+            self.leaving_into(ray, h, lit, spec_in, behind, &mut scratch, o);
         }
     }
 
-    /// The spectral radiance leaving hit `h` toward the origin of `ray`
-    /// (the module docs' equation, with the glint of [`crate::render::glint`]);
-    /// `vis` the hit's own sun visibility where it traced a shadow ray.
+    /// The spectral radiance leaving hit `h` toward the origin of `ray`:
+    /// the stages' inputs at the hit (surface terms, sources) handed to the
+    /// reference big equation, [`crate::radiometry::leaving_radiance`],
+    /// band by band; `vis` the hit's own sun visibility where it traced a
+    /// shadow ray.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn leaving_into(
         &self,
@@ -114,8 +116,7 @@ impl Shader<'_> {
         vis: Option<f32>,
         spec_in: Option<&[f64]>,
         behind: Option<&[f64]>,
-        b_t: &mut [f64],
-        b_bg: &mut [f64],
+        sc: &mut LeavingScratch,
         out: &mut [f64],
     ) {
         let f = self.facet_of(h);
@@ -137,37 +138,61 @@ impl Shader<'_> {
             }
             _ => 0.0,
         };
-        self.planck_into(t_hit, b_t);
-        self.planck_into(s.background_k[f] as f64, b_bg);
-        let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+        self.planck_into(t_hit, &mut sc.b_t);
+        self.planck_into(s.background_k[f] as f64, &mut sc.b_bg);
         // The sun only lights the face it falls on: for a single-sided facet
         // seen from behind, cos σ of the front face does not apply.
         let front = h.ng.dot(d) < 0.0;
-        let sun_w = if front || m.double_sided {
+        let cos_sun = if front || m.double_sided {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
-                / std::f64::consts::PI
         } else {
             0.0
         };
-        let spec_frac = m.specular_fraction.clamp(0.0, 1.0);
-        let tr = m.transmissivity.clamp(0.0, 1.0);
         for t in &self.bands {
-            let nl = t.band.len();
+            let (nl, k) = (t.band.len(), t.start);
+            // ε(λ, θ): linear between the 1° angle rows.
             let e = &t.eps[mi];
-            let e0 = &e[a0 * nl..(a0 + 1) * nl];
-            let e1 = &e[(a0 + 1) * nl..(a0 + 2) * nl];
-            for j in 0..nl {
-                let k = t.start + j;
-                let eps = e0[j] + ta * (e1[j] - e0[j]);
-                let r = (1.0 - eps - tr).max(0.0);
-                let rd = (1.0 - spec_frac) * r;
-                let rs = spec_frac * r;
-                let env = big_f * t.sky[j] + (1.0 - big_f) * b_bg[k];
-                let sun = t.sun[j] * sun_w;
-                let spec = spec_in.map_or(env, |v| v[k]) + t.sun[j] * glint;
-                let beh = behind.map_or(env, |v| v[k]);
-                out[k] = eps * b_t[k] + rd * (sun + env) + rs * spec + tr * beh;
+            let (e0, e1) = (&e[a0 * nl..(a0 + 1) * nl], &e[(a0 + 1) * nl..(a0 + 2) * nl]);
+            let eps = &mut sc.eps[..nl];
+            for ((x, &a), &b) in eps.iter_mut().zip(e0).zip(e1) {
+                *x = a + ta * (b - a);
             }
+            let inputs = SurfaceInputs {
+                blackbody: &sc.b_t[k..k + nl],
+                emissivity: eps,
+                specular_fraction: m.specular_fraction,
+                transmissivity: m.transmissivity,
+                shape_factor: s.shape_factor[f] as f64,
+                sky_radiance: &t.sky,
+                background_radiance: &sc.b_bg[k..k + nl],
+                solar_irradiance: Some(&t.sun),
+                cos_sun,
+                glint_sr: glint,
+                specular_radiance: spec_in.map(|v| &v[k..k + nl]),
+                transmitted_radiance: behind.map(|v| &v[k..k + nl]),
+            };
+            leaving_radiance(&inputs, &mut out[k..k + nl]);
+        }
+    }
+}
+
+/// Working spectra of [`Shader::leaving_into`], reused from hit to hit.
+pub(super) struct LeavingScratch {
+    /// B(λ, T) of the surface, all bands.
+    b_t: Vec<f64>,
+    /// B(λ, T_bg) of the background, all bands.
+    b_bg: Vec<f64>,
+    /// ε(λ, θ) of one band.
+    eps: Vec<f64>,
+}
+
+impl LeavingScratch {
+    /// Scratch for spectra of `n` values (all bands).
+    pub(super) fn new(n: usize) -> Self {
+        LeavingScratch {
+            b_t: vec![0.0; n],
+            b_bg: vec![0.0; n],
+            eps: vec![0.0; n],
         }
     }
 }
