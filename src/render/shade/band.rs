@@ -459,12 +459,19 @@ impl Shader<'_> {
                 let eps = ep[e + b] + ta * (ep[e + nb + b] - ep[e + b]);
                 // Temperature first, then range, then height, as the
                 // reference.
-                let at = |h: usize, hq: usize| {
-                    grey_node(pl, nd, [up, nb, b], [t0 + h, g0 + h, q + hq], [ft, fg, rx])
-                };
-                let [mut bt, mut bg, mut sky, mut sun, mut lu] = at(0, 0);
+                // (Direct calls, no closure: a closure here was not inlined,
+                // and building its environment per band cost more than the
+                // lookups.)
+                let [mut bt, mut bg, mut sky, mut sun, mut lu] =
+                    grey_node(pl, nd, [up, nb, b], [t0, g0, q], [ft, fg, rx]);
                 if two {
-                    let [bt1, bg1, sky1, sun1, lu1] = at(hp, hq);
+                    let [bt1, bg1, sky1, sun1, lu1] = grey_node(
+                        pl,
+                        nd,
+                        [up, nb, b],
+                        [t0 + hp, g0 + hp, q + hq],
+                        [ft, fg, rx],
+                    );
                     bt += ax * (bt1 - bt);
                     bg += ax * (bg1 - bg);
                     sky += ax * (sky1 - sky);
