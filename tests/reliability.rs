@@ -211,7 +211,7 @@ proptest! {
         let background = vec![env.1; n];
         let solar = vec![env.2; n];
         let inputs = SurfaceInputs {
-            temperature_k,
+            blackbody: &band.grid().blackbody(band.planck(), temperature_k),
             emissivity: &emissivity,
             specular_fraction: m.specular_fraction,
             transmissivity: m.transmissivity,
@@ -221,9 +221,11 @@ proptest! {
             solar_irradiance: Some(&solar),
             cos_sun,
             specular_radiance: None,
+            glint_sr: 0.0,
+            transmitted_radiance: None,
         };
         let mut out = vec![0.0; n];
-        leaving_radiance(&inputs, &band, &mut out);
+        leaving_radiance(&inputs, &mut out);
         for (i, &l) in out.iter().enumerate() {
             prop_assert!(l.is_finite() && l >= 0.0, "L({}) = {}", wl[i], l);
         }

@@ -1,30 +1,38 @@
-//! The per-hit radiance ("big equation"), spectral on a band grid; the
-//! solar spectrum at the top of the atmosphere is in [`super::solar`].
+//! The per-hit radiance ("big equation"), spectral on a band grid: the one
+//! reference implementation. The renderer's spectral path
+//! ([`crate::render::Shader::shade`]) evaluates every hit through
+//! [`leaving_radiance`]; its fast paths (grey band integrals, the fused
+//! single-precision band sums) are tested against it on random inputs
+//! (`tests/render.rs`, `docs/physics/radiometry.md`). The solar spectrum at
+//! the top of the atmosphere is in [`super::solar`].
 //!
 //! For a facet at temperature T seen at view zenith θ (from its normal), with
 //! spectral emissivity ε(λ, θ), transmissivity t (grey) and reflectance
-//! r(λ) = 1 − ε(λ, θ) − t (Kirchhoff; r = 1 − ε for opaque facets) split
-//! into a specular part r_s = s·r and a diffuse part r_d = (1 − s)·r (s the
-//! material's specular fraction), the radiance leaving toward the sensor is
-//! (the seed's equation, after DIRSIG; Schott, *Remote Sensing: The Image
-//! Chain Approach*, 2nd ed., eq. 4.59):
+//! r(λ) = max(1 − ε(λ, θ) − t, 0) (Kirchhoff; r = 1 − ε for opaque facets)
+//! split into a specular part r_s = s·r and a diffuse part r_d = (1 − s)·r
+//! (s the material's specular fraction), the radiance leaving toward the
+//! sensor is (after DIRSIG; Schott, *Remote Sensing: The Image Chain
+//! Approach*, 2nd ed., eq. 4.59):
 //!
 //! ```text
 //! L(λ) = ε·B(λ,T)                                  self-emission
-//!      + r_d·E_s(λ)·τ₁(λ)·cos σ / π                  direct sun (diffuse part)
-//!      + r_d·F·L_sky(λ)                              sky, L_sky = (E_ds + E_de)/π
-//!      + r_d·(1 − F)·L_bg(λ)                         background, L_bg = L_bs + L_be
-//!      + r_s·L_spec(λ)                               specular: radiance arriving
-//!                                                    along the mirror direction
-//!      [+ t·L_behind(λ), added by the caller, which traces the continuing ray]
+//!      + r_d·E_s(λ)·cos σ·f_sun / π                direct sun (diffuse part)
+//!      + r_d·F·L_sky(λ)                            sky, L_sky = (E_ds + E_de)/π
+//!      + r_d·(1 − F)·L_bg(λ)                       background, L_bg = L_bs + L_be
+//!      + r_s·L_spec(λ)                             specular: radiance arriving
+//!                                                  along the mirror direction
+//!      + r_s·E_s(λ)·v·D(h)/(4 cos θ)               the sun through the glint lobe
+//!      + t·L_behind(λ)                             radiance along the continuing ray
 //! ```
 //!
-//! and the sensor sees L·τ₂ + L_u, integrated over the band response
-//! ([`at_sensor`]). When no specular ray was traced (bounce budget spent)
-//! L_spec defaults to the diffuse environment F·L_sky + (1 − F)·L_bg. The
-//! sun's glint through a specular surface's roughness lobe is the renderer's
-//! ([`crate::render::glint`]); this form leaves it out. Units: spectral radiance
-//! W·m⁻²·sr⁻¹·µm⁻¹, irradiance W·m⁻²·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
+//! E_s is the solar spectral irradiance at the surface on a plane normal to
+//! the sun (E_toa·τ₁), `v·D(h)/(4 cos θ)` the glint lobe of
+//! [`crate::render::glint`] times the hit's sun visibility. When no
+//! specular or continuing ray was traced (bounce budget spent) L_spec and
+//! L_behind default to the diffuse environment F·L_sky + (1 − F)·L_bg.
+//! The sensor sees L·τ₂ + L_u, integrated over the band response
+//! ([`at_sensor`]). Units: spectral radiance W·m⁻²·sr⁻¹·µm⁻¹, irradiance
+//! W·m⁻²·µm⁻¹, band radiance W·m⁻²·sr⁻¹.
 
 use super::band::Band;
 
@@ -71,8 +79,10 @@ pub fn reflectance_split(
 /// Everything the equation needs for one hit; spectra are on the band grid.
 #[derive(Debug, Clone, Copy)]
 pub struct SurfaceInputs<'a> {
-    /// Surface temperature T, K.
-    pub temperature_k: f64,
+    /// Blackbody spectral radiance at the surface temperature, B(λ, T),
+    /// W·m⁻²·sr⁻¹·µm⁻¹ (exact: [`super::SpectralGrid::blackbody`]; the
+    /// renderer passes its tabulated values, see its module docs).
+    pub blackbody: &'a [f64],
     /// ε(λ, θ_view) on the grid (see [`super::Emissivity::eval_into`]).
     pub emissivity: &'a [f64],
     /// Fraction s of the reflectance that is specular, 0–1.
@@ -88,39 +98,45 @@ pub struct SurfaceInputs<'a> {
     /// Direct solar irradiance at the surface on a plane normal to the sun,
     /// E_s·τ₁, W·m⁻²·µm⁻¹ (`None` at night).
     pub solar_irradiance: Option<&'a [f64]>,
-    /// cos σ: cosine of the sun's incidence angle on the facet times the
-    /// sunlit fraction (0 in shadow or with the sun behind the facet).
+    /// cos σ · f_sun: cosine of the sun's incidence angle on the facet times
+    /// the sunlit fraction (≤ 0: no direct sun, e.g. the sun behind the face).
     pub cos_sun: f64,
+    /// The glint lobe toward the viewer times the hit's sun visibility,
+    /// v·D(h)/(4 cos θ_v), sr⁻¹ ([`crate::render::glint::glint_lobe_sr`];
+    /// 0: no glint).
+    pub glint_sr: f64,
     /// Radiance arriving along the specular direction, traced by the caller;
     /// `None`: use the diffuse environment F·L_sky + (1 − F)·L_bg.
     pub specular_radiance: Option<&'a [f64]>,
+    /// Radiance arriving along the continuing (transmitted) ray, traced by
+    /// the caller; `None`: use the diffuse environment.
+    pub transmitted_radiance: Option<&'a [f64]>,
 }
 
 /// Spectral radiance leaving the facet toward the sensor, written into `out`
-/// (W·m⁻²·sr⁻¹·µm⁻¹ on `band`'s grid); excludes the transmitted term
-/// t·L_behind, which the caller adds (t = `inputs.transmissivity`).
-pub fn leaving_radiance(inputs: &SurfaceInputs, band: &Band, out: &mut [f64]) {
-    let n = band.len();
-    debug_assert_eq!(out.len(), n);
+/// (W·m⁻²·sr⁻¹·µm⁻¹, one value per grid wavelength of the inputs): the
+/// module docs' equation, every term.
+pub fn leaving_radiance(inputs: &SurfaceInputs, out: &mut [f64]) {
+    let n = out.len();
+    debug_assert_eq!(inputs.blackbody.len(), n);
     debug_assert_eq!(inputs.emissivity.len(), n);
     debug_assert_eq!(inputs.sky_radiance.len(), n);
     debug_assert_eq!(inputs.background_radiance.len(), n);
-    let planck = band.planck();
     let f = inputs.shape_factor.clamp(0.0, 1.0);
-    let cos_sun = inputs.cos_sun.max(0.0);
-    let wl = band.wavelengths_um();
+    // E_s·cos σ·f_sun/π = E_s · sun_w.
+    let sun_w = inputs.cos_sun.max(0.0) / std::f64::consts::PI;
     for i in 0..n {
         let eps = inputs.emissivity[i];
         let split = reflectance_split(eps, inputs.specular_fraction, inputs.transmissivity);
         let env = f * inputs.sky_radiance[i] + (1.0 - f) * inputs.background_radiance[i];
-        let sun = match inputs.solar_irradiance {
-            Some(e) if cos_sun > 0.0 => e[i] * cos_sun / std::f64::consts::PI,
-            _ => 0.0,
-        };
-        let spec = inputs.specular_radiance.map_or(env, |s| s[i]);
-        out[i] = eps * planck.radiance(wl[i], inputs.temperature_k)
+        let e_s = inputs.solar_irradiance.map_or(0.0, |e| e[i]);
+        let sun = e_s * sun_w;
+        let spec = inputs.specular_radiance.map_or(env, |s| s[i]) + e_s * inputs.glint_sr;
+        let behind = inputs.transmitted_radiance.map_or(env, |s| s[i]);
+        out[i] = eps * inputs.blackbody[i]
             + split.diffuse * (sun + env)
-            + split.specular * spec;
+            + split.specular * spec
+            + split.transmitted * behind;
     }
 }
 

@@ -1,0 +1,619 @@
+//! Stage 5, the band: the big equation integrated over each sensor band —
+//! the fused single-precision spectral sum ([`band_sum`]) and, for
+//! materials grey within a band, per-band integrals ([`Integrals`],
+//! [`GreyTables`]) that ε and r leave.
+
+use super::fast::{FastMiss, FastScratch};
+use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
+use super::surface::{PlanckTable, hit_temperature};
+use super::{BandTables, Shader};
+use crate::material::Material;
+use crate::render::per_hit::HitState;
+use crate::trace::{Hit, Ray};
+
+/// One band's tables for [`Shader::fast_primary`], single precision, the
+/// quadrature weights (response × trapezoid) folded in where they multiply.
+#[derive(Debug, Clone)]
+pub(super) struct FastBand {
+    /// Number of wavelengths, rounded up to a multiple of [`LANES`]; every
+    /// row below is padded with zeros to it (zero weight: the padding adds
+    /// nothing).
+    pub(super) len: usize,
+    /// Planck's function on [`Shader`]'s temperature table, `nodes × len`.
+    pub(super) planck: Vec<f32>,
+    /// Quadrature weights × response, µm.
+    pub(super) w: Vec<f32>,
+    /// Sky spectral radiance.
+    pub(super) sky: Vec<f32>,
+    /// Solar spectral irradiance normal to the sun.
+    pub(super) sun: Vec<f32>,
+    /// Per material: `ANGLE_ROWS × len` emissivities.
+    pub(super) eps: Vec<Vec<f32>>,
+    /// Band radiance of a ray leaving the scene upward, per sky node
+    /// ([`sky_node_cos`]), and downward (ground beyond), W·m⁻²·sr⁻¹.
+    pub(super) miss_sky: Vec<f64>,
+    pub(super) miss_ground: f64,
+    /// Per material: when its emissivity is the same at every wavelength
+    /// of the band (at each angle row), the `ANGLE_ROWS` values.
+    pub(super) grey: Vec<Option<Vec<f64>>>,
+    /// Band integrals with the plain weights (no path).
+    pub(super) plain: Integrals,
+}
+
+impl FastBand {
+    /// The band radiance of the sky at fraction `f` from node `k` to node
+    /// `k + 1` (see [`sky_node`]).
+    #[inline]
+    pub(super) fn miss_sky_at(&self, k: usize, f: f64) -> f64 {
+        let (a, b) = (self.miss_sky[k], self.miss_sky[k + 1]);
+        a + f * (b - a)
+    }
+}
+
+/// Band integrals `Σ_λ q(λ)·X(λ)` of one band for one weighting `q`
+/// (`w`, or `w·τ₂` at one range node): what a hit on a material that is
+/// grey within the band needs, since ε and r then leave the sums.
+#[derive(Debug, Clone)]
+pub(super) struct Integrals {
+    /// Per node of the Planck table: `Σ q·B(λ, T_k)`.
+    pub(super) planck: Vec<f64>,
+    /// `Σ q·L_sky`.
+    pub(super) sky: f64,
+    /// `Σ q·E_s`.
+    pub(super) sun: f64,
+}
+
+impl Integrals {
+    pub(super) fn new(q: &[f64], t: &BandTables, table: &PlanckTable, total: usize) -> Self {
+        let dot = |v: &[f64]| q.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+        let nl = t.band.len();
+        Integrals {
+            planck: table
+                .values
+                .chunks(total)
+                .map(|node| dot(&node[t.start..t.start + nl]))
+                .collect(),
+            sky: dot(&t.sky),
+            sun: dot(&t.sun),
+        }
+    }
+
+    /// `Σ q·B(T)` at table node `k` + fraction `f`.
+    #[inline]
+    pub(super) fn planck_at(&self, k: usize, f: f64) -> f64 {
+        let p = &self.planck;
+        p[k] + f * (p[k + 1] - p[k])
+    }
+}
+
+/// The band integrals of the grey path, single precision, flat: per band
+/// the Planck integrals `Σ q_i·B(T_k)` of every temperature node `k` and
+/// range node `i` (weights `q_i = w·τ₂(R_i)`; without a path two equal
+/// nodes of the plain weights `w`), per range node the sky, sun and path
+/// terms, and the grey emissivities of every material. Every table is
+/// band-interleaved (the bands of one entry are adjacent), so one hit reads
+/// each entry of all its bands from one place.
+#[derive(Debug, Clone, Default)]
+pub(super) struct GreyTables {
+    /// Bands.
+    pub(super) bands: usize,
+    /// Path nodes (at least 2): height nodes × range nodes, node
+    /// `a · range_nodes + i` ([`PathTables::node`]).
+    pub(super) nodes: usize,
+    /// Range nodes per height node.
+    pub(super) range_nodes: usize,
+    /// Heights of the height nodes above the ground datum, m (one node:
+    /// no height interpolation).
+    pub(super) heights: Vec<f32>,
+    /// `1 / (heights[a + 1] − heights[a])`.
+    pub(super) inv_height_spacing: Vec<f32>,
+    /// Ranges of the nodes, m (empty without a path: every hit is at
+    /// node 1, fraction 0).
+    pub(super) ranges: Vec<f32>,
+    /// `1 / (ranges[i] − ranges[i − 1])`.
+    pub(super) inv_spacing: Vec<f32>,
+    /// First guess of the node of range `r`: `√r · sqrt_scale` (exact for
+    /// the quadratic spacing of [`PathTables`], refined for any spacing).
+    pub(super) sqrt_scale: f32,
+    /// `Σ q_i·B(T_k)` of band `b` at `[(k · nodes + i) · bands + b]`.
+    pub(super) planck: Vec<f32>,
+    /// Per range node `i`: `Σ q_i·L_sky`, `Σ q_i·E_s` and `Σ w·L_u` of band
+    /// `b` at `[(3·i + 0, 1, 2) · bands + b]`.
+    pub(super) node: Vec<f32>,
+    /// Grey emissivity at `[(material · ANGLE_ROWS + angle row) · bands + b]`
+    /// (0 for materials not grey in every band: never read).
+    pub(super) eps: Vec<f32>,
+    /// Per material: double-sided.
+    pub(super) double_sided: Vec<bool>,
+    /// Per material: transmissivity t.
+    pub(super) tr: Vec<f32>,
+}
+
+impl GreyTables {
+    /// Tables from each band's integrals and path radiance per range node
+    /// (`nodes[b][i]`), at `ranges` (empty: no path).
+    pub(super) fn new(
+        fast: &[FastBand],
+        nodes: &[Vec<(&Integrals, f64)>],
+        ranges: &[f64],
+        heights: &[f64],
+        materials: &[Material],
+    ) -> Self {
+        let nb = nodes.len();
+        let r = nodes.first().map_or(2, Vec::len);
+        let nt = nodes
+            .first()
+            .and_then(|b| b.first())
+            .map_or(0, |(i, _)| i.planck.len());
+        let mut planck = vec![0f32; nt * r * nb];
+        let mut node = vec![0f32; 3 * r * nb];
+        for (b, band) in nodes.iter().enumerate() {
+            for (i, (ig, lu)) in band.iter().enumerate() {
+                for (k, &x) in ig.planck.iter().enumerate() {
+                    planck[(k * r + i) * nb + b] = x as f32;
+                }
+                node[3 * i * nb + b] = ig.sky as f32;
+                node[(3 * i + 1) * nb + b] = ig.sun as f32;
+                node[(3 * i + 2) * nb + b] = *lu as f32;
+            }
+        }
+        let grey_everywhere = |mi: usize| fast.iter().all(|fb| fb.grey[mi].is_some());
+        let mut eps = vec![0f32; materials.len() * ANGLE_ROWS * nb];
+        for mi in (0..materials.len()).filter(|&mi| grey_everywhere(mi)) {
+            for (b, fb) in fast.iter().enumerate() {
+                let rows = fb.grey[mi].as_ref().expect("grey in every band");
+                for (a, &e) in rows.iter().enumerate() {
+                    eps[(mi * ANGLE_ROWS + a) * nb + b] = e as f32;
+                }
+            }
+        }
+        let ranges: Vec<f32> = ranges.iter().map(|&x| x as f32).collect();
+        let inv_spacing = (0..ranges.len())
+            .map(|i| {
+                if i == 0 {
+                    0.0
+                } else {
+                    1.0 / (ranges[i] - ranges[i - 1])
+                }
+            })
+            .collect();
+        let sqrt_scale = match ranges.last() {
+            Some(&last) if last > 0.0 => (ranges.len() - 1) as f32 / last.sqrt(),
+            _ => 0.0,
+        };
+        let heights: Vec<f32> = heights.iter().map(|&x| x as f32).collect();
+        let inv_height_spacing = heights.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
+        GreyTables {
+            bands: nb,
+            nodes: r,
+            range_nodes: if ranges.is_empty() { r } else { ranges.len() },
+            heights,
+            inv_height_spacing,
+            ranges,
+            inv_spacing,
+            sqrt_scale,
+            planck,
+            node,
+            eps,
+            double_sided: materials.iter().map(|m| m.double_sided).collect(),
+            tr: materials
+                .iter()
+                .map(|m| m.transmissivity.clamp(0.0, 1.0) as f32)
+                .collect(),
+        }
+    }
+
+    /// The range nodes bracketing range `r` (m): `(i, x)` with `r` at
+    /// fraction `x` (clamped to [0, 1]) from node `i − 1` to node `i`, as
+    /// [`PathTables::locate`]; `(1, 0)` without a path.
+    #[inline(always)]
+    pub(super) fn locate(&self, r: f32) -> (usize, f32) {
+        let x = &self.ranges;
+        if x.len() < 2 {
+            return (1, 0.0);
+        }
+        let last = x.len() - 1;
+        let mut i = ((r.max(0.0).sqrt() * self.sqrt_scale) as usize + 1).min(last);
+        while i < last && x[i] <= r {
+            i += 1;
+        }
+        while i > 1 && x[i - 1] > r {
+            i -= 1;
+        }
+        (i, ((r - x[i - 1]) * self.inv_spacing[i]).clamp(0.0, 1.0))
+    }
+
+    /// The height nodes bracketing height `z` (m): `(a, u)` with `z` at
+    /// fraction `u` (clamped to [0, 1]) from node `a` to `a + 1`, as
+    /// [`PathTables::locate_height`]; `(0, 0)` with one node.
+    #[inline(always)]
+    pub(super) fn locate_height(&self, z: f32) -> (usize, f32) {
+        let x = &self.heights;
+        if x.len() < 2 {
+            return (0, 0.0);
+        }
+        let mut a = 0;
+        while a + 2 < x.len() && x[a + 1] <= z {
+            a += 1;
+        }
+        (a, ((z - x[a]) * self.inv_height_spacing[a]).clamp(0.0, 1.0))
+    }
+}
+
+/// One band of [`Shader::grey_terms_pass`]: with `ε` interpolated between
+/// the angle rows' `e0` and `e1` at fraction `ta`, and `r = max(1 − ε − t,
+/// 0)`, the radiance `ε·x + r·(env + lit·w) + z` from the facet's terms
+/// `[x, env, w, z]` ([`grey_facets`]).
+#[inline(always)]
+pub(super) fn grey_terms_band(
+    e0: f32,
+    e1: f32,
+    ta: f32,
+    tr: f32,
+    lit: bool,
+    [x, env, w, z]: [f32; 4],
+) -> f32 {
+    let eps = e0 + ta * (e1 - e0);
+    let r = (1.0 - eps - tr).max(0.0);
+    eps * x + r * (env + if lit { w } else { 0.0 }) + z
+}
+
+/// One height node's grey-path terms of band `b` ([`Shader::grey_pass`]):
+/// `[Σq·B(T), Σq·B(T_bg), Σq·L_sky, Σq·E_s, Σw·L_u]`, the Planck
+/// integrals linear in temperature (fractions `ft`, `fg` from the entries
+/// at `t0`, `g0`; the next temperature node `up` on) and all linear in
+/// range (fraction `rx`; the next range node `nb` on, the node terms at
+/// `q`, `3·nb` on).
+#[inline(always)]
+pub(super) fn grey_node(
+    pl: &[f32],
+    nd: &[f32],
+    [up, nb, b]: [usize; 3],
+    [t0, g0, q]: [usize; 3],
+    [ft, fg, rx]: [f32; 3],
+) -> [f32; 5] {
+    let bilerp = |o: usize, f: f32| {
+        let v0 = pl[o + b] + f * (pl[o + up + b] - pl[o + b]);
+        let v1 = pl[o + nb + b] + f * (pl[o + up + nb + b] - pl[o + nb + b]);
+        v0 + rx * (v1 - v0)
+    };
+    let node = |o: usize| nd[q + o + b] + rx * (nd[q + o + 3 * nb + b] - nd[q + o + b]);
+    [
+        bilerp(t0, ft),
+        bilerp(g0, fg),
+        node(0),
+        node(nb),
+        node(2 * nb),
+    ]
+}
+
+/// The spectral rows one band of [`Shader::fast_primary`] reads (all of
+/// the band's length): emissivity at the two angle rows, Planck at the two
+/// table nodes of the surface and of the background temperature, `w·τ₂` at
+/// the two range nodes, sky radiance and solar irradiance.
+pub(super) struct BandStreams<'s> {
+    pub(super) e0: &'s [f32],
+    pub(super) e1: &'s [f32],
+    pub(super) t0: &'s [f32],
+    pub(super) t1: &'s [f32],
+    pub(super) g0: &'s [f32],
+    pub(super) g1: &'s [f32],
+    pub(super) q0: &'s [f32],
+    pub(super) q1: &'s [f32],
+    pub(super) sky: &'s [f32],
+    pub(super) sun: &'s [f32],
+}
+
+/// Lanes of the partial sums of [`band_sum`] (a fixed order: the result
+/// does not depend on the machine), and the padding of its rows.
+pub(super) const LANES: usize = 8;
+
+/// `Σ_λ w·τ₂ · [ε·B(T) + r·(env + sd·E_s) + tr·env]` over one band (see
+/// [`Shader::fast_primary`]); `frac` = the interpolation fractions of
+/// angle, temperature, background temperature and range. All rows are
+/// [`FastBand::len`] long, a multiple of [`LANES`].
+#[inline]
+pub(super) fn band_sum(s: &BandStreams, frac: [f32; 4], big_f: f32, sd: f32, tr: f32) -> f32 {
+    let [ta, ft, fg, fr] = frac;
+    let one_f = 1.0 - big_f;
+    let one_t = 1.0 - tr;
+    let lane = |v: &[f32], c: usize| -> [f32; LANES] {
+        v[c..c + LANES].try_into().expect("rows are whole lanes")
+    };
+    let mut acc = [0f32; LANES];
+    for c in (0..s.e0.len()).step_by(LANES) {
+        let (e0, e1, t0, t1) = (lane(s.e0, c), lane(s.e1, c), lane(s.t0, c), lane(s.t1, c));
+        let (g0, g1, q0, q1) = (lane(s.g0, c), lane(s.g1, c), lane(s.q0, c), lane(s.q1, c));
+        let (sky, sun) = (lane(s.sky, c), lane(s.sun, c));
+        for l in 0..LANES {
+            let eps = e0[l] + ta * (e1[l] - e0[l]);
+            let bt = t0[l] + ft * (t1[l] - t0[l]);
+            let bg = g0[l] + fg * (g1[l] - g0[l]);
+            let wt = q0[l] + fr * (q1[l] - q0[l]);
+            let env = big_f * sky[l] + one_f * bg;
+            let r = one_t - eps;
+            let r = if r > 0.0 { r } else { 0.0 };
+            acc[l] += wt * (eps * bt + r * (env + sd * sun[l]) + tr * env);
+        }
+    }
+    acc.iter().sum()
+}
+
+impl Shader<'_> {
+    /// The grey path's last pass without a sensor path: per band
+    /// `ε(θ)·x + r·(env + lit·w) + z` from the facet's precomputed terms
+    /// ([`grey_facets`]), `r = max(1 − ε − t, 0)`. One and two bands (the
+    /// common cases) have their own loops with the band count known.
+    pub(super) fn grey_terms_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        match self.grey_tables.bands {
+            1 => self.grey_terms_pass_n::<1>(sc, n, out),
+            2 => self.grey_terms_pass_n::<2>(sc, n, out),
+            _ => self.grey_terms_pass_any(sc, n, out),
+        }
+    }
+
+    /// A gathered hit's place in the grey tables: its facet's material
+    /// `mi`, the emissivity angle row `a0` and the fraction `ta` toward
+    /// `a0 + 1`, and whether its sunlit face is seen.
+    #[inline(always)]
+    pub(super) fn grey_hit_rows(&self, hit: &GreyHit) -> (usize, usize, f32, bool) {
+        let mi = self.grey[hit.facet as usize].mi as usize;
+        let th = hit.theta;
+        // θ ≥ 0: truncation is the floor.
+        let a0 = (th as usize).min(ANGLE_ROWS - 2);
+        let lit = (hit.dn < 0.0 || self.grey_tables.double_sided[mi]) && !hit.shaded;
+        (mi, a0, th - a0 as f32, lit)
+    }
+
+    /// [`Shader::grey_terms_pass`] with `NB` bands.
+    pub(super) fn grey_terms_pass_n<const NB: usize>(
+        &self,
+        sc: &FastScratch,
+        n: usize,
+        out: &mut [f32],
+    ) {
+        let gt = &self.grey_tables;
+        debug_assert_eq!(gt.bands, NB);
+        let (out, _) = out.split_at_mut(NB * n);
+        for hit in &sc.grey {
+            let (i, f) = (hit.ray as usize, hit.facet as usize);
+            let (mi, a0, ta, lit) = self.grey_hit_rows(hit);
+            let tr = gt.tr[mi];
+            // Angle rows a0 and a0 + 1, and the terms: one bounds check
+            // each (the lengths are constants).
+            let row = (mi * ANGLE_ROWS + a0) * NB;
+            let e0: &[f32; NB] = (&gt.eps[row..][..NB]).try_into().expect("angle row");
+            let e1: &[f32; NB] = (&gt.eps[row + NB..][..NB])
+                .try_into()
+                .expect("next angle row");
+            let t: &[[f32; 4]; NB] = (&self.grey_terms[f * NB..][..NB])
+                .try_into()
+                .expect("one facet's terms");
+            for b in 0..NB {
+                out[b * n + i] = grey_terms_band(e0[b], e1[b], ta, tr, lit, t[b]);
+            }
+        }
+    }
+
+    /// [`Shader::grey_terms_pass`] with any number of bands.
+    pub(super) fn grey_terms_pass_any(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        let nb = gt.bands;
+        for hit in &sc.grey {
+            let (i, f) = (hit.ray as usize, hit.facet as usize);
+            let (mi, a0, ta, lit) = self.grey_hit_rows(hit);
+            let tr = gt.tr[mi];
+            let e = &gt.eps[(mi * ANGLE_ROWS + a0) * nb..][..2 * nb];
+            let terms = &self.grey_terms[f * nb..][..nb];
+            for (b, &t) in terms.iter().enumerate() {
+                out[b * n + i] = grey_terms_band(e[b], e[nb + b], ta, tr, lit, t);
+            }
+        }
+    }
+
+    /// The grey path's last pass over every hit gathered in `sc` (see
+    /// [`Shader::shade_fast`]): per band
+    /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u`, with
+    /// `env = F·Σq·L_sky + (1 − F)·ΣqB(T_bg)`, `r = max(1 − ε − t, 0)`, the
+    /// integrals bilinear in temperature then range as in the reference.
+    /// The bands of one entry are adjacent in [`GreyTables`]: the offsets
+    /// are computed once per hit, then each band is a few loads.
+    pub(super) fn grey_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        let (nb, nodes) = (gt.bands, gt.nodes);
+        let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
+        // Next height node: `range_nodes` nodes on (none with one height).
+        let two = gt.heights.len() >= 2;
+        let hstep = if two { gt.range_nodes } else { 0 };
+        for hit in &sc.grey {
+            let i = hit.ray as usize;
+            let g = &self.grey[hit.facet as usize];
+            let mi = g.mi as usize;
+            let th = hit.theta;
+            // θ ≥ 0: truncation is the floor.
+            let a0 = (th as usize).min(ANGLE_ROWS - 2);
+            let ta = th - a0 as f32;
+            let (ri, rx) = gt.locate(hit.range);
+            let (ai, ax) = gt.locate_height(hit.z);
+            let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
+                g.sd
+            } else {
+                0.0
+            };
+            let tr = gt.tr[mi];
+            let (big_f, one_f) = (g.big_f, 1.0 - g.big_f);
+            let (ft, fg) = (g.ft, g.fg);
+            // Entry offsets: emissivity at angle rows a0, a0 + 1 (+nb);
+            // Planck rows k, k + 1 (+nodes·nb) at range nodes ri − 1, ri
+            // (+nb) of height node ai (+hstep·nb: ai + 1); sky, sun, path
+            // at node ri − 1 (+0, +nb, +2nb) and ri (+3nb).
+            let e = (mi * ANGLE_ROWS + a0) * nb;
+            let (kt, kg) = (g.kt as usize, g.kg as usize);
+            let n0 = ai * gt.range_nodes + ri - 1;
+            let t0 = (kt * nodes + n0) * nb;
+            let g0 = (kg * nodes + n0) * nb;
+            let up = nodes * nb;
+            let q = 3 * n0 * nb;
+            let (hp, hq) = (hstep * nb, 3 * hstep * nb);
+            for b in 0..nb {
+                let eps = ep[e + b] + ta * (ep[e + nb + b] - ep[e + b]);
+                // Temperature first, then range, then height, as the
+                // reference.
+                // (Direct calls, no closure: a closure here was not inlined,
+                // and building its environment per band cost more than the
+                // lookups.)
+                let [mut bt, mut bg, mut sky, mut sun, mut lu] =
+                    grey_node(pl, nd, [up, nb, b], [t0, g0, q], [ft, fg, rx]);
+                if two {
+                    let [bt1, bg1, sky1, sun1, lu1] = grey_node(
+                        pl,
+                        nd,
+                        [up, nb, b],
+                        [t0 + hp, g0 + hp, q + hq],
+                        [ft, fg, rx],
+                    );
+                    bt += ax * (bt1 - bt);
+                    bg += ax * (bg1 - bg);
+                    sky += ax * (sky1 - sky);
+                    sun += ax * (sun1 - sun);
+                    lu += ax * (lu1 - lu);
+                }
+                let r = (1.0 - eps - tr).max(0.0);
+                let env = big_f * sky + one_f * bg;
+                out[b * n + i] = eps * bt + r * (env + sd * sun) + tr * env + lu;
+            }
+        }
+    }
+
+    /// [`Shader::fast_primary`] of a hit off the grey path: per band the
+    /// grey integrals or the fused spectral sum.
+    /// `vis`: the hit's own sun visibility (its shadow ray), if traced.
+    pub(super) fn fast_general(
+        &self,
+        ray: &Ray,
+        h: &Hit,
+        state: Option<HitState>,
+        vis: Option<f32>,
+        out: &mut [f32],
+    ) -> Result<(), FastMiss> {
+        let f = self.facet_of(h);
+        if self.spawns_secondary(f) {
+            return Err(FastMiss::Secondary);
+        }
+        let mi = self.optics.facet_material[f] as usize;
+        if self.glint_m2[mi] > 0.0 {
+            return Err(FastMiss::Glint);
+        }
+        let s = &self.conditions.surface;
+        let (t_hit, sun_fraction) = hit_temperature(s, f, state);
+        let sun_fraction = vis.unwrap_or(sun_fraction);
+        let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
+        let (kg, fg) = self
+            .table_position(s.background_k[f] as f64)
+            .ok_or(FastMiss::OffTable)?;
+        let m = &self.optics.materials[mi];
+        let (_, nrm, d) = self.hit_frame(ray, h);
+        let (a0, ta) = angle_row(-d.dot(nrm));
+        let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+        let front = h.ng.dot(d) < 0.0;
+        let sun_w = if front || m.double_sided {
+            (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
+                / std::f64::consts::PI
+        } else {
+            0.0
+        };
+        let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_w;
+        let tr = m.transmissivity.clamp(0.0, 1.0);
+        // The path nodes: range node i − 1 → i at fraction x, of height
+        // node a (and a + 1 at fraction u when the table has two or more).
+        let node = match (&self.path, &self.fast_path) {
+            (Some(p), Some(_)) => {
+                let (i, x) = p.locate((h.t * ray.dir.length()) as f64);
+                let (a, u) = p.locate_height((ray.origin.z + ray.dir.z * h.t) as f64);
+                let next = (p.heights_m.len() >= 2).then(|| p.node(a + 1, i - 1));
+                Some((p.node(a, i - 1), x, next, u))
+            }
+            _ => None,
+        };
+        for (b, fb) in self.fast.iter().enumerate() {
+            if let Some(g) = &fb.grey[mi] {
+                // ε and r leave the sums: Σ q·ε·B(T) = ε·Σ q·B(T), …
+                let eps = g[a0] + ta * (g[a0 + 1] - g[a0]);
+                let r = (1.0 - eps - tr).max(0.0);
+                let (bt, bg, sky, sun, lu) = match (node, &self.fast_path) {
+                    (Some((n0, x, next, u)), Some(fp)) => {
+                        let lerp = |a: f64, b: f64, x: f64| a + x * (b - a);
+                        // Linear in range at the height node of `n0`.
+                        let at = |n0: usize| {
+                            let (p, q) = (&fp.integrals[b][n0], &fp.integrals[b][n0 + 1]);
+                            let w = &fp.path_radiance[b];
+                            [
+                                lerp(p.planck_at(kt, ft), q.planck_at(kt, ft), x),
+                                lerp(p.planck_at(kg, fg), q.planck_at(kg, fg), x),
+                                lerp(p.sky, q.sky, x),
+                                lerp(p.sun, q.sun, x),
+                                lerp(w[n0], w[n0 + 1], x),
+                            ]
+                        };
+                        let mut v = at(n0);
+                        if let Some(n1) = next {
+                            let v1 = at(n1);
+                            for (a, b) in v.iter_mut().zip(v1) {
+                                *a = lerp(*a, b, u);
+                            }
+                        }
+                        (v[0], v[1], v[2], v[3], v[4])
+                    }
+                    _ => {
+                        let p = &fb.plain;
+                        (p.planck_at(kt, ft), p.planck_at(kg, fg), p.sky, p.sun, 0.0)
+                    }
+                };
+                let env = big_f * sky + (1.0 - big_f) * bg;
+                let v = eps * bt + r * (env + sd * sun) + tr * env;
+                out[b] = (v + lu) as f32;
+                continue;
+            }
+            let nl = fb.len;
+            let e = &fb.eps[mi];
+            let row = |k: usize| &fb.planck[k * nl..(k + 1) * nl];
+            // The fused sum with path weights `w·τ₂` linear in range
+            // between `q0` and `q1`, plus the band path radiance.
+            let sum_with = |q0: &[f32], q1: &[f32], fr: f32| {
+                band_sum(
+                    &BandStreams {
+                        e0: &e[a0 * nl..(a0 + 1) * nl],
+                        e1: &e[(a0 + 1) * nl..(a0 + 2) * nl],
+                        t0: row(kt),
+                        t1: row(kt + 1),
+                        g0: row(kg),
+                        g1: row(kg + 1),
+                        q0,
+                        q1,
+                        sky: &fb.sky,
+                        sun: &fb.sun,
+                    },
+                    [ta as f32, ft as f32, fg as f32, fr],
+                    big_f as f32,
+                    sd as f32,
+                    tr as f32,
+                ) as f64
+            };
+            out[b] = match (node, &self.fast_path) {
+                (Some((n0, x, next, u)), Some(fp)) => {
+                    let at = |n0: usize| {
+                        let (q, w) = (&fp.weighted_tau[b], &fp.path_radiance[b]);
+                        sum_with(&q[n0], &q[n0 + 1], x as f32) + w[n0] + x * (w[n0 + 1] - w[n0])
+                    };
+                    let v = at(n0);
+                    match next {
+                        Some(n1) => v + u * (at(n1) - v),
+                        None => v,
+                    }
+                }
+                _ => sum_with(&fb.w, &fb.w, 0.0),
+            } as f32;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,213 @@
+//! The fast primary pipeline: band radiances at the sensor straight from
+//! the stages' tables, for the hits that need no secondary ray; the others
+//! go to the spectral reference ([`super::spectral`]).
+
+use glam::Vec3;
+
+use super::Shader;
+use super::hit::{GreyHit, acos_deg};
+use super::sources::{SunRays, sky_node};
+use super::truth::{TruthBlock, TruthOut};
+use crate::render::per_hit::HitState;
+use crate::trace::{Hit, Ray};
+
+/// Which primary hits [`Shader::fast_primary`] leaves to the spectral
+/// reference ([`Shader::shade_primary`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FastMiss {
+    /// The material is specular or transmissive and the bounce budget
+    /// allows secondary rays.
+    Secondary,
+    /// A temperature lies off the tabulated Planck function.
+    OffTable,
+    /// The material reflects the sun through a glint lobe
+    /// ([`crate::render::glint`]).
+    Glint,
+}
+
+/// Working memory of [`Shader::shade_fast`], reused from call to call.
+#[derive(Debug, Default)]
+pub struct FastScratch {
+    pub(super) grey: Vec<GreyHit>,
+    pub(super) sun: SunRays,
+    pub(super) bands: Vec<f32>,
+    /// Per ray of the batch: index into `states` (`u32::MAX`: the facet's
+    /// state).
+    pub(super) state_of: Vec<u32>,
+    /// Per-hit states of the batch's hits that have one.
+    pub(super) states: Vec<HitState>,
+    /// `(facet, point)` of those hits.
+    pub(super) points: Vec<(u32, Vec3)>,
+}
+
+impl Shader<'_> {
+    /// Band radiances at the sensor (W·m⁻²·sr⁻¹, one per band into `out`)
+    /// of the primary ray `ray` (unit direction) hitting `h`, without the
+    /// spectral intermediate of [`Shader::shade_primary`]: per band one
+    /// fused pass over the grid of
+    ///
+    /// ```text
+    /// Σ_λ w·τ₂(λ, R) · [ε·B(T) + r·(env + (1 − s)·E_s·cos σ·f_sun/π) + t·env]
+    ///   + Σ_λ w·L_u(λ, R),      r = max(1 − ε − t, 0),
+    ///   env = F·L_sky + (1 − F)·B(T_bg)
+    /// ```
+    ///
+    /// (the big equation of the module docs with `L_spec = L_behind = env`,
+    /// which is what the reference evaluates for a hit without secondary
+    /// rays), with the same interpolations as the reference — ε linear in
+    /// the 1° angle rows, B linear on the Planck table, τ₂ and L_u linear
+    /// in range — so the two agree to single-precision rounding
+    /// (~10⁻⁶ relative; `tests/render.rs` checks ≤ 10⁻⁵). The band weights
+    /// `w` (response × trapezoid) are folded into `w·τ₂` and `Σ w·L_u`
+    /// per range node, which is exact because both are linear in the range
+    /// interpolation. Returns `Err` (and leaves `out` alone) for hits that
+    /// need the reference: secondary rays, or temperatures off the table.
+    pub fn fast_primary(&self, ray: &Ray, h: &Hit, out: &mut [f32]) -> Result<(), FastMiss> {
+        let mut slow = Vec::new();
+        let mut o = vec![0f32; self.fast.len()];
+        self.shade_fast(
+            std::slice::from_ref(ray),
+            &[Some(*h)],
+            &mut o,
+            &mut slow,
+            &mut FastScratch::default(),
+            None,
+        );
+        if slow.is_empty() {
+            out.copy_from_slice(&o);
+            Ok(())
+        } else if self.spawns_secondary(self.facet_of(h)) {
+            Err(FastMiss::Secondary)
+        } else if self.glint_m2[self.optics.facet_material[self.facet_of(h)] as usize] > 0.0 {
+            Err(FastMiss::Glint)
+        } else {
+            Err(FastMiss::OffTable)
+        }
+    }
+
+    /// [`Shader::fast_primary`] and [`Shader::fast_miss`] for a batch of
+    /// primary rays (unit directions) and their hits: band radiances into
+    /// `out` band-major (`out[b · n + i]` for ray `i` of `n`), the indices
+    /// of the hits left to the spectral reference appended to `slow`
+    /// (their `out` values untouched).
+    ///
+    /// Hits on materials grey in every band (without secondary rays, on
+    /// the Planck table) take the grey path in three passes over the batch
+    /// — per hit the facet's record, `d·n_g` and the range; the view
+    /// zeniths of all of them at once (a loop that vectorises); then per
+    /// band `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
+    /// [`super::band::GreyTables`], with `q` the range-interpolated path weights — so
+    /// that no per-hit latency chain stalls the others. Other hits take
+    /// the per-hit fused spectral sums.
+    ///
+    /// With `truth`, the truth values of the pixel-centre rays it names are
+    /// written as the batch is read ([`Shader::truth_of`]).
+    pub fn shade_fast(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        out: &mut [f32],
+        slow: &mut Vec<usize>,
+        sc: &mut FastScratch,
+        mut truth: Option<TruthOut<'_, '_>>,
+    ) {
+        let n = rays.len();
+        let nb = self.fast.len();
+        debug_assert!(hits.len() == n && out.len() >= nb * n);
+        sc.grey.clear();
+        sc.bands.resize(nb, 0.0);
+        self.per_hit_states(rays, hits, sc);
+        {
+            let state_of = &sc.state_of;
+            let has_state = |i: usize| state_of.get(i).is_some_and(|&k| k != u32::MAX);
+            self.sun_visibility(rays, hits, has_state, &mut sc.sun);
+        }
+        // The next pixel-centre ray and its column.
+        let (mut next, mut col) = match &truth {
+            Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
+            _ => (usize::MAX, 0),
+        };
+        let mut block = TruthBlock::new();
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let centre = i == next;
+            let Some(h) = hit else {
+                let up = ray.dir.z >= 0.0;
+                let (k, f) = sky_node(ray.dir.z as f64, ray.dir.length() as f64);
+                for (b, fb) in self.fast.iter().enumerate() {
+                    out[b * n + i] = if up {
+                        fb.miss_sky_at(k, f)
+                    } else {
+                        fb.miss_ground
+                    } as f32;
+                }
+                if let (true, Some(t)) = (centre, &mut truth) {
+                    block.push(t, col, crate::render::MISS_TRUTH);
+                    (next, col) = t.advance(col);
+                }
+                continue;
+            };
+            let f = self.facet_of(h);
+            let range = h.t * ray.dir.length();
+            let state = sc
+                .state_of
+                .get(i)
+                .filter(|&&k| k != u32::MAX)
+                .map(|&k| sc.states[k as usize]);
+            let vis = sc.sun.of(i);
+            if let (true, Some(t)) = (centre, &mut truth) {
+                let mut v = self.truth_of_hit(f, range, state);
+                if let Some(x) = vis {
+                    v[4] = x;
+                }
+                block.push(t, col, v);
+                (next, col) = t.advance(col);
+            }
+            if let Some(st) = state {
+                if self
+                    .fast_general(ray, h, Some(st), None, &mut sc.bands)
+                    .is_err()
+                {
+                    slow.push(i);
+                    continue;
+                }
+                for (b, &v) in sc.bands.iter().enumerate() {
+                    out[b * n + i] = v;
+                }
+                continue;
+            }
+            let n2 = ray.dir.length_squared() * h.ng.length_squared();
+            if self.grey[f].mi != u32::MAX && n2 > 0.0 && n2.is_finite() {
+                sc.grey.push(GreyHit {
+                    ray: i as u32,
+                    facet: f as u32,
+                    dn: ray.dir.dot(h.ng),
+                    theta: n2,
+                    range,
+                    z: ray.origin.z + ray.dir.z * h.t,
+                    shaded: vis == Some(0.0),
+                });
+                continue;
+            }
+            if self.fast_general(ray, h, None, vis, &mut sc.bands).is_err() {
+                slow.push(i);
+                continue;
+            }
+            for (b, &v) in sc.bands.iter().enumerate() {
+                out[b * n + i] = v;
+            }
+        }
+        if let Some(t) = &mut truth {
+            // `col`: the columns written.
+            block.flush(t, col);
+        }
+        // View zeniths, degrees: cos θ = |d·n_g| / (|d|·|n_g|).
+        for g in &mut sc.grey {
+            g.theta = acos_deg((g.dn.abs() / g.theta.sqrt()).min(1.0));
+        }
+        if self.grey_terms.is_empty() {
+            self.grey_pass(sc, n, out);
+        } else {
+            self.grey_terms_pass(sc, n, out);
+        }
+    }
+}

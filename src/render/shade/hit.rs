@@ -1,0 +1,170 @@
+//! Stage 1, the hit: where a ray meets a facet — the hit frame (point,
+//! normal facing the ray, unit direction), the view zenith and its row in
+//! the 1° emissivity tables, and the hit's own per-hit thermal state
+//! ([`crate::render::per_hit`]) where its facet wants one.
+
+use glam::Vec3;
+
+use super::Shader;
+use super::fast::FastScratch;
+use crate::geometry::SceneGeometry;
+use crate::render::per_hit::HitState;
+use crate::trace::{Hit, Ray};
+
+/// Angle rows of the emissivity tables (0°, 1°, …, 90°).
+pub(super) const ANGLE_ROWS: usize = 91;
+
+/// Row `a0` of the 1° emissivity tables and the fraction toward `a0 + 1`
+/// for the cosine of the view zenith `cos_view` (clamped to [0, 1]).
+#[inline]
+pub(super) fn angle_row(cos_view: f32) -> (usize, f64) {
+    let theta = acos_unit(cos_view.clamp(0.0, 1.0) as f64).to_degrees();
+    // θ ≥ 0: truncation is the floor.
+    let a0 = (theta as usize).min(ANGLE_ROWS - 2);
+    (a0, theta - a0 as f64)
+}
+
+/// arccos x for 0 ≤ x ≤ 1, radians, to 3·10⁻⁸ (Abramowitz & Stegun,
+/// *Handbook of Mathematical Functions*, eq. 4.4.46: 2·10⁻⁸ with its
+/// ten-digit coefficients; 2·10⁻⁶° is far inside
+/// the 1° emissivity rows).
+#[inline]
+pub(super) fn acos_unit(x: f64) -> f64 {
+    pub(super) const A: [f64; 8] = [
+        1.570_796_305_0,
+        -0.214_598_801_6,
+        0.088_978_987_4,
+        -0.050_174_304_6,
+        0.030_891_881_0,
+        -0.017_088_125_6,
+        0.006_670_090_1,
+        -0.001_262_491_1,
+    ];
+    let p = A.iter().rev().fold(0.0, |acc, &a| acc * x + a);
+    (1.0 - x).max(0.0).sqrt() * p
+}
+
+/// arccos x in degrees for 0 ≤ x ≤ 1, single precision: the polynomial of
+/// [`acos_unit`] (Abramowitz & Stegun eq. 4.4.46) in f32, written so a loop
+/// over many cosines vectorises. Error ≤ 2·10⁻⁵° (f32 rounding; tested),
+/// far inside the 1° emissivity rows.
+#[inline]
+pub(super) fn acos_deg(x: f32) -> f32 {
+    pub(super) const A: [f32; 8] = [
+        // 1.570 796 305 0: in f32, π/2.
+        std::f32::consts::FRAC_PI_2,
+        -0.214_598_8,
+        0.088_978_99,
+        -0.050_174_303,
+        0.030_891_88,
+        -0.017_088_126,
+        0.006_670_09,
+        -0.001_262_491_1,
+    ];
+    // Estrin's scheme: a shorter dependency chain than Horner's.
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let p01 = A[0] + A[1] * x;
+    let p23 = A[2] + A[3] * x;
+    let p45 = A[4] + A[5] * x;
+    let p67 = A[6] + A[7] * x;
+    let p = (p01 + p23 * x2) + (p45 + p67 * x2) * x4;
+    (1.0 - x).max(0.0).sqrt() * p * (180.0 / std::f32::consts::PI)
+}
+
+/// A hit on the grey path, as [`Shader::shade_fast`] gathers it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct GreyHit {
+    /// Ray index in the batch.
+    pub(super) ray: u32,
+    /// Facet.
+    pub(super) facet: u32,
+    /// `d·n_g` (its sign: which face is seen).
+    pub(super) dn: f32,
+    /// `|d|²·|n_g|²`, then (second pass) the view zenith θ, degrees.
+    pub(super) theta: f32,
+    /// Slant range, m.
+    pub(super) range: f32,
+    /// Height of the hit above the ground datum (scene z), m.
+    pub(super) z: f32,
+    /// The hit's own shadow ray found the sun blocked.
+    pub(super) shaded: bool,
+}
+
+impl Shader<'_> {
+    /// The per-hit states of the hits of a batch whose facets want one
+    /// into `sc` (`state_of`, `states`).
+    pub(super) fn per_hit_states(&self, rays: &[Ray], hits: &[Option<Hit>], sc: &mut FastScratch) {
+        sc.state_of.clear();
+        sc.states.clear();
+        let Some(ph) = &self.conditions.per_hit else {
+            return;
+        };
+        sc.state_of.resize(rays.len(), u32::MAX);
+        sc.points.clear();
+        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
+            let Some(h) = hit else { continue };
+            let f = self.facet_of(h);
+            if ph.wants(f, h.t * ray.dir.length(), self.pixel_angle_rad) {
+                sc.state_of[i] = sc.points.len() as u32;
+                sc.points.push((f as u32, ray.origin + ray.dir * h.t));
+            }
+        }
+        ph.states(self.tracer, &sc.points, &mut sc.states);
+    }
+
+    /// The per-hit state of one hit, if its facet wants one.
+    pub(super) fn hit_state(&self, ray: &Ray, h: &Hit) -> Option<HitState> {
+        let ph = self.conditions.per_hit.as_ref()?;
+        let f = self.facet_of(h);
+        if !ph.wants(f, h.t * ray.dir.length(), self.pixel_angle_rad) {
+            return None;
+        }
+        let mut out = Vec::with_capacity(1);
+        ph.states(
+            self.tracer,
+            &[(f as u32, ray.origin + ray.dir * h.t)],
+            &mut out,
+        );
+        out.pop()
+    }
+
+    /// Hit point, normal facing the ray's origin, and unit ray direction.
+    pub(super) fn hit_frame(&self, ray: &Ray, h: &Hit) -> (Vec3, Vec3, Vec3) {
+        let d = ray.dir.normalize_or_zero();
+        let p = ray.origin + ray.dir * h.t;
+        let mut nrm = h.ng.normalize_or(Vec3::Z);
+        if nrm.dot(d) > 0.0 {
+            nrm = -nrm;
+        }
+        (p, nrm, d)
+    }
+
+    /// Global facet index of a hit.
+    pub fn facet_of(&self, hit: &Hit) -> usize {
+        SceneGeometry::facet_id(&self.offsets, hit.instance, hit.prim)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    pub(super) fn acos_deg_is_within_its_stated_bound() {
+        for i in 0..=100_000 {
+            let x = i as f64 / 100_000.0;
+            // The cosine as the renderer has it: in f32.
+            let x = x as f32;
+            let err = (super::acos_deg(x) as f64 - (x as f64).acos().to_degrees()).abs();
+            assert!(err <= 2e-5, "acos({x}): error {err}°");
+        }
+    }
+
+    #[test]
+    pub(super) fn acos_unit_is_within_its_published_bound() {
+        for i in 0..=100_000 {
+            let x = i as f64 / 100_000.0;
+            let err = (super::acos_unit(x) - x.acos()).abs();
+            assert!(err <= 3e-8, "acos({x}): error {err}");
+        }
+    }
+}
