@@ -161,69 +161,90 @@ pub fn reflected_shortwave(
     let nd = day.len();
     // E⁰ per unit E_dn on the day records, facet-major `[f·nd + d]`, and
     // per unit E_d.
-    let e0_direct: Vec<f32> = (0..n)
-        .into_par_iter()
-        .flat_map_iter(|f| {
-            let (s, c) = (solar.sun_fraction(f), solar.cos_incidence(f));
-            day.iter()
-                .map(move |&k| s[k].clamp(0.0, 1.0) * c[k].max(0.0))
-        })
-        .collect();
     let e0_diffuse: Vec<f32> = (0..n).map(|f| sky.mean_shape_factor(f)).collect();
+    if nd == 0 {
+        // No daytime record: only the diffuse coefficient.
+        let mut refl_diffuse = vec![0.0f32; n];
+        for _ in 0..bounces {
+            let leaving: Vec<f32> = (0..n)
+                .map(|j| albedo[j] * (e0_diffuse[j] + refl_diffuse[j]))
+                .collect();
+            refl_diffuse = diffuse_bounce(sky, ground_albedo, &leaving);
+        }
+        out.diffuse = refl_diffuse;
+        return Ok(out);
+    }
+    // E⁰ per unit E_dn on the day records, facet-major `[f·nd + d]`.
+    let mut e0_direct = vec![0.0f32; n * nd];
+    e0_direct.par_chunks_mut(nd).enumerate().for_each(|(f, e)| {
+        let (s, c) = (solar.sun_fraction(f), solar.cos_incidence(f));
+        for (e, &k) in e.iter_mut().zip(&day) {
+            *e = s[k].clamp(0.0, 1.0) * c[k].max(0.0);
+        }
+    });
     let mut refl_direct = vec![0.0f32; n * nd];
     let mut refl_diffuse = vec![0.0f32; n];
+    // ρ_j E_j per unit E_dn per day record (reused between bounces).
+    let mut leaving_direct = vec![0.0f32; n * nd];
     for _ in 0..bounces {
-        // ρ_j E_j (per unit E_dn per day record, and per unit E_d).
-        let leaving_direct: Vec<f32> = e0_direct
-            .par_chunks(nd.max(1))
-            .zip(refl_direct.par_chunks(nd.max(1)))
+        leaving_direct
+            .par_chunks_mut(nd)
+            .zip(e0_direct.par_chunks(nd))
+            .zip(refl_direct.par_chunks(nd))
             .zip(albedo.par_iter())
-            .flat_map_iter(|((e, rr), &a)| e.iter().zip(rr).map(move |(e, rr)| a * (e + rr)))
-            .collect();
+            .for_each(|(((l, e), rr), &a)| {
+                for ((l, e), rr) in l.iter_mut().zip(e).zip(rr) {
+                    *l = a * (e + rr);
+                }
+            });
         let leaving_diffuse: Vec<f32> = e0_diffuse
             .iter()
             .zip(&refl_diffuse)
             .zip(albedo)
             .map(|((e, rr), a)| a * (e + rr))
             .collect();
-        let next_diffuse: Vec<f32> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                sky.ground_weight[i] * ground_albedo
-                    + sky
-                        .background(i)
-                        .iter()
-                        .map(|e| e.weight * leaving_diffuse[e.facet as usize])
-                        .sum::<f32>()
-            })
-            .collect();
-        let mut next_direct = vec![0.0f32; n * nd];
-        if nd > 0 {
-            next_direct
-                .par_chunks_mut(nd)
-                .enumerate()
-                .for_each(|(i, out)| {
-                    let g = sky.ground_weight[i] * ground_albedo;
+        refl_diffuse = diffuse_bounce(sky, ground_albedo, &leaving_diffuse);
+        refl_direct
+            .par_chunks_mut(nd)
+            .enumerate()
+            .for_each(|(i, out)| {
+                let g = sky.ground_weight[i] * ground_albedo;
+                out.iter_mut()
+                    .zip(&ground_direct)
+                    .for_each(|(o, z)| *o = g * z);
+                for e in sky.background(i) {
+                    let j = e.facet as usize;
+                    let src = &leaving_direct[j * nd..(j + 1) * nd];
                     out.iter_mut()
-                        .zip(&ground_direct)
-                        .for_each(|(o, z)| *o = g * z);
-                    for e in sky.background(i) {
-                        let j = e.facet as usize;
-                        let src = &leaving_direct[j * nd..(j + 1) * nd];
-                        out.iter_mut()
-                            .zip(src)
-                            .for_each(|(o, l)| *o += e.weight * l);
-                    }
-                });
-        }
-        refl_direct = next_direct;
-        refl_diffuse = next_diffuse;
+                        .zip(src)
+                        .for_each(|(o, l)| *o += e.weight * l);
+                }
+            });
     }
-    for f in 0..n {
-        for (d, &k) in day.iter().enumerate() {
-            out.direct[f * r + k] = refl_direct[f * nd + d];
-        }
-    }
+    out.direct
+        .par_chunks_mut(r)
+        .zip(refl_direct.par_chunks(nd))
+        .for_each(|(o, rd)| {
+            for (&v, &k) in rd.iter().zip(&day) {
+                o[k] = v;
+            }
+        });
     out.diffuse = refl_diffuse;
     Ok(out)
+}
+
+/// One bounce of the diffuse coefficient: `Σ_j F_ij ρ_j E_j + g_i ρ_g` for
+/// each facet `i`, given `leaving[j] = ρ_j E_j` per unit `E_d`.
+fn diffuse_bounce(sky: &SkyView, ground_albedo: f32, leaving: &[f32]) -> Vec<f32> {
+    (0..leaving.len())
+        .into_par_iter()
+        .map(|i| {
+            sky.ground_weight[i] * ground_albedo
+                + sky
+                    .background(i)
+                    .iter()
+                    .map(|e| e.weight * leaving[e.facet as usize])
+                    .sum::<f32>()
+        })
+        .collect()
 }

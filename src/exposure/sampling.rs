@@ -123,8 +123,19 @@ pub fn stratified_cosine(samples: u32, mut rng: impl FnMut() -> f32) -> Vec<Hemi
 /// ([`r2_shift`]) their errors partly cancel, so that an area's mean
 /// converges faster than its facets' independent errors would.
 pub fn rotated_cosine(m: u32, jitter: &[(f32, f32)], shift: (f32, f32)) -> Vec<HemiSample> {
-    let w = 1.0 / (m * m) as f32;
     let mut out = Vec::with_capacity((m * m) as usize);
+    rotated_cosine_into(m, jitter, shift, &mut out);
+    out
+}
+
+/// [`rotated_cosine`] appended to `out` (a buffer reused from face to face).
+pub fn rotated_cosine_into(
+    m: u32,
+    jitter: &[(f32, f32)],
+    shift: (f32, f32),
+    out: &mut Vec<HemiSample>,
+) {
+    let w = 1.0 / (m * m) as f32;
     for i in 0..m {
         for j in 0..m {
             let (a, b) = jitter[(i * m + j) as usize];
@@ -139,7 +150,6 @@ pub fn rotated_cosine(m: u32, jitter: &[(f32, f32)], shift: (f32, f32)) -> Vec<H
             });
         }
     }
-    out
 }
 
 /// Point `index` of the R2 sequence, the two-dimensional Kronecker sequence

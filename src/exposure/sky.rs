@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::FacetSamples;
 use super::sampling::{
-    HemiSample, dirsig_grid, jitter_rng, r2_shift, rotated_cosine, stratified_side,
+    HemiSample, dirsig_grid, jitter_rng, r2_shift, rotated_cosine_into, stratified_side,
 };
 use crate::geometry::{BackgroundEntry, SceneGeometry};
 use crate::trace::{Coherence, Hit, Ray, Tracer};
@@ -247,6 +247,21 @@ impl SkyView {
     }
 }
 
+/// A worker's buffers, reused from batch to batch.
+#[derive(Default)]
+struct Scratch {
+    rays: Vec<Ray>,
+    /// Each ray's weight.
+    weights: Vec<f32>,
+    /// Start of each facet's rays, then the end of the last.
+    ranges: Vec<usize>,
+    hits: Vec<Option<Hit>>,
+    /// One facet's hits, before merging by facet id.
+    seen: Vec<BackgroundEntry>,
+    /// One face's hemisphere pattern.
+    pat: Vec<HemiSample>,
+}
+
 /// The scene-wide part of a sampling pattern ([`SkySampling::base`]).
 enum Base {
     /// The grid's directions, the same for every face.
@@ -258,14 +273,21 @@ enum Base {
 /// Hemisphere pattern of one facet face (local frame): the grid, or the
 /// strata's fixed jitter rotated by the face's point of the R2 sequence
 /// (front face of facet `f`: point `f`; back face: the same, shifted by
-/// half a stratum both ways).
-fn pattern(base: &Base, facet: usize, back: bool) -> Vec<HemiSample> {
+/// half a stratum both ways). `buf` holds the rotated pattern.
+fn pattern<'a>(
+    base: &'a Base,
+    facet: usize,
+    back: bool,
+    buf: &'a mut Vec<HemiSample>,
+) -> &'a [HemiSample] {
     match base {
-        Base::Grid(g) => g.clone(),
+        Base::Grid(g) => g,
         Base::Stratified(m, jitter) => {
             let (a, b) = r2_shift(facet as u64);
             let h = if back { 0.5 } else { 0.0 };
-            rotated_cosine(*m, jitter, (a + h, b + h))
+            buf.clear();
+            rotated_cosine_into(*m, jitter, (a + h, b + h), buf);
+            buf
         }
     }
 }
@@ -289,8 +311,16 @@ pub fn sky_rays(
     rays: &mut Vec<Ray>,
 ) {
     let base = sampling.base(seed);
-    let (mut weights, mut ranges) = (Vec::new(), Vec::new());
-    lay_out_rays(facets, range, &base, rays, &mut weights, &mut ranges);
+    let (mut weights, mut ranges, mut pat) = (Vec::new(), Vec::new(), Vec::new());
+    lay_out_rays(
+        facets,
+        range,
+        &base,
+        rays,
+        &mut weights,
+        &mut ranges,
+        &mut pat,
+    );
 }
 
 /// The rays of [`sky_rays`], each ray's weight in `weights` and the
@@ -302,6 +332,7 @@ fn lay_out_rays(
     rays: &mut Vec<Ray>,
     weights: &mut Vec<f32>,
     ranges: &mut Vec<usize>,
+    pat: &mut Vec<HemiSample>,
 ) {
     for f in range {
         ranges.push(rays.len());
@@ -314,8 +345,7 @@ fn lay_out_rays(
         let scale = 1.0 / sides.len() as f32;
         for (si, &side) in sides.iter().enumerate() {
             let lift = facets.normal[f] * (side * facets.offset_m);
-            let pat = pattern(base, f, si == 1);
-            for (k, h) in pat.iter().enumerate() {
+            for (k, h) in pattern(base, f, si == 1, pat).iter().enumerate() {
                 let dir = facets.to_world(f, h.dir, side);
                 rays.push(Ray::new(pts[k % pts.len()] + lift, dir));
                 weights.push(h.weight * scale);
@@ -369,20 +399,33 @@ pub fn sky_view_of<T: Tracer + ?Sized>(
     let face_rays = sampling.rays_per_face();
     let chunks: Vec<(SkyView, u64)> = (0..n.saturating_sub(start).div_ceil(batch))
         .into_par_iter()
-        .map(|c| {
+        .map_init(Scratch::default, |scratch, c| {
             let (f0, f1) = (start + c * batch, (start + (c + 1) * batch).min(n));
-            let mut rays = Vec::new();
-            let mut weights = Vec::new();
-            // Range of rays of each facet.
-            let mut ranges = Vec::with_capacity(f1 - f0 + 1);
-            lay_out_rays(facets, f0..f1, &base, &mut rays, &mut weights, &mut ranges);
-            let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
-            tracer.intersect(&rays, RAY_COHERENCE, &mut hits);
+            let Scratch {
+                rays,
+                weights,
+                ranges,
+                hits,
+                seen,
+                pat,
+            } = scratch;
+            rays.clear();
+            weights.clear();
+            ranges.clear();
+            lay_out_rays(facets, f0..f1, &base, rays, weights, ranges, pat);
+            hits.clear();
+            hits.resize(rays.len(), None);
+            tracer.intersect(rays, RAY_COHERENCE, hits);
+            let nf = f1 - f0;
             let mut out = SkyView {
-                offsets: vec![0],
-                ..Default::default()
+                shape_factor: Vec::with_capacity(nf),
+                back_shape_factor: Vec::with_capacity(nf),
+                std_error: Vec::with_capacity(nf),
+                ground_weight: Vec::with_capacity(nf),
+                offsets: Vec::with_capacity(nf + 1),
+                entries: Vec::new(),
             };
-            let mut seen: Vec<BackgroundEntry> = Vec::new();
+            out.offsets.push(0);
             for w in ranges.windows(2) {
                 let (r0, r1) = (w[0], w[1]);
                 let (mut sky, mut ground, mut var) = ([0.0f64; 2], 0.0f64, 0.0f64);
@@ -416,7 +459,7 @@ pub fn sky_view_of<T: Tracer + ?Sized>(
                 }
                 seen.sort_unstable_by_key(|e| e.facet);
                 let start = out.entries.len();
-                for e in &seen {
+                for e in seen.iter() {
                     match out.entries[start..].last_mut() {
                         Some(last) if last.facet == e.facet => last.weight += e.weight,
                         _ => out.entries.push(*e),

@@ -164,66 +164,85 @@ pub fn solar_history_of<T: Tracer + ?Sized>(
     done: &(dyn Fn(u64) + Sync),
 ) -> (SolarHistory, u64) {
     let steps = sun_dirs.len();
-    let (start, n) = (range.start, range.end.min(facets.len()));
+    let (start, end) = (range.start, range.end.min(facets.len()));
+    let n = end.saturating_sub(start);
     let batch = batch_facets.max(1);
     let stride = stride.max(1) as usize;
-    let chunks: Vec<(Vec<f32>, Vec<f32>, u64)> = (0..n.saturating_sub(start).div_ceil(batch))
-        .into_par_iter()
-        .map(|c| {
-            let (f0, f1) = (start + c * batch, (start + (c + 1) * batch).min(n));
+    // Every batch writes straight into its part of the history (no
+    // per-batch result vectors, no copy afterwards); each worker reuses
+    // its ray and answer buffers from batch to batch.
+    let mut out = SolarHistory {
+        steps,
+        sun_fraction: vec![0.0; n * steps],
+        cos_incidence: vec![0.0; n * steps],
+    };
+    if steps == 0 || n == 0 {
+        return (out, 0);
+    }
+    let rays = out
+        .sun_fraction
+        .par_chunks_mut(batch * steps)
+        .zip(out.cos_incidence.par_chunks_mut(batch * steps))
+        .enumerate()
+        .map_init(Scratch::default, |scratch, (c, (frac, cosi))| {
+            let f0 = start + c * batch;
+            let f1 = f0 + frac.len() / steps;
             let r = if stride == 1 {
-                exhaustive_batch(tracer, facets, sun_dirs, f0..f1)
+                exhaustive_batch(tracer, facets, sun_dirs, f0..f1, frac, cosi, scratch)
             } else {
-                refined_batch(tracer, facets, sun_dirs, f0..f1, stride)
+                refined_batch(tracer, facets, sun_dirs, f0..f1, stride, frac, cosi)
             };
             done((f1 - f0) as u64);
             r
         })
-        .collect();
-    let n = n.saturating_sub(start);
-    let mut out = SolarHistory {
-        steps,
-        sun_fraction: Vec::with_capacity(n * steps),
-        cos_incidence: Vec::with_capacity(n * steps),
-    };
-    let mut rays = 0;
-    for (f, c, r) in chunks {
-        out.sun_fraction.extend(f);
-        out.cos_incidence.extend(c);
-        rays += r;
-    }
+        .sum();
     (out, rays)
 }
 
-/// One batch of [`solar_history`] with every step traced.
+/// A worker's buffers, reused from batch to batch.
+#[derive(Default)]
+struct Scratch {
+    rays: Vec<Ray>,
+    occluded: Vec<bool>,
+    /// (slot in the batch's history, number of rays) per traced (facet, step).
+    slots: Vec<(u32, u32)>,
+}
+
+/// One batch of [`solar_history`] with every step traced: fills the
+/// batch's `frac` and `cosi` (`[(facet − range.start) · steps + step]`,
+/// zero on entry) and returns the number of rays.
 fn exhaustive_batch<T: Tracer + ?Sized>(
     tracer: &T,
     facets: &FacetSamples,
     sun_dirs: &[Vec3],
     range: Range<usize>,
-) -> (Vec<f32>, Vec<f32>, u64) {
-    let steps = sun_dirs.len();
-    let nf = range.len();
-    let mut frac = vec![0.0f32; nf * steps];
-    let mut cosi = vec![0.0f32; nf * steps];
-    let mut rays = Vec::new();
-    // (slot in frac, number of rays) for each traced (facet, step).
-    let mut slots: Vec<(u32, u32)> = Vec::new();
-    lay_out_rays(facets, range, sun_dirs, &mut rays, |slot, c, m| {
+    frac: &mut [f32],
+    cosi: &mut [f32],
+    scratch: &mut Scratch,
+) -> u64 {
+    let Scratch {
+        rays,
+        occluded,
+        slots,
+    } = scratch;
+    rays.clear();
+    slots.clear();
+    lay_out_rays(facets, range, sun_dirs, rays, |slot, c, m| {
         cosi[slot] = c.abs().min(1.0);
         if let Some(m) = m {
             slots.push((slot as u32, m));
         }
     });
-    let mut occ = vec![false; rays.len()];
-    tracer.occluded(&rays, RAY_COHERENCE, &mut occ);
+    occluded.clear();
+    occluded.resize(rays.len(), false);
+    tracer.occluded(rays, RAY_COHERENCE, occluded);
     let mut k = 0usize;
-    for &(slot, m) in &slots {
-        let lit = occ[k..k + m as usize].iter().filter(|&&o| !o).count();
+    for &(slot, m) in slots.iter() {
+        let lit = occluded[k..k + m as usize].iter().filter(|&&o| !o).count();
         frac[slot as usize] = lit as f32 / m as f32;
         k += m as usize;
     }
-    (frac, cosi, rays.len() as u64)
+    rays.len() as u64
 }
 
 /// Per (facet, step, point) of a refined batch: not traced yet.
@@ -241,10 +260,11 @@ fn refined_batch<T: Tracer + ?Sized>(
     sun_dirs: &[Vec3],
     range: Range<usize>,
     stride: usize,
-) -> (Vec<f32>, Vec<f32>, u64) {
+    frac: &mut [f32],
+    cosi: &mut [f32],
+) -> u64 {
     let steps = sun_dirs.len();
     let (nf, f0, m) = (range.len(), range.start, facets.per_facet);
-    let mut cosi = vec![0.0f32; nf * steps];
     // Per (facet, step): the side the sun is on (0: no ray), and whether
     // the step is a coarse one.
     let mut side = vec![0i8; nf * steps];
@@ -367,6 +387,8 @@ fn refined_batch<T: Tracer + ?Sized>(
             }
         }
     }
-    let frac = lit.iter().map(|&l| l as f32 / m as f32).collect();
-    (frac, cosi, total)
+    for (f, &l) in frac.iter_mut().zip(&lit) {
+        *f = l as f32 / m as f32;
+    }
+    total
 }

@@ -78,6 +78,10 @@ struct ExposureArgs {
         default_value = "dirsig@1,stratified:64@1,stratified:64@2,stratified:64@4,stratified:36@4"
     )]
     settings: String,
+    /// Sample points per facet edge, `n²` per facet (`render.facet_samples`;
+    /// the render's default, 1).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    facet_samples: u32,
 }
 
 /// Arguments of `irsig bench render`.
@@ -171,6 +175,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     irsig::exposure::ExposureParams {
                         sky,
                         solar_stride: stride,
+                        samples_per_edge: a.facet_samples,
                         ..Default::default()
                     },
                 ));
