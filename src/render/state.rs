@@ -728,6 +728,16 @@ fn decode_ipc(
         if !with_batches {
             return Ok((meta, Vec::new()));
         }
+        // irsig writes one record batch per file. Refuse any other count
+        // before decoding: a footer listing many blocks (each pointing at
+        // the same few bytes) would otherwise decode batch after batch into
+        // gigabytes (found by the `state` fuzz target).
+        if reader.num_batches() != 1 {
+            return Err(format!(
+                "{} record batches, expected one",
+                reader.num_batches()
+            ));
+        }
         let batches = reader
             .map(|b| b.map_err(|e| e.to_string()))
             .collect::<std::result::Result<Vec<_>, String>>()?;
