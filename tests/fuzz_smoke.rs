@@ -286,5 +286,5 @@ fn r8_fuzz_crash_regressions() {
             n += 1;
         }
     }
-    assert_eq!(n, 10, "expected the ten crash inputs");
+    assert_eq!(n, 11, "expected the eleven crash inputs");
 }

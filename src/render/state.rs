@@ -718,10 +718,11 @@ fn write_batch(path: &Path, batch: &RecordBatch) -> Result<()> {
 /// `state` fuzz target): the panic is caught and reported as a malformed file
 /// (the default hook still prints the panic's own message).
 fn decode_ipc(
-    f: std::fs::File,
+    mut f: std::fs::File,
     with_batches: bool,
 ) -> std::result::Result<(HashMap<String, String>, Vec<RecordBatch>), String> {
     let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        check_ipc_blocks(&mut f)?;
         let reader = arrow_ipc::reader::FileReader::try_new(f, None)
             .map_err(|e| format!("not an Arrow IPC file: {e}"))?;
         let meta = reader.schema().metadata().clone();
@@ -751,6 +752,57 @@ fn decode_ipc(
             .unwrap_or("the Arrow reader failed");
         Err(format!("malformed Arrow IPC file: {why}"))
     })
+}
+
+/// Check that every block an Arrow IPC file's footer lists lies inside the
+/// file, and leave `f` at its start. arrow-ipc allocates each block's
+/// declared size before reading it, so a footer declaring a block of
+/// exabytes aborts the process (an allocation failure is not a panic that
+/// [`decode_ipc`] could catch; found by the `state` fuzz target).
+fn check_ipc_blocks(f: &mut std::fs::File) -> std::result::Result<(), String> {
+    use std::io::{Read, Seek, SeekFrom};
+    let io = |e: std::io::Error| format!("not an Arrow IPC file: {e}");
+    let len = f.seek(SeekFrom::End(0)).map_err(io)?;
+    if len < 10 {
+        return Err(format!("not an Arrow IPC file: {len} bytes"));
+    }
+    let mut tail = [0u8; 10];
+    f.seek(SeekFrom::End(-10)).map_err(io)?;
+    f.read_exact(&mut tail).map_err(io)?;
+    let footer_len = arrow_ipc::reader::read_footer_length(tail)
+        .map_err(|e| format!("not an Arrow IPC file: {e}"))? as u64;
+    if footer_len + 10 > len {
+        return Err(format!(
+            "malformed Arrow IPC file: a footer of {footer_len} bytes in a file of {len}"
+        ));
+    }
+    let mut footer = vec![0u8; footer_len as usize];
+    f.seek(SeekFrom::Start(len - 10 - footer_len)).map_err(io)?;
+    f.read_exact(&mut footer).map_err(io)?;
+    let footer = arrow_ipc::root_as_footer(&footer)
+        .map_err(|e| format!("malformed Arrow IPC file: its footer: {e}"))?;
+    let blocks = footer
+        .dictionaries()
+        .into_iter()
+        .flatten()
+        .chain(footer.recordBatches().into_iter().flatten());
+    for b in blocks {
+        let end = u64::try_from(b.offset())
+            .ok()
+            .zip(u64::try_from(b.metaDataLength()).ok())
+            .zip(u64::try_from(b.bodyLength()).ok())
+            .and_then(|((o, m), n)| o.checked_add(m)?.checked_add(n));
+        if !end.is_some_and(|e| e <= len) {
+            return Err(format!(
+                "malformed Arrow IPC file: a block at offset {} of {} + {} bytes beyond the file's {len} bytes",
+                b.offset(),
+                b.metaDataLength(),
+                b.bodyLength()
+            ));
+        }
+    }
+    f.seek(SeekFrom::Start(0)).map_err(io)?;
+    Ok(())
 }
 
 /// Read the one record batch of `path`, checking its metadata.
