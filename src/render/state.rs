@@ -792,7 +792,7 @@ fn check_ipc_blocks(f: &mut std::fs::File) -> std::result::Result<(), String> {
             .zip(u64::try_from(b.metaDataLength()).ok())
             .zip(u64::try_from(b.bodyLength()).ok())
             .and_then(|((o, m), n)| o.checked_add(m)?.checked_add(n));
-        if !end.is_some_and(|e| e <= len) {
+        if end.is_none_or(|e| e > len) {
             return Err(format!(
                 "malformed Arrow IPC file: a block at offset {} of {} + {} bytes beyond the file's {len} bytes",
                 b.offset(),
