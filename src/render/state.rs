@@ -710,8 +710,9 @@ fn write_batch(path: &Path, batch: &RecordBatch) -> Result<()> {
     })
 }
 
-/// An Arrow IPC file's schema metadata and (`with_batches`) its record
-/// batches; the error says
+/// An Arrow IPC file's schema metadata and (`with_batch`) its one record
+/// batch (irsig writes one per file; any other count is an error); the
+/// error says
 /// what is malformed. arrow-ipc 59 panics on some malformed files instead of
 /// returning an error (a schema field of type `NONE`; a boolean null bitmap
 /// shorter than its column; a buffer slice beyond the body; found by the
@@ -719,30 +720,28 @@ fn write_batch(path: &Path, batch: &RecordBatch) -> Result<()> {
 /// (the default hook still prints the panic's own message).
 fn decode_ipc(
     mut f: std::fs::File,
-    with_batches: bool,
-) -> std::result::Result<(HashMap<String, String>, Vec<RecordBatch>), String> {
+    with_batch: bool,
+) -> std::result::Result<(HashMap<String, String>, Option<RecordBatch>), String> {
     let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        check_ipc_blocks(&mut f)?;
-        let reader = arrow_ipc::reader::FileReader::try_new(f, None)
+        let batches = check_ipc_blocks(&mut f)?;
+        let mut reader = arrow_ipc::reader::FileReader::try_new(f, None)
             .map_err(|e| format!("not an Arrow IPC file: {e}"))?;
         let meta = reader.schema().metadata().clone();
-        if !with_batches {
-            return Ok((meta, Vec::new()));
+        if !with_batch {
+            return Ok((meta, None));
         }
-        // irsig writes one record batch per file. Refuse any other count
-        // before decoding: a footer listing many blocks (each pointing at
-        // the same few bytes) would otherwise decode batch after batch into
-        // gigabytes (found by the `state` fuzz target).
-        if reader.num_batches() != 1 {
-            return Err(format!(
-                "{} record batches, expected one",
-                reader.num_batches()
-            ));
+        // Refuse any other count before decoding: a footer listing many
+        // blocks (each pointing at the same few bytes) would otherwise
+        // decode batch after batch into gigabytes (found by the `state`
+        // fuzz target).
+        if batches != 1 {
+            return Err(format!("{batches} record batches, expected one"));
         }
-        let batches = reader
-            .map(|b| b.map_err(|e| e.to_string()))
-            .collect::<std::result::Result<Vec<_>, String>>()?;
-        Ok((meta, batches))
+        let batch = reader
+            .next()
+            .ok_or("no record batch")?
+            .map_err(|e| e.to_string())?;
+        Ok((meta, Some(batch)))
     }));
     decoded.unwrap_or_else(|p| {
         let why = p
@@ -755,11 +754,11 @@ fn decode_ipc(
 }
 
 /// Check that every block an Arrow IPC file's footer lists lies inside the
-/// file, and leave `f` at its start. arrow-ipc allocates each block's
+/// file, and leave `f` at its start; the number of record batches it lists. arrow-ipc allocates each block's
 /// declared size before reading it, so a footer declaring a block of
 /// exabytes aborts the process (an allocation failure is not a panic that
 /// [`decode_ipc`] could catch; found by the `state` fuzz target).
-fn check_ipc_blocks(f: &mut std::fs::File) -> std::result::Result<(), String> {
+fn check_ipc_blocks(f: &mut std::fs::File) -> std::result::Result<usize, String> {
     use std::io::{Read, Seek, SeekFrom};
     let io = |e: std::io::Error| format!("not an Arrow IPC file: {e}");
     let len = f.seek(SeekFrom::End(0)).map_err(io)?;
@@ -802,7 +801,7 @@ fn check_ipc_blocks(f: &mut std::fs::File) -> std::result::Result<(), String> {
         }
     }
     f.seek(SeekFrom::Start(0)).map_err(io)?;
-    Ok(())
+    Ok(footer.recordBatches().map_or(0, |b| b.len()))
 }
 
 /// Read the one record batch of `path`, checking its metadata.
@@ -815,7 +814,7 @@ fn read_batch(
 ) -> Result<RecordBatch> {
     let bad = |m: String| Error::invalid("state", format!("{}: {m}", path.display()));
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let (meta, batches) = decode_ipc(f, true).map_err(bad)?;
+    let (meta, batch) = decode_ipc(f, true).map_err(bad)?;
     let want = file_metadata(kind, key, shard, range);
     for field in [
         "irsig.format",
@@ -832,11 +831,7 @@ fn read_batch(
             )));
         }
     }
-    let schema = batches
-        .first()
-        .map(|b| b.schema())
-        .ok_or_else(|| bad("no record batch".into()))?;
-    let batch = arrow_select_concat(&schema, &batches).map_err(|e| bad(e.to_string()))?;
+    let batch = batch.ok_or_else(|| bad("no record batch".into()))?;
     if batch.num_rows() != range.len() {
         return Err(bad(format!(
             "{} rows, expected {} (facets {}..{})",
@@ -847,21 +842,6 @@ fn read_batch(
         )));
     }
     Ok(batch)
-}
-
-/// The batches of one file as one (this crate writes one per file).
-fn arrow_select_concat(
-    schema: &arrow_schema::SchemaRef,
-    batches: &[RecordBatch],
-) -> std::result::Result<RecordBatch, arrow_schema::ArrowError> {
-    if batches.len() == 1 {
-        return Ok(batches[0].clone());
-    }
-    Err(arrow_schema::ArrowError::InvalidArgumentError(format!(
-        "{} record batches of {} columns, expected one",
-        batches.len(),
-        schema.fields().len()
-    )))
 }
 
 /// A column of `batch` by name.
