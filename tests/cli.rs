@@ -824,6 +824,14 @@ fn import_dirsig_cli_writes_a_scene_that_checks_and_renders() {
     let (code, text) = irsig(&["render", "out/demo.json", "-o", "img"]);
     assert_eq!(code, Some(0), "{text}");
     assert!(dir.path().join("img/lwir.exr").is_file(), "{text}");
+    // `scene check` and `render` take the DIRSIG simulation directly (imported on the
+    // fly), with the import's warnings.
+    let (code, text) = irsig(&["scene", "check", "dirsig/demo.sim"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("warning:"), "{text}");
+    let (code, text) = irsig(&["render", "dirsig/demo.sim", "-o", "img2"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(dir.path().join("img2/lwir.exr").is_file(), "{text}");
 
     // A missing referenced file: an error naming the list, its line and the file.
     let glist = set.join("scene/geometry/demo.glist");

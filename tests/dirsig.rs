@@ -481,6 +481,282 @@ fn simulations_give_time_sensor_weather_and_atmosphere() {
     assert!(e.contains("DIRSIG atmosphere file"), "{e}");
 }
 
+/// WGS84 semi-major axis (m) and first eccentricity squared (NIMA TR8350.2).
+const WGS84_A: f64 = 6_378_137.0;
+const WGS84_E2: f64 = 6.694_379_990_14e-3;
+
+/// Where a geodetic point `dlat_deg` due north of the origin and `dh` m above it lies in
+/// the origin's east-north-up frame, by the meridian's radius of curvature at the mean
+/// latitude (second order in the arc: the chord and the drop below the origin's
+/// horizon). Independent of the importer's ECEF path.
+fn north_up(lat0_deg: f64, h0: f64, dlat_deg: f64, dh: f64) -> (f64, f64) {
+    let phi = (lat0_deg + dlat_deg / 2.0).to_radians();
+    let m = WGS84_A * (1.0 - WGS84_E2) / (1.0 - WGS84_E2 * phi.sin().powi(2)).powf(1.5);
+    let d = dlat_deg.to_radians();
+    let r = m + h0 + dh;
+    (r * d.sin(), r * d.cos() - (m + h0))
+}
+
+/// Geographic placements (DIRSIG coordinates manual, dirsig.cis.rit.edu/docs/new/
+/// coordinates.html; the construct is the GeoLocation1 demo's glist,
+/// dirsig.cis.rit.edu/demos/zips/GeoLocation1.zip): a `<staticinstance>` translated to a
+/// `<location type="geodetic">` lands at the scene ENU point of that latitude, longitude
+/// and altitude (rotation still applied about z first); a `<box>` primitive (the same
+/// demo's ground, `<matid>` with lower and upper extents) is a closed box facing
+/// outward; a `.ppd` entry at a geodetic `<location>` puts the camera there. The
+/// material is the DIRSIG manual's NEF example (materials: nefmaterial-howto.html), a
+/// Therm block with no THICKNESS and no SOLAR_ABSORPTION.
+#[test]
+fn geographic_locations_and_box_primitive() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    // The manual's NEF example as printed (no THICKNESS: left out, unused) as ID 8001,
+    // and with a thickness as ID 8000 (its VISIBLE_EMISSIVITY is the solar absorptance).
+    let nef = "MATERIAL_ENTRY {\n    NAME = asphalt\n    ID = 8001\n    SURFACE_PROPERTIES {\n        REFLECTANCE_PROP_NAME = NEFBeardMaxwell\n        REFLECTANCE_PROP {\n            NEF_MAT_FILE = /home/NEFDS/0693UUUASP.nmf\n        }\n    }\n    RAD_SOLVER_NAME = Generic\n    RAD_SOLVER {\n        INITIAL_SAMPLE_COUNT = 25\n    }\n    TEMP_SOLVER_NAME = Therm\n    TEMP_SOLVER {\n        SPECIFIC_HEAT = 0.4650\n        THERMAL_CONDUCTIVITY = 20.9300\n        MASS_DENSITY = 1.0000\n        SPECULARITY = 0.10\n        VISIBLE_EMISSIVITY = 0.95\n        THERMAL_EMISSIVITY = 0.65\n        EXPOSED_AREA = 0.40\n    }\n}\n";
+    let thick = nef
+        .replace("ID = 8001", "ID = 8000")
+        .replace("NAME = asphalt", "NAME = thick asphalt")
+        .replace("EXPOSED_AREA = 0.40\n", "EXPOSED_AREA = 0.40\n        THICKNESS = 5\n");
+    put(
+        dir,
+        "materials/scene.mat",
+        &(therm_entry("5", "paint")
+            + &thick
+            + nef
+            // A material-map proxy: no NAME, no solver, a LUT of bare `DC:ID` lines.
+            + "MATERIAL_ENTRY {\n    ID = proxy\n    MATERIAL_MAP {\n        IMAGE_FILENAME = m.png\n        LUT {\n            0:5\n            255:8000\n        }\n    }\n}\n"),
+    );
+    put(dir, "geometry/tri.obj", &tri_obj("5"));
+    put(
+        dir,
+        "geometry/geo.glist",
+        r#"<geometrylist enabled="true">
+  <object>
+    <basegeometry>
+      <box>
+        <matid>8000</matid>
+        <lowerextent><point><x>-1000</x><y>-1000</y><z>-1</z></point></lowerextent>
+        <upperextent><point><x> 1000</x><y> 1000</y><z> 0</z></point></upperextent>
+      </box>
+    </basegeometry>
+    <staticinstance>
+      <translation><point><x>0</x><y>0</y><z>0</z></point></translation>
+    </staticinstance>
+  </object>
+  <object>
+    <basegeometry><obj><filename>tri.obj</filename></obj></basegeometry>
+    <staticinstance>
+      <translation>
+        <location type="geodetic">
+          <latitude>43.18</latitude><longitude>-77.61</longitude><altitude>210</altitude>
+        </location>
+      </translation>
+      <rotation><cartesiantriple><x>0</x><y>0</y><z>45</z></cartesiantriple></rotation>
+    </staticinstance>
+  </object>
+</geometrylist>
+"#,
+    );
+    let scene = put(dir, "t.scene", &scene_xml("geo.glist"));
+    let s = load(&scene);
+    // The scene origin is 43.16 N, 160 m (scene_xml): 0.02° north and 50 m up.
+    let (n, u) = north_up(43.16, 160.0, 0.02, 50.0);
+    let p = placed(&s, 1, [0.0, 0.0, 0.0]);
+    assert!(p.x.abs() < 0.01, "{p}");
+    assert!((f64::from(p.y) - n).abs() < 0.02, "{p} vs north {n}");
+    assert!((f64::from(p.z) - u).abs() < 0.02, "{p} vs up {u}");
+    // Rotated 45° about z before the move.
+    let q = placed(&s, 1, [1.0, 0.0, 0.0]) - p;
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    assert!((q - Vec3::new(h, h, 0.0)).length() < 1e-3, "{q}");
+    // The box: 12 triangles enclosing 2000 × 2000 × 1 m³ with outward normals (a
+    // positive signed volume), its material the ID 8000 entry.
+    let b = &s.objects[0];
+    let m = &s.geometry.meshes[b.mesh];
+    assert_eq!(m.indices.len(), 12);
+    let vol: f64 = m
+        .indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
+    assert!((vol - 4.0e6).abs() < 1.0, "{vol}");
+    let (lo, hi) = m.positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    assert_eq!(
+        (lo, hi),
+        (Vec3::new(-1000.0, -1000.0, -1.0), Vec3::new(1000.0, 1000.0, 0.0))
+    );
+    let im = import(&scene, &dir.join("o.json"), &ImportOptions::default()).unwrap();
+    assert_eq!(im.scene.objects[0].parts[0].material, "thick asphalt");
+    let asphalt = im
+        .materials
+        .materials
+        .iter()
+        .find(|m| m.name == "thick asphalt")
+        .unwrap();
+    // 20.93 cal/(cm·h·°C) × 4.1868/36 = 2.434 W/(m·K); 0.465 cal/(g·°C) × 4186.8;
+    // 5 cm.
+    assert!((asphalt.conductivity_w_m_k.unwrap() - 20.93 * 4.1868 / 36.0).abs() < 1e-9);
+    assert!((asphalt.specific_heat_j_kg_k.unwrap() - 0.465 * 4186.8).abs() < 1e-9);
+    assert!((asphalt.thickness_m.unwrap() - 0.05).abs() < 1e-12);
+    assert!((asphalt.solar_absorptivity - 0.95).abs() < 1e-12);
+    assert!((asphalt.thermal_emissivity - 0.65).abs() < 1e-12);
+    assert!(
+        im.warnings.iter().any(|w| w.contains("scene.mat:line 54")
+            && w.contains("ID 8001")
+            && w.contains("THICKNESS")),
+        "{:#?}",
+        im.warnings
+    );
+    assert!(
+        im.warnings
+            .iter()
+            .any(|w| w.contains("ID proxy has no NAME")),
+        "{:#?}",
+        im.warnings
+    );
+    // Used, the entry without a thickness is an error naming it.
+    put(
+        dir,
+        "geometry/b2.glist",
+        "<geometrylist><object><basegeometry><box><matid>8001</matid><lowerextent>0 0 0</lowerextent><upperextent>1 1 1</upperextent></box></basegeometry><staticinstance/></object></geometrylist>",
+    );
+    let s2 = put(dir, "t2.scene", &scene_xml("b2.glist"));
+    let e = import(&s2, &dir.join("o3.json"), &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("ID 8001") && e.contains("THICKNESS"), "{e}");
+
+    // A platform at a geodetic location, 1 km above the triangle's point.
+    put(
+        dir,
+        "m.ppd",
+        r#"<platformmotion type="generic"><method type="raw"/>
+<data rotationframe="sceneenu" rotationorder="xyz" angularunits="degrees" spatialunits="meters">
+<entry><datetime type="relative">0</datetime>
+<position><location type="geodetic"><latitude>43.18</latitude><longitude>-77.61</longitude><altitude>1210</altitude></location></position>
+<orientation><eulerangles><cartesiantriple><x>0</x><y>0</y><z>0</z></cartesiantriple></eulerangles></orientation></entry>
+</data></platformmotion>"#,
+    );
+    put(
+        dir,
+        "p.platform",
+        r#"<platform><attachment><mount name="m" type="static"><attachment><instrument name="cam" type="generic"><properties><focallength>50</focallength></properties>
+<focalplane enabled="true" name="cam"><capturemethod><spectralresponse><bandpass spectralunits="microns"><minimum>8</minimum><maximum>12</maximum><delta>0.1</delta></bandpass></spectralresponse></capturemethod>
+<detectorarray spatialunits="microns"><xelementcount>8</xelementcount><yelementcount>8</yelementcount><xelementspacing>17</xelementspacing><yelementspacing>17</yelementspacing></detectorarray>
+</focalplane></instrument></attachment></mount></attachment></platform>"#,
+    );
+    let sim = put(
+        dir,
+        "x.sim",
+        r#"<simulation><scene externalfile="t.scene"/><platform externalfile="p.platform"/><platformmotion externalfile="m.ppd"/></simulation>"#,
+    );
+    let im = import(&sim, &dir.join("o2.json"), &ImportOptions::default()).unwrap();
+    let pos: Vec<f64> = im.scene.sensors[0]["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let (n, u) = north_up(43.16, 160.0, 0.02, 1050.0);
+    assert!(pos[0].abs() < 0.01, "{pos:?}");
+    assert!((pos[1] - n).abs() < 0.02 && (pos[2] - u).abs() < 0.02, "{pos:?} vs {n}, {u}");
+
+    // A flight line: entries at 0 s and 100 s from the task reference; the task starts at
+    // 25 s, so the platform is a quarter of the way along (DIRSIG interpolates between
+    // entries); the orientation is the nearest entry's (the first: looking down).
+    put(
+        dir,
+        "line.ppd",
+        r#"<platformmotion type="generic"><method type="raw"/>
+<data rotationframe="sceneenu" rotationorder="xyz" angularunits="degrees" spatialunits="meters">
+<entry><datetime type="relative">100</datetime>
+<position><location type="scene"><point><x>1000</x><y>0</y><z>800</z></point></location></position>
+<orientation><eulerangles><cartesiantriple><x>0</x><y>0</y><z>90</z></cartesiantriple></eulerangles></orientation></entry>
+<entry><datetime type="relative">0</datetime>
+<position><location type="scene"><point><x>0</x><y>0</y><z>800</z></point></location></position>
+<orientation><eulerangles><cartesiantriple><x>0</x><y>0</y><z>0</z></cartesiantriple></eulerangles></orientation></entry>
+</data></platformmotion>"#,
+    );
+    put(
+        dir,
+        "t.tasks",
+        r#"<tasklist><reference><datetime type="absolute">2025-06-21T10:00:00-04:00</datetime></reference>
+<task><start><datetime type="relative">25</datetime></start><stop><datetime type="relative">25</datetime></stop></task></tasklist>"#,
+    );
+    let sim = put(
+        dir,
+        "line.sim",
+        r#"<simulation><scene externalfile="t.scene"/><platform externalfile="p.platform"/><platformmotion externalfile="line.ppd"/><tasklist externalfile="t.tasks"/></simulation>"#,
+    );
+    let im = import(&sim, &dir.join("o4.json"), &ImportOptions::default()).unwrap();
+    assert_eq!(im.scene.time, "2025-06-21T10:00:25-04:00");
+    let cam = &im.scene.sensors[0];
+    assert_eq!(cam["position"], serde_json::json!([250.0, 0.0, 800.0]));
+    assert_eq!(cam["up"], serde_json::json!([0.0, 1.0, 0.0]));
+    // A flexible `.motion` (BasicPlatform takes one too) is not imported: the sensor is
+    // dropped with a warning, the scene still imports.
+    put(
+        dir,
+        "f.motion",
+        r#"<motion type="flexible"><locationengine type="straight"><start frame="scene"><x>0</x><y>0</y><z>500</z></start></locationengine><orientationengine type="velocity"/></motion>"#,
+    );
+    let sim = put(
+        dir,
+        "flex.sim",
+        r#"<simulation><scene externalfile="t.scene"/><platform externalfile="p.platform"/><platformmotion externalfile="f.motion"/><tasklist externalfile="t.tasks"/></simulation>"#,
+    );
+    let im = import(&sim, &dir.join("o5.json"), &ImportOptions::default()).unwrap();
+    assert!(im.scene.sensors.is_empty());
+    assert!(
+        im.warnings
+            .iter()
+            .any(|w| w.contains("f.motion:line 1") && w.contains("flexible motion")),
+        "{:#?}",
+        im.warnings
+    );
+}
+
+/// A scene's `<geometrylistinclude>` may name an `.odb` or a `.gdb` as well as a `.glist`
+/// (RIT's Tacoma scene includes `terrain.odb`, `tacoma.odb` and `targets.glist`, as listed
+/// in github.com/KevinKearney/protoDIRSIG notebooks/dirfm_tutorials/
+/// tutorial_tacoma_scene.ipynb); an `.odb` without its extension is known by its
+/// `DIRSIG_ODB` line.
+#[test]
+fn geometry_list_includes_odb_and_gdb() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    put(dir, "materials/scene.mat", &therm_entry("7", "concrete"));
+    put(
+        dir,
+        "geometry/pad.gdb",
+        "OBJECT\nPAD\n1-0-0\nPART\nTOP\n1-1-0\n\
+         FACE\nF1\n1-1-1\nconcrete\n7\nf1\n-1.0\n0.0\n0.0\n0.0\nnull\nnull\nnull\n4\n\
+         0 0 0\n2 0 0\n2 2 0\n0 2 0\n0 0 1\n0.0\n0.0\n0.0\nEND\n",
+    );
+    put(dir, "geometry/tri.obj", &tri_obj("7"));
+    put(
+        dir,
+        "geometry/terrain",
+        "DIRSIG_ODB = 1.0\nOBJECT {\n    OBJ_FILENAME = tri.obj\n    UNITS = METERS\n    INSTANCES {\n        INFO = 5, 0, 0, 1, 1, 1, 0, 0, 0\n    }\n}\n",
+    );
+    let scene = put(
+        dir,
+        "t.scene",
+        &scene_xml("terrain</geometrylistinclude>\n    <geometrylistinclude>pad.gdb"),
+    );
+    let s = load(&scene);
+    assert_eq!(s.objects.len(), 2);
+    // The ODB's instance moves the triangle 5 m east; the GDB stays where it is.
+    assert!(near(placed(&s, 0, [0.0, 0.0, 0.0]), [5.0, 0.0, 0.0]));
+    assert!(near(placed(&s, 1, [2.0, 2.0, 0.0]), [2.0, 2.0, 0.0]));
+}
+
 /// Corrupt input: errors name the file and line.
 #[test]
 fn bad_dirsig_input_names_file_and_line() {

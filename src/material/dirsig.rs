@@ -7,7 +7,8 @@
 //! `Gidder_mat`, DIRSIG ≥ 4.7, which gets the next number after the file's numeric
 //! IDs), `NAME`, `DOUBLE_SIDED`, `TEMP_SOLVER_NAME`, the `TEMP_SOLVER` block and
 //! `SURFACE_PROPERTIES/EMISSIVITY_PROP` (`FILENAME`, `SPECULAR_FRACTION`). Entries
-//! whose solver is not `Therm` (`Null`, `DataDriven`, …) or that have none are left
+//! whose solver is not `Therm` (`Null`, `DataDriven`, …), that have none, or whose
+//! `Therm` block lacks a property THERM needs (or the block itself) are left
 //! out with a warning in [`MaterialDb::warnings`]: a library loads for the entries a
 //! scene uses.
 //! Other keys (editor colour, radiometry solver settings) are ignored. `#`
@@ -22,7 +23,7 @@
 //! | `SPECIFIC_HEAT` | cal/(g·°C) | × 4186.8 → J/(kg·K) |
 //! | `MASS_DENSITY` | g/cm³ | × 1000 → kg/m³ |
 //! | `THICKNESS` | cm | ÷ 100 → m |
-//! | `SOLAR_ABSORPTION`, `THERMAL_EMISSIVITY`, `EXPOSED_AREA` | fraction | as is |
+//! | `SOLAR_ABSORPTION` (else `VISIBLE_EMISSIVITY`), `THERMAL_EMISSIVITY`, `EXPOSED_AREA` | fraction | as is |
 //! | `SELF_GENERATED_POWER` (if present) | W/m² (assumed) | as is |
 //!
 //! The calorie is the International Table calorie (4.1868 J).
@@ -334,7 +335,12 @@ pub fn read_mat_with(
                 ));
             }
         };
-        let (name, _) = req(b, "NAME")?;
+        // An entry without NAME (a `MATERIAL_MAP` proxy, as in the material-map
+        // entries protoDIRSIG's scene-coverage tests write) is named by its ID.
+        let (name, no_name) = match b.get("NAME") {
+            Some((v, _)) => (v.to_string(), false),
+            None => (id_s.clone(), true),
+        };
         let double_sided = match b.get("DOUBLE_SIDED") {
             None => false,
             Some((v, l)) => parse_bool(v).ok_or_else(|| {
@@ -380,7 +386,10 @@ pub fn read_mat_with(
             if ep.get("SPECULAR_FRACTION").is_some() {
                 specular = num(ep, "SPECULAR_FRACTION")?;
             }
-            if let Some((f, fl)) = ep.get("FILENAME") {
+            // `ClassicEmissivity` names its file `FILENAME`; a `ShellTarget` property
+            // `EMISSIVITY_FILE` (RIT's Tacoma scene, as protoDIRSIG's scene_coverage.py
+            // reads it).
+            if let Some((f, fl)) = ep.get("FILENAME").or_else(|| ep.get("EMISSIVITY_FILE")) {
                 match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
                     Some(p) => {
                         curve = Some(read_ems(&p).map_err(|e| {
@@ -396,7 +405,23 @@ pub fn read_mat_with(
         }
         if curve.is_none() {
             if let Some(rp) = props.and_then(|s| s.child("REFLECTANCE_PROP")) {
-                if let Some((f, fl)) = rp.get("TXT_FILENAME").or_else(|| rp.get("FILENAME")) {
+                if let Some((f, fl)) = rp.get("EMISSIVITY_FILE") {
+                    // A `ShellTarget` reflectance property carries its emissivity file.
+                    match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
+                        Some(p) => {
+                            curve = Some(read_ems(&p).map_err(|e| {
+                                Error::parse(
+                                    loc("EMISSIVITY_FILE", fl),
+                                    format!("material `{name}`: {e}"),
+                                )
+                            })?)
+                        }
+                        None => warnings.push(format!(
+                            "{}:{fl}: material `{name}`: emissivity file `{f}` not found; using grey THERMAL_EMISSIVITY",
+                            path.display()
+                        )),
+                    }
+                } else if let Some((f, fl)) = rp.get("TXT_FILENAME").or_else(|| rp.get("FILENAME")) {
                     match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
                         Some(p) => {
                             curve = Some(read_reflectance_as_emissivity(&p).map_err(|e| {
@@ -413,6 +438,13 @@ pub fn read_mat_with(
                     }
                 }
             }
+        }
+        if no_name {
+            warnings.push(format!(
+                "{}:{}: material entry with ID {id_s} has no NAME: named `{id_s}`",
+                path.display(),
+                b.line
+            ));
         }
         let mut entry = MatEntry {
             id: id_s.clone(),
@@ -457,12 +489,46 @@ pub fn read_mat_with(
             out.entries.push(entry);
             continue;
         }
-        let ts = ts.ok_or_else(|| {
-            Error::parse(
-                loc("TEMP_SOLVER", b.line),
-                format!("material `{name}` has no `TEMP_SOLVER {{ … }}` block"),
-            )
-        })?;
+        // A THERM entry short of a property THERM needs is left out like the other
+        // unusable entries (the library still loads for the entries a scene uses). The
+        // solar absorptance may be given as `VISIBLE_EMISSIVITY`, the older key of the
+        // DIRSIG manual's examples (nefmaterial-howto.html): a surface's solar-band
+        // emissivity is its solar absorptance (Kirchhoff's law).
+        let solar_key = match ts {
+            Some(ts) if ts.get("SOLAR_ABSORPTION").is_none() && ts.get("VISIBLE_EMISSIVITY").is_some() => {
+                "VISIBLE_EMISSIVITY"
+            }
+            _ => "SOLAR_ABSORPTION",
+        };
+        let needed = [
+            "SPECIFIC_HEAT",
+            "THERMAL_CONDUCTIVITY",
+            "MASS_DENSITY",
+            "THICKNESS",
+            solar_key,
+            "THERMAL_EMISSIVITY",
+        ];
+        let missing: Vec<&str> = match ts {
+            None => vec!["TEMP_SOLVER { … }"],
+            Some(ts) => needed.into_iter().filter(|k| ts.get(k).is_none()).collect(),
+        };
+        if !missing.is_empty() {
+            let line = ts.map_or(b.line, |t| t.line);
+            entry.skipped = Some(
+                Error::parse(
+                    loc(missing[0], line),
+                    format!(
+                        "material `{name}` (ID {id_s}): its Therm solver has no {}: not loaded \
+                         (a surface that uses it is an error)",
+                        missing.join(", ")
+                    ),
+                )
+                .to_string(),
+            );
+            out.entries.push(entry);
+            continue;
+        }
+        let ts = ts.expect("checked above");
         let self_power = match ts.get("SELF_GENERATED_POWER") {
             Some(_) => num(ts, "SELF_GENERATED_POWER")?,
             None => 0.0,
@@ -474,7 +540,7 @@ pub fn read_mat_with(
             conductivity_w_m_k: num(ts, "THERMAL_CONDUCTIVITY")? * THERM_CONDUCTIVITY_TO_SI,
             density_kg_m3: num(ts, "MASS_DENSITY")? * THERM_DENSITY_TO_SI,
             thickness_m: num(ts, "THICKNESS")? * THERM_THICKNESS_TO_SI,
-            solar_absorptivity: num(ts, "SOLAR_ABSORPTION")?,
+            solar_absorptivity: num(ts, solar_key)?,
             thermal_emissivity: num(ts, "THERMAL_EMISSIVITY")?,
             exposed_area: match ts.get("EXPOSED_AREA") {
                 Some(_) => num(ts, "EXPOSED_AREA")?,
@@ -514,7 +580,7 @@ pub fn read_mat_with(
                 "conductivity_w_m_k" => "THERMAL_CONDUCTIVITY",
                 "density_kg_m3" => "MASS_DENSITY",
                 "thickness_m" => "THICKNESS",
-                "solar_absorptivity" => "SOLAR_ABSORPTION",
+                "solar_absorptivity" => solar_key,
                 "thermal_emissivity" => "THERMAL_EMISSIVITY",
                 "exposed_area" => "EXPOSED_AREA",
                 "specular_fraction" => "SPECULAR_FRACTION",

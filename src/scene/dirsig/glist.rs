@@ -1,13 +1,18 @@
 //! DIRSIG geometry lists (`.glist`, XML, root `<geometrylist>`; the same element inside
 //! a `.scene`).
 //!
-//! Each `<object>` has base geometry (`<basegeometry>` holding `<obj>`, `<gdb>`,
+//! A `<geometrylistinclude>` names a `.glist`, or an `.odb` or `.gdb` (by extension, else
+//! by content). Each `<object>` has base geometry (`<basegeometry>` holding `<obj>`, `<gdb>`,
 //! `<glist>` or `<odb>`, each with a `<filename>`; `<obj>` may `<assign id="ID">name</assign>`
 //! its material names to `.mat` IDs) and instances. Files are looked up in the bundle's
 //! folder for `search_paths="local"`, then the scene's geometry folders, then the list's
 //! own folder. `<localmaterials>` gives a bundle its own `.mat`.
 //!
-//! Instances: `<staticinstance>` with `<translation>` (`<point>` x, y, z, m),
+//! Instances: `<staticinstance>` with `<translation>` (`<point>` x, y, z, m, or a
+//! `<location type="scene|geodetic|ecef">` converted about the scene origin, see
+//! [`super::scene_point`]; the rotation stays about the scene axes, which differ from the
+//! local east-north-up axes at that point by the meridian convergence, under 0.01° per
+//! kilometre at mid latitudes),
 //! `<scale>` (`<cartesiantriple>`, or one number) and `<rotation>` (`<cartesiantriple>`,
 //! degrees, about x then y then z: DIRSIG's fixed order, irsig's `rotate_deg`; an
 //! `angularunits`/`units` of `radians` and a `rotationorder`/`order` other than `xyz`
@@ -18,8 +23,12 @@
 //! orientation engine are dropped with a warning); other motions (`.mov` keyframes) are
 //! dropped with a warning.
 //!
+//! Primitives: a `<box>` (`<matid>`, `<lowerextent>`, `<upperextent>`) becomes a
+//! generated OBJ box (see [`box_obj`]).
+//!
 //! Dropped with a warning: disabled objects and lists (silently: they are off), point
-//! sources (`<basesource>`), primitives (`<sphere>`, `<box>`, …), unknown elements.
+//! sources (`<basesource>`), other primitives (`<sphere>`, `<cylinder>`, …), unknown
+//! elements.
 //!
 //! Takes the XML; gives the importer's objects and instances.
 
@@ -31,7 +40,7 @@ use roxmltree::Node;
 use super::scene::SceneDirs;
 use super::{Geo, Importer, MatCtx, Placement, euler, length_unit, xml};
 use crate::error::{Error, Location, Result};
-use crate::scene::file::{Scale, TransformSpec};
+use crate::scene::file::{Scale, SiteSpec, TransformSpec};
 
 /// How deep lists may nest (a list including itself is an error, not a hang).
 pub(crate) const MAX_DEPTH: usize = 16;
@@ -97,7 +106,7 @@ impl Importer<'_> {
                         .chain([here.clone()])
                         .collect();
                     let p = self.find(&name, &bases, "geometry list", &at)?;
-                    self.glist_file(&p, dirs, mats, parent, depth + 1)?;
+                    self.include(&p, dirs, mats, parent, depth, &at)?;
                 }
                 "object" => {
                     if xml::disabled(n) {
@@ -113,6 +122,44 @@ impl Importer<'_> {
             }
         }
         Ok(())
+    }
+
+    /// A `<geometrylistinclude>`: a `.glist`, or an `.odb` or `.gdb` (a scene's list
+    /// "can point at GDB, GLIST, or ODB files": RIT's Tacoma scene includes
+    /// `terrain.odb`, `tacoma.odb` and `targets.glist`, as protoDIRSIG's notebook
+    /// `tutorial_tacoma_scene.ipynb` lists them), by extension, else by content (an
+    /// `.odb` begins `DIRSIG_ODB`). A `.gdb` is placed as it is (metres).
+    fn include(
+        &mut self,
+        p: &Path,
+        dirs: &SceneDirs,
+        mats: &MatCtx,
+        parent: &Placement,
+        depth: usize,
+        at: &Location,
+    ) -> Result<()> {
+        let ext = p
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let kind = match ext.as_deref() {
+            Some(e @ ("odb" | "gdb" | "obj" | "glist")) => e.to_string(),
+            _ => {
+                let head = std::fs::read(p).map_err(|e| Error::io(p, e))?;
+                let head = String::from_utf8_lossy(&head[..head.len().min(256)]).to_string();
+                if head.trim_start().to_ascii_uppercase().starts_with("DIRSIG_ODB") {
+                    "odb".into()
+                } else {
+                    "glist".into()
+                }
+            }
+        };
+        match kind.as_str() {
+            "odb" => self.odb(p, dirs, mats, parent, depth + 1),
+            "gdb" => self.place(&Geo::Gdb(p.to_path_buf()), mats, None, parent, at),
+            "obj" => self.place(&Geo::Obj(p.to_path_buf()), mats, None, parent, at),
+            _ => self.glist_file(p, dirs, mats, parent, depth + 1),
+        }
     }
 
     fn glist_object(
@@ -145,7 +192,9 @@ impl Importer<'_> {
         let mut placements = Vec::new();
         for n in xml::elements(obj) {
             match n.tag_name().name().to_ascii_lowercase().as_str() {
-                "staticinstance" => placements.push(static_instance(path, n)?),
+                "staticinstance" => {
+                    placements.push(static_instance(path, n, self.site.as_ref())?)
+                }
                 "dynamicinstance" => {
                     if let Some(p) = self.dynamic_instance(path, n)? {
                         placements.push(p);
@@ -223,6 +272,12 @@ impl Importer<'_> {
                         self.place(&geo, &m, unit, &parent.then(pl), &at)?;
                     }
                 }
+                "box" => {
+                    let geo = box_obj(path, g)?;
+                    for pl in &placements {
+                        self.place(&geo, &mats, unit, &parent.then(pl), &at)?;
+                    }
+                }
                 "glist" => {
                     let p = self.find(&file()?, &bases, "geometry list", &at)?;
                     for pl in &placements {
@@ -293,23 +348,21 @@ impl Importer<'_> {
 }
 
 /// A `<staticinstance>` (format in the module docs).
-pub(crate) fn static_instance(path: &Path, n: Node) -> Result<Placement> {
+pub(crate) fn static_instance(
+    path: &Path,
+    n: Node,
+    origin: Option<&SiteSpec>,
+) -> Result<Placement> {
     if let Some(m) = xml::child(n, "matrix") {
         return matrix(path, m, &xml::text(m));
     }
     let mut spec = TransformSpec::default();
     let mut general: Option<DMat3> = None;
     if let Some(t) = xml::child(n, "translation") {
-        if let Some(l) = xml::child(t, "location") {
-            if xml::attr(l, "frame").is_some_and(|f| !f.eq_ignore_ascii_case("scene")) {
-                return Err(Error::parse(
-                    xml::loc(path, l),
-                    "translation given as a geographic location: irsig imports scene-frame \
-                     (x, y, z) translations only",
-                ));
-            }
-        }
-        spec.translate = Some(xml::triple(path, t, 0.0)?);
+        spec.translate = Some(match xml::child(t, "location") {
+            Some(l) => super::scene_point(path, l, origin)?.to_array(),
+            None => xml::triple(path, t, 0.0)?,
+        });
     }
     if let Some(s) = xml::child(n, "scale") {
         let t = xml::text(s);
@@ -419,4 +472,55 @@ pub(crate) fn matrix_at(at: &Location, text: &str) -> Result<Placement> {
         ));
     }
     Ok(Placement::from_matrix(m))
+}
+
+/// A `<box>` primitive (`<matid>`, `<lowerextent>` and `<upperextent>` points, m, in the
+/// instance's frame; the GeoLocation1 demo's ground) as a closed OBJ box of six quads
+/// facing outward, all of material `matid`.
+pub(crate) fn box_obj(path: &Path, n: Node) -> Result<Geo> {
+    let id = xml::child(n, "matid")
+        .map(xml::text)
+        .filter(|t| !t.is_empty())
+        .ok_or_else(|| Error::parse(xml::loc(path, n), "`<box>` needs a `<matid>`"))?;
+    let corner = |name: &str| -> Result<[f64; 3]> {
+        let c = xml::child(n, name).ok_or_else(|| {
+            Error::parse(xml::loc(path, n), format!("`<box>` needs a `<{name}>`"))
+        })?;
+        xml::triple(path, c, 0.0)
+    };
+    let (lo, hi) = (corner("lowerextent")?, corner("upperextent")?);
+    if (0..3).any(|k| lo[k] >= hi[k]) {
+        return Err(Error::parse(
+            xml::loc(path, n),
+            format!(
+                "`<box>` extents ({}, {}, {}) .. ({}, {}, {}): each lower value must be below \
+                 the upper one",
+                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+            ),
+        ));
+    }
+    let mut obj = String::from("# DIRSIG <box> primitive\n");
+    for z in [lo[2], hi[2]] {
+        for (x, y) in [(lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1])] {
+            obj += &format!("v {x} {y} {z}\n");
+        }
+    }
+    obj += &format!("usemtl {id}\n");
+    // Counter-clockwise seen from outside: −z, +z, −y, +y, −x, +x.
+    for f in [
+        [1, 4, 3, 2],
+        [5, 6, 7, 8],
+        [1, 2, 6, 5],
+        [3, 4, 8, 7],
+        [4, 1, 5, 8],
+        [2, 3, 7, 6],
+    ] {
+        obj += &format!("f {} {} {} {}\n", f[0], f[1], f[2], f[3]);
+    }
+    Ok(Geo::Prim {
+        kind: "box".into(),
+        obj,
+        id,
+        src: path.to_path_buf(),
+    })
 }

@@ -141,8 +141,8 @@ pub fn import(path: &Path, out: &Path, opts: &ImportOptions) -> Result<Imported>
 
 impl Imported {
     /// Write the scene to `out` (JSON), its materials beside it
-    /// (`STEM.materials.json`) and the generated geometry (`STEM.geometry/`). Gives the
-    /// files written.
+    /// (`STEM.materials.json`) and the generated geometry (`STEM.geometry/`), each file
+    /// atomically. Gives the files written.
     pub fn write(&self, out: &Path) -> Result<Vec<PathBuf>> {
         let dir = out.parent().unwrap_or(Path::new("."));
         let mut written = Vec::new();
@@ -150,7 +150,10 @@ impl Imported {
             if let Some(d) = p.parent() {
                 std::fs::create_dir_all(d).map_err(|e| Error::io(d, e))?;
             }
-            std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
+            // Atomically: an interrupted import leaves no half-written file.
+            crate::output::atomic::write_atomic(&p, |w| {
+                w.write_all(text.as_bytes()).map_err(|e| Error::io(&p, e))
+            })?;
             written.push(p);
             Ok(())
         };
@@ -260,6 +263,74 @@ pub(crate) fn euler(order: &str, a: [f64; 3]) -> Option<DMat3> {
     Some(m)
 }
 
+/// A point given as a DIRSIG `<location>` (or `<point>`), in scene east-north-up metres.
+/// The frame is the element's `type` (or `frame`) attribute: `scene` (default; `<x>`,
+/// `<y>`, `<z>`, m), `geodetic` (`<latitude>`, `<longitude>` in degrees, east positive,
+/// and `<altitude>`, m above the WGS84 ellipsoid) or `ecef` (`<x>`, `<y>`, `<z>`, m,
+/// WGS84 Earth-centred, Earth-fixed), as DIRSIG's coordinates manual lists them
+/// (dirsig.cis.rit.edu/docs/new/coordinates.html; the GeoLocation1 demo's glist places
+/// an aircraft with `<location type="geodetic">`). Geographic points become scene
+/// coordinates about `origin` (the `.scene` `<sceneorigin>`) through
+/// [`crate::geodesy::enu_from_geodetic`]. UTM (which needs a zone) is an error naming
+/// the element.
+pub(crate) fn scene_point(
+    path: &Path,
+    n: roxmltree::Node,
+    origin: Option<&SiteSpec>,
+) -> Result<DVec3> {
+    let frame = xml::attr(n, "type")
+        .or_else(|| xml::attr(n, "frame"))
+        .unwrap_or("scene")
+        .to_ascii_lowercase();
+    let site = || {
+        origin
+            .map(|o| crate::sun::Site {
+                latitude_deg: o.latitude_deg,
+                longitude_deg: o.longitude_deg,
+                altitude_m: o.altitude_m,
+            })
+            .ok_or_else(|| {
+                Error::parse(
+                    xml::loc(path, n),
+                    format!(
+                        "a `{frame}` location needs the scene origin (`<sceneorigin>`), \
+                         which is not known here"
+                    ),
+                )
+            })
+    };
+    match frame.as_str() {
+        "scene" | "sceneenu" | "local" => Ok(DVec3::from(xml::triple(path, n, 0.0)?)),
+        "geodetic" | "geographic" | "lla" => {
+            let lat = xml::req_number(path, n, "latitude")?;
+            let lon = xml::req_number(path, n, "longitude")?;
+            let alt = xml::opt_number(path, n, "altitude")?.unwrap_or(0.0);
+            if lat.abs() > 90.0 || lon.abs() > 360.0 {
+                return Err(Error::parse(
+                    xml::loc(path, n),
+                    format!(
+                        "latitude {lat}°, longitude {lon}°: expected −90..=90 and \
+                         −180..=180 (degrees)"
+                    ),
+                ));
+            }
+            Ok(crate::geodesy::enu_from_geodetic(&site()?, lat, lon, alt))
+        }
+        "ecef" => {
+            let p = DVec3::from(xml::triple(path, n, 0.0)?);
+            let (lat, lon, h) = crate::geodesy::geodetic_from_ecef(p);
+            Ok(crate::geodesy::enu_from_geodetic(&site()?, lat, lon, h))
+        }
+        other => Err(Error::parse(
+            xml::loc(path, n),
+            format!(
+                "location type `{other}`: irsig imports `scene`, `geodetic` and `ecef` \
+                 locations (a UTM point can be given as geodetic)"
+            ),
+        )),
+    }
+}
+
 /// The length unit of a DIRSIG `UNITS`/`units` value.
 pub(crate) fn length_unit(s: &str) -> Option<LengthUnit> {
     Some(match s.trim().to_ascii_lowercase().as_str() {
@@ -288,6 +359,14 @@ pub(crate) enum Geo {
     Obj(PathBuf),
     /// A DIRSIG `.gdb` file.
     Gdb(PathBuf),
+    /// A glist primitive (`<box>`) as generated OBJ text with one material ID; `src` is
+    /// the list that names it (for names and messages).
+    Prim {
+        kind: String,
+        obj: String,
+        id: String,
+        src: PathBuf,
+    },
 }
 
 /// One `.mat` file read.
@@ -317,6 +396,8 @@ pub(crate) struct Importer<'o> {
     pub(crate) site: Option<SiteSpec>,
     pub(crate) description: Option<String>,
     pub(crate) time: Option<DateTime<FixedOffset>>,
+    /// The task list's reference time: relative `.ppd` times count from it.
+    pub(crate) time_reference: Option<DateTime<FixedOffset>>,
     pub(crate) weather: Option<PathBuf>,
     pub(crate) atmosphere: Option<Value>,
     pub(crate) render: Map<String, Value>,
@@ -340,6 +421,7 @@ impl<'o> Importer<'o> {
             site: None,
             description: None,
             time: None,
+            time_reference: None,
             weather: None,
             atmosphere: None,
             render: Map::new(),
@@ -756,6 +838,15 @@ impl<'o> Importer<'o> {
                     .collect();
                 (self.relative(p), p.as_path(), groups)
             }
+            Geo::Prim { kind, obj, id, src } => {
+                let name = format!(
+                    "{}.geometry/{}_{kind}.obj",
+                    stem(&self.out),
+                    self.files.len()
+                );
+                self.files.push((name.clone(), obj.clone()));
+                (name, src.as_path(), vec![(id.clone(), id.clone(), None)])
+            }
             Geo::Gdb(p) => {
                 let g = gdb::to_obj(p)?;
                 self.warnings.extend(g.warnings);
@@ -784,7 +875,10 @@ impl<'o> Importer<'o> {
                 back: None,
             });
         }
-        let mut name = stem(path);
+        let mut name = match geo {
+            Geo::Prim { kind, .. } => kind.clone(),
+            _ => stem(path),
+        };
         let base = name.clone();
         let mut k = 1;
         while self.objects.iter().any(|o| o.name == name) {

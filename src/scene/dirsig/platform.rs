@@ -9,16 +9,20 @@
 //! - `<spectralresponse>`: each `<channel>` → a band `[centre − width/2, centre + width/2]`
 //!   µm (a Gaussian channel becomes flat over its full width at half maximum, with a
 //!   warning); no channel: the `<bandpass>` `<minimum>`..`<maximum>`;
-//! - position and pointing: the `.ppd` entry nearest the image time (`<location
-//!   type="scene">` point, m; `<eulerangles>` in the `<data>`'s `angularunits` and
-//!   `rotationorder`, about fixed scene ENU axes, composed with the static mount's
+//! - position and pointing: the `.ppd` at the image time (entry times in seconds from the
+//!   task list's reference time; the position interpolated linearly between the entries
+//!   around it, the orientation of the nearest entry; `<location>` of type `scene` (m),
+//!   `geodetic` or `ecef` (converted about the scene origin, see
+//!   [`super::scene_point`]), or an old-format scene point; `<eulerangles>` in the
+//!   `<data>`'s `angularunits` and `rotationorder`, about fixed scene ENU axes, composed
+//!   with the static mount's
 //!   rotations). DIRSIG's platform at zero rotation looks straight down (−z) with the
 //!   array's +y toward +y (north): irsig's `look_at` is along R·(0, 0, −1) and `up` is
 //!   R·(0, 1, 0). Without a `.ppd` the sensor is dropped with a warning.
 //!
 //! Dropped with a warning: temporal integration, clocks, truth collections, output file
 //! settings, spatial response, polarisation, hypersampling, non-static mounts, motion
-//! files other than raw scene-frame entries.
+//! files other than raw entries (way points, orbits, flexible `.motion` files).
 //!
 //! Takes the XML; gives the importer's sensors.
 
@@ -337,7 +341,18 @@ impl Importer<'_> {
     fn motion(&mut self, path: &Path) -> Result<Option<Pose>> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let doc = xml::parse(&text, path)?;
-        let root = xml::root(&doc, path, "platformmotion", "")?;
+        // A flexible motion (`<motion type="flexible">`, a `.motion` file: location and
+        // orientation engines, DIRSIG's flex_motion.html), which BasicPlatform also
+        // takes, is not imported: the sensor is dropped with a warning, not the scene.
+        if doc.root_element().tag_name().name().eq_ignore_ascii_case("motion") {
+            self.warn(
+                xml::loc(path, doc.root_element()),
+                "flexible motion (`<motion>` with location and orientation engines) is not \
+                 imported: the platform has no pose; its sensors are dropped",
+            );
+            return Ok(None);
+        }
+        let root = xml::root(&doc, path, "platformmotion", " or `<motion>`")?;
         let Some(data) = xml::child(root, "data") else {
             self.warn(
                 xml::loc(path, root),
@@ -364,50 +379,93 @@ impl Importer<'_> {
                 ));
             }
         }
-        // The entry nearest the image time (relative seconds from the task reference:
-        // the image is at the task start, taken as relative time 0 when unknown).
-        let mut best: Option<(f64, Node)> = None;
-        let entries: Vec<Node> = xml::children(data, "entry").collect();
-        for e in &entries {
-            let t = match xml::child(*e, "datetime") {
+        // Entry times in seconds from the task list's reference time, "the simulation's
+        // absolute time variable" that relative times count from (DIRSIG manual, Task
+        // List, dirsig.org/docs/manual/xml-tasks.html); the image is at the task start
+        // (or the given time). Without a reference, relative time 0 is the image time.
+        let image = match &self.opts.time {
+            Some(t) => crate::sun::parse_time(t).ok(),
+            None => self.time,
+        };
+        let reference = self.time_reference.or(image);
+        let target = match (image, reference) {
+            (Some(i), Some(r)) => (i - r).num_milliseconds() as f64 / 1000.0,
+            _ => 0.0,
+        };
+        let mut timed: Vec<(f64, Node)> = Vec::new();
+        for e in xml::children(data, "entry") {
+            let t = match xml::child(e, "datetime") {
                 Some(d)
                     if xml::attr(d, "type").is_none_or(|t| t.eq_ignore_ascii_case("relative")) =>
                 {
                     xml::number(path, d)?
                 }
-                _ => 0.0,
+                Some(d) => {
+                    let abs = crate::sun::parse_time(&xml::text(d)).map_err(|err| {
+                        Error::parse(xml::loc(path, d), format!("datetime: {err}"))
+                    })?;
+                    match reference {
+                        Some(r) => (abs - r).num_milliseconds() as f64 / 1000.0,
+                        None => 0.0,
+                    }
+                }
+                None => 0.0,
             };
-            if best.is_none_or(|(b, _)| t.abs() < b.abs()) {
-                best = Some((t, *e));
-            }
+            timed.push((t, e));
         }
-        let Some((_, e)) = best else {
+        if timed.is_empty() {
             self.warn(
                 xml::loc(path, data),
                 "platform motion without entries: not imported",
             );
             return Ok(None);
+        }
+        timed.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Position: linear between the entries around the image time (DIRSIG
+        // interpolates generic motion between entries); orientation: the nearest entry.
+        let k = timed.partition_point(|(t, _)| *t <= target);
+        let nearest = (0..timed.len())
+            .min_by(|&a, &b| (timed[a].0 - target).abs().total_cmp(&(timed[b].0 - target).abs()))
+            .expect("not empty");
+        let point = |e: Node| -> Result<DVec3> {
+            let pos = xml::child(e, "position").ok_or_else(|| {
+                Error::parse(xml::loc(path, e), "motion entry without `<position>`")
+            })?;
+            // New format: `<location type=…>` (scene, geodetic or ECEF); old format: a
+            // scene-frame `<point>`/`<cartesiantriple>` or bare x, y, z.
+            match xml::child(pos, "location") {
+                Some(loc) => super::scene_point(path, loc, self.site.as_ref()),
+                None => Ok(DVec3::from(xml::triple(path, pos, 0.0)?)),
+            }
         };
-        if entries.len() > 1 {
+        let p = if k > 0 && k < timed.len() && timed[k].0 > timed[k - 1].0 {
+            let ((t0, e0), (t1, e1)) = (timed[k - 1], timed[k]);
+            let w = (target - t0) / (t1 - t0);
+            point(e0)? * (1.0 - w) + point(e1)? * w
+        } else {
+            point(timed[nearest].1)?
+        };
+        let (t_first, t_last) = (timed[0].0, timed[timed.len() - 1].0);
+        if target < t_first || target > t_last {
             self.warn(
                 xml::loc(path, data),
-                format!("{} motion entries: the platform is placed at the one at the image time; the motion is dropped", entries.len()),
+                format!(
+                    "the image time ({target} s from the task reference) is outside the motion's \
+                     entries ({t_first} .. {t_last} s): the platform is at the nearest entry"
+                ),
+            );
+        } else if timed.len() > 1 {
+            self.warn(
+                xml::loc(path, data),
+                format!(
+                    "{} motion entries: the platform is placed where they put it at the image \
+                     time ({target} s from the task reference; position interpolated, \
+                     orientation of the nearest entry); the motion is dropped",
+                    timed.len()
+                ),
             );
         }
-        let loc = xml::path(e, &["position", "location"]).ok_or_else(|| {
-            Error::parse(
-                xml::loc(path, e),
-                "motion entry without `<position><location>`",
-            )
-        })?;
-        let ty = xml::attr(loc, "type").unwrap_or("scene");
-        if !ty.eq_ignore_ascii_case("scene") {
-            return Err(Error::parse(
-                xml::loc(path, loc),
-                format!("location type `{ty}`: irsig imports scene-frame positions only"),
-            ));
-        }
-        let p = xml::triple(path, loc, 0.0)?;
+        let e = timed[nearest].1;
         let angles = match xml::path(e, &["orientation", "eulerangles"]) {
             Some(a) => xml::triple(path, a, 0.0)?,
             None => [0.0; 3],
@@ -422,7 +480,7 @@ impl Importer<'_> {
             Error::parse(xml::loc(path, data), format!("rotation order `{order}`"))
         })?;
         Ok(Some(Pose {
-            position: DVec3::from(p),
+            position: p,
             rotation,
         }))
     }

@@ -126,7 +126,16 @@ impl Importer<'_> {
                 .ok_or_else(|| {
                     Error::parse(at(&p), "a scene entry needs `inputs` (the `.scene` file)")
                 })?;
-            if let Some(off) = s.get("offset") {
+            // A zero offset (`"0,0,0"`, `[0, 0, 0]`) changes nothing.
+            let zero = |v: &Value| match v {
+                Value::String(t) => t
+                    .split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|x| !x.is_empty())
+                    .all(|x| x.parse::<f64>() == Ok(0.0)),
+                Value::Array(a) => a.iter().all(|x| x.as_f64() == Some(0.0)),
+                _ => false,
+            };
+            if let Some(off) = s.get("offset").filter(|o| !zero(o)) {
                 self.warn(
                     at(&format!("{p}.offset")),
                     format!("scene offset {off} is not imported; dropped"),
@@ -278,7 +287,8 @@ impl Importer<'_> {
         let text = std::fs::read_to_string(&scene).map_err(|e| Error::io(&scene, e))?;
         let doc = xml::parse(&text, &scene)?;
         let root = doc.root_element();
-        if !root.tag_name().name().eq_ignore_ascii_case("classicscene") {
+        let tag = root.tag_name().name();
+        if !(tag.eq_ignore_ascii_case("classicscene") || tag.eq_ignore_ascii_case("scene")) {
             return Err(Error::parse(
                 at,
                 format!(
@@ -380,6 +390,7 @@ impl Importer<'_> {
             );
         }
         self.time = Some(start);
+        self.time_reference = reference;
         Ok(())
     }
 
