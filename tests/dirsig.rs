@@ -516,7 +516,10 @@ fn geographic_locations_and_box_primitive() {
     let thick = nef
         .replace("ID = 8001", "ID = 8000")
         .replace("NAME = asphalt", "NAME = thick asphalt")
-        .replace("EXPOSED_AREA = 0.40\n", "EXPOSED_AREA = 0.40\n        THICKNESS = 5\n");
+        .replace(
+            "EXPOSED_AREA = 0.40\n",
+            "EXPOSED_AREA = 0.40\n        THICKNESS = 5\n",
+        );
     put(
         dir,
         "materials/scene.mat",
@@ -589,7 +592,10 @@ fn geographic_locations_and_box_primitive() {
     );
     assert_eq!(
         (lo, hi),
-        (Vec3::new(-1000.0, -1000.0, -1.0), Vec3::new(1000.0, 1000.0, 0.0))
+        (
+            Vec3::new(-1000.0, -1000.0, -1.0),
+            Vec3::new(1000.0, 1000.0, 0.0)
+        )
     );
     let im = import(&scene, &dir.join("o.json"), &ImportOptions::default()).unwrap();
     assert_eq!(im.scene.objects[0].parts[0].material, "thick asphalt");
@@ -665,7 +671,10 @@ fn geographic_locations_and_box_primitive() {
         .collect();
     let (n, u) = north_up(43.16, 160.0, 0.02, 1050.0);
     assert!(pos[0].abs() < 0.01, "{pos:?}");
-    assert!((pos[1] - n).abs() < 0.02 && (pos[2] - u).abs() < 0.02, "{pos:?} vs {n}, {u}");
+    assert!(
+        (pos[1] - n).abs() < 0.02 && (pos[2] - u).abs() < 0.02,
+        "{pos:?} vs {n}, {u}"
+    );
 
     // A flight line: entries at 0 s and 100 s from the task reference; the task starts at
     // 25 s, so the platform is a quarter of the way along (DIRSIG interpolates between
@@ -726,7 +735,7 @@ fn geographic_locations_and_box_primitive() {
 /// (RIT's Tacoma scene includes `terrain.odb`, `tacoma.odb` and `targets.glist`, as listed
 /// in github.com/KevinKearney/protoDIRSIG notebooks/dirfm_tutorials/
 /// tutorial_tacoma_scene.ipynb); an `.odb` without its extension is known by its
-/// `DIRSIG_ODB` line.
+/// `DIRSIG_ODB` line; `$SCENE_DIR` is expanded in any file name.
 #[test]
 fn geometry_list_includes_odb_and_gdb() {
     let d = tempfile::tempdir().unwrap();
@@ -748,13 +757,53 @@ fn geometry_list_includes_odb_and_gdb() {
     let scene = put(
         dir,
         "t.scene",
-        &scene_xml("terrain</geometrylistinclude>\n    <geometrylistinclude>pad.gdb"),
+        &scene_xml(
+            "terrain</geometrylistinclude>\n    <geometrylistinclude>$SCENE_DIR/geometry/pad.gdb",
+        ),
     );
     let s = load(&scene);
     assert_eq!(s.objects.len(), 2);
     // The ODB's instance moves the triangle 5 m east; the GDB stays where it is.
     assert!(near(placed(&s, 0, [0.0, 0.0, 0.0]), [5.0, 0.0, 0.0]));
     assert!(near(placed(&s, 1, [2.0, 2.0, 0.0]), [2.0, 2.0, 0.0]));
+}
+
+/// Surface properties of real libraries beyond `ClassicEmissivity`: a `ShellTarget`
+/// property names its emissivity `EMISSIVITY_FILE` (RIT's Tacoma `tacoma.mat`, as
+/// protoDIRSIG's src/protodirsig/scene_coverage.py reads it, with a `BRDF_FIT_FILE`), in
+/// the emissivity or the reflectance block; the curve is read from it.
+#[test]
+fn shell_target_emissivity_file_is_read() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    put(
+        dir,
+        "emissivity/panel.ems",
+        &format!(
+            "1\n{}CURVE_BEGIN\n7.0 0.80\n14.0 0.80\n",
+            "1.0\n".repeat(91)
+        ),
+    );
+    let shell = |id: &str, block: &str| {
+        format!(
+            "MATERIAL_ENTRY {{\n    ID = {id}\n    NAME = panel {id}\n    SURFACE_PROPERTIES {{\n        {block}_PROP_NAME = ShellTarget\n        {block}_PROP {{\n            BRDF_FIT_FILE = matte.fit\n            EMISSIVITY_FILE = emissivity/panel.ems\n        }}\n    }}\n    TEMP_SOLVER_NAME = Therm\n    TEMP_SOLVER {{\n        SPECIFIC_HEAT = 0.22\n        MASS_DENSITY = 2.3\n        THERMAL_CONDUCTIVITY = 8\n        SOLAR_ABSORPTION = 0.7\n        THERMAL_EMISSIVITY = 0.9\n        EXPOSED_AREA = 0\n        THICKNESS = 10\n    }}\n}}\n"
+        )
+    };
+    let mat = put(
+        dir,
+        "shell.mat",
+        &(shell("1", "EMISSIVITY") + &shell("2", "REFLECTANCE")),
+    );
+    let f = irsig::material::dirsig::read_mat(&mat, &[]).unwrap();
+    assert_eq!(f.entries.len(), 2);
+    for e in &f.entries {
+        let c = e
+            .emissivity
+            .as_ref()
+            .unwrap_or_else(|| panic!("{} has no curve", e.name));
+        assert!((c.band_mean(8.0, 12.0) - 0.80).abs() < 1e-12, "{}", e.name);
+        assert!(e.warnings.is_empty(), "{:?}", e.warnings);
+    }
 }
 
 /// Corrupt input: errors name the file and line.

@@ -421,7 +421,8 @@ pub fn read_mat_with(
                             path.display()
                         )),
                     }
-                } else if let Some((f, fl)) = rp.get("TXT_FILENAME").or_else(|| rp.get("FILENAME")) {
+                } else if let Some((f, fl)) = rp.get("TXT_FILENAME").or_else(|| rp.get("FILENAME"))
+                {
                     match find_relative(f, base, ems_dirs).or_else(|| fallback(f)) {
                         Some(p) => {
                             curve = Some(read_reflectance_as_emissivity(&p).map_err(|e| {
@@ -495,7 +496,10 @@ pub fn read_mat_with(
         // DIRSIG manual's examples (nefmaterial-howto.html): a surface's solar-band
         // emissivity is its solar absorptance (Kirchhoff's law).
         let solar_key = match ts {
-            Some(ts) if ts.get("SOLAR_ABSORPTION").is_none() && ts.get("VISIBLE_EMISSIVITY").is_some() => {
+            Some(ts)
+                if ts.get("SOLAR_ABSORPTION").is_none()
+                    && ts.get("VISIBLE_EMISSIVITY").is_some() =>
+            {
                 "VISIBLE_EMISSIVITY"
             }
             _ => "SOLAR_ABSORPTION",

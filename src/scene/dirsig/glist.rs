@@ -147,7 +147,11 @@ impl Importer<'_> {
             _ => {
                 let head = std::fs::read(p).map_err(|e| Error::io(p, e))?;
                 let head = String::from_utf8_lossy(&head[..head.len().min(256)]).to_string();
-                if head.trim_start().to_ascii_uppercase().starts_with("DIRSIG_ODB") {
+                if head
+                    .trim_start()
+                    .to_ascii_uppercase()
+                    .starts_with("DIRSIG_ODB")
+                {
                     "odb".into()
                 } else {
                     "glist".into()
@@ -192,9 +196,7 @@ impl Importer<'_> {
         let mut placements = Vec::new();
         for n in xml::elements(obj) {
             match n.tag_name().name().to_ascii_lowercase().as_str() {
-                "staticinstance" => {
-                    placements.push(static_instance(path, n, self.site.as_ref())?)
-                }
+                "staticinstance" => placements.push(static_instance(path, n, self.site.as_ref())?),
                 "dynamicinstance" => {
                     if let Some(p) = self.dynamic_instance(path, n)? {
                         placements.push(p);
@@ -501,7 +503,12 @@ pub(crate) fn box_obj(path: &Path, n: Node) -> Result<Geo> {
     }
     let mut obj = String::from("# DIRSIG <box> primitive\n");
     for z in [lo[2], hi[2]] {
-        for (x, y) in [(lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1])] {
+        for (x, y) in [
+            (lo[0], lo[1]),
+            (hi[0], lo[1]),
+            (hi[0], hi[1]),
+            (lo[0], hi[1]),
+        ] {
             obj += &format!("v {x} {y} {z}\n");
         }
     }

@@ -310,7 +310,7 @@ pub(crate) fn scene_point(
                     xml::loc(path, n),
                     format!(
                         "latitude {lat}°, longitude {lon}°: expected −90..=90 and \
-                         −180..=180 (degrees)"
+                         −180..=360 (degrees, east positive)"
                     ),
                 ));
             }
@@ -403,6 +403,8 @@ pub(crate) struct Importer<'o> {
     pub(crate) render: Map<String, Value>,
     pub(crate) sensors: Vec<Map<String, Value>>,
     pub(crate) scene_seen: bool,
+    /// The folder of the `.scene` read (`$SCENE_DIR`).
+    pub(crate) scene_dir: Option<PathBuf>,
 }
 
 impl<'o> Importer<'o> {
@@ -427,6 +429,7 @@ impl<'o> Importer<'o> {
             render: Map::new(),
             sensors: Vec::new(),
             scene_seen: false,
+            scene_dir: None,
         }
     }
 
@@ -465,6 +468,19 @@ impl<'o> Importer<'o> {
         what: &str,
         at: &Location,
     ) -> Result<PathBuf> {
+        // Variables in any DIRSIG file name: `$SCENE_DIR` (the folder of the `.scene`
+        // once read) and the environment's `$DIRSIG_HOME` (the jsim documentation's
+        // ThermWeather example names `$DIRSIG_HOME/lib/data/weather/…`).
+        let expanded = match &self.scene_dir {
+            Some(d) => Self::expand(name, &[("SCENE_DIR", d.as_path())]),
+            None => Self::expand(name, &[]),
+        };
+        let unset = if expanded.contains('$') {
+            " (a `$` variable in the name is not set)"
+        } else {
+            ""
+        };
+        let name = expanded.as_str();
         let p = Path::new(name);
         let mut tried = Vec::new();
         if p.is_absolute() || name.chars().nth(1) == Some(':') {
@@ -514,7 +530,7 @@ impl<'o> Importer<'o> {
         Err(Error::parse(
             at.clone(),
             format!(
-                "{what} `{name}` not found (looked for {}{})",
+                "{what} `{name}`{unset} not found (looked for {}{})",
                 if list.is_empty() {
                     "it".into()
                 } else {

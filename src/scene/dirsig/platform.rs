@@ -344,7 +344,12 @@ impl Importer<'_> {
         // A flexible motion (`<motion type="flexible">`, a `.motion` file: location and
         // orientation engines, DIRSIG's flex_motion.html), which BasicPlatform also
         // takes, is not imported: the sensor is dropped with a warning, not the scene.
-        if doc.root_element().tag_name().name().eq_ignore_ascii_case("motion") {
+        if doc
+            .root_element()
+            .tag_name()
+            .name()
+            .eq_ignore_ascii_case("motion")
+        {
             self.warn(
                 xml::loc(path, doc.root_element()),
                 "flexible motion (`<motion>` with location and orientation engines) is not \
@@ -425,7 +430,11 @@ impl Importer<'_> {
         // interpolates generic motion between entries); orientation: the nearest entry.
         let k = timed.partition_point(|(t, _)| *t <= target);
         let nearest = (0..timed.len())
-            .min_by(|&a, &b| (timed[a].0 - target).abs().total_cmp(&(timed[b].0 - target).abs()))
+            .min_by(|&a, &b| {
+                (timed[a].0 - target)
+                    .abs()
+                    .total_cmp(&(timed[b].0 - target).abs())
+            })
             .expect("not empty");
         let point = |e: Node| -> Result<DVec3> {
             let pos = xml::child(e, "position").ok_or_else(|| {

@@ -45,6 +45,7 @@ impl Importer<'_> {
             .unwrap_or_else(|| PathBuf::from("."));
         let dir = std::path::absolute(&dir).unwrap_or(dir);
         let vars = [("SCENE_DIR", dir.as_path())];
+        self.scene_dir = Some(dir.clone());
         let folder = |n: Option<Node>| {
             n.map(|n| PathBuf::from(Importer::expand(&xml::text(n), &vars)))
                 .filter(|p| !p.as_os_str().is_empty())
