@@ -420,6 +420,21 @@ fn simulations_give_time_sensor_weather_and_atmosphere() {
         s.weather.as_ref().unwrap().start.as_deref(),
         Some("2025-06-20T00:00:00-04:00")
     );
+    // At midnight the image is at the start of the file's second day (DIRSIG's current
+    // day), not at its last row: the file still starts the day before.
+    let midnight = import(
+        &jsim,
+        &dir.join("out0.json"),
+        &ImportOptions {
+            time: Some("2025-06-21T00:00:00-04:00".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        midnight.scene.weather.as_ref().unwrap().start.as_deref(),
+        Some("2025-06-20T00:00:00-04:00")
+    );
     assert_eq!(s.atmosphere, Some(serde_json::json!("mid-latitude-summer")));
     assert!(
         im.warnings

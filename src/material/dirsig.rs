@@ -5,8 +5,10 @@
 //! `MATERIAL_ENTRY { … }` blocks of `KEY = VALUE` lines and nested
 //! `NAME { … }` blocks. irsig reads `ID` (a number, or a label such as
 //! `Gidder_mat`, DIRSIG ≥ 4.7, which gets the next number after the file's numeric
-//! IDs), `NAME`, `DOUBLE_SIDED`, `TEMP_SOLVER_NAME`, the `TEMP_SOLVER` block and
-//! `SURFACE_PROPERTIES/EMISSIVITY_PROP` (`FILENAME`, `SPECULAR_FRACTION`). Entries
+//! IDs), `NAME` (an entry without one, such as a `MATERIAL_MAP` proxy, is named by its
+//! ID), `DOUBLE_SIDED`, `TEMP_SOLVER_NAME`, the `TEMP_SOLVER` block and
+//! `SURFACE_PROPERTIES/EMISSIVITY_PROP` (`FILENAME`, or a `ShellTarget`'s
+//! `EMISSIVITY_FILE`, which may also sit in `REFLECTANCE_PROP`; `SPECULAR_FRACTION`). Entries
 //! whose solver is not `Therm` (`Null`, `DataDriven`, …), that have none, or whose
 //! `Therm` block lacks a property THERM needs (or the block itself) are left
 //! out with a warning in [`MaterialDb::warnings`]: a library loads for the entries a

@@ -1023,9 +1023,11 @@ impl<'o> Importer<'o> {
     }
 
     /// The weather reference for `.wth` (or other) file `w` at image time `time`. A
-    /// `.wth` carries no date: its first row is taken at local midnight, as many whole
-    /// days before the image date as the file spans beyond the image time (DIRSIG's
-    /// THERM spins up over the days before; a 48-hour file covers the day before).
+    /// `.wth` carries no date, in local time: its first row is taken at local midnight,
+    /// so that the image falls in the file's last day that reaches it — DIRSIG's files
+    /// hold 48 hours "so that DIRSIG can simulate any time during the current day and
+    /// have at least 24-hours of previous weather history" (dirsig.org/docs/new/wth.html):
+    /// a 48-hour file starts the day before the image, at midnight too.
     fn weather_spec(&mut self, w: &Path, time: DateTime<FixedOffset>) -> Result<WeatherSpec> {
         let file = self.relative(w);
         let is_wth = w.extension().is_some_and(|e| e.eq_ignore_ascii_case("wth"));
@@ -1057,7 +1059,10 @@ impl<'o> Importer<'o> {
             .and_then(|d| d.and_local_timezone(*time.offset()).single())
             .expect("valid midnight");
         let hour = (time - midnight).num_seconds() as f64 / 3600.0;
-        let days = ((span_h - hour) / 24.0).floor().max(0.0) as i64;
+        // Whole days before the image date: ⌈(span − hour)/24⌉ − 1, so an image at
+        // midnight is at the start of the last day, not at the file's last row.
+        let days = ((span_h - hour) / 24.0).ceil() as i64 - 1;
+        let days = days.max(0);
         let start = chrono::TimeDelta::try_days(days)
             .and_then(|d| midnight.checked_sub_signed(d))
             .ok_or_else(|| {
