@@ -27,10 +27,11 @@
 //! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
 //! 4. Not modelled: aerosols and scattering. On the six AFGL profiles the
-//!    zenith path is within 6 % in τ̄ and 10 % in L of LOWTRAN 7 (without
-//!    aerosol) in 8–12 µm, 8–14 µm and 3–5 µm, and on the tropical one
-//!    within 7 % of MODTRAN (docs/physics/atmosphere.md has the
-//!    comparisons).
+//!    zenith path is within 4 % in τ̄ and 7 % in L of LOWTRAN 7 (without
+//!    aerosol) in 8–12, 8–14, 3–5 and 3.5–4.5 µm, on the tropical one
+//!    within 7 % of MODTRAN in τ̄, and the mid-latitude summer window and
+//!    3–5 µm sky fluxes within 1.3 % of RRTMG (docs/physics/atmosphere.md
+//!    has the comparisons).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
@@ -42,7 +43,8 @@
 //! **Sky.** The downwelling radiance of an isotropic equivalent sky is the
 //! path radiance from the ground to 50 km at the diffusivity angle
 //! (sec θ = 1.66, θ = 52.96°; Elsasser 1942), taken as a blackbody at the
-//! air temperature beyond 16 µm (the opaque water rotational band), then
+//! air temperature beyond 16 µm (the water rotational band, opaque but in
+//! dry air: 8 % too bright broadband on the sub-arctic winter), then
 //! scaled so that its integral over 3–∞ µm equals the weather's broadband sky
 //! longwave E_sky/π.
 
