@@ -635,6 +635,7 @@ mod table {
 /// directional sky, and the published values they are checked against.
 mod standard {
     use super::*;
+    use irsig::atmosphere::builtin::DIFFUSIVITY_ZENITH_DEG;
     use irsig::atmosphere::{
         Atmosphere, BuiltinAtmosphere, BuiltinParams, PathGeometry, Profile, SkyConditions,
         SurfaceMet,
@@ -790,9 +791,10 @@ mod standard {
                 last = l;
             }
             println!("{p}: 8–12 µm sky at 89° = {:.3} B(T_air)", last / b_air);
-            // 0.80 for the dry sub-arctic winter (0.42 g/cm², a surface inversion).
+            // 0.75 for the dry sub-arctic winter (0.42 g/cm², a surface
+            // inversion; τ = 0.19 along the 57 air masses at 89°).
             assert!(
-                last > 0.75 * b_air,
+                last > 0.7 * b_air,
                 "{p}: horizon sky {last} vs B(T_air) {b_air}"
             );
         }
@@ -924,6 +926,161 @@ mod standard {
         let tau_b = band.mean(&p.transmittance);
         println!("tape7-01b: MODTRAN τ̄ {tau_m:.3}; built-in τ̄ {tau_b:.3}");
         assert!((tau_b - tau_m).abs() < 0.1, "τ {tau_b} vs {tau_m}");
+    }
+
+    /// Rows of a reference CSV in tests/data/atmosphere (comment lines
+    /// start with `#`, then a header line).
+    fn reference_rows(file: &str) -> Vec<Vec<String>> {
+        let path = util::repo_path(&format!("tests/data/atmosphere/{file}"));
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let rows: Vec<Vec<String>> = text
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+            .skip(1)
+            .map(|l| l.split(',').map(|f| f.trim().to_string()).collect())
+            .collect();
+        assert!(!rows.is_empty(), "{}: no rows", path.display());
+        rows
+    }
+
+    fn sky_of(p: Profile) -> SkyConditions {
+        SkyConditions {
+            air_temperature_k: p.level(0.0).temperature_k,
+            sky_longwave_w_m2: f64::NAN,
+        }
+    }
+
+    #[test]
+    fn six_profiles_zenith_compare_with_lowtran7() {
+        // LOWTRAN 7 (tests/data/atmosphere/lowtran7_zenith.csv: how it was
+        // run is in the file) on its six model atmospheres, looking up from
+        // the ground at zenith (and at 60° in 8–12 µm), without aerosol,
+        // against the built-in model on the same AFGL profiles with
+        // LOWTRAN 7's CO₂ (330 ppmv): the issue's goals, 10 % in τ̄ and L in
+        // 8–12 and 8–14 µm, 15 % in 3–5 and 3.5–4.5 µm.
+        // The built-in model uses LOWTRAN 7's band models and continuum, so
+        // this checks the profiles, the layering and the radiative transfer
+        // on every profile; MODTRAN (`tropical_zenith_compares_with_modtran`)
+        // and RRTMG (`mid_latitude_summer_band_fluxes_compare_with_rrtmg`)
+        // are the independent checks of the spectroscopy.
+        let rows = reference_rows("lowtran7_zenith.csv");
+        let mut checked = 0;
+        for r in rows.iter().filter(|r| r[1] == "none") {
+            let p = Profile::from_name(&r[0]).unwrap();
+            let zenith: f64 = r[2].parse().unwrap();
+            let (lo, hi): (f64, f64) = (r[3].parse().unwrap(), r[4].parse().unwrap());
+            let (tau_ref, l_ref): (f64, f64) = (r[5].parse().unwrap(), r[6].parse().unwrap());
+            let a = Atmosphere::Builtin(
+                BuiltinAtmosphere::with_params(
+                    SurfaceMet::of_profile(p, 0.0),
+                    BuiltinParams {
+                        profile: Some(p),
+                        co2_ppmv: 330.0,
+                        ..BuiltinParams::default()
+                    },
+                )
+                .unwrap(),
+            );
+            let band = Band::flat(lo, hi, 0.01).unwrap();
+            let up = a.look_up(&sky_of(p), zenith, band.grid()).unwrap();
+            let (tau, l) = (
+                band.mean(&up.transmittance),
+                band.integrate(&up.path_radiance),
+            );
+            let tol = if hi <= 5.0 { 0.15 } else { 0.10 };
+            println!(
+                "{p} {zenith}° {lo}–{hi} µm: LOWTRAN 7 τ̄ {tau_ref:.3} L {l_ref:.3}; built-in τ̄ {tau:.3} \
+                 L {l:.3} ({:+.1} %, {:+.1} %)",
+                100.0 * (tau / tau_ref - 1.0),
+                100.0 * (l / l_ref - 1.0)
+            );
+            assert!(
+                rel(tau, tau_ref) < tol,
+                "{p} {zenith}° {lo}–{hi} µm: τ {tau} vs {tau_ref}"
+            );
+            assert!(
+                rel(l, l_ref) < tol,
+                "{p} {zenith}° {lo}–{hi} µm: L {l} vs {l_ref}"
+            );
+            checked += 1;
+        }
+        assert_eq!(
+            checked, 30,
+            "six profiles × (four bands at zenith + 8–12 µm at 60°)"
+        );
+    }
+
+    #[test]
+    fn mid_latitude_summer_band_fluxes_compare_with_rrtmg() {
+        // RRTMG_LW's clear-sky downward flux at the surface per band on the
+        // mid-latitude summer atmosphere (tests/data/atmosphere/
+        // rrtmg_lw_surface_flux.csv; LBLRTM's spectroscopy, independent of
+        // LOWTRAN) against π × the built-in sky at the diffusivity angle
+        // (sec θ = 1.66, RRTMG's own flux approximation): each band from
+        // 700 to 1390 cm⁻¹ within 10 %, the window 820–1180 cm⁻¹
+        // (8.5–12.2 µm) within 10 % and 2080–3250 cm⁻¹ (3.1–4.8 µm) within
+        // 15 %.
+        let p = Profile::MidLatitudeSummer;
+        let a = Atmosphere::standard(p, 0.0).unwrap();
+        let flux = |v1: f64, v2: f64| {
+            let band = Band::flat(1e4 / v2, 1e4 / v1, 0.005).unwrap();
+            let sky = a
+                .look_up(&sky_of(p), DIFFUSIVITY_ZENITH_DEG, band.grid())
+                .unwrap();
+            std::f64::consts::PI * band.integrate(&sky.path_radiance)
+        };
+        let rows = reference_rows("rrtmg_lw_surface_flux.csv");
+        let (mut window, mut window_ref, mut mwir, mut mwir_ref) = (0.0, 0.0, 0.0, 0.0);
+        for r in rows.iter().filter(|r| r[0] == p.name() && r[1] != "10") {
+            let (v1, v2): (f64, f64) = (r[1].parse().unwrap(), r[2].parse().unwrap());
+            let f_ref: f64 = r[3].parse().unwrap();
+            let f = flux(v1, v2);
+            println!(
+                "{v1}–{v2} cm⁻¹: RRTMG {f_ref:.2} W/m², built-in {f:.2} ({:+.1} %)",
+                100.0 * (f / f_ref - 1.0)
+            );
+            if v2 <= 1390.0 {
+                assert!(rel(f, f_ref) < 0.10, "{v1}–{v2} cm⁻¹: {f} vs {f_ref}");
+            }
+            if (820.0..1180.0).contains(&v1) {
+                window += f;
+                window_ref += f_ref;
+            }
+            if v1 >= 2080.0 {
+                mwir += f;
+                mwir_ref += f_ref;
+            }
+        }
+        println!("820–1180 cm⁻¹: RRTMG {window_ref:.2}, built-in {window:.2}");
+        println!("2080–3250 cm⁻¹: RRTMG {mwir_ref:.3}, built-in {mwir:.3}");
+        assert!(window_ref > 40.0 && rel(window, window_ref) < 0.10);
+        assert!(mwir_ref > 2.0 && rel(mwir, mwir_ref) < 0.15);
+    }
+
+    #[test]
+    fn downward_longwave_compares_with_rrtmg() {
+        // Broadband (10–3250 cm⁻¹) downward flux at the surface of RRTMG_LW
+        // on four AFGL atmospheres against the built-in model's unscaled
+        // isotropic-equivalent sky (3–16 µm from the model, a blackbody at
+        // the air temperature beyond 16 µm): 1/sky_scale(1 W/m²). Within
+        // 10 %; the blackbody beyond 16 µm makes the dry atmospheres too
+        // bright (the 16–25 µm water band is not opaque there), by 8 % for
+        // the sub-arctic winter.
+        let rows = reference_rows("rrtmg_lw_surface_flux.csv");
+        let mut checked = 0;
+        for r in rows.iter().filter(|r| r[1] == "10") {
+            let p = Profile::from_name(&r[0]).unwrap();
+            let f_ref: f64 = r[3].parse().unwrap();
+            let f = 1.0 / model(p, None).sky_scale(1.0).unwrap();
+            println!(
+                "{p}: RRTMG {f_ref:.1} W/m², built-in {f:.1} ({:+.1} %)",
+                100.0 * (f / f_ref - 1.0)
+            );
+            assert!(rel(f, f_ref) < 0.10, "{p}: {f} vs {f_ref}");
+            checked += 1;
+        }
+        assert_eq!(checked, 4);
     }
 
     #[test]

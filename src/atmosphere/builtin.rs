@@ -13,50 +13,29 @@
 //! 2 km scale height (a tropical column of ~4 g/cm² at 300 K, 80 % RH).
 //! CO₂ well mixed at 420 ppmv.
 //!
-//! **Absorption.** Spectral on the caller's grid; items 1 and 2 below
-//! 2000 cm⁻¹ (λ > 5 µm), item 3 from 2000 cm⁻¹ up, items 4 and 5
-//! everywhere:
-//! 1. Water-vapour self/foreign continuum after Roberts, Selby & Biberman
-//!    (1976), Appl. Opt. 15, 2085 (as in LOWTRAN 5, Kneizys et al. 1980):
-//!    optical depth C_s(ν,T)·u·(e + γ(p − e)), u in g/cm², e and p in atm,
-//!    C_s(ν, 296 K) = 4.18 + 5578·exp(−7.87·10⁻³ ν) (g cm⁻²)⁻¹ atm⁻¹,
-//!    C_s(T) = C_s(296)·exp(1800 (1/T − 1/296)), γ = 0.002. The constant term
-//!    was fitted to 8–12 µm data; above 1250 cm⁻¹ (λ < 8 µm) only the
-//!    exponential term is kept, since the 3–5 µm self continuum is about two
-//!    orders weaker (Thomas 1990, JHU APL Tech. Dig. 11, 134).
-//! 2. Molecular bands with Edwards' exponential wide-band model (Edwards 1976,
-//!    Adv. Heat Transfer 12, 115; parameters as tabulated in Modest,
-//!    *Radiative Heat Transfer*, 3rd ed., table 11.3): H₂O 6.3 µm
-//!    (ν_c 1600 cm⁻¹, α₀ 41.2 cm⁻¹/(g m⁻²), ω₀ 56.4 cm⁻¹, β₀ 0.09427) and
-//!    CO₂ 15 µm (667, 19.0, 12.7, 0.06157). Mean line strength-to-spacing
-//!    k̄(ν) = (α/ω)·exp(−2|ν − ν_c|/ω), ω = ω₀√(T/100 K); narrow-band
-//!    transmittance in the Malkmus form τ = exp(−(β/2)(√(1 + 4X/β) − 1)),
-//!    X = Σ k̄·u along the path and β the amount-weighted line-overlap
-//!    parameter (Curtis–Godson scaling), β = β₀√(100 K/T)·P_e,
-//!    P_e = (p/1 atm)(1 + (b − 1)x)ⁿ with Edwards' self-broadening b and
-//!    exponent n. The water rotational band (> 16 µm) is not modelled: its
-//!    far wing in the window is part of the continuum above. O₃ 9.6 µm
-//!    (AFGL profiles only) likewise (see [`BANDS`] for parameters and
-//!    sources).
-//! 3. LOWTRAN 7's band models of H₂O, CO₂ (outside the 4.3 µm lines of
-//!    item 4), O₃, N₂O, CO and CH₄ and its CKD water-vapour continuum
+//! **Absorption.** Spectral on the caller's grid, 3–16 µm:
+//! 1. LOWTRAN 7's band models of H₂O, CO₂ (outside the 4.3 µm lines of
+//!    item 2), O₃, N₂O, CO and CH₄ and its CKD water-vapour continuum
 //!    ([`super::lowtran`], Kneizys et al. 1988, AFGL-TR-88-0177), with CH₄
 //!    1.7, CO 0.15 and N₂O 0.32 ppmv well mixed.
-//! 4. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) from
+//! 2. The CO₂ 4.3 µm band (¹²CO₂ ν₃, its first hot band and ¹³CO₂ ν₃) from
 //!    its lines ([`super::lines`]): positions and intensities from the
 //!    molecular constants at each layer's temperature, Malkmus parameters
-//!    from the lines in each wavelength's window (the same Curtis–Godson
-//!    path sums), and the far wings of the other lines, sub-Lorentzian after
-//!    Perrin & Hartmann (1989), as a continuum.
-//! 5. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
+//!    from the lines in each wavelength's window (Curtis–Godson path sums),
+//!    and the far wings of the other lines, sub-Lorentzian after Perrin &
+//!    Hartmann (1989), as a continuum.
+//! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
-//! 6. Not modelled: aerosols and scattering. On the AFGL tropical profile
-//!    the zenith path is within 7 % of MODTRAN in 8–12 µm and 4 % in
-//!    3.5–4.5 µm (docs/physics/atmosphere.md has the comparisons).
+//! 4. Not modelled: aerosols and scattering. On the six AFGL profiles the
+//!    zenith path is within 4 % in τ̄ and 7 % in L of LOWTRAN 7 (without
+//!    aerosol) in 8–12, 8–14, 3–5 and 3.5–4.5 µm, on the tropical one
+//!    within 7 % of MODTRAN in τ̄, and the mid-latitude summer window and
+//!    3–5 µm sky fluxes within 1.3 % of RRTMG (docs/physics/atmosphere.md
+//!    has the comparisons).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
-//! the continuum optical depth and the band models, and path radiance
+//! the continua's optical depth and the band models, and path radiance
 //! L_u = Σ B(λ, T_i)·(τ(s_i) − τ(s_{i+1})) (Schwarzschild's equation without
 //! scattering). τ → 1 and L_u → 0 as the range → 0; τ falls and L_u rises
 //! with range and water vapour.
@@ -64,7 +43,8 @@
 //! **Sky.** The downwelling radiance of an isotropic equivalent sky is the
 //! path radiance from the ground to 50 km at the diffusivity angle
 //! (sec θ = 1.66, θ = 52.96°; Elsasser 1942), taken as a blackbody at the
-//! air temperature beyond 16 µm (the opaque water rotational band), then
+//! air temperature beyond 16 µm (the water rotational band, opaque but in
+//! dry air: 8 % too bright broadband on the sub-arctic winter), then
 //! scaled so that its integral over 3–∞ µm equals the weather's broadband sky
 //! longwave E_sky/π.
 
@@ -238,94 +218,6 @@ pub struct AirState {
     pub n2o_g_m3: f64,
 }
 
-/// An Edwards exponential wide band.
-struct WideBand {
-    /// Centre (symmetric) or upper head (head = true), cm⁻¹.
-    nu_cm: f64,
-    head: bool,
-    alpha: f64,
-    omega0: f64,
-    beta0: f64,
-    /// Self-broadening b at T (function of T for water).
-    water: bool,
-    n: f64,
-}
-
-/// The exponential wide bands: H₂O 6.3 µm, CO₂ 15 µm, O₃ 9.6 µm, used below
-/// [`lowtran::LOWTRAN_FROM_CM`] (the 4.3 µm CO₂ band is a line-by-line band
-/// model, [`super::lines`]; from 2000 cm⁻¹ up LOWTRAN 7, [`super::lowtran`]).
-const BANDS: [WideBand; 3] = [
-    WideBand {
-        nu_cm: 1600.0,
-        head: false,
-        alpha: 41.2,
-        omega0: 56.4,
-        beta0: 0.09427,
-        water: true,
-        n: 1.0,
-    },
-    WideBand {
-        nu_cm: 667.0,
-        head: false,
-        alpha: 19.0,
-        omega0: 12.7,
-        beta0: 0.06157,
-        water: false,
-        n: 0.7,
-    },
-    // O₃ 9.6 µm (ν₃ at 1042 cm⁻¹): band strength 376 cm⁻² atm⁻¹ at STP
-    // = 17.6 cm⁻¹/(g m⁻²), bandwidth parameter 30 cm⁻¹ at stratospheric
-    // temperatures (ω₀ = 30/√2.2), mean line spacing 0.1 cm⁻¹ and air
-    // half-width 0.08 cm⁻¹/atm at 296 K (Vardavas & Taylor, *Radiation and
-    // Climate*, 2007, § 4.7; half-width: Hoell et al. 1982, Opt. Eng. 21,
-    // 213548), so β = πγ/d = 2.51 at 296 K and 1 atm, β₀ = 2.51·√2.96.
-    WideBand {
-        nu_cm: 1042.0,
-        head: false,
-        alpha: 17.6,
-        omega0: 20.2,
-        beta0: 4.32,
-        water: false,
-        n: 1.0,
-    },
-];
-
-impl WideBand {
-    /// Mean k̄ (m²/g) at wavenumber ν and temperature T.
-    fn kbar(&self, nu: f64, t: f64) -> f64 {
-        if nu >= lowtran::LOWTRAN_FROM_CM {
-            return 0.0;
-        }
-        let omega = self.omega0 * (t / 100.0).sqrt();
-        let x = if self.head {
-            if nu > self.nu_cm {
-                return 0.0;
-            }
-            (self.nu_cm - nu) / omega
-        } else {
-            2.0 * (nu - self.nu_cm).abs() / omega
-        };
-        if x > 60.0 {
-            0.0
-        } else {
-            self.alpha / omega * (-x).exp()
-        }
-    }
-    /// Line-overlap parameter β at state `s`.
-    fn beta(&self, s: &AirState) -> f64 {
-        let (b, x) = if self.water {
-            (
-                8.6 * (100.0 / s.temperature_k).sqrt() + 0.5,
-                s.water_pa / s.pressure_pa,
-            )
-        } else {
-            (1.3, 0.0)
-        };
-        let pe = (s.pressure_pa / ATM_PA * (1.0 + (b - 1.0) * x)).powf(self.n);
-        self.beta0 * (100.0 / s.temperature_k).sqrt() * pe
-    }
-}
-
 /// Malkmus narrow-band transmittance for X = Σ k̄u and overlap β.
 #[inline]
 fn malkmus(x: f64, beta: f64) -> f64 {
@@ -347,17 +239,6 @@ fn n2_cia(nu: f64) -> f64 {
     } else {
         N2_CIA_INTEGRAL / N2_CIA_WIDTH_CM * (-x).exp()
     }
-}
-
-/// Roberts et al. (1976) self-continuum coefficient, (g cm⁻²)⁻¹ atm⁻¹;
-/// zero from [`lowtran::LOWTRAN_FROM_CM`] up (LOWTRAN 7's continuum there).
-#[inline]
-fn continuum_cs(nu: f64, t: f64) -> f64 {
-    if nu >= lowtran::LOWTRAN_FROM_CM {
-        return 0.0;
-    }
-    let a = if nu <= 1250.0 { 4.18 } else { 0.0 };
-    (a + 5578.0 * (-7.87e-3 * nu).exp()) * (1800.0 * (1.0 / t - 1.0 / 296.0)).exp()
 }
 
 impl BuiltinAtmosphere {
@@ -543,8 +424,6 @@ impl BuiltinAtmosphere {
         };
         let nu: Vec<f64> = wl.iter().map(|l| 1e4 / l).collect();
         let mut cont = vec![0.0; n];
-        let mut x = vec![[0.0f64; BANDS.len()]; n];
-        let mut xb = vec![[0.0f64; BANDS.len()]; n];
         let line_bands = lines::co2_bands();
         let windows = lines::LineWindows::new(line_bands, &nu);
         let band_model = lowtran::BandModelGrid::new(&nu, &lines::window_widths(&nu));
@@ -562,11 +441,7 @@ impl BuiltinAtmosphere {
             let st = self.state(z.max(self.met.ground_altitude_m - 500.0));
             let t = st.temperature_k;
             let u_w_cm2 = st.water_g_m3 * ds * 1e-4;
-            let e_atm = st.water_pa / ATM_PA;
             let p_atm = st.pressure_pa / ATM_PA;
-            let broad = e_atm + 0.002 * (p_atm - e_atm);
-            let amounts = [st.water_g_m3 * ds, st.co2_g_m3 * ds, st.o3_g_m3 * ds];
-            let betas = BANDS.each_ref().map(|b| b.beta(&st));
             let line_layers: Vec<(lines::LayerBand, f64)> = (0..line_bands.len())
                 .filter(|&b| windows.active(b))
                 .map(|b| {
@@ -579,9 +454,9 @@ impl BuiltinAtmosphere {
             // N₂ density in amagat (number density / Loschmidt's at 273.15 K, 1 atm).
             let n2 = N2_FRACTION * (st.pressure_pa - st.water_pa) / ATM_PA * 273.15 / t;
             let n2_path = n2 * n2 * ds * 100.0;
-            // LOWTRAN 7 (ν ≥ 2000 cm⁻¹): the layer's amounts, g/cm² of water
-            // and atm·cm of the other gases, and its water continuum
-            // factors (module docs of `lowtran`).
+            // LOWTRAN 7: the layer's amounts, g/cm² of water and atm·cm of
+            // the other gases, and its water continuum factors (module docs
+            // of `lowtran`).
             let n_air = st.pressure_pa * AVOGADRO / (R_GAS * t);
             let atm_cm = |n_m3: f64| n_m3 * ds / (lowtran::LOSCHMIDT_M3 * 0.01);
             let per_m3 = |g_m3: f64, m: f64| g_m3 / m * AVOGADRO;
@@ -605,19 +480,8 @@ impl BuiltinAtmosphere {
             let w260 = ((296.0 - t) / 36.0).clamp(0.0, 1.0);
             for i in 0..n {
                 let [c296, c260, cf] = h2o_cont[i];
-                cont[i] += continuum_cs(nu[i], t) * u_w_cm2 * broad
-                    + n2_cia(nu[i]) * n2_path
-                    + (c296 + w260 * c260) * self_w
-                    + cf * foreign_w;
+                cont[i] += n2_cia(nu[i]) * n2_path + (c296 + w260 * c260) * self_w + cf * foreign_w;
                 let mut t_lines = band_model.transmittance(i, &ln_w_bm);
-                for b in 0..BANDS.len() {
-                    let ku = BANDS[b].kbar(nu[i], t) * amounts[b];
-                    x[i][b] += ku;
-                    xb[i][b] += ku * betas[b];
-                    if x[i][b] > 0.0 {
-                        t_lines *= malkmus(x[i][b], xb[i][b] / x[i][b]);
-                    }
-                }
                 for (b, (lb, amount)) in line_layers.iter().enumerate() {
                     cont[i] += lb.wing[i] * amount;
                     let ku = lb.kbar[i] * amount;

@@ -1,6 +1,9 @@
 //! LOWTRAN 7's molecular band models and water-vapour continuum for
-//! ν ≥ [`LOWTRAN_FROM_CM`] (λ ≤ 5 µm): H₂O, CO₂ (outside the 4.3 µm band,
-//! which [`super::lines`] computes from its lines), O₃, N₂O, CO and CH₄.
+//! ν ≥ [`LOWTRAN_FROM_CM`] (λ ≤ 20 µm, so over the built-in model's whole
+//! 3–16 µm): H₂O, CO₂ (outside the 4.3 µm band, which [`super::lines`]
+//! computes from its lines), O₃, N₂O, CO and CH₄. Not included: LOWTRAN 7's
+//! band models of the trace gases NO, NO₂, NH₃, SO₂ and O₂, and its HNO₃
+//! cross-sections (AFGL columns of 10⁻⁴ atm·cm and less).
 //!
 //! **Source.** F. X. Kneizys, E. P. Shettle, L. W. Abreu, J. H. Chetwynd,
 //! G. P. Anderson, W. O. Gallery, J. E. A. Selby and S. A. Clough, *Users
@@ -35,13 +38,15 @@
 //! Loschmidt units (2.6868·10¹⁹ cm⁻³), ρ₀ = 273.15/296, the radiation term
 //! R_T = ν·tanh(hcν/2kT) (cm⁻¹), w = (296 − T)/36 clamped to 0–1, the
 //! coefficients C in 10⁻²⁰ cm² molecule⁻¹ (cm⁻¹)⁻¹ linear between their
-//! 10 cm⁻¹ nodes, and F the far-wing term.
+//! 10 cm⁻¹ nodes, and F the far-wing term. The self coefficients carry
+//! LOWTRAN 7's correction of 1 September 1985 (subroutine TRANS),
+//! `1 − 0.2333·α²/((ν − 1050)² + α²)`, α = 200 cm⁻¹ (0.78 at 1000 cm⁻¹).
 
 use std::sync::OnceLock;
 
-/// Lowest wavenumber at which these models are used, cm⁻¹ (5 µm); below it
-/// the built-in model keeps Edwards' wide bands and Roberts' continuum.
-pub const LOWTRAN_FROM_CM: f64 = 2000.0;
+/// Lowest wavenumber of the embedded tables, cm⁻¹ (20 µm); nothing is
+/// absorbed below it (the built-in model stops at 16 µm, 625 cm⁻¹).
+pub const LOWTRAN_FROM_CM: f64 = 500.0;
 /// The CO₂ 4.3 µm band's lines ([`super::lines`]) lie within this range,
 /// cm⁻¹; LOWTRAN's CO₂ band model is used only outside it.
 pub const CO2_LINE_RANGE_CM: (f64, f64) = (2150.0, 2450.0);
@@ -100,25 +105,34 @@ const fn r(gas: Gas, lo: f64, hi: f64, a: f64, n: f64, m: f64) -> Region {
     }
 }
 
-/// The band-model regions that reach 2000–3500 cm⁻¹, from lowtran7.f:
+/// The band-model regions that reach 500–3500 cm⁻¹, from lowtran7.f:
 /// regions from BLOCK DATA WVBNRG and subroutine ABCDTA (band index IW),
-/// a from BLOCK DATA ABCD (AH2O(4–6), ACO2(3–4), AO3(3–5), AN2O(2–3),
+/// a from BLOCK DATA ABCD (AH2O(2–6), ACO2(1–4), AO3(2–5), AN2O(2–3),
 /// ACO(2), ACH4(2)), n and m from subroutine STDMDL (DENSTY(IW) =
 /// u·PSS^n·TSS^m).
-pub const REGIONS: [Region; 14] = [
+pub const REGIONS: [Region; 23] = [
+    r(Gas::H2o, 350.0, 1000.0, 0.5299, 1.1406, -2.6343), // IW 18
+    r(Gas::H2o, 1005.0, 1640.0, 0.5416, 0.9834, -2.5294), // IW 19
     r(Gas::H2o, 1645.0, 2530.0, 0.5479, 1.0443, -2.4359), // IW 20
     r(Gas::H2o, 2535.0, 3420.0, 0.5495, 0.9681, -1.9537), // IW 21
     r(Gas::H2o, 3425.0, 4310.0, 0.5464, 0.9555, -1.5378), // IW 22
+    r(Gas::Co2, 425.0, 835.0, 0.6176, 0.6705, -2.2560),  // IW 36
+    r(Gas::Co2, 840.0, 1440.0, 0.6810, 0.7038, -5.0768), // IW 37
     r(Gas::Co2, 1805.0, 2855.0, 0.6033, 0.7258, -1.6740), // IW 38
     r(Gas::Co2, 3070.0, 3755.0, 0.6146, 0.6982, -1.8107), // IW 39
-    r(Gas::O3, 1630.0, 2295.0, 0.7819, 0.3739, 0.1225),   // IW 33
-    r(Gas::O3, 2670.0, 2845.0, 0.9175, 0.1770, 0.9827),   // IW 34
-    r(Gas::O3, 2850.0, 3260.0, 0.7703, 0.3921, 0.1942),   // IW 35
+    r(Gas::O3, 515.0, 1275.0, 0.7593, 0.4221, 0.7678),   // IW 32
+    r(Gas::O3, 1630.0, 2295.0, 0.7819, 0.3739, 0.1225),  // IW 33
+    r(Gas::O3, 2670.0, 2845.0, 0.9175, 0.1770, 0.9827),  // IW 34
+    r(Gas::O3, 2850.0, 3260.0, 0.7703, 0.3921, 0.1942),  // IW 35
+    r(Gas::N2o, 490.0, 775.0, 0.7201, 0.7203, -0.1836),  // IW 48
+    r(Gas::N2o, 865.0, 995.0, 0.7201, 0.7203, -0.1836),  // IW 48
+    r(Gas::N2o, 1065.0, 1385.0, 0.7201, 0.7203, -0.1836), // IW 48
     r(Gas::N2o, 1545.0, 2040.0, 0.7201, 0.7203, -0.1836), // IW 48
     r(Gas::N2o, 2090.0, 2655.0, 0.7201, 0.7203, -0.1836), // IW 48
-    r(Gas::N2o, 2705.0, 2865.0, 0.7201, 0.7764, 1.1931),  // IW 49
-    r(Gas::N2o, 3245.0, 3925.0, 0.7201, 0.7764, 1.1931),  // IW 49
-    r(Gas::Co, 1940.0, 2285.0, 0.6133, 0.9267, 0.1716),   // IW 45
+    r(Gas::N2o, 2705.0, 2865.0, 0.7201, 0.7764, 1.1931), // IW 49
+    r(Gas::N2o, 3245.0, 3925.0, 0.7201, 0.7764, 1.1931), // IW 49
+    r(Gas::Co, 1940.0, 2285.0, 0.6133, 0.9267, 0.1716),  // IW 45
+    r(Gas::Ch4, 1065.0, 1775.0, 0.5844, 0.7139, -0.4185), // IW 46
     r(Gas::Ch4, 2345.0, 3230.0, 0.5844, 0.7139, -0.4185), // IW 46
 ];
 
@@ -204,7 +218,8 @@ fn radiation_term(nu: f64, t_k: f64) -> f64 {
 
 /// The water-vapour continuum coefficients at `nu` (cm⁻¹), each times its
 /// radiation term, 10⁻²⁰ cm² molecule⁻¹: (C_s(296)R₂₉₆,
-/// C_s(260)R₂₆₀ − C_s(296)R₂₉₆, (C_f(296) + F)R₂₉₆); zero below
+/// C_s(260)R₂₆₀ − C_s(296)R₂₉₆, (C_f(296) + F)R₂₉₆), the self terms with
+/// the 1985 correction (module docs); zero below
 /// [`LOWTRAN_FROM_CM`].
 pub fn continuum(nu: f64) -> [f64; 3] {
     let t = tables();
@@ -216,9 +231,12 @@ pub fn continuum(nu: f64) -> [f64; 3] {
     let f = (x - i as f64).min(1.0);
     let c: [f64; 3] = std::array::from_fn(|k| t.cont[i][k] * (1.0 - f) + t.cont[i + 1][k] * f);
     let (r296, r260) = (radiation_term(nu, 296.0), radiation_term(nu, 260.0));
+    let alpha2 = 200.0f64 * 200.0;
+    let self_correction = 1.0 - 0.2333 * alpha2 / ((nu - 1050.0).powi(2) + alpha2);
+    let (s296, s260) = (c[0] * self_correction, c[1] * self_correction);
     [
-        c[0] * r296,
-        c[1] * r260 - c[0] * r296,
+        s296 * r296,
+        s260 * r260 - s296 * r296,
         (c[2] + far_wing(nu)) * r296,
     ]
 }
@@ -334,20 +352,23 @@ mod tests {
     #[test]
     fn tables_parse_and_hold_the_published_values() {
         let t = tables();
-        // 2000–3500 cm⁻¹ every 5; 1990–3510 every 10.
-        assert_eq!(t.bm_v0, 2000.0);
-        assert_eq!(t.bm.len(), 301);
-        assert_eq!(t.c_v0, 1990.0);
-        assert_eq!(t.cont.len(), 153);
+        // 500–3500 cm⁻¹ every 5; 490–3510 every 10.
+        assert_eq!(t.bm_v0, 500.0);
+        assert_eq!(t.bm.len(), 601);
+        assert_eq!(t.c_v0, 490.0);
+        assert_eq!(t.cont.len(), 303);
         // Spot values of lowtran7.f: CPH2O at 2000 cm⁻¹ (region 1645–2530,
-        // element 72) and CPCH4 at 3000 cm⁻¹; SF296 at 2500 cm⁻¹.
-        assert_eq!(t.bm[0][Gas::H2o as usize], -0.16662);
-        assert_eq!(t.bm[200][Gas::Ch4 as usize], -0.9715);
-        assert_eq!(t.cont[51][0], 2.0082e-07);
+        // element 72) and CPCH4 at 3000 cm⁻¹; SF296 at 2500 cm⁻¹; the first
+        // CPH2O and CPCO2 of the table, at 500 cm⁻¹.
+        assert_eq!(t.bm[300][Gas::H2o as usize], -0.16662);
+        assert_eq!(t.bm[500][Gas::Ch4 as usize], -0.9715);
+        assert_eq!(t.cont[201][0], 2.0082e-07);
+        assert_eq!(t.bm[0][Gas::H2o as usize], 0.4449);
+        assert_eq!(t.bm[0][Gas::Co2 as usize], -6.7823);
         // Every C′ lies in a region of its gas, and every region's samples
         // within the table have a C′.
         for (k, row) in t.bm.iter().enumerate() {
-            let s = 2000.0 + 5.0 * k as f64;
+            let s = 500.0 + 5.0 * k as f64;
             for (g, cp) in row.iter().enumerate() {
                 let in_region = REGIONS
                     .iter()
@@ -364,13 +385,14 @@ mod tests {
         let mut w = [0.0; REGIONS.len()];
         assert_eq!(g.transmittance(0, &ln_amounts(&w)), 1.0);
         scaled_amounts(&mut w, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, 273.15);
-        // At 1 atm and 273.15 K the scaled amount is the amount.
-        assert!((w[1] - 1.0).abs() < 1e-12);
-        let cp = tables().bm[140][0];
+        // At 1 atm and 273.15 K the scaled amount is the amount (region
+        // 2535–3420 cm⁻¹, the fourth).
+        assert!((w[3] - 1.0).abs() < 1e-12);
+        let cp = tables().bm[440][0];
         let want = (-(10f64.powf(cp)).powf(0.5495)).exp();
         assert!((g.transmittance(0, &ln_amounts(&w)) - want).abs() < 1e-12);
-        // Nothing below 5 µm's wavenumber, nor CO₂ inside the line range.
-        assert!(!BandModelGrid::new(&[1900.0], &[5.0]).active());
+        // Nothing below the tables (20 µm), nor CO₂ inside the line range.
+        assert!(!BandModelGrid::new(&[400.0], &[5.0]).active());
         let co2 = BandModelGrid::new(&[2300.0], &[5.0]);
         assert!(
             co2.samples[0]
@@ -386,7 +408,14 @@ mod tests {
         assert!((radiation_term(2500.0, 296.0) / 2500.0 - 1.0).abs() < 1e-4);
         let y1 = 1.025 * 3.159e-8 * (-2.75e-4f64 * 100.0).exp();
         assert!((far_wing(100.0) / y1 - 1.0).abs() < 0.05);
-        assert_eq!(continuum(1999.0), [0.0; 3]);
+        assert_eq!(continuum(499.0), [0.0; 3]);
+        // The 1985 self correction: 0.7667 at 1050 cm⁻¹ (no change to the
+        // foreign term).
+        let t = tables();
+        let c = continuum(1050.0);
+        let k = ((1050.0 - t.c_v0) / 10.0) as usize;
+        let want = t.cont[k][0] * 0.7667 * radiation_term(1050.0, 296.0);
+        assert!((c[0] / want - 1.0).abs() < 1e-9, "{} vs {want}", c[0]);
         let c = continuum(2500.0);
         assert!(c[0] > 0.0 && c[2] > 0.0);
     }
