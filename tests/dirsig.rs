@@ -993,6 +993,19 @@ fn real_auror_simulation_imports_and_renders() {
     im.scene.sensors[0]["height"] = 64.into();
     im.scene.sensors[0]["pixel_pitch_m"] = (10e-6 * 500.0 / 64.0).into();
     im.write(&out).unwrap();
+    // Its 0.82–0.88 µm NIR channel lies below the built-in atmosphere's 3–16 µm: refused,
+    // naming the sensor, not rendered as a near-black image.
+    let e = irsig::render::session::Session::open(&out, irsig::trace::Backend::Embree)
+        .err()
+        .expect("a NIR band under the built-in atmosphere is refused")
+        .to_string();
+    assert!(
+        e.contains("sensors[0]") && e.contains("outside the built-in atmosphere"),
+        "{e}"
+    );
+    // A thermal band renders.
+    im.scene.sensors[0]["bands"] = serde_json::json!([{"name": "lwir", "response": [8.0, 12.0]}]);
+    im.write(&out).unwrap();
     let mut session =
         irsig::render::session::Session::open(&out, irsig::trace::Backend::Embree).unwrap();
     let files = session

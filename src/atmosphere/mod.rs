@@ -121,6 +121,10 @@ fn grey_sky(sky: &SkyConditions, grid: &SpectralGrid) -> Result<Vec<f64>> {
 /// masses; 89° gives 57).
 pub const MAX_SKY_ZENITH_DEG: f64 = 89.0;
 
+/// The spectral range the built-in model covers, µm (its LOWTRAN 7 band
+/// models and continuum tables, 3–16 µm).
+pub const BUILTIN_RANGE_UM: (f64, f64) = (3.0, 16.0);
+
 impl Atmosphere {
     /// The built-in model on the AFGL `profile` for a weather record at a
     /// site altitude (the record's surface conditions blended into the
@@ -157,7 +161,7 @@ impl Atmosphere {
     /// their own coverage when resampled) have no fixed range.
     pub fn spectral_range_um(&self) -> Option<(f64, f64)> {
         match self {
-            Atmosphere::Builtin(_) => Some((3.0, 16.0)),
+            Atmosphere::Builtin(_) => Some(BUILTIN_RANGE_UM),
             _ => None,
         }
     }

@@ -75,7 +75,9 @@ fn parse_unplaced(scene: &Scene) -> Result<Sections> {
                 format!("`{}` is used twice: expected unique sensor names", s.name),
             ));
         }
-        bands.push(sensor_bands(&s, &base, config.spectral_step_um, &loc)?);
+        let b = sensor_bands(&s, &base, config.spectral_step_um, &loc)?;
+        check_band_range(&atmosphere, &b, &loc)?;
+        bands.push(b);
         sensors.push(s);
     }
     if sensors.is_empty() {
@@ -90,6 +92,34 @@ fn parse_unplaced(scene: &Scene) -> Result<Sections> {
         sensors,
         bands,
     })
+}
+
+/// A sensor's bands must lie inside the spectral range of the built-in
+/// atmosphere when the scene uses it: outside it the model has no
+/// transmittance or sky, and the image would be silently near zero.
+fn check_band_range(atmosphere: &AtmosphereConfig, bands: &[Band], loc: &Location) -> Result<()> {
+    if !matches!(
+        atmosphere,
+        AtmosphereConfig::Builtin { .. } | AtmosphereConfig::Standard { .. }
+    ) {
+        return Ok(());
+    }
+    let (a, b) = crate::atmosphere::BUILTIN_RANGE_UM;
+    for band in bands {
+        let wl = band.wavelengths_um();
+        let (lo, hi) = (wl[0], wl[wl.len() - 1]);
+        if lo < a - 1e-9 || hi > b + 1e-9 {
+            return Err(Error::parse(
+                loc.clone(),
+                format!(
+                    "band {lo}–{hi} µm lies outside the built-in atmosphere's spectral range \
+                     {a}–{b} µm: use \"atmosphere\": \"none\" (no atmosphere) or a MODTRAN \
+                     tape7 table covering the band ({{\"model\": \"tape7\", \"index\": FILE}})"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `v` (the value at JSON path `field` of the file at `file`) as a `T`.
