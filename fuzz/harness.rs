@@ -832,7 +832,10 @@ pub fn state(data: &[u8]) -> bool {
             assert_eq!(h.lit.len(), 5 * h.day.len() * h.width());
             for f in 0..5 {
                 for d in 0..h.day.len() {
-                    assert!(h.lit_points(f, d) <= h.points, "lit points above the points");
+                    assert!(
+                        h.lit_points(f, d) <= h.points,
+                        "lit points above the points"
+                    );
                 }
             }
             true

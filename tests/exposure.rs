@@ -874,10 +874,17 @@ fn refined_solar_history_matches_every_step() {
             compute_exposure(&tracer, &geo, &ds, &steps, &params).unwrap()
         };
         let every = run(1);
-        assert!(crate::util::sun_fractions(&every.solar).iter().any(|&f| f > 0.0 && f < 1.0));
+        assert!(
+            crate::util::sun_fractions(&every.solar)
+                .iter()
+                .any(|&f| f > 0.0 && f < 1.0)
+        );
         for stride in [2, 4, 8] {
             let r = run(stride);
-            assert_eq!(crate::util::cos_incidences(&r.solar), crate::util::cos_incidences(&every.solar));
+            assert_eq!(
+                crate::util::cos_incidences(&r.solar),
+                crate::util::cos_incidences(&every.solar)
+            );
             let day = crate::util::cos_incidences(&every.solar)
                 .iter()
                 .filter(|&&c| c > 0.0)
@@ -1105,7 +1112,11 @@ fn backends_agree_on_a_procedural_town() {
     assert!(same_s as f64 >= 0.995 * crate::util::sun_fractions(&e.solar).len() as f64);
     assert!(worst <= 0.05, "{worst}");
     // Some facets are shaded and some see buildings: the scene exercises both.
-    assert!(crate::util::sun_fractions(&e.solar).iter().any(|&s| s > 0.0 && s < 1.0));
+    assert!(
+        crate::util::sun_fractions(&e.solar)
+            .iter()
+            .any(|&s| s > 0.0 && s < 1.0)
+    );
     assert!((0..n).any(|f| !e.sky.background(f).is_empty()));
 }
 

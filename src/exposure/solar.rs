@@ -114,9 +114,8 @@ impl SolarHistory {
                 let s = sun_fraction[f * steps + r];
                 let k = (s * m as f32).round();
                 let d = h.day.binary_search(&(r as u32));
-                let ok = (0.0..=m as f32).contains(&k)
-                    && s == k / m as f32
-                    && (d.is_ok() || k == 0.0);
+                let ok =
+                    (0.0..=m as f32).contains(&k) && s == k / m as f32 && (d.is_ok() || k == 0.0);
                 if !ok {
                     return Err(Error::invalid(
                         format!("sun_fraction[facet {f}, record {r}]"),
@@ -170,9 +169,7 @@ impl SolarHistory {
     /// Appends the facets of `other` (the same records and points) after
     /// this history's.
     pub fn append(&mut self, other: SolarHistory) {
-        debug_assert!(
-            (self.day == other.day && self.points == other.points) || self.facets == 0
-        );
+        debug_assert!((self.day == other.day && self.points == other.points) || self.facets == 0);
         if self.facets == 0 {
             self.steps = other.steps;
             self.day = other.day;
@@ -483,7 +480,9 @@ fn refined_batch<T: Tracer + ?Sized>(
 ) -> u64 {
     // The day records only; a run of steps never spans a night (two day
     // records that are not consecutive records).
-    let day: Vec<usize> = (0..sun_dirs.len()).filter(|&s| sun_dirs[s].z > 0.0).collect();
+    let day: Vec<usize> = (0..sun_dirs.len())
+        .filter(|&s| sun_dirs[s].z > 0.0)
+        .collect();
     let steps = day.len();
     let (nf, f0, m) = (range.len(), range.start, facets.per_facet);
     // Per (facet, day record): the side the sun is on (0: no ray), and

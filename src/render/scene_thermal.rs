@@ -32,8 +32,7 @@ use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
     FacetThermal, PassStats, PointResponse, SceneInputs, SceneTemperatures, SolarSource,
-    ThermalParams,
-    solve_facet_temperatures,
+    ThermalParams, solve_facet_temperatures,
 };
 use crate::thermal::wind::{FacetWind, WindProfile};
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};

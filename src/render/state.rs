@@ -1111,10 +1111,7 @@ fn read_sun_lit(batch: &RecordBatch, path: &Path, nf: usize) -> Result<SolarHist
              columns; this irsig reads version {VERSION}: rerun pass 1 into a new folder"
         )));
     }
-    let get = |k: &str| {
-        meta.get(k)
-            .ok_or_else(|| bad(format!("no metadata `{k}`")))
-    };
+    let get = |k: &str| meta.get(k).ok_or_else(|| bad(format!("no metadata `{k}`")));
     let steps: usize = get("irsig.history_steps")?
         .parse()
         .map_err(|e| bad(format!("metadata `irsig.history_steps`: {e}")))?;
@@ -1143,7 +1140,11 @@ fn read_sun_lit(batch: &RecordBatch, path: &Path, nf: usize) -> Result<SolarHist
             l.value_length()
         )));
     }
-    let start = if nf > 0 { l.value_offset(0) as usize } else { 0 };
+    let start = if nf > 0 {
+        l.value_offset(0) as usize
+    } else {
+        0
+    };
     let mut h = SolarHistory {
         steps,
         facets: nf,
