@@ -47,6 +47,8 @@ impl SolarSource for SolarArrays<'_> {
     fn records(&self) -> usize {
         self.records
     }
+    /// `usize::MAX` when the two arrays differ in length (which
+    /// [`SceneInputs::validate`] then refuses).
     fn facets(&self) -> usize {
         if self.sun_fraction.len() != self.cos_incidence.len() {
             return usize::MAX;
