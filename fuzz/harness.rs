@@ -828,10 +828,16 @@ pub fn state(data: &[u8]) -> bool {
             let backs: Vec<f32> = sky.back_shape_factor.iter().flatten().copied().collect();
             finite32(&backs, "back_shape_factor");
             let h = &r.solar;
-            assert_eq!(h.sun_fraction.len(), 5 * h.steps);
-            assert_eq!(h.cos_incidence.len(), 5 * h.steps);
-            finite32(&h.sun_fraction, "sun_fraction");
-            finite32(&h.cos_incidence, "cos_incidence");
+            assert_eq!(h.facet_count(), 5);
+            assert_eq!(h.lit.len(), 5 * h.day.len() * h.width());
+            for f in 0..5 {
+                for d in 0..h.day.len() {
+                    assert!(
+                        h.lit_points(f, d) <= h.points,
+                        "lit points above the points"
+                    );
+                }
+            }
             true
         }
         Err(e) => check_error(&e, &p),
@@ -883,8 +889,11 @@ fn state_seeds() -> Vec<Vec<u8>> {
         range: 0..5,
         solar: SolarHistory {
             steps: 3,
-            sun_fraction: (0..15).map(|i| (i % 3) as f32 / 2.0).collect(),
-            cos_incidence: (0..15).map(|i| (i % 4) as f32 / 4.0).collect(),
+            facets: 5,
+            day: vec![1, 2],
+            points: 2,
+            lit: (0..10).map(|i| (i % 3) as u8).collect(),
+            ..SolarHistory::default()
         },
         sky: SkyView {
             shape_factor: vec![1.0, 0.8, 0.5, 0.9, 0.2],

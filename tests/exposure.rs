@@ -693,7 +693,7 @@ fn partial_shadow_matches_the_sunlit_area() {
     let exp = compute_exposure(&brute, &geo, &[], &[sun(elev, 180.0)], &params).unwrap();
     // Strip 5 (facets 10, 11 of the ground) spans y ∈ [1, 2].
     let strip = ground.start + 10..ground.start + 12;
-    let mean = area_mean(&exp, strip, &exp.solar.sun_fraction);
+    let mean = area_mean(&exp, strip, &crate::util::sun_fractions(&exp.solar));
     assert!((mean - 0.5).abs() < 1.0 / 32.0, "half-shaded strip: {mean}");
 }
 
@@ -749,6 +749,100 @@ fn results_do_not_depend_on_threads_or_batches() {
     }
 }
 
+/// Issue 23: the solar history is stored compactly (lit sample points per
+/// facet and day record, one byte — two above 255 points; no night
+/// records; the cosine of incidence recomputed from the normal and the
+/// sun), and its decoded sun fractions and cosines equal, bit for bit, the
+/// exhaustive per-record `f32` answer traced here ray by ray: a wall
+/// (single- and double-sided) shading the ground over 36 h at 15 min (two
+/// nights), with 9 and 256 sample points per facet.
+#[test]
+fn compact_solar_history_equals_the_exhaustive_arrays() {
+    let steps: Vec<Vec3> = (0..=144)
+        .map(|i| {
+            let hour = (i as f32 * 0.25) % 24.0;
+            let s = (std::f32::consts::PI * (hour - 6.0) / 12.0).sin();
+            let elev = if s > 0.0 { 60.0 * s } else { -10.0 };
+            sun(elev, 90.0 + 180.0 * ((hour - 6.0) / 12.0).clamp(0.0, 1.0))
+        })
+        .collect();
+    let day = steps.iter().filter(|d| d.z > 0.0).count();
+    assert!(day > 0 && day < steps.len());
+    for (double_sided, per_edge) in [(false, 3), (true, 3), (false, 16)] {
+        let (geo, ds, _, _) = wall_on_ground(double_sided);
+        let tracer = Brute::new(&geo);
+        let params = ExposureParams {
+            samples_per_edge: per_edge,
+            ..Default::default()
+        };
+        let exp = compute_exposure(&tracer, &geo, &ds, &steps, &params).unwrap();
+        let (fx, s) = (&exp.facets, &exp.solar);
+        let m = fx.per_facet;
+        assert_eq!(m, (per_edge * per_edge) as usize);
+        // The storage: one count per facet and day record.
+        assert_eq!(s.day.len(), day);
+        assert_eq!(s.width(), if m > 255 { 2 } else { 1 });
+        assert_eq!(s.lit.len(), fx.len() * day * s.width());
+        // The exhaustive answer, ray by ray.
+        let mut sun_ref = vec![0.0f32; fx.len() * steps.len()];
+        let mut cos_ref = vec![0.0f32; fx.len() * steps.len()];
+        for f in 0..fx.len() {
+            for (k, &dir) in steps.iter().enumerate() {
+                let c = fx.normal[f].dot(dir);
+                if dir.z <= 0.0 || !(fx.double_sided[f] || c > 0.0) || c == 0.0 {
+                    continue;
+                }
+                let lift = fx.normal[f] * (c.signum() * fx.offset_m);
+                let rays: Vec<Ray> = fx
+                    .facet_points(f)
+                    .iter()
+                    .map(|&p| Ray::new(p + lift, dir))
+                    .collect();
+                let mut occ = vec![false; rays.len()];
+                tracer.occluded(&rays, Coherence::Coherent, &mut occ);
+                let lit = occ.iter().filter(|&&o| !o).count();
+                sun_ref[f * steps.len() + k] = lit as f32 / m as f32;
+                cos_ref[f * steps.len() + k] = c.abs().min(1.0);
+            }
+        }
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&crate::util::sun_fractions(s)), bits(&sun_ref));
+        assert_eq!(bits(&crate::util::cos_incidences(s)), bits(&cos_ref));
+        // Partial shadows occur (the counts are not all 0 or m).
+        assert!(sun_ref.iter().any(|&x| x > 0.0 && x < 1.0));
+        // Per-record access agrees with the decoded histories.
+        for f in 0..fx.len() {
+            for k in [0, 40, 72, 100, 144] {
+                assert_eq!(s.sun_fraction_at(f, k), sun_ref[f * steps.len() + k]);
+                assert_eq!(s.cos_incidence_at(f, k), cos_ref[f * steps.len() + k]);
+            }
+        }
+        // The compact history of the exhaustive arrays is the traced one.
+        let back = irsig::exposure::SolarHistory::from_fractions(
+            &sun_ref,
+            &steps,
+            m as u32,
+            &fx.normal,
+            &fx.double_sided,
+        )
+        .unwrap();
+        assert_eq!(&back, s);
+        // A value that is not a multiple of 1/m, or sun at night, is refused.
+        let mut bad = sun_ref.clone();
+        bad[0] = 0.5 / m as f32;
+        let e = irsig::exposure::SolarHistory::from_fractions(
+            &bad,
+            &steps,
+            m as u32,
+            &fx.normal,
+            &fx.double_sided,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("facet 0, record 0"), "{e}");
+    }
+}
+
 /// Issue 18: the solar history traced at coarse steps and refined where a
 /// sample point's visibility changes gives the answer of tracing every step
 /// but for brief shadows (here, near the wall's ends at sunrise and sunset,
@@ -780,21 +874,24 @@ fn refined_solar_history_matches_every_step() {
             compute_exposure(&tracer, &geo, &ds, &steps, &params).unwrap()
         };
         let every = run(1);
-        assert!(every.solar.sun_fraction.iter().any(|&f| f > 0.0 && f < 1.0));
+        assert!(
+            crate::util::sun_fractions(&every.solar)
+                .iter()
+                .any(|&f| f > 0.0 && f < 1.0)
+        );
         for stride in [2, 4, 8] {
             let r = run(stride);
-            assert_eq!(r.solar.cos_incidence, every.solar.cos_incidence);
-            let day = every
-                .solar
-                .cos_incidence
+            assert_eq!(
+                crate::util::cos_incidences(&r.solar),
+                crate::util::cos_incidences(&every.solar)
+            );
+            let day = crate::util::cos_incidences(&every.solar)
                 .iter()
                 .filter(|&&c| c > 0.0)
                 .count();
-            let differ = r
-                .solar
-                .sun_fraction
+            let differ = crate::util::sun_fractions(&r.solar)
                 .iter()
-                .zip(&every.solar.sun_fraction)
+                .zip(&crate::util::sun_fractions(&every.solar))
                 .filter(|(a, b)| a != b)
                 .count();
             eprintln!(
@@ -999,21 +1096,27 @@ fn backends_agree_on_a_procedural_town() {
     let same_f = (0..n)
         .filter(|&f| e.sky.shape_factor[f] == o.sky.shape_factor[f])
         .count();
-    let same_s = (0..e.solar.sun_fraction.len())
-        .filter(|&i| e.solar.sun_fraction[i] == o.solar.sun_fraction[i])
-        .count();
+    let (es, os) = (
+        crate::util::sun_fractions(&e.solar),
+        crate::util::sun_fractions(&o.solar),
+    );
+    let same_s = (0..es.len()).filter(|&i| es[i] == os[i]).count();
     let worst = (0..n)
         .map(|f| (e.sky.shape_factor[f] - o.sky.shape_factor[f]).abs())
         .fold(0.0f32, f32::max);
     eprintln!(
         "{n} facets: F identical on {same_f}, sun fraction on {same_s} of {} facet-steps; worst |ΔF| {worst}",
-        e.solar.sun_fraction.len()
+        crate::util::sun_fractions(&e.solar).len()
     );
     assert!(same_f as f64 >= 0.995 * n as f64);
-    assert!(same_s as f64 >= 0.995 * e.solar.sun_fraction.len() as f64);
+    assert!(same_s as f64 >= 0.995 * crate::util::sun_fractions(&e.solar).len() as f64);
     assert!(worst <= 0.05, "{worst}");
     // Some facets are shaded and some see buildings: the scene exercises both.
-    assert!(e.solar.sun_fraction.iter().any(|&s| s > 0.0 && s < 1.0));
+    assert!(
+        crate::util::sun_fractions(&e.solar)
+            .iter()
+            .any(|&s| s > 0.0 && s < 1.0)
+    );
     assert!((0..n).any(|f| !e.sky.background(f).is_empty()));
 }
 

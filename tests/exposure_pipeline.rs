@@ -111,7 +111,7 @@ fn ring(
         let d = c.truncate().length();
         let sun = r.exposure.solar.sun_fraction(f);
         let cos = r.exposure.solar.cos_incidence(f);
-        let shaded = sun.iter().zip(cos).any(|(&s, &c)| c > 0.0 && s < 1.0);
+        let shaded = sun.iter().zip(&cos).any(|(&s, &c)| c > 0.0 && s < 1.0);
         if d < r0 || d > r1 || shaded {
             continue;
         }

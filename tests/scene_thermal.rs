@@ -303,7 +303,7 @@ fn scene_solve_rejects_mismatched_inputs() {
 #[test]
 fn scene_inputs_that_do_not_fit_are_rejected() {
     use irsig::geometry::BackgroundEntry;
-    use irsig::thermal::scene::SceneInputs;
+    use irsig::thermal::scene::{SceneInputs, SolarArrays};
     let (forcing, _) = clear_day(true);
     let r = forcing.len();
     let sun = vec![0.0f32; 2 * r];
@@ -315,10 +315,14 @@ fn scene_inputs_that_do_not_fit_are_rejected() {
         facet: 0,
         weight: 0.5,
     }];
-    let good = SceneInputs {
+    let solar = SolarArrays {
         records: r,
         sun_fraction: &sun,
         cos_incidence: &sun,
+    };
+    let good = SceneInputs {
+        records: r,
+        solar: &solar,
         normal: &normal,
         double_sided: &ds,
         shape_factor: &f,

@@ -161,3 +161,19 @@ pub fn stock_props(name: &str) -> irsig::thermal::SlabProperties {
         .unwrap_or_else(|| panic!("no stock material `{name}`"));
     irsig::thermal::SlabProperties::from_material(m).unwrap()
 }
+
+/// The sunlit fraction of every facet at every record, facet-major
+/// (`[facet · steps + record]`): the exhaustive `f32` layout of a compact
+/// solar history.
+pub fn sun_fractions(s: &irsig::exposure::SolarHistory) -> Vec<f32> {
+    (0..s.facet_count())
+        .flat_map(|f| s.sun_fraction(f))
+        .collect()
+}
+
+/// The cosine of incidence of every facet at every record, facet-major.
+pub fn cos_incidences(s: &irsig::exposure::SolarHistory) -> Vec<f32> {
+    (0..s.facet_count())
+        .flat_map(|f| s.cos_incidence(f))
+        .collect()
+}

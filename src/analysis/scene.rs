@@ -544,11 +544,25 @@ impl SceneStudy {
             .collect()
     }
 
-    fn inputs<'a>(&'a self, f: usize, background: Background<'a>) -> FacetInputs<'a> {
+    /// `sun`: the facet's sunlit fraction and cosine of incidence per record
+    /// (decoded from the compact solar history: [`Self::solar_of`]).
+    /// The solar history of facet `f`: sunlit fraction and cosine of
+    /// incidence per record.
+    fn solar_of(&self, f: usize) -> (Vec<f32>, Vec<f32>) {
+        let s = &self.exposure.solar;
+        (s.sun_fraction(f), s.cos_incidence(f))
+    }
+
+    fn inputs<'a>(
+        &'a self,
+        f: usize,
+        sun: &'a (Vec<f32>, Vec<f32>),
+        background: Background<'a>,
+    ) -> FacetInputs<'a> {
         let s = &self.exposure;
         FacetInputs {
-            sun_fraction: s.solar.sun_fraction(f),
-            cos_incidence: s.solar.cos_incidence(f),
+            sun_fraction: &sun.0,
+            cos_incidence: &sun.1,
             shape_factor: s.sky.shape_factor[f] as f64,
             back_shape_factor: s.sky.back_shape_factor(f).map(f64::from),
             background,
@@ -656,7 +670,7 @@ impl SceneStudy {
                     p,
                     &forcing,
                     ex,
-                    &self.inputs(f, Background::Air),
+                    &self.inputs(f, &self.solar_of(f), Background::Air),
                     &self.options,
                 )?;
                 Ok(sol
@@ -713,7 +727,7 @@ impl SceneStudy {
                     p,
                     &forcing,
                     ex,
-                    &self.inputs(f, background),
+                    &self.inputs(f, &self.solar_of(f), background),
                     &self.options,
                 )?;
                 Ok(sol.surface_temperature_k[self.image_record] as f32)

@@ -165,6 +165,25 @@ impl SceneGeometry {
     }
 }
 
+/// Cosine of the solar incidence angle on a facet with unit front normal
+/// `normal` for the unit vector toward the sun `sun`: `n·s`, or `|n·s|` for
+/// a double-sided facet (the face toward the sun is lit); 0 with the sun at
+/// or below the horizon (`z ≤ 0`) or behind a single-sided facet; at most 1.
+/// The one rule of the solar history ([`crate::exposure::SolarHistory`]),
+/// which recomputes it rather than storing it.
+#[inline]
+pub fn sun_cosine(normal: Vec3, double_sided: bool, sun: Vec3) -> f32 {
+    if sun.z <= 0.0 {
+        return 0.0;
+    }
+    let c = normal.dot(sun);
+    if double_sided || c > 0.0 {
+        c.abs().min(1.0)
+    } else {
+        0.0
+    }
+}
+
 /// Geometric (unnormalised-area) quantities of a world triangle.
 pub fn triangle_normal_area(t: &[Vec3; 3]) -> (Vec3, f32) {
     let n = (t[1] - t[0]).cross(t[2] - t[0]);

@@ -31,8 +31,8 @@ use crate::progress::{NoProgress, Progress, Stage};
 use crate::scene::Scene;
 use crate::sun::Site;
 use crate::thermal::scene::{
-    FacetThermal, PassStats, PointResponse, SceneInputs, SceneTemperatures, ThermalParams,
-    solve_facet_temperatures,
+    FacetThermal, PassStats, PointResponse, SceneInputs, SceneTemperatures, SolarSource,
+    ThermalParams, solve_facet_temperatures,
 };
 use crate::thermal::wind::{FacetWind, WindProfile};
 use crate::thermal::{BackBoundary, Forcing, SlabProperties};
@@ -46,8 +46,7 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
     fn from(e: &'a Exposure) -> Self {
         SceneInputs {
             records: e.solar.steps,
-            sun_fraction: &e.solar.sun_fraction,
-            cos_incidence: &e.solar.cos_incidence,
+            solar: &e.solar,
             normal: &e.facets.normal,
             double_sided: &e.facets.double_sided,
             shape_factor: &e.sky.shape_factor,
@@ -58,6 +57,49 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
             reflected_direct: &e.reflected.direct,
             reflected_diffuse: &e.reflected.diffuse,
             wind: &[],
+        }
+    }
+}
+
+impl SolarSource for SolarHistory {
+    fn records(&self) -> usize {
+        self.steps
+    }
+    fn facets(&self) -> usize {
+        self.facet_count()
+    }
+    fn sun_fraction_into(&self, facet: usize, out: &mut [f32]) {
+        SolarHistory::sun_fraction_into(self, facet, out);
+    }
+    fn cos_incidence_into(&self, facet: usize, out: &mut [f32]) {
+        SolarHistory::cos_incidence_into(self, facet, out);
+    }
+}
+
+/// The records `window` (indices into the history, in order) of a solar
+/// history: one image time's own window, read without copying the
+/// history.
+#[derive(Debug)]
+struct SolarWindow<'a> {
+    solar: &'a SolarHistory,
+    window: &'a [usize],
+}
+
+impl SolarSource for SolarWindow<'_> {
+    fn records(&self) -> usize {
+        self.window.len()
+    }
+    fn facets(&self) -> usize {
+        self.solar.facet_count()
+    }
+    fn sun_fraction_into(&self, facet: usize, out: &mut [f32]) {
+        for (o, &r) in out.iter_mut().zip(self.window) {
+            *o = self.solar.sun_fraction_at(facet, r);
+        }
+    }
+    fn cos_incidence_into(&self, facet: usize, out: &mut [f32]) {
+        for (o, &r) in out.iter_mut().zip(self.window) {
+            *o = self.solar.cos_incidence_at(facet, r);
         }
     }
 }
@@ -434,7 +476,9 @@ impl SceneThermal {
     pub fn sun_fraction(&self, image: usize) -> Vec<f32> {
         let r = self.temperatures.image_records[image];
         let s = &self.exposure.solar;
-        (0..s.facet_count()).map(|f| s.sun_fraction(f)[r]).collect()
+        (0..s.facet_count())
+            .map(|f| s.sun_fraction_at(f, r))
+            .collect()
     }
     /// Cosine of the solar incidence angle of every facet at image time
     /// `image` (0 at night or behind a single-sided facet).
@@ -442,7 +486,7 @@ impl SceneThermal {
         let r = self.temperatures.image_records[image];
         let s = &self.exposure.solar;
         (0..s.facet_count())
-            .map(|f| s.cos_incidence(f)[r])
+            .map(|f| s.cos_incidence_at(f, r))
             .collect()
     }
     /// Background temperature of every facet at image time `image`, K: the
@@ -727,10 +771,7 @@ fn solve_traced(
     progress: &dyn Progress,
 ) -> Result<SceneThermal> {
     let n = facets.len();
-    let mut solar = SolarHistory {
-        steps: history.times.len(),
-        ..SolarHistory::default()
-    };
+    let mut solar = SolarHistory::empty(&history.sun, facets.per_facet as u32);
     let mut sky = SkyView::default();
     let mut ground = Vec::with_capacity(n);
     let mut stats = ExposureStats::default();
@@ -740,14 +781,25 @@ fn solve_traced(
             || p.ground.len() != p.range.len()
             || p.sky.facet_count() != p.range.len()
             || p.solar.steps != solar.steps
+            || p.solar.day != solar.day
+            || p.solar.points != solar.points
             || p.solar.facet_count() != p.range.len()
+            || p.solar.lit.len() != p.range.len() * solar.day.len() * solar.width()
         {
             return Err(Error::invalid(
                 "facet rays",
                 format!(
-                    "the part of facets {}..{} ({} steps) does not follow facet {next} \
-                     of a history of {} steps",
-                    p.range.start, p.range.end, p.solar.steps, solar.steps
+                    "the part of facets {}..{} ({} steps, {} with the sun up, {} sample points) \
+                     does not follow facet {next} of a history of {} steps ({} with the sun up, \
+                     {} sample points)",
+                    p.range.start,
+                    p.range.end,
+                    p.solar.steps,
+                    p.solar.day.len(),
+                    p.solar.points,
+                    solar.steps,
+                    solar.day.len(),
+                    solar.points
                 ),
             ));
         }
@@ -775,6 +827,13 @@ fn solve_traced(
         ));
     }
     stats.facets = n;
+    // Parts read from files carry no geometry: the cosine of incidence is
+    // recomputed from the facets' normals and the sun.
+    if solar.normal.len() != n {
+        solar.normal = facets.normal.clone();
+        solar.double_sided = facets.double_sided.clone();
+    }
+    solar.sun = history.sun.clone();
     let exposure = Exposure {
         facets,
         solar,
@@ -950,10 +1009,10 @@ fn solve_windows(
                 }
                 o
             };
-            let (sun, cos) = (
-                gather(&exposure.solar.sun_fraction),
-                gather(&exposure.solar.cos_incidence),
-            );
+            let solar = SolarWindow {
+                solar: &exposure.solar,
+                window: w,
+            };
             let refl = if exposure.reflected.direct.is_empty() {
                 Vec::new()
             } else {
@@ -961,8 +1020,7 @@ fn solve_windows(
             };
             let mut inputs = SceneInputs::from(exposure);
             inputs.records = w.len();
-            inputs.sun_fraction = &sun;
-            inputs.cos_incidence = &cos;
+            inputs.solar = &solar;
             inputs.reflected_direct = &refl;
             inputs.wind = wind;
             let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();

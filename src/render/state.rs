@@ -49,9 +49,11 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use arrow_array::builder::{FixedSizeListBuilder, Float32Builder, ListBuilder, UInt32Builder};
+use arrow_array::builder::{
+    FixedSizeListBuilder, Float32Builder, ListBuilder, UInt8Builder, UInt16Builder, UInt32Builder,
+};
 use arrow_array::cast::AsArray;
-use arrow_array::types::{Float32Type, UInt32Type};
+use arrow_array::types::{Float32Type, UInt8Type, UInt16Type, UInt32Type};
 use arrow_array::{Array, ArrayRef, BooleanArray, Float32Array, RecordBatch, UInt32Array};
 use arrow_schema::{DataType, Field, Schema};
 use chrono::{DateTime, FixedOffset};
@@ -67,7 +69,7 @@ use crate::{Error, Result};
 /// The `format` of the manifest.
 pub const FORMAT: &str = "irsig-facet-state";
 /// The version of the folder's layout and files this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The manifest's file name.
 pub const MANIFEST: &str = "manifest.json";
 
@@ -1024,20 +1026,35 @@ pub fn write_rays(
             .append_slice(&e.iter().map(|x| x.weight).collect::<Vec<_>>());
         bg_weight.append(true);
     }
-    let history = |v: &[f32]| {
+    // The sun at the history's day records: lit sample points per facet and
+    // day record, uint8 (uint16 above 255 points per facet).
+    let solar = &rays.solar;
+    let nd = solar.day.len();
+    let sun: ArrayRef = if solar.width() == 1 {
         let mut b = FixedSizeListBuilder::with_capacity(
-            Float32Builder::with_capacity(v.len()),
-            steps as i32,
+            UInt8Builder::with_capacity(solar.lit.len()),
+            nd as i32,
             range.len(),
         );
         for f in 0..range.len() {
-            b.values().append_slice(&v[f * steps..(f + 1) * steps]);
+            b.values().append_slice(&solar.lit[f * nd..(f + 1) * nd]);
             b.append(true);
         }
-        b.finish()
+        Arc::new(b.finish())
+    } else {
+        let mut b = FixedSizeListBuilder::with_capacity(
+            UInt16Builder::with_capacity(solar.lit.len() / 2),
+            nd as i32,
+            range.len(),
+        );
+        for f in 0..range.len() {
+            for d in 0..nd {
+                b.values().append_value(solar.lit_points(f, d) as u16);
+            }
+            b.append(true);
+        }
+        Arc::new(b.finish())
     };
-    let sun = history(&rays.solar.sun_fraction);
-    let cos = history(&rays.solar.cos_incidence);
     let (bg_facet, bg_weight) = (bg_facet.finish(), bg_weight.finish());
     let fields = vec![
         Field::new("facet", DataType::UInt32, false),
@@ -1048,8 +1065,7 @@ pub fn write_rays(
         Field::new("on_ground", DataType::Boolean, false),
         Field::new("background_facet", bg_facet.data_type().clone(), false),
         Field::new("background_weight", bg_weight.data_type().clone(), false),
-        Field::new("sun_fraction", sun.data_type().clone(), false),
-        Field::new("cos_incidence", cos.data_type().clone(), false),
+        Field::new("sun_lit", sun.data_type().clone(), false),
     ];
     let columns: Vec<ArrayRef> = vec![
         Arc::new(UInt32Array::from_iter_values(
@@ -1062,15 +1078,104 @@ pub fn write_rays(
         Arc::new(BooleanArray::from(rays.ground.clone())),
         Arc::new(bg_facet),
         Arc::new(bg_weight),
-        Arc::new(sun),
-        Arc::new(cos),
+        sun,
     ];
     let mut meta = file_metadata(RAYS_KIND, key, shard, &range);
     meta.insert("irsig.history_steps".into(), steps.to_string());
+    meta.insert(
+        "irsig.day_records".into(),
+        serde_json::to_string(&solar.day).unwrap_or_default(),
+    );
+    meta.insert("irsig.sample_points".into(), solar.points.to_string());
     let schema = Schema::new(fields).with_metadata(meta);
     let batch = RecordBatch::try_new(Arc::new(schema), columns)
         .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
     write_batch(path, &batch)
+}
+
+/// The solar history of a rays file: metadata `irsig.history_steps`,
+/// `irsig.day_records` and `irsig.sample_points`, column `sun_lit`. The
+/// history carries no geometry (normals, sun): the thermal stage adds the
+/// scene's.
+fn read_sun_lit(batch: &RecordBatch, path: &Path, nf: usize) -> Result<SolarHistory> {
+    let bad = |m: String| Error::invalid("state", format!("{}: {m}", path.display()));
+    let schema = batch.schema();
+    let meta = schema.metadata();
+    let version: u32 = meta
+        .get("irsig.version")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    if version < 2 {
+        return Err(bad(format!(
+            "a rays file of format version {version}, which held the solar history as float32 \
+             columns; this irsig reads version {VERSION}: rerun pass 1 into a new folder"
+        )));
+    }
+    let get = |k: &str| meta.get(k).ok_or_else(|| bad(format!("no metadata `{k}`")));
+    let steps: usize = get("irsig.history_steps")?
+        .parse()
+        .map_err(|e| bad(format!("metadata `irsig.history_steps`: {e}")))?;
+    let points: u32 = get("irsig.sample_points")?
+        .parse()
+        .map_err(|e| bad(format!("metadata `irsig.sample_points`: {e}")))?;
+    let day: Vec<u32> = serde_json::from_str(get("irsig.day_records")?)
+        .map_err(|e| bad(format!("metadata `irsig.day_records`: {e}")))?;
+    if !(1..=256).contains(&points) {
+        return Err(bad(format!(
+            "metadata `irsig.sample_points`: {points}, expected 1 to 256"
+        )));
+    }
+    if day.windows(2).any(|w| w[0] >= w[1]) || day.last().is_some_and(|&d| d as usize >= steps) {
+        return Err(bad(format!(
+            "metadata `irsig.day_records`: expected ascending records below {steps}"
+        )));
+    }
+    let nd = day.len();
+    let l = column(batch, path, "sun_lit")?
+        .as_fixed_size_list_opt()
+        .ok_or_else(|| bad("column `sun_lit` is not a fixed-size list".into()))?;
+    if l.value_length() as usize != nd {
+        return Err(bad(format!(
+            "column `sun_lit` holds {} values per facet, expected {nd} (one per day record)",
+            l.value_length()
+        )));
+    }
+    let start = if nf > 0 {
+        l.value_offset(0) as usize
+    } else {
+        0
+    };
+    let mut h = SolarHistory {
+        steps,
+        facets: nf,
+        day,
+        points,
+        ..SolarHistory::default()
+    };
+    let counts: Vec<u32> = if h.width() == 1 {
+        let v = l
+            .values()
+            .as_primitive_opt::<UInt8Type>()
+            .ok_or_else(|| bad("`sun_lit` does not hold uint8".into()))?;
+        h.lit = v.values()[start..start + nf * nd].to_vec();
+        h.lit.iter().map(|&c| c as u32).collect()
+    } else {
+        let v = l
+            .values()
+            .as_primitive_opt::<UInt16Type>()
+            .ok_or_else(|| bad("`sun_lit` does not hold uint16".into()))?;
+        let v = &v.values()[start..start + nf * nd];
+        h.lit = v.iter().flat_map(|c| c.to_le_bytes()).collect();
+        v.iter().map(|&c| c as u32).collect()
+    };
+    if let Some(i) = counts.iter().position(|&c| c > points) {
+        return Err(bad(format!(
+            "`sun_lit` of facet row {} is {}, more than the {points} sample points",
+            i / nd.max(1),
+            counts[i]
+        )));
+    }
+    Ok(h)
 }
 
 /// Read pass 1's rays of a shard from `path` (`rays-K-of-N.arrow`): shard
@@ -1139,38 +1244,10 @@ pub fn read_rays(
         .zip(weights.values().iter())
         .map(|(&facet, &weight)| BackgroundEntry { facet, weight })
         .collect();
-    let history = |name: &str| -> Result<(usize, Vec<f32>)> {
-        let l = column(&batch, path, name)?
-            .as_fixed_size_list_opt()
-            .ok_or_else(|| bad(format!("column `{name}` is not a fixed-size list")))?;
-        let steps = l.value_length() as usize;
-        let start = if nf > 0 {
-            l.value_offset(0) as usize
-        } else {
-            0
-        };
-        let v = l
-            .values()
-            .as_primitive_opt::<Float32Type>()
-            .ok_or_else(|| bad(format!("`{name}` does not hold float32")))?;
-        let v = &v.values()[start..start + nf * steps];
-        check_finite(path, name, v)?;
-        Ok((steps, v.to_vec()))
-    };
-    let (steps, sun_fraction) = history("sun_fraction")?;
-    let (steps2, cos_incidence) = history("cos_incidence")?;
-    if steps != steps2 {
-        return Err(bad(
-            "`sun_fraction` and `cos_incidence` differ in steps".into()
-        ));
-    }
+    let solar = read_sun_lit(&batch, path, nf)?;
     Ok(FacetRays {
         range,
-        solar: SolarHistory {
-            steps,
-            sun_fraction,
-            cos_incidence,
-        },
+        solar,
         sky: SkyView {
             shape_factor: f32_column(&batch, path, "shape_factor")?,
             back_shape_factor,

@@ -144,11 +144,15 @@ pub fn run(
     for l in &lines {
         let e = &l.exposure;
         let (mut differ, mut day) = (0u64, 0u64);
-        for (a, b) in e.solar.sun_fraction.iter().zip(&r.solar.sun_fraction) {
+        // Both histories hold the same day records and sample points, so
+        // their lit counts compare entry by entry.
+        for (a, b) in e.solar.lit.iter().zip(&r.solar.lit) {
             differ += (a != b) as u64;
         }
-        for c in &r.solar.cos_incidence {
-            day += (*c > 0.0) as u64;
+        let mut cos = vec![0.0f32; r.solar.steps];
+        for f in 0..r.solar.facet_count() {
+            r.solar.cos_incidence_into(f, &mut cos);
+            day += cos.iter().filter(|&&c| c > 0.0).count() as u64;
         }
         let (mut se, mut me) = (0.0f64, 0.0f64);
         for (a, b) in e.sky.shape_factor.iter().zip(&r.sky.shape_factor) {

@@ -25,6 +25,11 @@ pub(super) struct FacetsArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
+    /// Write the generated scene (scene.json, scene.obj, weather,
+    /// materials) into this folder and keep it, e.g. to render it
+    /// (default: a temporary folder, removed).
+    #[arg(long, value_name = "DIR")]
+    keep: Option<std::path::PathBuf>,
 }
 
 /// What `irsig bench facets` measures.
@@ -124,9 +129,19 @@ pub(super) fn run(a: FacetsArgs) -> anyhow::Result<()> {
         "--facets: {} is out of range (expected 2 to 200000000)",
         a.facets
     );
-    let dir = tempfile::tempdir()?;
+    let tmp;
+    let dir = match &a.keep {
+        Some(d) => {
+            std::fs::create_dir_all(d).with_context(|| format!("--keep: {}", d.display()))?;
+            d.as_path()
+        }
+        None => {
+            tmp = tempfile::tempdir()?;
+            tmp.path()
+        }
+    };
     let t0 = std::time::Instant::now();
-    let scene = write_scene(dir.path(), a.facets, a.seed).context("writing the generated scene")?;
+    let scene = write_scene(dir, a.facets, a.seed).context("writing the generated scene")?;
     let write_s = t0.elapsed().as_secs_f64();
     let mut session = Session::open(&scene, a.backend).context("loading the generated scene")?;
     let states = session

@@ -14,6 +14,58 @@ use crate::thermal::Reflected;
 use crate::thermal::wind::FacetWind;
 use crate::{Error, Result};
 
+/// Where the scene solve reads each facet's solar history: sunlit fraction
+/// and cosine of incidence per record. The exposure stores it compactly and
+/// decodes one facet at a time (`crate::render::scene_thermal` implements
+/// this for it); [`SolarArrays`] serves plain per-record arrays.
+pub trait SolarSource: Sync + std::fmt::Debug {
+    /// Records per facet.
+    fn records(&self) -> usize;
+    /// Facets.
+    fn facets(&self) -> usize;
+    /// Writes the sunlit fraction ∈ [0, 1] of `facet` at every record into
+    /// `out` (`records()` values).
+    fn sun_fraction_into(&self, facet: usize, out: &mut [f32]);
+    /// Writes the cosine of the solar incidence angle of `facet` at every
+    /// record into `out` (0 at night or behind a single-sided facet; `|n·s|`
+    /// for a double-sided one).
+    fn cos_incidence_into(&self, facet: usize, out: &mut [f32]);
+}
+
+/// A solar history as two plain facet-major arrays, `[facet·R + record]`.
+#[derive(Debug, Clone, Copy)]
+pub struct SolarArrays<'a> {
+    /// Records per facet, `R`.
+    pub records: usize,
+    /// Sunlit fraction ∈ [0, 1].
+    pub sun_fraction: &'a [f32],
+    /// Cosine of the solar incidence angle.
+    pub cos_incidence: &'a [f32],
+}
+
+impl SolarSource for SolarArrays<'_> {
+    fn records(&self) -> usize {
+        self.records
+    }
+    /// `usize::MAX` when the two arrays differ in length (which
+    /// [`SceneInputs::validate`] then refuses).
+    fn facets(&self) -> usize {
+        if self.sun_fraction.len() != self.cos_incidence.len() {
+            return usize::MAX;
+        }
+        self.sun_fraction
+            .len()
+            .checked_div(self.records)
+            .unwrap_or(0)
+    }
+    fn sun_fraction_into(&self, facet: usize, out: &mut [f32]) {
+        out.copy_from_slice(&self.sun_fraction[facet * self.records..(facet + 1) * self.records]);
+    }
+    fn cos_incidence_into(&self, facet: usize, out: &mut [f32]) {
+        out.copy_from_slice(&self.cos_incidence[facet * self.records..(facet + 1) * self.records]);
+    }
+}
+
 /// The ray-traced inputs of every facet of a scene, in global facet order:
 /// `n` facets, `R` records per history (one per weather record).
 ///
@@ -24,11 +76,8 @@ use crate::{Error, Result};
 pub struct SceneInputs<'a> {
     /// Records per facet history, `R`.
     pub records: usize,
-    /// Sunlit fraction ∈ [0, 1], facet-major: `[facet·R + record]`.
-    pub sun_fraction: &'a [f32],
-    /// Cosine of the solar incidence angle, facet-major (0 at night or
-    /// behind a single-sided facet; `|n·s|` for a double-sided one).
-    pub cos_incidence: &'a [f32],
+    /// Sunlit fraction and cosine of incidence per facet and record.
+    pub solar: &'a dyn SolarSource,
     /// Unit front normal per facet (it fixes the cos θ history, so the
     /// per-class method keys on it).
     pub normal: &'a [Vec3],
@@ -66,16 +115,22 @@ impl<'a> SceneInputs<'a> {
         self.shape_factor.len()
     }
 
-    /// Sunlit fraction of `facet` at every record.
+    /// Sunlit fraction of `facet` at every record (decoded for the
+    /// caller: the solar history is held compactly).
     #[inline]
-    pub fn sun_fraction(&self, facet: usize) -> &'a [f32] {
-        &self.sun_fraction[facet * self.records..(facet + 1) * self.records]
+    pub fn sun_fraction(&self, facet: usize) -> Vec<f32> {
+        let mut v = vec![0.0; self.records];
+        self.solar.sun_fraction_into(facet, &mut v);
+        v
     }
 
-    /// Cosine of incidence of `facet` at every record.
+    /// Cosine of incidence of `facet` at every record (decoded for the
+    /// caller).
     #[inline]
-    pub fn cos_incidence(&self, facet: usize) -> &'a [f32] {
-        &self.cos_incidence[facet * self.records..(facet + 1) * self.records]
+    pub fn cos_incidence(&self, facet: usize) -> Vec<f32> {
+        let mut v = vec![0.0; self.records];
+        self.solar.cos_incidence_into(facet, &mut v);
+        v
     }
 
     /// Shape factor of the back face of `facet` when it is double-sided.
@@ -162,11 +217,18 @@ impl<'a> SceneInputs<'a> {
                 ),
             ));
         }
-        for (name, len, optional) in [
-            ("sun_fraction", self.sun_fraction.len(), false),
-            ("cos_incidence", self.cos_incidence.len(), false),
-            ("reflected_direct", self.reflected_direct.len(), true),
-        ] {
+        if self.solar.records() != self.records || self.solar.facets() != n {
+            return Err(Error::invalid(
+                "solar",
+                format!(
+                    "expected {} records for each of {n} facets, got {} records of {} facets",
+                    self.records,
+                    self.solar.records(),
+                    self.solar.facets()
+                ),
+            ));
+        }
+        for (name, len, optional) in [("reflected_direct", self.reflected_direct.len(), true)] {
             if len != n * self.records && !(optional && len == 0) {
                 return Err(Error::invalid(
                     name,

@@ -196,9 +196,10 @@ fn solve_classes(
             let FacetThermal::Solve(pi) = ctx.kinds[f] else {
                 unreachable!("representatives are solved facets")
             };
+            let (sun, cos) = (ctx.inputs.sun_fraction(f), ctx.inputs.cos_incidence(f));
             let inputs = FacetInputs {
-                sun_fraction: ctx.inputs.sun_fraction(f),
-                cos_incidence: ctx.inputs.cos_incidence(f),
+                sun_fraction: &sun,
+                cos_incidence: &cos,
                 shape_factor: ctx.inputs.shape_factor[f] as f64,
                 back_shape_factor: ctx.inputs.back_shape_factor(f).map(f64::from),
                 background,

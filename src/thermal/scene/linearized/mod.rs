@@ -336,12 +336,14 @@ impl Facets<'_> {
         true
     }
 
-    /// The slab model's inputs of `facet`, with the air as background.
-    fn slab_inputs(&self, facet: usize) -> FacetInputs<'_> {
+    /// The slab model's inputs of `facet` with its solar history `sun`,
+    /// `cos` ([`SceneInputs::sun_fraction`], [`SceneInputs::cos_incidence`]),
+    /// with the air as background.
+    fn slab_inputs<'b>(&'b self, facet: usize, sun: &'b [f32], cos: &'b [f32]) -> FacetInputs<'b> {
         let inputs = self.inputs;
         FacetInputs {
-            sun_fraction: inputs.sun_fraction(facet),
-            cos_incidence: inputs.cos_incidence(facet),
+            sun_fraction: sun,
+            cos_incidence: cos,
             shape_factor: inputs.shape_factor[facet] as f64,
             back_shape_factor: inputs.back_shape_factor(facet).map(f64::from),
             background: Background::Air,
@@ -367,11 +369,15 @@ impl Facets<'_> {
         let FacetThermal::Solve(pi) = self.kinds[facet] else {
             unreachable!("solved facets only")
         };
+        let (sun, cos) = (
+            self.inputs.sun_fraction(facet),
+            self.inputs.cos_incidence(facet),
+        );
         let lin = thermal::linearize_with(
             self.props_of(facet),
             self.forcing,
             &self.exchanges[pi as usize],
-            &self.slab_inputs(facet),
+            &self.slab_inputs(facet, &sun, &cos),
             &lp.options,
         )
         .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
@@ -562,11 +568,11 @@ impl<'a> Groups<'a> {
     /// group `g`, W m⁻².
     fn daily_mean_source(&self, facets: &Facets, f: usize, g: usize) -> f64 {
         let r = facets.forcing.len();
-        let sun: f64 = sunlit_cos(facets.state(f))
+        let st = facets.state(f);
+        let sun: f64 = sunlit_cos(&st)
             .zip(&self.sun32[g])
             .map(|(sc, w)| (sc * w) as f64)
             .sum();
-        let st = facets.state(f);
         self.base_mean[g]
             + facets.inputs.shape_factor[f] as f64 * self.shape_mean[g]
             + st.b as f64 * self.refl_diffuse_mean[g]
@@ -641,7 +647,7 @@ impl Bins {
                     let rep = centre_refs[g].as_ref().expect("non-empty group");
                     let st = facets.state(f);
                     s.sc.iter_mut()
-                        .zip(sunlit_cos(st))
+                        .zip(sunlit_cos(&st))
                         .for_each(|(o, v)| *o = v);
                     let d = Diff::of(&st, &rep.facet);
                     let p = |j: usize| rep.probe(j, &s.sc, d);

@@ -212,7 +212,7 @@ impl PassPlan<'_> {
         let st = facets.state(f);
         let diff = Diff::of(&st, &rep.facet);
         s.sc.iter_mut()
-            .zip(sunlit_cos(st))
+            .zip(sunlit_cos(&st))
             .for_each(|(o, v)| *o = v);
         if !full {
             // Pass 1, image records only.
