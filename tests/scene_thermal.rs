@@ -617,7 +617,9 @@ fn linearized_solve_with_reflected_shortwave_matches_the_exact_solve() {
 /// accuracy of the per-facet exact solve (RMS 0.01 K, max 0.05 K): the
 /// exchange coefficients are shared per material (`irsig::thermal::surface`),
 /// so only the curvature of e°(T) and T⁴ is neglected. The same with the
-/// grass's kB⁻¹ from its canopy and the grass growing through the run.
+/// grass's kB⁻¹ from its canopy and the grass growing through the run, and
+/// with the grass as a two-source canopy (its leaves linearised about the
+/// open reference, its output the radiometric composite).
 #[test]
 fn linearized_solve_matches_the_exact_solve_with_latent_heat() {
     use irsig::material::{HeatRoughness, Phenology, PhenologyPoint};
@@ -647,7 +649,14 @@ fn linearized_solve_matches_the_exact_solve_with_latent_heat() {
     let growing = SlabProperties::from_material(&growing)
         .unwrap()
         .with_back(BackBoundary::GROUND);
-    for grass in [props[0], growing] {
+    // And the grass as two sources, leaves and soil (Norman et al. 1995).
+    let mut two = db.get("grass").unwrap().clone();
+    two.surface_energy.as_mut().unwrap().canopy = irsig::material::CanopyModel::TwoSource;
+    let two = SlabProperties::from_material(&two)
+        .unwrap()
+        .with_back(BackBoundary::GROUND);
+    assert!(two.surface.unwrap().two_source.is_some());
+    for grass in [props[0], growing, two] {
         props[0] = grass;
         let (mut forcing, dirs) = clear_day(false);
         // The global horizontal irradiance the stomata respond to.

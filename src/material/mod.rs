@@ -49,8 +49,8 @@ use crate::error::{Error, Location, Result};
 use crate::math::{bracket, interp1d, lerp};
 pub use construction::{BackSpec, InteriorSpec, LayerEntry, MaterialLayer};
 pub use surface::{
-    ConvectionModel, ConvectionSpec, HeatRoughness, Phenology, PhenologyPoint, SurfaceEnergySpec,
-    SurfaceKind, SurfaceRoughness,
+    CanopyModel, ConvectionModel, ConvectionSpec, HeatRoughness, Phenology, PhenologyPoint,
+    SurfaceEnergySpec, SurfaceKind, SurfaceRoughness,
 };
 
 /// A spectral emissivity curve, optionally angle-dependent.

@@ -226,6 +226,26 @@ pub enum HeatRoughness {
     Su2001,
 }
 
+/// How a canopy's leaves and the soil under them share the surface
+/// energy balance (`surface_energy.canopy`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CanopyModel {
+    /// One big leaf: a canopy skin over the soil slab, the skin's
+    /// temperature what the sensor sees (`crate::thermal::surface`).
+    #[default]
+    BigLeaf,
+    /// Two sources: leaves and soil with their own temperatures, net
+    /// radiation, sensible and latent heat in series resistances, the
+    /// radiometric temperature composed by the cover (Norman, Kustas &
+    /// Anderson 1995; `crate::thermal::two_source`).
+    TwoSource,
+}
+
+fn is_big_leaf(c: &CanopyModel) -> bool {
+    *c == CanopyModel::BigLeaf
+}
+
 /// What kind of evaporating surface (module table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
@@ -312,6 +332,19 @@ pub struct SurfaceEnergySpec {
     /// exposed back sets `false`: the leaves are the slab.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub skin: Option<bool>,
+    /// How leaves and soil share the balance (default `big_leaf`;
+    /// `two_source`: [`CanopyModel::TwoSource`], canopy only).
+    #[serde(default, skip_serializing_if = "is_big_leaf")]
+    pub canopy: CanopyModel,
+    /// Clumping index Ω of the foliage, (0, 1] (`two_source`; default 1,
+    /// leaves spread at random; row crops and shrubs 0.5–0.9).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clumping_index: Option<f64>,
+    /// Volumetric water content at saturation (porosity), m³ m⁻³, for the
+    /// soil surface's resistance to evaporation (`two_source`; default
+    /// 0.451, loam, Clapp & Hornberger 1978).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub saturation_m3_m3: Option<f64>,
 }
 
 fn is_fao56(h: &HeatRoughness) -> bool {
@@ -395,6 +428,16 @@ impl SurfaceEnergySpec {
     pub fn skin_conductance(&self) -> f64 {
         self.skin_conductance_w_m2_k
             .unwrap_or(if self.is_high() { 20.0 } else { 10.0 })
+    }
+
+    /// The clumping index Ω (default 1).
+    pub fn clumping(&self) -> f64 {
+        self.clumping_index.unwrap_or(1.0)
+    }
+
+    /// The soil's water content at saturation, m³ m⁻³ (default 0.451).
+    pub fn saturation(&self) -> f64 {
+        self.saturation_m3_m3.unwrap_or(0.451)
     }
 
     /// Problems as `(field, message)`, the field relative to the block
@@ -564,6 +607,30 @@ impl SurfaceEnergySpec {
                 "> 0 W/(m²·K)",
             );
         }
+        if self.canopy == CanopyModel::TwoSource && self.kind != SurfaceKind::Canopy {
+            p.push((
+                "canopy",
+                "two_source needs leaves (kind \"canopy\")".to_string(),
+            ));
+        }
+        if let Some(c) = self.clumping_index {
+            check(
+                &mut p,
+                "clumping_index",
+                c,
+                c > 0.0 && c <= 1.0,
+                "a clumping index in (0, 1]",
+            );
+        }
+        if let Some(t) = self.saturation_m3_m3 {
+            check(
+                &mut p,
+                "saturation_m3_m3",
+                t,
+                t > 0.0 && t <= 1.0 && t >= self.soil_moisture_m3_m3,
+                "a water content in (0, 1] at or above soil_moisture_m3_m3",
+            );
+        }
         p
     }
 }
@@ -586,6 +653,28 @@ mod tests {
         let w = parse(r#"{"kind": "water"}"#);
         assert!(w.problems().is_empty());
         assert_eq!(w.roughness_m(), 0.0002);
+    }
+
+    #[test]
+    fn bad_two_source_values_name_their_field() {
+        let fields = |s: &str| -> Vec<&'static str> {
+            parse(s).problems().into_iter().map(|(f, _)| f).collect()
+        };
+        let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3, "canopy": "two_source""#;
+        assert!(fields(&format!("{{{base}}}")).is_empty());
+        for (extra, field) in [
+            (r#""clumping_index": 0"#, "clumping_index"),
+            (r#""clumping_index": 1.2"#, "clumping_index"),
+            (r#""clumping_index": -0.5"#, "clumping_index"),
+            (r#""saturation_m3_m3": 0.1"#, "saturation_m3_m3"),
+        ] {
+            let f = fields(&format!("{{{base}, {extra}}}"));
+            assert!(f.contains(&field), "{extra}: {f:?}");
+        }
+        assert!(
+            fields(r#"{"kind": "bare_soil", "canopy": "two_source"}"#).contains(&"canopy"),
+            "two sources need leaves"
+        );
     }
 
     #[test]

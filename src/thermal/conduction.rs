@@ -434,6 +434,14 @@ impl Slab {
         }
     }
 
+    /// Set every node's temperature, K (one per node, front first; extra
+    /// values are ignored).
+    pub fn set_node_temperatures(&mut self, t_k: &[f64]) {
+        for (t, &v) in self.temp.iter_mut().zip(t_k) {
+            *t = v;
+        }
+    }
+
     /// Front-surface temperature, K.
     pub fn front_k(&self) -> f64 {
         self.temp[0]

@@ -87,7 +87,13 @@ pub fn source_history_with(
     exchange.check_len(forcing.len())?;
     let p = prepare(props, forcing, inputs, exchange);
     Ok(SourceHistory {
-        front_w_m2: p.front.iter().map(|f| f.source_w_m2).collect(),
+        // A two-source canopy's source is the absorbed incoming radiation
+        // (its soil law's source is affine in it, `super::two_source`).
+        front_w_m2: if p.incoming.is_empty() {
+            p.front.iter().map(|f| f.source_w_m2).collect()
+        } else {
+            p.incoming.clone()
+        },
         back_w_m2: matches!(props.back, BackBoundary::Exposed { .. }).then(|| {
             p.back
                 .iter()
@@ -538,6 +544,12 @@ pub(crate) struct Tangent {
     /// `P` at record `k_p`.
     period: Vec<f64>,
     active: bool,
+    /// How a unit source at each record enters the front law (empty: 1;
+    /// a two-source canopy's `∂S'/∂S`, [`super::two_source`]).
+    source_scale: Vec<f64>,
+    /// The spin-up's start state and its sensitivity to the first period's
+    /// sources ([`super::SpinupStart::MeanSteady`]; None: a fixed start).
+    initial: Option<super::MeanSteady>,
 }
 
 impl Tangent {
@@ -559,7 +571,26 @@ impl Tangent {
             out_back: Vec::new(),
             period: Vec::new(),
             active: false,
+            source_scale: Vec::new(),
+            initial: None,
         }
+    }
+
+    /// The spin-up starts from `init`, which depends on the first period's
+    /// sources.
+    pub(crate) fn set_initial_sensitivity(&mut self, init: &super::MeanSteady) {
+        self.initial = Some(super::MeanSteady {
+            temperatures_k: Vec::new(),
+            weights: init.weights.clone(),
+            per_front_source: init.per_front_source.clone(),
+            per_back_source: init.per_back_source.clone(),
+        });
+    }
+
+    /// How a unit source at each record enters the front law (module docs
+    /// of [`super::two_source`]; empty: as itself).
+    pub(crate) fn set_source_scale(&mut self, scale: Vec<f64>) {
+        self.source_scale = scale;
     }
 
     /// Called when the slab is built: remember its operators. The tangent
@@ -586,8 +617,10 @@ impl Tangent {
     }
 
     /// The real run is at record `t`: store the sensitivities (record 0
-    /// starts the tangent with `P = [0 | I]`).
-    pub(crate) fn record(&mut self, t: usize) {
+    /// starts the tangent with `P = [0 | I]`) of the output, `weight` times
+    /// the front node plus `feed` times the record's own front source (a
+    /// two-source canopy's radiometric temperature; 1 and 0 otherwise).
+    pub(crate) fn record(&mut self, t: usize, weight: f64, feed: f64) {
         let (nodes, cols) = (self.nodes, self.cols);
         if t == 0 {
             self.p.iter_mut().for_each(|v| *v = 0.0);
@@ -601,7 +634,12 @@ impl Tangent {
             }
             self.active = true;
         }
-        self.out_front[t * cols..(t + 1) * cols].copy_from_slice(&self.p[..cols]);
+        let out = &mut self.out_front[t * cols..(t + 1) * cols];
+        out.copy_from_slice(&self.p[..cols]);
+        if weight != 1.0 {
+            out.iter_mut().for_each(|v| *v *= weight);
+        }
+        out[t] += feed;
         if self.has_back {
             let last = (nodes - 1) * cols;
             self.out_back[t * cols..(t + 1) * cols].copy_from_slice(&self.p[last..last + cols]);
@@ -726,8 +764,10 @@ impl Tangent {
     fn add_sources(&mut self, k: usize, w_k: f64, w_k1: f64) {
         let cols = self.cols;
         let r = self.records;
-        self.rhs[k] += w_k;
-        self.rhs[k + 1] += w_k1;
+        let scale = |j: usize| self.source_scale.get(j).copied().unwrap_or(1.0);
+        let (s_k, s_k1) = (scale(k), scale(k + 1));
+        self.rhs[k] += w_k * s_k;
+        self.rhs[k + 1] += w_k1 * s_k1;
         if self.has_back {
             let row = (self.nodes - 1) * cols;
             self.rhs[row + r + k] += w_k;
@@ -764,6 +804,39 @@ impl Tangent {
                 term = next;
                 x.iter_mut().zip(&term).for_each(|(a, b)| *a += b);
             }
+        }
+        // A start state that depends on the sources adds Φᶜ ∂x_init/∂S.
+        if let Some(init) = &self.initial
+            && cycles > 0
+            && !self.period.is_empty()
+        {
+            let phi = |i: usize, l: usize| self.period[i * cols + src + l];
+            let mut term = vec![0.0; nodes * src];
+            for i in 0..nodes {
+                for (k, &w) in init.weights.iter().enumerate().take(r) {
+                    let scale = self.source_scale.get(k).copied().unwrap_or(1.0);
+                    term[i * src + k] = init.per_front_source[i] * w * scale;
+                    if self.has_back {
+                        term[i * src + r + k] = init.per_back_source[i] * w;
+                    }
+                }
+            }
+            for _ in 0..cycles {
+                let mut next = vec![0.0; nodes * src];
+                for i in 0..nodes {
+                    for l in 0..nodes {
+                        let f = phi(i, l);
+                        if f == 0.0 {
+                            continue;
+                        }
+                        for j in 0..src {
+                            next[i * src + j] += f * term[l * src + j];
+                        }
+                    }
+                }
+                term = next;
+            }
+            x.iter_mut().zip(&term).for_each(|(a, b)| *a += b);
         }
         let fold = |out: &[f64]| -> Vec<f64> {
             let mut g = vec![0.0; r * src];

@@ -68,6 +68,7 @@ pub mod latent;
 pub mod linear;
 pub mod scene;
 pub mod surface;
+pub mod two_source;
 pub mod wind;
 
 use crate::error::{Error, Result};
@@ -83,6 +84,7 @@ pub use linear::{
     source_history, source_history_into, source_history_with,
 };
 pub use surface::{Exchange, LandSurface, Skin, WetStore};
+pub use two_source::{TwoSourceFluxes, TwoSourceStep};
 
 /// Angular frequency of the diurnal cycle, rad/s.
 pub const DIURNAL_OMEGA_RAD_S: f64 = 2.0 * std::f64::consts::PI / 86_400.0;
@@ -982,6 +984,27 @@ pub struct Spinup {
     /// Stop repeating once a cycle ends within this of the state it started
     /// from, at every node (the state is then periodic), K.
     pub tolerance_k: f64,
+    /// The state the first cycle starts from.
+    pub start: SpinupStart,
+}
+
+/// The state a spin-up starts from ([`Spinup::start`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpinupStart {
+    /// The steady state of the slab under the period's mean forcing
+    /// (default): the front and back laws averaged over the first period
+    /// (trapezoidal, as the solver interpolates them), the steady
+    /// conduction profile between the two faces solved by Newton's method.
+    /// The deep nodes of thick slabs (a pond, a soil column) start near
+    /// their periodic mean instead of at the first record's air
+    /// temperature, so the spin-up days settle the diurnal wave only. A
+    /// mean law without a steady state (no loss that grows with
+    /// temperature) falls back to [`SpinupStart::FirstAir`].
+    #[default]
+    MeanSteady,
+    /// Every node at the first record's air temperature (a ground column:
+    /// linear from it to the deep temperature).
+    FirstAir,
 }
 
 impl Default for Spinup {
@@ -992,6 +1015,7 @@ impl Default for Spinup {
             max_cycles: 3,
             period_s: 86_400.0,
             tolerance_k: 0.05,
+            start: SpinupStart::MeanSteady,
         }
     }
 }
@@ -1063,6 +1087,7 @@ impl SolveOptions {
                 max_cycles: 6,
                 period_s: 86_400.0,
                 tolerance_k: 0.01,
+                start: SpinupStart::MeanSteady,
             },
             newton_tolerance_k: 1e-6,
         }
@@ -1141,6 +1166,13 @@ pub struct ThermalSolution {
     /// history is shorter than two periods). It mixes incomplete spin-up
     /// with genuine day-to-day weather change.
     pub last_period_change_k: Option<f64>,
+    /// A two-source canopy's soil surface temperature at each record, K
+    /// (the slab's front node; empty for any other surface, whose
+    /// `surface_temperature_k` is its front node).
+    pub soil_temperature_k: Vec<f64>,
+    /// A two-source canopy's leaf temperature at each record, K (empty for
+    /// any other surface).
+    pub canopy_temperature_k: Vec<f64>,
     /// Energy budget of the final run.
     pub energy: EnergyBudget,
     /// Work counters of the final run and spin-up.
@@ -1150,6 +1182,10 @@ pub struct ThermalSolution {
 /// The flux laws at each record for one facet, and the column to solve.
 struct Prepared {
     front: Vec<SurfaceFlux>,
+    /// A two-source canopy's absorbed incoming radiation at each record
+    /// (the facet's source, W m⁻²) and its model (both empty otherwise).
+    incoming: Vec<f64>,
+    two_source: Vec<two_source::TwoSourceStep>,
     back: Vec<Boundary>,
     initial_surface_k: f64,
     deep_k: Option<f64>,
@@ -1173,15 +1209,23 @@ fn prepare(
         } => Some(deep_temperature_k.unwrap_or_else(|| forcing.mean_air_temperature_k())),
         _ => None,
     };
+    let mut incoming = Vec::new();
     for k in 0..n {
         let air = forcing.air_temperature_k[k];
         let ff = front_forcing_at(forcing, exchange, inputs, k);
-        front.push(balance::front_flux(
+        let law = balance::front_flux(
             &ff,
             props.solar_absorptivity,
             props.thermal_emissivity,
             props.self_power_w_m2,
-        ));
+        );
+        front.push(match exchange.two_source.get(k) {
+            Some(step) => {
+                incoming.push(law.source_w_m2);
+                step.soil_law(law.source_w_m2)
+            }
+            None => law,
+        });
         back.push(match props.back {
             BackBoundary::Insulated => Boundary::Flux(SurfaceFlux::default()),
             BackBoundary::Exposed { fraction } => Boundary::Flux(balance::exposed_back_flux(
@@ -1202,6 +1246,8 @@ fn prepare(
     }
     Prepared {
         front,
+        incoming,
+        two_source: exchange.two_source.clone(),
         back,
         initial_surface_k: forcing.air_temperature_k[0],
         deep_k,
@@ -1288,6 +1334,127 @@ fn advance(
             t.step(dt, [deriv(0), deriv(1), deriv(2)], k, phi);
         }
     }
+}
+
+/// The steady state of a slab under the mean of its laws over records
+/// `0..=k_p` ([`SpinupStart::MeanSteady`]), with its sensitivity to the
+/// sources of those records (for the tangent-linear model).
+#[derive(Debug, Clone)]
+pub(crate) struct MeanSteady {
+    /// Node temperatures, K.
+    pub temperatures_k: Vec<f64>,
+    /// Trapezoidal weight of each record `0..=k_p` in the mean (sum 1).
+    pub weights: Vec<f64>,
+    /// `∂T_i/∂S̄` of every node per unit mean front source, K per W m⁻²
+    /// (a record's source enters with its weight and, for a two-source
+    /// canopy, its [`two_source::TwoSourceStep::source_slope`]).
+    pub per_front_source: Vec<f64>,
+    /// `∂T_i/∂B̄` per unit mean back source (exposed back).
+    pub per_back_source: Vec<f64>,
+}
+
+fn mean_steady_state(slab: &Slab, p: &Prepared, times: &[f64], k_p: usize) -> Option<MeanSteady> {
+    let total = times[k_p] - times[0];
+    if total <= 0.0 {
+        return None;
+    }
+    let weights: Vec<f64> = (0..=k_p)
+        .map(|k| {
+            let before = if k > 0 { times[k] - times[k - 1] } else { 0.0 };
+            let after = if k < k_p {
+                times[k + 1] - times[k]
+            } else {
+                0.0
+            };
+            0.5 * (before + after) / total
+        })
+        .collect();
+    let mean = |t: f64, laws: &mut dyn Iterator<Item = (f64, &SurfaceFlux)>| {
+        laws.fold((0.0, 0.0), |(q, d), (w, law)| {
+            (q + w * law.flux(t), d + w * law.derivative(t))
+        })
+    };
+    let front = |t: f64| mean(t, &mut weights.iter().copied().zip(&p.front[..=k_p]));
+    let fixed_back = match p.back[0] {
+        Boundary::Temperature(_) => Some(
+            weights
+                .iter()
+                .zip(&p.back)
+                .map(|(w, b)| match b {
+                    Boundary::Temperature(t) => w * t,
+                    Boundary::Flux(_) => f64::NAN,
+                })
+                .sum::<f64>(),
+        ),
+        Boundary::Flux(_) => None,
+    };
+    let back = |t: f64| {
+        weights
+            .iter()
+            .zip(&p.back)
+            .fold((0.0, 0.0), |(q, d), (w, b)| match b {
+                Boundary::Flux(law) => (q + w * law.flux(t), d + w * law.derivative(t)),
+                Boundary::Temperature(_) => (f64::NAN, f64::NAN),
+            })
+    };
+    // Resistance from the front node to each node, m² K W⁻¹.
+    let mut r_to = vec![0.0];
+    for k in slab.conductances_w_m2_k() {
+        r_to.push(r_to[r_to.len() - 1] + 1.0 / k);
+    }
+    let r = *r_to.last()?;
+    let (mut t0, mut tn) = (
+        p.initial_surface_k,
+        fixed_back.unwrap_or(p.initial_surface_k),
+    );
+    let mut jac = [[0.0; 2]; 2];
+    let mut converged = false;
+    for _ in 0..60 {
+        let f = (t0 - tn) / r;
+        let (qf, df) = front(t0);
+        let r1 = qf - f;
+        jac[0] = [df - 1.0 / r, 1.0 / r];
+        let r2 = match fixed_back {
+            Some(td) => {
+                jac[1] = [0.0, 1.0];
+                tn - td
+            }
+            None => {
+                let (qb, db) = back(tn);
+                jac[1] = [1.0 / r, db - 1.0 / r];
+                qb + f
+            }
+        };
+        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+        if !(det.is_finite() && det.abs() > 1e-12 * (1.0 + jac[0][0].abs()) / r) {
+            return None;
+        }
+        let d0 = (-(r1 * jac[1][1] - jac[0][1] * r2) / det).clamp(-20.0, 20.0);
+        let dn = (-(jac[0][0] * r2 - jac[1][0] * r1) / det).clamp(-20.0, 20.0);
+        t0 += d0;
+        tn += dn;
+        if !(t0.is_finite() && tn.is_finite()) {
+            return None;
+        }
+        if d0.abs().max(dn.abs()) < 1e-9 {
+            converged = true;
+            break;
+        }
+    }
+    if !converged || !(100.0..700.0).contains(&t0) || !(100.0..700.0).contains(&tn) {
+        return None;
+    }
+    let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+    // [dT0, dTn] = −J⁻¹ e₁ per unit mean front source, −J⁻¹ e₂ per back.
+    let (u0, u1) = (-jac[1][1] / det, jac[1][0] / det);
+    let (v0, v1) = (jac[0][1] / det, -jac[0][0] / det);
+    let c: Vec<f64> = r_to.iter().map(|x| x / r).collect();
+    Some(MeanSteady {
+        temperatures_k: c.iter().map(|&ci| t0 + (tn - t0) * ci).collect(),
+        weights,
+        per_front_source: c.iter().map(|&ci| (1.0 - ci) * u0 + ci * u1).collect(),
+        per_back_source: c.iter().map(|&ci| (1.0 - ci) * v0 + ci * v1).collect(),
+    })
 }
 
 /// Solve the thermal model of one facet over the whole weather history.
@@ -1379,7 +1546,17 @@ fn solve_prepared(
     let k_p = times.partition_point(|&t| t <= times[0] + period + 1e-6) - 1;
     let mut spinup_cycles = 0;
     let mut spinup_change_k = None;
-    if opts.spinup.max_cycles > 0 && k_p > 0 && times[k_p] - times[0] >= period - 1e-6 {
+    let spin = opts.spinup.max_cycles > 0 && k_p > 0 && times[k_p] - times[0] >= period - 1e-6;
+    if spin
+        && opts.spinup.start == SpinupStart::MeanSteady
+        && let Some(init) = mean_steady_state(&slab, p, times, k_p)
+    {
+        slab.set_node_temperatures(&init.temperatures_k);
+        if let Some(t) = tangent.as_deref_mut() {
+            t.set_initial_sensitivity(&init);
+        }
+    }
+    if spin {
         let mut start_state = slab.temperatures_k().to_vec();
         for _ in 0..opts.spinup.max_cycles {
             for k in 0..k_p {
@@ -1414,11 +1591,30 @@ fn solve_prepared(
     let mut surface = Vec::with_capacity(n);
     let mut back = Vec::with_capacity(n);
     let mut flux = Vec::with_capacity(n);
-    surface.push(slab.front_k());
+    let two = !p.two_source.is_empty();
+    let mut soil = Vec::with_capacity(if two { n } else { 0 });
+    let mut canopy = Vec::with_capacity(if two { n } else { 0 });
+    // The record's output: the front node, or a two-source canopy's
+    // radiometric temperature (with its derivatives for the tangent).
+    let mut output = |k: usize, t_front: f64| -> (f64, f64, f64) {
+        if !two {
+            return (t_front, 1.0, 0.0);
+        }
+        let (step, s) = (&p.two_source[k], p.incoming[k]);
+        soil.push(t_front);
+        canopy.push(step.canopy_k(s, t_front));
+        let (w, feed) = step.radiometric_derivatives(s, t_front);
+        (step.radiometric_k(s, t_front), w, feed)
+    };
+    if let Some(t) = tangent.as_deref_mut() {
+        t.set_source_scale(p.two_source.iter().map(|s| s.source_slope()).collect());
+    }
+    let (t0, w0, feed0) = output(0, slab.front_k());
+    surface.push(t0);
     back.push(slab.back_k());
     flux.push(p.front[0].flux(slab.front_k()));
     if let Some(t) = tangent.as_deref_mut() {
-        t.record(0);
+        t.record(0, w0, feed0);
     }
     for k in 0..n - 1 {
         advance(
@@ -1429,10 +1625,11 @@ fn solve_prepared(
             opts.max_substep_s,
             tangent.as_deref_mut(),
         );
+        let (tk, wk, feedk) = output(k + 1, slab.front_k());
         if let Some(t) = tangent.as_deref_mut() {
-            t.record(k + 1);
+            t.record(k + 1, wk, feedk);
         }
-        surface.push(slab.front_k());
+        surface.push(tk);
         back.push(slab.back_k());
         flux.push(p.front[k + 1].flux(slab.front_k()));
     }
@@ -1472,6 +1669,8 @@ fn solve_prepared(
         spinup_cycles,
         spinup_change_k,
         last_period_change_k,
+        soil_temperature_k: soil,
+        canopy_temperature_k: canopy,
         energy: EnergyBudget {
             front_in_j_m2: front_in,
             back_in_j_m2: back_in,

@@ -45,14 +45,18 @@ use super::latent::aerodynamic::CanopyKb;
 use super::latent::{
     Aerodynamic, AirState, InputError, JarvisStewart, SurfaceEnergy, SurfaceResistance,
 };
+use super::two_source::{TwoSourceParams, TwoSourceStep};
 use super::{FacetInputs, Forcing, SlabProperties, SolveOptions, convection, mcadams_h_w_m2_k};
 use crate::error::{Error, Result};
-use crate::material::{HeatRoughness, Phenology, SurfaceEnergySpec, SurfaceKind};
+use crate::material::{CanopyModel, HeatRoughness, Phenology, SurfaceEnergySpec, SurfaceKind};
 
 /// Passes of the stability fixed point of [`Exchange::new`]. Each pass is
 /// one solve of the open reference surface; the third changes the surface
 /// temperature by less than 0.01 K on the flux-tower tests.
 pub const EXCHANGE_PASSES: usize = 3;
+
+/// Most reference passes of a two-source canopy ([`Exchange::two_source`]).
+pub const TWO_SOURCE_PASSES: usize = 16;
 
 /// Wind speed floor of the turbulent exchange, m s⁻¹ (module docs).
 pub const MIN_WIND_M_S: f64 = 0.5;
@@ -99,6 +103,9 @@ pub struct LandSurface {
     /// Whether d and z_om follow the canopy height (FAO-56: d = 2/3 h,
     /// z_om = 0.123 h) rather than a given `roughness_length_m`.
     pub roughness_from_height: bool,
+    /// Leaves and soil as two sources ([`super::two_source`]; None: one
+    /// big leaf, with or without a skin).
+    pub two_source: Option<TwoSourceParams>,
 }
 
 impl LandSurface {
@@ -131,7 +138,12 @@ impl LandSurface {
         if let SurfaceResistance::Canopy(js) = &resistance {
             js.validate()?;
         }
-        let skin = spec.has_skin().then(|| Skin {
+        let two_source = (spec.canopy == CanopyModel::TwoSource).then(|| TwoSourceParams {
+            clumping_index: spec.clumping(),
+            leaf_width_m: spec.leaf_width(),
+            saturation_m3_m3: spec.saturation(),
+        });
+        let skin = (spec.has_skin() && two_source.is_none()).then(|| Skin {
             capacity_j_m2_k: spec.canopy_capacity(),
             conductance_w_m2_k: spec.skin_conductance(),
         });
@@ -145,6 +157,7 @@ impl LandSurface {
             leaf_width_m: spec.leaf_width(),
         });
         Ok(LandSurface {
+            two_source,
             canopy_kb,
             phenology: spec.phenology,
             canopy_height_m: spec.canopy_height_m.unwrap_or(0.0),
@@ -172,16 +185,23 @@ impl LandSurface {
     ) -> std::result::Result<SurfaceEnergy, InputError> {
         let d = self.displacement_height_m;
         let z0 = self.roughness_length_m;
-        let floor = 1.5 * d + 2.0;
-        let (zw, za) = match self.measurement_height_m {
-            Some(z) => (z, z),
-            None => (wind_height_m.max(floor), air_height_m.max(floor)),
-        };
+        let (zw, za) = self.heights(wind_height_m, air_height_m);
         let aero = Aerodynamic::new(zw, za, d, z0, 0.1 * z0)?;
         let e = SurfaceEnergy::new(aero, self.resistance, self.soil_moisture_m3_m3)?;
         match self.canopy_kb {
             Some(c) => e.with_canopy_kb(c),
             None => Ok(e),
+        }
+    }
+
+    /// The heights of wind and air (m) under a weather measured at
+    /// `wind_height_m` and `air_height_m` (field docs of
+    /// [`LandSurface::measurement_height_m`]).
+    pub fn heights(&self, wind_height_m: f64, air_height_m: f64) -> (f64, f64) {
+        let floor = 1.5 * self.displacement_height_m + 2.0;
+        match self.measurement_height_m {
+            Some(z) => (z, z),
+            None => (wind_height_m.max(floor), air_height_m.max(floor)),
         }
     }
 
@@ -354,6 +374,11 @@ pub struct Exchange {
     pub sensible_w_m2_k: Vec<f64>,
     /// Vapour conductance `ρc_p/(γ(r_a + r_s))`, W m⁻² Pa⁻¹ (0: dry).
     pub vapour_conductance_w_m2_pa: Vec<f64>,
+    /// A two-source canopy's model at each record, linearised about the
+    /// open reference surface ([`super::two_source`]; empty otherwise).
+    /// With it the two vectors above are 0: a facet's source is its
+    /// absorbed incoming radiation, and the soil's law comes from here.
+    pub two_source: Vec<TwoSourceStep>,
 }
 
 impl Exchange {
@@ -368,6 +393,7 @@ impl Exchange {
                 .map(|&u| mcadams_h_w_m2_k(u))
                 .collect(),
             vapour_conductance_w_m2_pa: vec![0.0; forcing.len()],
+            two_source: Vec::new(),
         }
     }
 
@@ -396,6 +422,9 @@ impl Exchange {
     /// Humidity or pressure of a record outside the physical range the
     /// psychrometrics accept (naming `records[k].field`).
     pub fn facing(props: &SlabProperties, forcing: &Forcing, normal_z: f64) -> Result<Exchange> {
+        if props.surface.is_some_and(|s| s.two_source.is_some()) {
+            return Exchange::two_source(props, forcing);
+        }
         let rain = forcing.precipitation_mm.iter().any(|&p| p > 0.0);
         let mcadams = props.convection.model == crate::material::ConvectionModel::Mcadams;
         if props.surface.is_none() && mcadams && !rain {
@@ -447,6 +476,93 @@ impl Exchange {
         Ok(ex)
     }
 
+    /// The exchange of a two-source canopy ([`super::two_source`]): the
+    /// model of each record linearised about the open reference surface
+    /// (horizontal, unshaded, the whole sky, a fixed three spin-up days),
+    /// the reference solved again about its own leaf and soil temperatures
+    /// until they change by less than [`super::two_source::CONVERGED_K`],
+    /// then with the resistances held until they change by less than
+    /// 1e-7 K (at most [`TWO_SOURCE_PASSES`] passes in all). The weather's
+    /// rain does not wet it (no interception store).
+    ///
+    /// # Errors
+    /// Humidity or pressure of a record out of range (naming it); the
+    /// canopy's heights (naming the field).
+    pub fn two_source(props: &SlabProperties, forcing: &Forcing) -> Result<Exchange> {
+        use super::two_source;
+        let surface = props
+            .surface
+            .ok_or_else(|| Error::invalid("surface_energy", "a two-source canopy needs one"))?;
+        let n = forcing.len();
+        let mut inputs = Vec::with_capacity(n);
+        for k in 0..n {
+            let x = two_source::inputs_at(
+                &surface,
+                forcing,
+                k,
+                props.solar_absorptivity,
+                props.thermal_emissivity,
+            )?
+            .ok_or_else(|| Error::invalid("surface_energy.canopy", "not two_source"))?;
+            inputs.push(x);
+        }
+        let steps = |t_c: &[f64], t_s: &[f64]| -> Vec<TwoSourceStep> {
+            inputs
+                .iter()
+                .zip(t_c.iter().zip(t_s))
+                .map(|(x, (&c, &s))| TwoSourceStep::new(x, c, s))
+                .collect()
+        };
+        let sun = vec![1.0f32; n];
+        let cos: Vec<f32> = inputs.iter().map(|x| x.cos_zenith as f32).collect();
+        let facet = FacetInputs::new(&sun, &cos, 1.0);
+        // A fixed number of spin-up days: a spin-up that stops on its
+        // tolerance may stop a day earlier in one pass than in the next,
+        // and the passes would not converge below that tolerance.
+        let mut opts = SolveOptions::default();
+        opts.spinup.tolerance_k = 0.0;
+        let mut t_c = forcing.air_temperature_k.clone();
+        let mut t_s = forcing.air_temperature_k.clone();
+        let mut ex = Exchange {
+            sensible_w_m2_k: vec![0.0; n],
+            vapour_conductance_w_m2_pa: vec![0.0; n],
+            two_source: steps(&t_c, &t_s),
+        };
+        // Passes that update the resistances (stability, the soil's free
+        // convection) with the linearisation until the reference settles to
+        // CONVERGED_K; then Newton passes with the resistances held, which
+        // converge quadratically, so the reference closes the leaves'
+        // balance.
+        let mut hold = false;
+        for pass in 0..TWO_SOURCE_PASSES {
+            let p = super::prepare(props, forcing, &facet, &ex);
+            let sol = super::solve_prepared(props, forcing, &p, &opts, None);
+            let change = sol
+                .soil_temperature_k
+                .iter()
+                .zip(&t_s)
+                .chain(sol.canopy_temperature_k.iter().zip(&t_c))
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            t_s = sol.soil_temperature_k;
+            t_c = sol.canopy_temperature_k;
+            if hold && change < 1e-7 {
+                break;
+            }
+            hold = hold || change < two_source::CONVERGED_K || pass + 4 >= TWO_SOURCE_PASSES;
+            ex.two_source = if hold {
+                ex.two_source
+                    .iter()
+                    .zip(t_c.iter().zip(&t_s))
+                    .map(|(x, (&c, &s))| x.relinearised(c, s))
+                    .collect()
+            } else {
+                steps(&t_c, &t_s)
+            };
+        }
+        Ok(ex)
+    }
+
     /// [`Exchange::at_temperatures_facing`] of a horizontal surface facing
     /// up.
     ///
@@ -486,6 +602,7 @@ impl Exchange {
                     })
                     .collect(),
                 vapour_conductance_w_m2_pa: vec![0.0; n],
+                two_source: Vec::new(),
             },
             Some(surface) => {
                 let energy_of = |s: &LandSurface| {
@@ -510,6 +627,7 @@ impl Exchange {
                 Exchange {
                     sensible_w_m2_k: sensible,
                     vapour_conductance_w_m2_pa: vapour,
+                    two_source: Vec::new(),
                 }
             }
         };
@@ -521,7 +639,10 @@ impl Exchange {
 
     /// Error unless there is one entry per record.
     pub(crate) fn check_len(&self, n: usize) -> Result<()> {
-        if self.sensible_w_m2_k.len() != n || self.vapour_conductance_w_m2_pa.len() != n {
+        if self.sensible_w_m2_k.len() != n
+            || self.vapour_conductance_w_m2_pa.len() != n
+            || !(self.two_source.is_empty() || self.two_source.len() == n)
+        {
             return Err(Error::invalid(
                 "exchange",
                 format!(
