@@ -35,8 +35,9 @@
 //! for the first bounce (`entries × day records` multiply-adds); the later
 //! bounces, a fraction of the first and smooth in time, at every
 //! [`LATER_BOUNCE_STRIDE`]-th daytime record, their addition linear in
-//! between ([`reflected_shortwave_strided`]; on the bundled town within
-//! a few mW/m² … see `docs/physics/reflected-and-wind.md`).
+//! between ([`reflected_shortwave_strided`]; in a street canyon with the
+//! sun sweeping over it within 4 % of what the later bounces add,
+//! `docs/physics/reflected-and-wind.md`).
 //!
 //! # Approximations
 //! - Lambertian reflection (no specular glint from glass or water).
@@ -239,10 +240,13 @@ pub fn reflected_shortwave_strided(
     // each facet.
     let mut refl_direct = vec![0.0f32; n * nd];
     let mut scratch = (Vec::new(), Vec::new());
-    direct_bounce(
+    let surfaces = Surfaces {
         sky,
         ground_albedo,
         albedo,
+    };
+    direct_bounce(
+        surfaces,
         &ground_direct,
         &e0_direct,
         None,
@@ -255,9 +259,7 @@ pub fn reflected_shortwave_strided(
         let mut next = vec![0.0f32; n * nd];
         for _ in 1..bounces {
             direct_bounce(
-                sky,
-                ground_albedo,
-                albedo,
+                surfaces,
                 &ground_direct,
                 &e0_direct,
                 Some(&refl_direct),
@@ -291,9 +293,7 @@ pub fn reflected_shortwave_strided(
         let mut next = vec![0.0f32; n * nc];
         for _ in 1..bounces {
             direct_bounce(
-                sky,
-                ground_albedo,
-                albedo,
+                surfaces,
                 &ground_c,
                 &e0_c,
                 Some(&cur),
@@ -332,6 +332,15 @@ pub fn reflected_shortwave_strided(
     Ok(out)
 }
 
+/// What reflects: the sky view's background lists, the ground's albedo
+/// beyond the scene and each facet's.
+#[derive(Clone, Copy)]
+struct Surfaces<'a> {
+    sky: &'a SkyView,
+    ground_albedo: f32,
+    albedo: &'a [f32],
+}
+
 /// One bounce of the direct coefficient at the day records of `e0`
 /// (`m` per facet, facet-major): `out_i = g_i ρ_g z + Σ_j F_ij ρ_j (E⁰_j +
 /// R_j)` with `R` = `refl` the previous bounce's (`None`: the first
@@ -340,15 +349,18 @@ pub fn reflected_shortwave_strided(
 /// nothing (no albedo, never lit) are skipped: adding their zeros changes
 /// nothing. `scratch` holds the leaving irradiances between calls.
 fn direct_bounce(
-    sky: &SkyView,
-    ground_albedo: f32,
-    albedo: &[f32],
+    surfaces: Surfaces,
     ground_direct: &[f32],
     e0: &[f32],
     refl: Option<&[f32]>,
     out: &mut [f32],
     scratch: &mut (Vec<f32>, Vec<bool>),
 ) {
+    let Surfaces {
+        sky,
+        ground_albedo,
+        albedo,
+    } = surfaces;
     let m = ground_direct.len();
     let n = albedo.len();
     // ρ_j (E⁰_j + R_j), and whether any of it is not zero.

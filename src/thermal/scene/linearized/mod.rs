@@ -98,9 +98,9 @@ pub struct LinearizedParams {
 }
 
 /// Default [`LinearizedParams::curvature_stride`]: hourly nodes at 15-min
-/// records. On the bundled town's default render it moves the image-time
-/// temperatures by at most a few mK from the curvature at every record
-/// (`docs/physics/thermal.md`), at a third of the last pass's products.
+/// records (32 of a 97-record window), a third of the last pass's
+/// second-order products; on the yard test scene within 0.004 K of the
+/// curvature at every record (`docs/physics/thermal.md`).
 pub const CURVATURE_STRIDE: usize = 4;
 
 impl Default for LinearizedParams {
