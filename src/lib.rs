@@ -79,6 +79,7 @@ pub mod radiometry;
 pub mod render;
 pub mod scene;
 pub mod sensor;
+pub mod simd;
 pub mod suggest;
 pub mod sun;
 pub(crate) mod textio;

@@ -31,8 +31,13 @@
 //! walls, whose reflected-shortwave warming is 2.5 K at noon
 //! (`docs/physics/reflected-and-wind.md`).
 //!
-//! Cost per bounce: one sparse product over the background entries per
-//! daytime record (`entries × day records` multiply-adds).
+//! Cost: one sparse product over the background entries per daytime record
+//! for the first bounce (`entries × day records` multiply-adds); the later
+//! bounces, a fraction of the first and smooth in time, at every
+//! [`LATER_BOUNCE_STRIDE`]-th daytime record, their addition linear in
+//! between ([`reflected_shortwave_strided`]; in a street canyon with the
+//! sun sweeping over it within 4 % of what the later bounces add,
+//! `docs/physics/reflected-and-wind.md`).
 //!
 //! # Approximations
 //! - Lambertian reflection (no specular glint from glass or water).
@@ -101,11 +106,18 @@ impl ReflectedShortwave {
     }
 }
 
+/// Day records between the nodes at which the bounces after the first are
+/// computed ([`reflected_shortwave_strided`]): 4, hourly at 15-min records.
+pub const LATER_BOUNCE_STRIDE: usize = 4;
+
 /// The reflected shortwave of every facet (module docs) after `bounces`
 /// bounces (0: none, all zeros). `albedo` has one value per facet (0 for
 /// facets that reflect nothing, e.g. fixed-temperature ones without a
 /// material); `sun_dirs` one unit vector per record (as the solar history
 /// was traced with).
+///
+/// The first bounce is computed at every daytime record, the later ones at
+/// every [`LATER_BOUNCE_STRIDE`]-th ([`reflected_shortwave_strided`]).
 ///
 /// # Errors
 /// [`Error::Invalid`] for lengths that do not match the sky view and solar
@@ -117,6 +129,38 @@ pub fn reflected_shortwave(
     ground_albedo: f32,
     sun_dirs: &[Vec3],
     bounces: u32,
+) -> Result<ReflectedShortwave> {
+    reflected_shortwave_strided(
+        sky,
+        solar,
+        albedo,
+        ground_albedo,
+        sun_dirs,
+        bounces,
+        LATER_BOUNCE_STRIDE,
+    )
+}
+
+/// [`reflected_shortwave`] with the bounces after the first at every
+/// `stride`-th daytime record only (and the first and last of each run of
+/// daytime records): there the Jacobi iteration is exact; between them the
+/// later bounces' addition to the first, `R⁽ᴺ⁾ − R⁽¹⁾`, is linear in time,
+/// while the first bounce, which carries the neighbours' own shadow edges,
+/// stays exact at every record. The later bounces are a fraction
+/// `≲ ρ(1 − F)` of the first and smooth in time (each sums the first bounce
+/// of many neighbours), and they cost a `stride`-th. `stride` 1 is every
+/// record: the plain iteration (module docs), the reference.
+///
+/// # Errors
+/// As [`reflected_shortwave`].
+pub fn reflected_shortwave_strided(
+    sky: &SkyView,
+    solar: &SolarHistory,
+    albedo: &[f32],
+    ground_albedo: f32,
+    sun_dirs: &[Vec3],
+    bounces: u32,
+    stride: usize,
 ) -> Result<ReflectedShortwave> {
     let n = sky.facet_count();
     let r = solar.steps;
@@ -182,21 +226,8 @@ pub fn reflected_shortwave(
             *e = s[k].clamp(0.0, 1.0) * c[k].max(0.0);
         }
     });
-    let mut refl_direct = vec![0.0f32; n * nd];
     let mut refl_diffuse = vec![0.0f32; n];
-    // ρ_j E_j per unit E_dn per day record (reused between bounces).
-    let mut leaving_direct = vec![0.0f32; n * nd];
     for _ in 0..bounces {
-        leaving_direct
-            .par_chunks_mut(nd)
-            .zip(e0_direct.par_chunks(nd))
-            .zip(refl_direct.par_chunks(nd))
-            .zip(albedo.par_iter())
-            .for_each(|(((l, e), rr), &a)| {
-                for ((l, e), rr) in l.iter_mut().zip(e).zip(rr) {
-                    *l = a * (e + rr);
-                }
-            });
         let leaving_diffuse: Vec<f32> = e0_diffuse
             .iter()
             .zip(&refl_diffuse)
@@ -204,20 +235,88 @@ pub fn reflected_shortwave(
             .map(|((e, rr), a)| a * (e + rr))
             .collect();
         refl_diffuse = diffuse_bounce(sky, ground_albedo, &leaving_diffuse);
+    }
+    // The first bounce at every day record: ρ_j E⁰_j per unit E_dn leaves
+    // each facet.
+    let mut refl_direct = vec![0.0f32; n * nd];
+    let mut scratch = (Vec::new(), Vec::new());
+    let surfaces = Surfaces {
+        sky,
+        ground_albedo,
+        albedo,
+    };
+    direct_bounce(
+        surfaces,
+        &ground_direct,
+        &e0_direct,
+        None,
+        &mut refl_direct,
+        &mut scratch,
+    );
+    let stride = stride.max(1);
+    if bounces > 1 && stride == 1 {
+        // The reference: every bounce at every day record.
+        let mut next = vec![0.0f32; n * nd];
+        for _ in 1..bounces {
+            direct_bounce(
+                surfaces,
+                &ground_direct,
+                &e0_direct,
+                Some(&refl_direct),
+                &mut next,
+                &mut scratch,
+            );
+            std::mem::swap(&mut refl_direct, &mut next);
+        }
+    } else if bounces > 1 {
+        // The later bounces at the nodes, their addition to the first
+        // linear in between.
+        let nodes: Vec<usize> = (0..nd)
+            .filter(|&d| {
+                d % stride == 0
+                    || d + 1 == nd
+                    || day[d + 1] != day[d] + 1
+                    || (d > 0 && day[d - 1] + 1 != day[d])
+            })
+            .collect();
+        let nc = nodes.len();
+        let at_nodes = |v: &[f32]| -> Vec<f32> {
+            let mut o = vec![0.0f32; n * nc];
+            o.par_chunks_mut(nc)
+                .zip(v.par_chunks(nd))
+                .for_each(|(o, v)| o.iter_mut().zip(&nodes).for_each(|(o, &d)| *o = v[d]));
+            o
+        };
+        let (e0_c, first_c) = (at_nodes(&e0_direct), at_nodes(&refl_direct));
+        let ground_c: Vec<f32> = nodes.iter().map(|&d| ground_direct[d]).collect();
+        let mut cur = first_c.clone();
+        let mut next = vec![0.0f32; n * nc];
+        for _ in 1..bounces {
+            direct_bounce(
+                surfaces,
+                &ground_c,
+                &e0_c,
+                Some(&cur),
+                &mut next,
+                &mut scratch,
+            );
+            std::mem::swap(&mut cur, &mut next);
+        }
+        // R⁽ᴺ⁾ = R⁽¹⁾ + the later bounces' addition, linear between nodes.
         refl_direct
             .par_chunks_mut(nd)
-            .enumerate()
-            .for_each(|(i, out)| {
-                let g = sky.ground_weight[i] * ground_albedo;
-                out.iter_mut()
-                    .zip(&ground_direct)
-                    .for_each(|(o, z)| *o = g * z);
-                for e in sky.background(i) {
-                    let j = e.facet as usize;
-                    let src = &leaving_direct[j * nd..(j + 1) * nd];
-                    out.iter_mut()
-                        .zip(src)
-                        .for_each(|(o, l)| *o += e.weight * l);
+            .zip(cur.par_chunks(nc).zip(first_c.par_chunks(nc)))
+            .for_each(|(o, (last, first))| {
+                let add = |c: usize| last[c] - first[c];
+                for c in 0..nc {
+                    o[nodes[c]] = last[c];
+                    if c + 1 < nc {
+                        let (a, b) = (nodes[c], nodes[c + 1]);
+                        for (d, v) in o.iter_mut().enumerate().take(b).skip(a + 1) {
+                            let t = (d - a) as f32 / (b - a) as f32;
+                            *v += add(c) + t * (add(c + 1) - add(c));
+                        }
+                    }
                 }
             });
     }
@@ -231,6 +330,107 @@ pub fn reflected_shortwave(
         });
     out.diffuse = refl_diffuse;
     Ok(out)
+}
+
+/// What reflects: the sky view's background lists, the ground's albedo
+/// beyond the scene and each facet's.
+#[derive(Clone, Copy)]
+struct Surfaces<'a> {
+    sky: &'a SkyView,
+    ground_albedo: f32,
+    albedo: &'a [f32],
+}
+
+/// One bounce of the direct coefficient at the day records of `e0`
+/// (`m` per facet, facet-major): `out_i = g_i ρ_g z + Σ_j F_ij ρ_j (E⁰_j +
+/// R_j)` with `R` = `refl` the previous bounce's (`None`: the first
+/// bounce, `R = 0`) and `z` = `ground_direct`
+/// (the sine of the sun's elevation) at those records. Sources that send
+/// nothing (no albedo, never lit) are skipped: adding their zeros changes
+/// nothing. `scratch` holds the leaving irradiances between calls.
+fn direct_bounce(
+    surfaces: Surfaces,
+    ground_direct: &[f32],
+    e0: &[f32],
+    refl: Option<&[f32]>,
+    out: &mut [f32],
+    scratch: &mut (Vec<f32>, Vec<bool>),
+) {
+    let Surfaces {
+        sky,
+        ground_albedo,
+        albedo,
+    } = surfaces;
+    let m = ground_direct.len();
+    let n = albedo.len();
+    // ρ_j (E⁰_j + R_j), and whether any of it is not zero.
+    let (leaving, lit) = scratch;
+    leaving.resize(n * m, 0.0);
+    lit.resize(n, false);
+    leaving
+        .par_chunks_mut(m)
+        .zip(lit.par_iter_mut())
+        .zip(e0.par_chunks(m))
+        .zip(albedo.par_iter())
+        .enumerate()
+        .for_each(|(j, (((l, lit), e), &a))| {
+            match refl {
+                Some(refl) => {
+                    let rr = &refl[j * m..(j + 1) * m];
+                    for ((l, e), rr) in l.iter_mut().zip(e).zip(rr) {
+                        *l = a * (e + rr);
+                    }
+                }
+                None => l.iter_mut().zip(e).for_each(|(l, e)| *l = a * e),
+            }
+            *lit = l.iter().any(|&x| x != 0.0);
+        });
+    out.par_chunks_mut(m).enumerate().for_each(|(i, out)| {
+        let g = sky.ground_weight[i] * ground_albedo;
+        let entries = sky.background(i);
+        crate::simd::vectorized(GatherBounce {
+            out,
+            g,
+            z: ground_direct,
+            entries,
+            leaving,
+            lit,
+        })
+    });
+}
+
+crate::simd::simd_kernel!(GatherBounce<'a> {
+    out: &'a mut [f32],
+    g: f32,
+    z: &'a [f32],
+    entries: &'a [super::BackgroundEntry],
+    leaving: &'a [f32],
+    lit: &'a [bool],
+} -> () => gather_bounce);
+
+/// `out = g·z + Σ_e w_e l_{j_e}` over the background entries whose source
+/// is lit, `l_j` the `j`-th row (`out.len()` long) of `leaving`.
+#[inline(always)]
+fn gather_bounce(
+    out: &mut [f32],
+    g: f32,
+    z: &[f32],
+    entries: &[super::BackgroundEntry],
+    leaving: &[f32],
+    lit: &[bool],
+) {
+    let m = out.len();
+    out.iter_mut().zip(z).for_each(|(o, z)| *o = g * z);
+    for e in entries {
+        let j = e.facet as usize;
+        if !lit[j] {
+            continue;
+        }
+        let src = &leaving[j * m..(j + 1) * m];
+        out.iter_mut()
+            .zip(src)
+            .for_each(|(o, l)| *o += e.weight * l);
+    }
 }
 
 /// One bounce of the diffuse coefficient: `Σ_j F_ij ρ_j E_j + g_i ρ_g` for

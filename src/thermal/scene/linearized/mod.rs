@@ -50,6 +50,7 @@
 //! inputs were traced.
 
 mod kernels;
+mod nodes;
 mod passes;
 mod reference;
 
@@ -59,6 +60,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use self::kernels::accumulate_rows;
+use self::nodes::CurvatureNodes;
 use self::passes::{PassPlan, Slots};
 use self::reference::{Diff, FacetState, Reference, sunlit_cos};
 use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
@@ -86,7 +88,20 @@ pub struct LinearizedParams {
     /// [`SolveOptions::default`]: they are few, so the accurate grid and
     /// spin-up cost little).
     pub options: SolveOptions,
+    /// Records between the curvature nodes of the second order away from
+    /// the image records (`nodes` module: the curvature is evaluated at
+    /// every record within 2 h of an image record and every `stride`-th
+    /// record elsewhere, linear in between; the first order stays exact).
+    /// Default [`CURVATURE_STRIDE`]; 1 evaluates it at every record (the
+    /// reference path).
+    pub curvature_stride: usize,
 }
+
+/// Default [`LinearizedParams::curvature_stride`]: hourly nodes at 15-min
+/// records (32 of a 97-record window), a third of the last pass's
+/// second-order products; on the yard test scene within 0.004 K of the
+/// curvature at every record (`docs/physics/thermal.md`).
+pub const CURVATURE_STRIDE: usize = 4;
 
 impl Default for LinearizedParams {
     fn default() -> Self {
@@ -94,6 +109,7 @@ impl Default for LinearizedParams {
             bin_k: 3.0,
             second_order: false,
             options: SolveOptions::default(),
+            curvature_stride: CURVATURE_STRIDE,
         }
     }
 }
@@ -162,6 +178,14 @@ pub(super) fn solve(
             .collect(),
     };
     let rows = Rows::new(image_records, forcing.len());
+    let nodes = (lp.curvature_stride > 1)
+        .then(|| CurvatureNodes::new(forcing.len(), image_records, lp.curvature_stride));
+    let lin = Linearize {
+        lp,
+        rows: &rows.all,
+        images: image_records.len(),
+        nodes: nodes.as_ref(),
+    };
     // 1. Groups of equal property sets and their source models.
     let groups = Groups::new(props, exchanges, wind_class, kinds, forcing);
     // 2. Per group, the centre facet, linearised.
@@ -170,7 +194,7 @@ pub(super) fn solve(
         .par_iter()
         .map(|&f| {
             (f != usize::MAX)
-                .then(|| facets.linearize(f, lp, &rows.all, groups.model_of(f)))
+                .then(|| facets.linearize(f, &lin, groups.model_of(f)))
                 .transpose()
         })
         .collect::<Result<_>>()?;
@@ -180,7 +204,7 @@ pub(super) fn solve(
     let refs: Vec<Reference> = bins
         .reference
         .par_iter()
-        .map(|&f| facets.linearize(f, lp, &rows.all, groups.model_of(f)))
+        .map(|&f| facets.linearize(f, &lin, groups.model_of(f)))
         .collect::<Result<_>>()?;
     let max_spin = refs
         .iter()
@@ -263,7 +287,7 @@ fn point_response(
             sun_rows.extend(rep.row_front(i).iter().zip(sun).map(|(g, w)| g * w));
             rows.extend_from_slice(rep.row_front(i));
         }
-        green.extend_from_slice(&rep.front.from_front);
+        green.extend_from_slice(&rep.front.from_front[..r * r]);
         reference_k.extend_from_slice(&rep.front.temperature_k);
         suns.extend_from_slice(sun);
     }
@@ -359,13 +383,7 @@ impl Facets<'_> {
     }
 
     /// Linearise about `facet` (air as background).
-    fn linearize(
-        &self,
-        facet: usize,
-        lp: &LinearizedParams,
-        rows: &[usize],
-        model: &SourceModel,
-    ) -> Result<Reference> {
+    fn linearize(&self, facet: usize, how: &Linearize, model: &SourceModel) -> Result<Reference> {
         let FacetThermal::Solve(pi) = self.kinds[facet] else {
             unreachable!("solved facets only")
         };
@@ -378,10 +396,17 @@ impl Facets<'_> {
             self.forcing,
             &self.exchanges[pi as usize],
             &self.slab_inputs(facet, &sun, &cos),
-            &lp.options,
+            &how.lp.options,
         )
         .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
-        Ok(Reference::new(lin, rows, model, self.state(facet)))
+        Ok(Reference::new(
+            lin,
+            how.rows,
+            how.images,
+            model,
+            self.state(facet),
+            how.nodes,
+        ))
     }
 
     /// The inputs a facet's sources are made of.
@@ -398,6 +423,16 @@ impl Facets<'_> {
             b: refl.diffuse as f32,
         }
     }
+}
+
+/// How references are linearised and laid out: the parameters, the probed
+/// records ([`Rows::all`]; the first `images` are the image records) and
+/// the curvature nodes of the second order (`None`: every record).
+struct Linearize<'a> {
+    lp: &'a LinearizedParams,
+    rows: &'a [usize],
+    images: usize,
+    nodes: Option<&'a CurvatureNodes>,
 }
 
 /// The records whose front-temperature rows a reference keeps row-major
@@ -771,6 +806,9 @@ struct Scratch {
     bg: Vec<f32>,
     cols: Vec<(u32, f32)>,
     cols_bg: Vec<(u32, f32)>,
+    /// Curvature at the nodes, front and back.
+    curv: Vec<f32>,
+    curv_back: Vec<f32>,
 }
 
 impl Scratch {
@@ -784,6 +822,8 @@ impl Scratch {
             bg: vec![0.0; r],
             cols: Vec::with_capacity(r),
             cols_bg: Vec::with_capacity(r),
+            curv: vec![0.0; r],
+            curv_back: vec![0.0; r],
         }
     }
 }

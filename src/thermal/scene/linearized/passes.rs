@@ -9,7 +9,7 @@
 use rayon::prelude::*;
 
 use super::kernels::{columns, curvature, dot, matvec_cols};
-use super::reference::{Diff, NodeGreen, Reference, sunlit_cos};
+use super::reference::{Coarse, Diff, NodeGreen, Reference, sunlit_cos};
 use super::{CHUNK, Facets, Groups, Scratch};
 use crate::thermal;
 use crate::thermal::scene::{FacetThermal, SceneInputs};
@@ -228,6 +228,10 @@ impl PassPlan<'_> {
         let sun = &self.groups.sun32[g];
         columns(s.sc.iter().zip(sun).map(|(a, b)| a * b), 1.0, &mut s.cols);
         let change = Change { diff, bgc };
+        if second && let Some(coarse) = &rep.coarse {
+            self.second_order_at_nodes(rep, coarse, g, change, s, o);
+            return;
+        }
         change.history(
             &rep.front,
             rep.has_back,
@@ -297,6 +301,98 @@ impl PassPlan<'_> {
                     *v += cb * dot(rep.row_back(i), &s.bg);
                 }
             }
+        }
+    }
+
+    /// The last pass with the second-order correction at the curvature
+    /// nodes (`super::nodes`): `T = T_ref + G ΔS + Σ_n w_n r(Δ_n)` at the
+    /// image records, the first order `G ΔS` exact, `Δ_n` the first-order
+    /// change of the front and back nodes at the node records only. With
+    /// every record a node it is [`PassPlan::second_order_image`].
+    fn second_order_at_nodes(
+        &self,
+        rep: &Reference,
+        coarse: &Coarse,
+        g: usize,
+        change: Change,
+        s: &mut Scratch,
+        o: &mut [f32],
+    ) {
+        let groups = self.groups;
+        let nn = coarse.front.temperature_k.len();
+        // The first-order change at the nodes.
+        change.history(
+            &coarse.front,
+            rep.has_back,
+            &s.bg,
+            &s.cols,
+            &mut s.cols_bg,
+            &mut s.d[..nn],
+        );
+        if rep.has_back {
+            change.history(
+                &coarse.back,
+                rep.has_back,
+                &s.bg,
+                &s.cols,
+                &mut s.cols_bg,
+                &mut s.dback[..nn],
+            );
+        }
+        // Its curvature there.
+        let latent = &coarse.front.latent;
+        for (n, (c, (d, t))) in s.curv[..nn]
+            .iter_mut()
+            .zip(s.d.iter().zip(&coarse.front.temperature_k))
+            .enumerate()
+        {
+            *c = curvature(coarse.front.radiative, *t, *d);
+            if let Some(&gv) = latent.get(n) {
+                *c += thermal::linear::latent_curvature(gv, f64::from(*t), f64::from(*d)) as f32;
+            }
+        }
+        if rep.has_back {
+            for (c, (d, t)) in s.curv_back[..nn]
+                .iter_mut()
+                .zip(s.dback.iter().zip(&coarse.back.temperature_k))
+            {
+                *c = curvature(coarse.back.radiative, *t, *d);
+            }
+        }
+        // The first-order sources at every record.
+        let Change {
+            diff: Diff { df, dfb, db },
+            bgc,
+        } = change;
+        for (((((o, sc), rsc), w), sh), rd) in
+            s.ds.iter_mut()
+                .zip(&s.sc)
+                .zip(&rep.facet.sc)
+                .zip(&groups.sun32[g])
+                .zip(&groups.shape32[g])
+                .zip(&groups.refl_diffuse32[g])
+        {
+            *o = df * sh + db * rd + (sc - rsc) * w;
+        }
+        if let Some((cf, _)) = bgc {
+            s.ds.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cf * e);
+        }
+        if rep.has_back {
+            for (o, sh) in s.db.iter_mut().zip(&groups.back_shape32[g]) {
+                *o = dfb * sh;
+            }
+            if let Some((_, cb)) = bgc {
+                s.db.iter_mut().zip(&s.bg).for_each(|(o, e)| *o += cb * e);
+            }
+        }
+        for (i, v) in o.iter_mut().enumerate() {
+            let w = &coarse.weights_front[i * nn..(i + 1) * nn];
+            let mut x = dot(rep.row_front(i), &s.ds) + dot(w, &s.curv[..nn]);
+            if rep.has_back {
+                let w = &coarse.weights_back[i * nn..(i + 1) * nn];
+                x += dot(rep.row_back(i), &s.db) + dot(w, &s.curv_back[..nn]);
+            }
+            *v = rep.front.temperature_k[self.image_records[i]] + x;
         }
     }
 

@@ -9,7 +9,8 @@
 //! [`Linearization`], the probed records and the property set's
 //! [`SourceModel`]; knows nothing of passes, bins or backgrounds.
 
-use super::kernels::dot;
+use super::kernels::{GREEN_PADDING, dot};
+use super::nodes::CurvatureNodes;
 use crate::thermal::{Linearization, SourceModel};
 
 /// What a facet's sources are made of (see [`SourceModel`]): its shape
@@ -120,8 +121,26 @@ pub(super) struct Reference {
     pub back: NodeGreen,
     /// Probes of the front node.
     pub probes: Probes,
+    /// The front and back nodes at the curvature nodes only, for the
+    /// second order ([`super::nodes`]; `None`: at every record).
+    pub coarse: Option<Coarse>,
     /// The reference solve's last spin-up change, K.
     pub spinup_change_k: f64,
+}
+
+/// A reference at the curvature nodes ([`super::nodes`]): the rows of its
+/// Green's matrices at the node records (`g[k·N + n]`, `N` nodes, so that
+/// the history products run over `N` rows instead of `R`), and the weights
+/// of the node curvatures in the image records.
+pub(super) struct Coarse {
+    /// The front node at the node records.
+    pub front: NodeGreen,
+    /// The back node at the node records (empty without an exposed back).
+    pub back: NodeGreen,
+    /// `[image][n]`: `Σ_k ∂T_front(image)/∂S_k φ_n(k)`, K per W m⁻².
+    pub weights_front: Vec<f32>,
+    /// `[image][n]`: `Σ_k ∂T_front(image)/∂B_k φ_n(k)`, K per W m⁻².
+    pub weights_back: Vec<f32>,
 }
 
 impl Reference {
@@ -130,8 +149,10 @@ impl Reference {
     pub fn new(
         lin: Linearization,
         rows: &[usize],
+        images: usize,
         model: &SourceModel,
         st: FacetState,
+        nodes: Option<&CurvatureNodes>,
     ) -> Reference {
         let r = lin.records;
         let sc: Vec<f32> = sunlit_cos(&st).collect();
@@ -160,7 +181,7 @@ impl Reference {
             if g.is_empty() {
                 return Vec::new();
             }
-            let mut out = vec![0.0f32; r * r];
+            let mut out = vec![0.0f32; r * r + GREEN_PADDING];
             for t in 0..r {
                 for k in 0..r {
                     out[k * r + t] = to_f32(g[t * r + k]);
@@ -193,7 +214,7 @@ impl Reference {
                 .collect()
         };
         let f32s = |v: &[f64]| v.iter().map(|&x| to_f32(x)).collect::<Vec<f32>>();
-        Reference {
+        let mut reference = Reference {
             has_back: lin.has_back(),
             front: NodeGreen {
                 from_front: transpose(&lin.front_from_front),
@@ -229,6 +250,7 @@ impl Reference {
                 reference_sun: pf.iter().map(|p| to_f32(dot64(p, &ref_sun))).collect(),
                 reflected_diffuse: pf.iter().map(|p| to_f32(dot64(p, refl_diffuse))).collect(),
             },
+            coarse: None,
             spinup_change_k: lin.solution.spinup_change_k.unwrap_or(0.0),
             facet: RefFacet {
                 f: st.f,
@@ -236,7 +258,12 @@ impl Reference {
                 b: st.b,
                 sc,
             },
+        };
+        if let Some(nodes) = nodes {
+            let c = Coarse::new(&lin, &reference, nodes, &pf, &pb, images);
+            reference.coarse = Some(c);
         }
+        reference
     }
 
     /// First-order change of the front temperature at probe `j` (K) of a
@@ -272,6 +299,71 @@ impl Reference {
         let r = self.facet.sc.len();
         &self.probes.rows_back[i * r..(i + 1) * r]
     }
+}
+
+impl Coarse {
+    /// `rep` (laid out from `lin`) at the curvature `nodes`; `pf`, `pb` the
+    /// probe rows of the front node's response to the front and back
+    /// sources (the first `images` are the image records).
+    fn new(
+        lin: &Linearization,
+        rep: &Reference,
+        nodes: &CurvatureNodes,
+        pf: &[Vec<f64>],
+        pb: &[Vec<f64>],
+        images: usize,
+    ) -> Coarse {
+        let r = lin.records;
+        let nn = nodes.len();
+        // Rows of `g` (row-major `[t][k]`) at the nodes, column-major.
+        let node_rows = |g: &[f64]| -> Vec<f32> {
+            if g.is_empty() {
+                return Vec::new();
+            }
+            let mut out = vec![0.0f32; r * nn + GREEN_PADDING];
+            for (n, &t) in nodes.records.iter().enumerate() {
+                for k in 0..r {
+                    out[k * nn + n] = to_f32(g[t * r + k]);
+                }
+            }
+            out
+        };
+        let node = |from_front: &[f64], from_back: &[f64], full: &NodeGreen| NodeGreen {
+            from_front: node_rows(from_front),
+            from_back: node_rows(from_back),
+            shape: pick(&full.shape, nodes),
+            back_shape: pick(&full.back_shape, nodes),
+            reference_sun: pick(&full.reference_sun, nodes),
+            reflected_diffuse: pick(&full.reflected_diffuse, nodes),
+            temperature_k: pick(&full.temperature_k, nodes),
+            radiative: full.radiative,
+            latent: if full.latent.is_empty() {
+                Vec::new()
+            } else {
+                nodes.records.iter().map(|&t| full.latent[t]).collect()
+            },
+        };
+        let weights = |p: &[Vec<f64>]| -> Vec<f32> {
+            p.iter()
+                .take(images)
+                .flat_map(|row| nodes.weights(row).into_iter().map(to_f32))
+                .collect()
+        };
+        Coarse {
+            front: node(&lin.front_from_front, &lin.front_from_back, &rep.front),
+            back: node(&lin.back_from_front, &lin.back_from_back, &rep.back),
+            weights_front: weights(pf),
+            weights_back: weights(pb),
+        }
+    }
+}
+
+/// The entries of `v` (one per record; empty stays empty) at the nodes.
+fn pick(v: &[f32], nodes: &CurvatureNodes) -> Vec<f32> {
+    if v.is_empty() {
+        return Vec::new();
+    }
+    nodes.records.iter().map(|&t| v[t]).collect()
 }
 
 /// A facet's differences from its reference in the scalar inputs: shape
