@@ -219,6 +219,12 @@ impl GreyTables {
         }
         let last = x.len() - 1;
         let mut i = ((r.max(0.0).sqrt() * self.sqrt_scale) as usize + 1).min(last);
+        // One step each way without a branch (the guess is exact up to
+        // rounding for the quadratic spacing, so the loops below, which
+        // find the same node from any start, then rarely run: a
+        // data-dependent branch here mispredicted on most hits).
+        i += usize::from((i < last) & (x[i] <= r));
+        i -= usize::from((i > 1) & (x[i - 1] > r));
         while i < last && x[i] <= r {
             i += 1;
         }
