@@ -284,7 +284,12 @@ fn lerp(a: f32, b: f32, x: f32) -> f32 {
 fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32) -> [f32; NB] {
     let a = &pl[o..o + 2 * NB];
     let c = &pl[o + rs..o + rs + 2 * NB];
-    std::array::from_fn(|b| lerp(lerp(a[b], a[NB + b], f), lerp(c[b], c[NB + b], f), rx))
+    // (Loops, not `array::from_fn`, which was not always inlined.)
+    let mut v = [0f32; NB];
+    for (b, v) in v.iter_mut().enumerate() {
+        *v = lerp(lerp(a[b], a[NB + b], f), lerp(c[b], c[NB + b], f), rx);
+    }
+    v
 }
 
 /// One height node's sky, sun and path terms `[Σq·L_sky, Σq·E_s, Σw·L_u]`
@@ -293,7 +298,13 @@ fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32
 #[inline(always)]
 fn grey_node_terms<const NB: usize>(nd: &[f32], q: usize, rx: f32) -> [[f32; NB]; 3] {
     let s = &nd[q..q + 6 * NB];
-    std::array::from_fn(|j| std::array::from_fn(|b| lerp(s[j * NB + b], s[(3 + j) * NB + b], rx)))
+    let mut v = [[0f32; NB]; 3];
+    for (j, v) in v.iter_mut().enumerate() {
+        for (b, v) in v.iter_mut().enumerate() {
+            *v = lerp(s[j * NB + b], s[(3 + j) * NB + b], rx);
+        }
+    }
+    v
 }
 
 /// One height node's grey-path terms of band `b` of `nb`
@@ -736,5 +747,53 @@ impl Shader<'_> {
             } as f32;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GreyTables;
+
+    /// The node a range lies in, from its definition: `i` in
+    /// `1..=last` with `x[i − 1] ≤ r < x[i]` (clamped at both ends), and
+    /// the fraction from `x[i − 1]`.
+    fn brute(x: &[f32], r: f32) -> (usize, f32) {
+        let last = x.len() - 1;
+        let i = x.partition_point(|&v| v <= r).clamp(1, last);
+        (i, ((r - x[i - 1]) / (x[i] - x[i - 1])).clamp(0.0, 1.0))
+    }
+
+    /// [`GreyTables::locate`] (first guess from √r, then a branch-free step
+    /// each way, then the loops) finds the node of its definition for the
+    /// quadratic spacing of the path tables and for irregular spacings,
+    /// at, between, before and beyond the nodes.
+    #[test]
+    fn locate_finds_the_node_of_any_range_for_any_spacing() {
+        let quadratic: Vec<f64> = (0..48)
+            .map(|i| 5000.0 * (i as f64 / 47.0).powi(2))
+            .collect();
+        let mut irregular = vec![0.0];
+        let mut seed = 0x2545_f491_u64;
+        for _ in 0..12 {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let step = 1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64 * 900.0;
+            irregular.push(irregular.last().unwrap() + step);
+        }
+        for ranges in [quadratic, irregular, vec![0.0, 10.0]] {
+            let t = GreyTables::new(&[], &[], &ranges, &[], &[]);
+            let x = &t.ranges;
+            let last = *x.last().unwrap();
+            let mut probes: Vec<f32> = x.clone();
+            probes.extend(x.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+            probes.extend(x.iter().map(|&v| v * (1.0 + 1e-7)));
+            probes.extend(x.iter().map(|&v| v * (1.0 - 1e-7)));
+            probes.extend([-5.0, 0.0, last * 1.5, last * 10.0]);
+            for r in probes {
+                let (i, f) = t.locate(r);
+                let (j, g) = brute(x, r);
+                assert_eq!(i, j, "range {r} with nodes {x:?}");
+                assert!((f - g).abs() <= 1e-6, "range {r}: fraction {f} against {g}");
+            }
+        }
     }
 }
