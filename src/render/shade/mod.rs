@@ -222,22 +222,14 @@ impl<'a> Shader<'a> {
                                     .map(|k| sky_node_cos(k).clamp(-1.0, 1.0).acos().to_degrees())
                                     .collect();
                                 let atm = &conditions.atmosphere;
+                                // (One call for all directions: each call
+                                // computes the broadband scale, which costs
+                                // more than several directions.)
                                 let (iso, dir) = rayon::join(
                                     || atm.sky_radiance(c, band.grid()),
-                                    || {
-                                        // A few chunks of directions per
-                                        // thread (each computes the
-                                        // broadband scale once).
-                                        let chunk = SKY_NODES
-                                            .div_ceil(2 * rayon::current_num_threads())
-                                            .max(1);
-                                        zeniths
-                                            .par_chunks(chunk)
-                                            .map(|z| atm.sky_radiances_toward(c, z, band.grid()))
-                                            .collect::<crate::Result<Vec<_>>>()
-                                    },
+                                    || atm.sky_radiances_toward(c, &zeniths, band.grid()),
                                 );
-                                Ok((iso?, dir?.into_iter().flatten().collect()))
+                                Ok((iso?, dir?))
                             }
                         }
                     },
