@@ -1942,12 +1942,19 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
             per_hit: None,
             wind_speed_m_s: rng.f(0.0, 12.0),
         };
-        let bands: Vec<Band> = match rng.u(3) {
+        // One, two or three bands (the grey pass has its own loops for one
+        // and two, and a general one).
+        let bands: Vec<Band> = match rng.u(4) {
             0 => vec![Band::flat(8.0, 12.0, 0.1).unwrap()],
             1 => vec![Band::flat(3.0, 5.0, 0.05).unwrap()],
-            _ => vec![
+            2 => vec![
                 Band::flat(3.0, 5.0, 0.05).unwrap(),
                 Band::flat(7.5, 13.5, 0.1).unwrap(),
+            ],
+            _ => vec![
+                Band::flat(3.0, 5.0, 0.05).unwrap(),
+                Band::flat(8.0, 10.0, 0.1).unwrap(),
+                Band::flat(10.0, 12.0, 0.1).unwrap(),
             ],
         };
         // A random sensor path: τ₂ and L_u per band, range node and height

@@ -1,5 +1,7 @@
 //! The atmosphere along the sensor's primary rays, tabulated.
 
+use rayon::prelude::*;
+
 use crate::Result;
 use crate::atmosphere::{Atmosphere, PathGeometry};
 use crate::radiometry::Band;
@@ -86,45 +88,59 @@ impl PathTables {
             )?;
             Ok((p.transmittance, p.path_radiance))
         };
-        let mut tables = Vec::with_capacity(bands.len());
-        for b in bands {
-            let mut nodes = Vec::with_capacity(heights.len() * ranges_m.len());
-            for &z in &heights {
-                let target = ground_altitude_m + z;
-                // Ranges below the height difference `d` cannot reach a
-                // target at this height. Their nodes lie on the line
-                // through the vertical path (range d) and the first node
-                // beyond it, so that interpolating between the last of
-                // them and that node gives the vertical path exactly at d
-                // (τ₂ clamped to [0, 1], L_u to ≥ 0 further out).
-                let d = (sensor_alt - target).abs();
-                let first = ranges_m.partition_point(|&r| r < d).min(ranges_m.len() - 1);
-                let reach: Vec<(Vec<f64>, Vec<f64>)> = ranges_m[first..]
-                    .iter()
-                    .map(|&r| path(b, target, r.max(d)))
-                    .collect::<Result<_>>()?;
-                if first > 0 {
-                    let (t_d, l_d) = path(b, target, d)?;
-                    let (t_1, l_1) = &reach[0];
-                    let r1 = ranges_m[first];
-                    for &r in &ranges_m[..first] {
-                        let s = if r1 > d { (r - d) / (r1 - d) } else { 0.0 };
-                        let line = |x0: &[f64], x1: &[f64], lo: f64, hi: f64| -> Vec<f64> {
-                            x0.iter()
-                                .zip(x1)
-                                .map(|(a, b)| (a + s * (b - a)).clamp(lo, hi))
-                                .collect()
-                        };
-                        nodes.push((
-                            line(&t_d, t_1, 0.0, 1.0),
-                            line(&l_d, l_1, 0.0, f64::INFINITY),
-                        ));
-                    }
-                }
-                nodes.extend(reach);
-            }
-            tables.push(nodes);
-        }
+        // Every node is independent: bands, heights and ranges in parallel
+        // (the same values as in turn).
+        let tables = bands
+            .par_iter()
+            .map(|b| -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
+                let per_height = heights
+                    .par_iter()
+                    .map(|&z| -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
+                        let target = ground_altitude_m + z;
+                        // Ranges below the height difference `d` cannot
+                        // reach a target at this height. Their nodes lie on
+                        // the line through the vertical path (range d) and
+                        // the first node beyond it, so that interpolating
+                        // between the last of them and that node gives the
+                        // vertical path exactly at d (τ₂ clamped to [0, 1],
+                        // L_u to ≥ 0 further out).
+                        let d = (sensor_alt - target).abs();
+                        let first = ranges_m.partition_point(|&r| r < d).min(ranges_m.len() - 1);
+                        let (reach, vertical) = rayon::join(
+                            || {
+                                ranges_m[first..]
+                                    .par_iter()
+                                    .map(|&r| path(b, target, r.max(d)))
+                                    .collect::<Result<Vec<_>>>()
+                            },
+                            || (first > 0).then(|| path(b, target, d)).transpose(),
+                        );
+                        let (reach, vertical) = (reach?, vertical?);
+                        let mut nodes = Vec::with_capacity(ranges_m.len());
+                        if let Some((t_d, l_d)) = vertical {
+                            let (t_1, l_1) = &reach[0];
+                            let r1 = ranges_m[first];
+                            for &r in &ranges_m[..first] {
+                                let s = if r1 > d { (r - d) / (r1 - d) } else { 0.0 };
+                                let line = |x0: &[f64], x1: &[f64], lo: f64, hi: f64| -> Vec<f64> {
+                                    x0.iter()
+                                        .zip(x1)
+                                        .map(|(a, b)| (a + s * (b - a)).clamp(lo, hi))
+                                        .collect()
+                                };
+                                nodes.push((
+                                    line(&t_d, t_1, 0.0, 1.0),
+                                    line(&l_d, l_1, 0.0, f64::INFINITY),
+                                ));
+                            }
+                        }
+                        nodes.extend(reach);
+                        Ok(nodes)
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                Ok(per_height.into_iter().flatten().collect())
+            })
+            .collect::<Result<Vec<_>>>()?;
         let bands = tables;
         Ok(Some(PathTables {
             ranges_m,

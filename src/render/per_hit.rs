@@ -193,26 +193,35 @@ impl PerHit {
     /// facet's `temperature_k` plus and minus the largest change its
     /// response allows (every record fully lit or shaded).
     pub fn temperature_bounds(&self, temperature_k: &[f32]) -> (f32, f32) {
+        use rayon::prelude::*;
         let r = self.records.len();
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (f, &t) in temperature_k.iter().enumerate() {
-            let Some(&b) = self.block_of.get(f) else {
-                continue;
-            };
-            if b == u32::MAX {
-                continue;
-            }
-            let c = self.solar.cos_incidence(f);
-            let row = &self.rows[b as usize * r..(b as usize + 1) * r];
-            let m: f32 = row
-                .iter()
-                .zip(&self.records)
-                .map(|(g, &k)| (g * c[k].max(0.0)).abs())
-                .sum();
-            lo = lo.min(t - m);
-            hi = hi.max(t + m);
-        }
-        (lo, hi)
+        // Facets in parallel (min and max do not depend on the order).
+        temperature_k
+            .par_iter()
+            .enumerate()
+            .fold(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |(lo, hi), (f, &t)| {
+                    let Some(&b) = self.block_of.get(f) else {
+                        return (lo, hi);
+                    };
+                    if b == u32::MAX {
+                        return (lo, hi);
+                    }
+                    let c = self.solar.cos_incidence(f);
+                    let row = &self.rows[b as usize * r..(b as usize + 1) * r];
+                    let m: f32 = row
+                        .iter()
+                        .zip(&self.records)
+                        .map(|(g, &k)| (g * c[k].max(0.0)).abs())
+                        .sum();
+                    (lo.min(t - m), hi.max(t + m))
+                },
+            )
+            .reduce(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |(a, b), (c, d)| (a.min(c), b.max(d)),
+            )
     }
 
     /// The second-order term of a point whose `s cos θ` differs from its

@@ -5,7 +5,7 @@
 
 use super::fast::{FastMiss, FastScratch};
 use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
-use super::surface::{PlanckTable, hit_temperature};
+use super::surface::{GreyFacet, PlanckTable, hit_temperature};
 use super::{BandTables, Shader};
 use crate::material::Material;
 use crate::render::per_hit::HitState;
@@ -88,19 +88,22 @@ impl Integrals {
 
 /// The band integrals of the grey path, single precision, flat: per band
 /// the Planck integrals `Σ q_i·B(T_k)` of every temperature node `k` and
-/// range node `i` (weights `q_i = w·τ₂(R_i)`; without a path two equal
-/// nodes of the plain weights `w`), per range node the sky, sun and path
+/// path node `i` (weights `q_i = w·τ₂(R_i)`; without a path two equal
+/// nodes of the plain weights `w`), per path node the sky, sun and path
 /// terms, and the grey emissivities of every material. Every table is
 /// band-interleaved (the bands of one entry are adjacent), so one hit reads
-/// each entry of all its bands from one place.
+/// each entry of all its bands from one place; the Planck integrals are
+/// stored path node by path node, so the two temperature nodes a hit
+/// interpolates between are adjacent (one cache line) and the hits of a
+/// row, which share few path nodes, read a few kilobytes of the table
+/// whatever their temperatures.
 #[derive(Debug, Clone, Default)]
 pub(super) struct GreyTables {
     /// Bands.
     pub(super) bands: usize,
-    /// Path nodes (at least 2): height nodes × range nodes, node
-    /// `a · range_nodes + i` ([`PathTables::node`]).
-    pub(super) nodes: usize,
-    /// Range nodes per height node.
+    /// Range nodes per height node (the path nodes, at least 2, are
+    /// height nodes × range nodes, node `a · range_nodes + i`:
+    /// [`PathTables::node`]).
     pub(super) range_nodes: usize,
     /// Heights of the height nodes above the ground datum, m (one node:
     /// no height interpolation).
@@ -115,7 +118,9 @@ pub(super) struct GreyTables {
     /// First guess of the node of range `r`: `√r · sqrt_scale` (exact for
     /// the quadratic spacing of [`PathTables`], refined for any spacing).
     pub(super) sqrt_scale: f32,
-    /// `Σ q_i·B(T_k)` of band `b` at `[(k · nodes + i) · bands + b]`.
+    /// Temperature nodes (of the Planck table).
+    pub(super) temperatures: usize,
+    /// `Σ q_i·B(T_k)` of band `b` at `[(i · temperatures + k) · bands + b]`.
     pub(super) planck: Vec<f32>,
     /// Per range node `i`: `Σ q_i·L_sky`, `Σ q_i·E_s` and `Σ w·L_u` of band
     /// `b` at `[(3·i + 0, 1, 2) · bands + b]`.
@@ -150,7 +155,7 @@ impl GreyTables {
         for (b, band) in nodes.iter().enumerate() {
             for (i, (ig, lu)) in band.iter().enumerate() {
                 for (k, &x) in ig.planck.iter().enumerate() {
-                    planck[(k * r + i) * nb + b] = x as f32;
+                    planck[(i * nt + k) * nb + b] = x as f32;
                 }
                 node[3 * i * nb + b] = ig.sky as f32;
                 node[(3 * i + 1) * nb + b] = ig.sun as f32;
@@ -185,7 +190,7 @@ impl GreyTables {
         let inv_height_spacing = heights.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
         GreyTables {
             bands: nb,
-            nodes: r,
+            temperatures: nt,
             range_nodes: if ranges.is_empty() { r } else { ranges.len() },
             heights,
             inv_height_spacing,
@@ -214,6 +219,12 @@ impl GreyTables {
         }
         let last = x.len() - 1;
         let mut i = ((r.max(0.0).sqrt() * self.sqrt_scale) as usize + 1).min(last);
+        // One step each way without a branch (the guess is exact up to
+        // rounding for the quadratic spacing, so the loops below, which
+        // find the same node from any start, then rarely run: a
+        // data-dependent branch here mispredicted on most hits).
+        i += usize::from((i < last) & (x[i] <= r));
+        i -= usize::from((i > 1) & (x[i - 1] > r));
         while i < last && x[i] <= r {
             i += 1;
         }
@@ -258,26 +269,64 @@ pub(super) fn grey_terms_band(
     eps * x + r * (env + if lit { w } else { 0.0 }) + z
 }
 
-/// One height node's grey-path terms of band `b` ([`Shader::grey_pass`]):
-/// `[Σq·B(T), Σq·B(T_bg), Σq·L_sky, Σq·E_s, Σw·L_u]`, the Planck
-/// integrals linear in temperature (fractions `ft`, `fg` from the entries
-/// at `t0`, `g0`; the next temperature node `up` on) and all linear in
-/// range (fraction `rx`; the next range node `nb` on, the node terms at
-/// `q`, `3·nb` on).
+/// `a + x·(b − a)`: every interpolation of the grey path, in the
+/// reference's order.
+#[inline(always)]
+fn lerp(a: f32, b: f32, x: f32) -> f32 {
+    a + x * (b - a)
+}
+
+/// One height node's Planck integrals `Σq·B(T)` of `NB` bands for
+/// [`Shader::grey_pass`]: linear in temperature (fraction `f` from the
+/// entries at `o` to the next temperature node's, `NB` on), then in range
+/// (fraction `rx` toward the next range node's, `rs` on).
+#[inline(always)]
+fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32) -> [f32; NB] {
+    let a = &pl[o..o + 2 * NB];
+    let c = &pl[o + rs..o + rs + 2 * NB];
+    // (Loops, not `array::from_fn`, which was not always inlined.)
+    let mut v = [0f32; NB];
+    for (b, v) in v.iter_mut().enumerate() {
+        *v = lerp(lerp(a[b], a[NB + b], f), lerp(c[b], c[NB + b], f), rx);
+    }
+    v
+}
+
+/// One height node's sky, sun and path terms `[Σq·L_sky, Σq·E_s, Σw·L_u]`
+/// of `NB` bands, linear in range (fraction `rx` from the entries at `q`
+/// to the next range node's, `3·NB` on).
+#[inline(always)]
+fn grey_node_terms<const NB: usize>(nd: &[f32], q: usize, rx: f32) -> [[f32; NB]; 3] {
+    let s = &nd[q..q + 6 * NB];
+    let mut v = [[0f32; NB]; 3];
+    for (j, v) in v.iter_mut().enumerate() {
+        for (b, v) in v.iter_mut().enumerate() {
+            *v = lerp(s[j * NB + b], s[(3 + j) * NB + b], rx);
+        }
+    }
+    v
+}
+
+/// One height node's grey-path terms of band `b` of `nb`
+/// ([`Shader::grey_pass_any`]): `[Σq·B(T), Σq·B(T_bg), Σq·L_sky, Σq·E_s,
+/// Σw·L_u]`, the Planck integrals linear in temperature (fractions `ft`,
+/// `fg` from the entries at `t0`, `g0`; the next temperature node `nb` on)
+/// then in range (fraction `rx`; the next range node `rs` on), the node
+/// terms at `q` linear in range (the next range node `3·nb` on).
 #[inline(always)]
 pub(super) fn grey_node(
     pl: &[f32],
     nd: &[f32],
-    [up, nb, b]: [usize; 3],
+    [nb, rs, b]: [usize; 3],
     [t0, g0, q]: [usize; 3],
     [ft, fg, rx]: [f32; 3],
 ) -> [f32; 5] {
     let bilerp = |o: usize, f: f32| {
-        let v0 = pl[o + b] + f * (pl[o + up + b] - pl[o + b]);
-        let v1 = pl[o + nb + b] + f * (pl[o + up + nb + b] - pl[o + nb + b]);
-        v0 + rx * (v1 - v0)
+        let v0 = lerp(pl[o + b], pl[o + nb + b], f);
+        let v1 = lerp(pl[o + rs + b], pl[o + rs + nb + b], f);
+        lerp(v0, v1, rx)
     };
-    let node = |o: usize| nd[q + o + b] + rx * (nd[q + o + 3 * nb + b] - nd[q + o + b]);
+    let node = |o: usize| lerp(nd[q + o + b], nd[q + o + 3 * nb + b], rx);
     [
         bilerp(t0, ft),
         bilerp(g0, fg),
@@ -285,6 +334,20 @@ pub(super) fn grey_node(
         node(nb),
         node(2 * nb),
     ]
+}
+
+/// Where a gathered hit reads the grey path's tables
+/// ([`Shader::grey_place`]).
+struct GreyPlace<'s> {
+    g: &'s GreyFacet,
+    mi: usize,
+    a0: usize,
+    ta: f32,
+    /// Path node of height node `ai`, range node `ri − 1`.
+    n0: usize,
+    rx: f32,
+    ax: f32,
+    sd: f32,
 }
 
 /// The spectral rows one band of [`Shader::fast_primary`] reads (all of
@@ -415,72 +478,141 @@ impl Shader<'_> {
     /// [`Shader::shade_fast`]): per band
     /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u`, with
     /// `env = F·Σq·L_sky + (1 − F)·ΣqB(T_bg)`, `r = max(1 − ε − t, 0)`, the
-    /// integrals bilinear in temperature then range as in the reference.
-    /// The bands of one entry are adjacent in [`GreyTables`]: the offsets
-    /// are computed once per hit, then each band is a few loads.
+    /// integrals bilinear in temperature then range, then linear in height,
+    /// as in the reference. The bands of one entry are adjacent in
+    /// [`GreyTables`]: the offsets are computed once per hit, then each
+    /// band is a few loads. One and two bands (the common cases) have
+    /// their own loops with the band count known.
     pub(super) fn grey_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        match self.grey_tables.bands {
+            1 => self.grey_pass_n::<1>(sc, n, out),
+            2 => self.grey_pass_n::<2>(sc, n, out),
+            _ => self.grey_pass_any(sc, n, out),
+        }
+    }
+
+    /// A gathered hit's place in the grey path's tables: its facet's
+    /// record, material `mi`, the emissivity angle row `a0` and the
+    /// fraction `ta` toward `a0 + 1`, the range node `ri` and fraction
+    /// `rx` from `ri − 1`, the height node `ai` and fraction `ax` toward
+    /// `ai + 1`, and the diffuse-reflected sun `sd` of its seen face.
+    #[inline(always)]
+    fn grey_place(&self, hit: &GreyHit) -> GreyPlace<'_> {
         let gt = &self.grey_tables;
-        let (nb, nodes) = (gt.bands, gt.nodes);
+        let g = &self.grey[hit.facet as usize];
+        let mi = g.mi as usize;
+        let th = hit.theta;
+        // θ ≥ 0: truncation is the floor.
+        let a0 = (th as usize).min(ANGLE_ROWS - 2);
+        let (ri, rx) = gt.locate(hit.range);
+        let (ai, ax) = gt.locate_height(hit.z);
+        let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
+            g.sd
+        } else {
+            0.0
+        };
+        GreyPlace {
+            g,
+            mi,
+            a0,
+            ta: th - a0 as f32,
+            n0: ai * gt.range_nodes + ri - 1,
+            rx,
+            ax,
+            sd,
+        }
+    }
+
+    /// [`Shader::grey_pass`] with `NB` bands.
+    fn grey_pass_n<const NB: usize>(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        debug_assert_eq!(gt.bands, NB);
+        let (out, _) = out.split_at_mut(NB * n);
         let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
-        // Next height node: `range_nodes` nodes on (none with one height).
+        let nt = gt.temperatures;
+        // Steps in the Planck table: to the next range node, to the next
+        // height node (`range_nodes` path nodes on); in the node terms, to
+        // the next height node.
+        let rs = nt * NB;
         let two = gt.heights.len() >= 2;
-        let hstep = if two { gt.range_nodes } else { 0 };
+        let (hp, hq) = (gt.range_nodes * nt * NB, 3 * gt.range_nodes * NB);
         for hit in &sc.grey {
             let i = hit.ray as usize;
-            let g = &self.grey[hit.facet as usize];
-            let mi = g.mi as usize;
-            let th = hit.theta;
-            // θ ≥ 0: truncation is the floor.
-            let a0 = (th as usize).min(ANGLE_ROWS - 2);
-            let ta = th - a0 as f32;
-            let (ri, rx) = gt.locate(hit.range);
-            let (ai, ax) = gt.locate_height(hit.z);
-            let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
-                g.sd
-            } else {
-                0.0
-            };
-            let tr = gt.tr[mi];
-            let (big_f, one_f) = (g.big_f, 1.0 - g.big_f);
-            let (ft, fg) = (g.ft, g.fg);
-            // Entry offsets: emissivity at angle rows a0, a0 + 1 (+nb);
-            // Planck rows k, k + 1 (+nodes·nb) at range nodes ri − 1, ri
-            // (+nb) of height node ai (+hstep·nb: ai + 1); sky, sun, path
-            // at node ri − 1 (+0, +nb, +2nb) and ri (+3nb).
-            let e = (mi * ANGLE_ROWS + a0) * nb;
-            let (kt, kg) = (g.kt as usize, g.kg as usize);
-            let n0 = ai * gt.range_nodes + ri - 1;
-            let t0 = (kt * nodes + n0) * nb;
-            let g0 = (kg * nodes + n0) * nb;
-            let up = nodes * nb;
-            let q = 3 * n0 * nb;
-            let (hp, hq) = (hstep * nb, 3 * hstep * nb);
+            let p = self.grey_place(hit);
+            let g = p.g;
+            let tr = gt.tr[p.mi];
+            let one_f = 1.0 - g.big_f;
+            let t0 = (p.n0 * nt + g.kt as usize) * NB;
+            let g0 = (p.n0 * nt + g.kg as usize) * NB;
+            let q = 3 * p.n0 * NB;
+            // Temperature first, then range, then height, as the reference.
+            let mut bt = grey_planck::<NB>(pl, t0, rs, g.ft, p.rx);
+            let mut bg = grey_planck::<NB>(pl, g0, rs, g.fg, p.rx);
+            let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, p.rx);
+            if two {
+                let bt1 = grey_planck::<NB>(pl, t0 + hp, rs, g.ft, p.rx);
+                let bg1 = grey_planck::<NB>(pl, g0 + hp, rs, g.fg, p.rx);
+                let [sky1, sun1, lu1] = grey_node_terms::<NB>(nd, q + hq, p.rx);
+                for b in 0..NB {
+                    bt[b] = lerp(bt[b], bt1[b], p.ax);
+                    bg[b] = lerp(bg[b], bg1[b], p.ax);
+                    sky[b] = lerp(sky[b], sky1[b], p.ax);
+                    sun[b] = lerp(sun[b], sun1[b], p.ax);
+                    lu[b] = lerp(lu[b], lu1[b], p.ax);
+                }
+            }
+            let e = &ep[(p.mi * ANGLE_ROWS + p.a0) * NB..][..2 * NB];
+            for b in 0..NB {
+                let eps = lerp(e[b], e[NB + b], p.ta);
+                let r = (1.0 - eps - tr).max(0.0);
+                let env = g.big_f * sky[b] + one_f * bg[b];
+                out[b * n + i] = eps * bt[b] + r * (env + p.sd * sun[b]) + tr * env + lu[b];
+            }
+        }
+    }
+
+    /// [`Shader::grey_pass`] with any number of bands.
+    fn grey_pass_any(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        let gt = &self.grey_tables;
+        let nb = gt.bands;
+        let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
+        let nt = gt.temperatures;
+        let rs = nt * nb;
+        let two = gt.heights.len() >= 2;
+        let (hp, hq) = (gt.range_nodes * nt * nb, 3 * gt.range_nodes * nb);
+        for hit in &sc.grey {
+            let i = hit.ray as usize;
+            let p = self.grey_place(hit);
+            let g = p.g;
+            let tr = gt.tr[p.mi];
+            let one_f = 1.0 - g.big_f;
+            let e = (p.mi * ANGLE_ROWS + p.a0) * nb;
+            let t0 = (p.n0 * nt + g.kt as usize) * nb;
+            let g0 = (p.n0 * nt + g.kg as usize) * nb;
+            let q = 3 * p.n0 * nb;
             for b in 0..nb {
-                let eps = ep[e + b] + ta * (ep[e + nb + b] - ep[e + b]);
+                let eps = lerp(ep[e + b], ep[e + nb + b], p.ta);
                 // Temperature first, then range, then height, as the
                 // reference.
-                // (Direct calls, no closure: a closure here was not inlined,
-                // and building its environment per band cost more than the
-                // lookups.)
                 let [mut bt, mut bg, mut sky, mut sun, mut lu] =
-                    grey_node(pl, nd, [up, nb, b], [t0, g0, q], [ft, fg, rx]);
+                    grey_node(pl, nd, [nb, rs, b], [t0, g0, q], [g.ft, g.fg, p.rx]);
                 if two {
                     let [bt1, bg1, sky1, sun1, lu1] = grey_node(
                         pl,
                         nd,
-                        [up, nb, b],
+                        [nb, rs, b],
                         [t0 + hp, g0 + hp, q + hq],
-                        [ft, fg, rx],
+                        [g.ft, g.fg, p.rx],
                     );
-                    bt += ax * (bt1 - bt);
-                    bg += ax * (bg1 - bg);
-                    sky += ax * (sky1 - sky);
-                    sun += ax * (sun1 - sun);
-                    lu += ax * (lu1 - lu);
+                    bt = lerp(bt, bt1, p.ax);
+                    bg = lerp(bg, bg1, p.ax);
+                    sky = lerp(sky, sky1, p.ax);
+                    sun = lerp(sun, sun1, p.ax);
+                    lu = lerp(lu, lu1, p.ax);
                 }
                 let r = (1.0 - eps - tr).max(0.0);
-                let env = big_f * sky + one_f * bg;
-                out[b * n + i] = eps * bt + r * (env + sd * sun) + tr * env + lu;
+                let env = g.big_f * sky + one_f * bg;
+                out[b * n + i] = eps * bt + r * (env + p.sd * sun) + tr * env + lu;
             }
         }
     }
@@ -615,5 +747,53 @@ impl Shader<'_> {
             } as f32;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GreyTables;
+
+    /// The node a range lies in, from its definition: `i` in
+    /// `1..=last` with `x[i − 1] ≤ r < x[i]` (clamped at both ends), and
+    /// the fraction from `x[i − 1]`.
+    fn brute(x: &[f32], r: f32) -> (usize, f32) {
+        let last = x.len() - 1;
+        let i = x.partition_point(|&v| v <= r).clamp(1, last);
+        (i, ((r - x[i - 1]) / (x[i] - x[i - 1])).clamp(0.0, 1.0))
+    }
+
+    /// [`GreyTables::locate`] (first guess from √r, then a branch-free step
+    /// each way, then the loops) finds the node of its definition for the
+    /// quadratic spacing of the path tables and for irregular spacings,
+    /// at, between, before and beyond the nodes.
+    #[test]
+    fn locate_finds_the_node_of_any_range_for_any_spacing() {
+        let quadratic: Vec<f64> = (0..48)
+            .map(|i| 5000.0 * (i as f64 / 47.0).powi(2))
+            .collect();
+        let mut irregular = vec![0.0];
+        let mut seed = 0x2545_f491_u64;
+        for _ in 0..12 {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let step = 1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64 * 900.0;
+            irregular.push(irregular.last().unwrap() + step);
+        }
+        for ranges in [quadratic, irregular, vec![0.0, 10.0]] {
+            let t = GreyTables::new(&[], &[], &ranges, &[], &[]);
+            let x = &t.ranges;
+            let last = *x.last().unwrap();
+            let mut probes: Vec<f32> = x.clone();
+            probes.extend(x.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+            probes.extend(x.iter().map(|&v| v * (1.0 + 1e-7)));
+            probes.extend(x.iter().map(|&v| v * (1.0 - 1e-7)));
+            probes.extend([-5.0, 0.0, last * 1.5, last * 10.0]);
+            for r in probes {
+                let (i, f) = t.locate(r);
+                let (j, g) = brute(x, r);
+                assert_eq!(i, j, "range {r} with nodes {x:?}");
+                assert!((f - g).abs() <= 1e-6, "range {r}: fraction {f} against {g}");
+            }
+        }
     }
 }

@@ -84,6 +84,7 @@ pub use surface::PLANCK_TABLE_STEP_K;
 pub use truth::TruthOut;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::path::PathTables;
 use crate::geometry::SceneGeometry;
@@ -200,50 +201,66 @@ impl<'a> Shader<'a> {
             .iter()
             .map(Emissivity::from_material)
             .collect::<crate::Result<Vec<_>>>()?;
-        let mut tables = Vec::new();
+        // Each band's sources, in parallel (bands, and within a band the
+        // sky, its directions and the sun: the same values as in turn).
+        let sources = bands
+            .par_iter()
+            .map(|band| -> crate::Result<_> {
+                let wl = band.wavelengths_um();
+                let (sky, sun) = rayon::join(
+                    || -> crate::Result<(Vec<f64>, Vec<Vec<f64>>)> {
+                        match &conditions.sky {
+                            Sky::Blackbody { temperature_k } => {
+                                let sky: Vec<f64> = wl
+                                    .iter()
+                                    .map(|&l| planck.radiance(l, *temperature_k))
+                                    .collect();
+                                Ok((sky.clone(), vec![sky; SKY_NODES]))
+                            }
+                            Sky::Atmosphere(c) => {
+                                let zeniths: Vec<f64> = (0..SKY_NODES)
+                                    .map(|k| sky_node_cos(k).clamp(-1.0, 1.0).acos().to_degrees())
+                                    .collect();
+                                let atm = &conditions.atmosphere;
+                                // (One call for all directions: each call
+                                // computes the broadband scale, which costs
+                                // more than several directions.)
+                                let (iso, dir) = rayon::join(
+                                    || atm.sky_radiance(c, band.grid()),
+                                    || atm.sky_radiances_toward(c, &zeniths, band.grid()),
+                                );
+                                Ok((iso?, dir?))
+                            }
+                        }
+                    },
+                    || match conditions.sun {
+                        Some(s) if s.direction.z > 0.0 => {
+                            surface_solar_spectrum(&conditions.atmosphere, &planck, &s, band.grid())
+                        }
+                        _ => Ok(vec![0.0; wl.len()]),
+                    },
+                );
+                let (sky, sky_dir) = sky?;
+                let ground = wl
+                    .iter()
+                    .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
+                    .collect();
+                let eps = emissivities
+                    .iter()
+                    .map(|e| {
+                        let mut rows = Vec::with_capacity(ANGLE_ROWS * wl.len());
+                        for a in 0..ANGLE_ROWS {
+                            rows.extend(wl.iter().map(|&l| e.eval(l, a as f64)));
+                        }
+                        rows
+                    })
+                    .collect();
+                Ok((sky, sky_dir, ground, sun?, eps))
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
+        let mut tables = Vec::with_capacity(bands.len());
         let mut wavelengths = Vec::new();
-        for band in bands {
-            let wl = band.wavelengths_um();
-            let (sky, sky_dir) = match &conditions.sky {
-                Sky::Blackbody { temperature_k } => {
-                    let sky: Vec<f64> = wl
-                        .iter()
-                        .map(|&l| planck.radiance(l, *temperature_k))
-                        .collect();
-                    (sky.clone(), vec![sky; SKY_NODES])
-                }
-                Sky::Atmosphere(c) => {
-                    let zeniths: Vec<f64> = (0..SKY_NODES)
-                        .map(|k| sky_node_cos(k).clamp(-1.0, 1.0).acos().to_degrees())
-                        .collect();
-                    (
-                        conditions.atmosphere.sky_radiance(c, band.grid())?,
-                        conditions
-                            .atmosphere
-                            .sky_radiances_toward(c, &zeniths, band.grid())?,
-                    )
-                }
-            };
-            let ground = wl
-                .iter()
-                .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
-                .collect();
-            let sun = match conditions.sun {
-                Some(s) if s.direction.z > 0.0 => {
-                    surface_solar_spectrum(&conditions.atmosphere, &planck, &s, band.grid())?
-                }
-                _ => vec![0.0; wl.len()],
-            };
-            let eps = emissivities
-                .iter()
-                .map(|e| {
-                    let mut rows = Vec::with_capacity(ANGLE_ROWS * wl.len());
-                    for a in 0..ANGLE_ROWS {
-                        rows.extend(wl.iter().map(|&l| e.eval(l, a as f64)));
-                    }
-                    rows
-                })
-                .collect();
+        for (band, (sky, sky_dir, ground, sun, eps)) in bands.iter().zip(sources) {
             tables.push(BandTables {
                 band: band.clone(),
                 start: wavelengths.len(),
@@ -253,7 +270,7 @@ impl<'a> Shader<'a> {
                 sun,
                 eps,
             });
-            wavelengths.extend_from_slice(wl);
+            wavelengths.extend_from_slice(band.wavelengths_um());
         }
         let total = wavelengths.len();
         // Planck table over the scene's temperature range.
@@ -277,11 +294,16 @@ impl<'a> Shader<'a> {
             let t0 = (lo / PLANCK_TABLE_STEP_K).floor() * PLANCK_TABLE_STEP_K;
             let nodes =
                 (((hi - t0) / PLANCK_TABLE_STEP_K).ceil() as usize + 2).min(PLANCK_TABLE_MAX_NODES);
-            let mut values = Vec::with_capacity(nodes * total);
-            for k in 0..nodes {
-                let t = t0 + k as f64 * PLANCK_TABLE_STEP_K;
-                values.extend(wavelengths.iter().map(|&l| planck.radiance(l, t)));
-            }
+            let mut values = vec![0.0; nodes * total];
+            values
+                .par_chunks_mut(total)
+                .enumerate()
+                .for_each(|(k, row)| {
+                    let t = t0 + k as f64 * PLANCK_TABLE_STEP_K;
+                    for (v, &l) in row.iter_mut().zip(&wavelengths) {
+                        *v = planck.radiance(l, t);
+                    }
+                });
             PlanckTable { t0, nodes, values }
         } else {
             PlanckTable {

@@ -3,6 +3,8 @@
 //! weights per path node ([`FastPath`]), so that the band stage reads
 //! `Σ w·τ₂·X` and `Σ w·L_u` directly.
 
+use rayon::prelude::*;
+
 use super::Shader;
 use super::band::{GreyTables, Integrals, LANES};
 use crate::render::path::PathTables;
@@ -63,8 +65,10 @@ impl Shader<'_> {
                 .iter()
                 .enumerate()
                 .map(|(b, t)| {
+                    // Per node: nodes × temperature nodes × wavelengths
+                    // products, in parallel.
                     p.bands[b]
-                        .iter()
+                        .par_iter()
                         .map(|(tau, _)| {
                             let q: Vec<f64> = t
                                 .band
