@@ -302,6 +302,9 @@ pub fn reflected_shortwave_strided(
             );
             std::mem::swap(&mut cur, &mut next);
         }
+        // Free what the bounces needed before the last steps touch new pages
+        // (these temporaries set the peak memory of a large scene).
+        drop((next, e0_c, e0_direct));
         // R⁽ᴺ⁾ = R⁽¹⁾ + the later bounces' addition, linear between nodes.
         refl_direct
             .par_chunks_mut(nd)
