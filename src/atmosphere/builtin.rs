@@ -197,6 +197,22 @@ pub struct BuiltinAtmosphere {
     met: SurfaceMet,
     params: BuiltinParams,
     planck: Planck,
+    /// The broadband integral of the unscaled sky shape
+    /// ([`BuiltinAtmosphere::sky_scale`]), computed once: it depends only on
+    /// the fields above, which do not change after construction.
+    broadband: Broadband,
+}
+
+/// A once-computed broadband sky integral, W m⁻² sr⁻¹. Not part of the
+/// atmosphere's identity: two atmospheres are equal whether or not either
+/// has computed it.
+#[derive(Debug, Clone, Default)]
+struct Broadband(std::sync::OnceLock<f64>);
+
+impl PartialEq for Broadband {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// Thermodynamic state at one altitude.
@@ -288,6 +304,7 @@ impl BuiltinAtmosphere {
             met,
             params,
             planck: Planck::default(),
+            broadband: Broadband::default(),
         })
     }
 
@@ -566,8 +583,20 @@ impl BuiltinAtmosphere {
         if !(sky_longwave_w_m2.is_finite() && sky_longwave_w_m2 > 0.0) {
             return Ok(1.0);
         }
-        // Broadband integral of the shape: 3–16 µm from the model at
-        // 0.02 µm, 16 µm–∞ a blackbody at the air temperature.
+        let total = match self.broadband.0.get() {
+            Some(&v) => v,
+            None => {
+                let v = self.broadband_sky()?;
+                *self.broadband.0.get_or_init(|| v)
+            }
+        };
+        Ok(sky_longwave_w_m2 / std::f64::consts::PI / total)
+    }
+
+    /// The broadband integral of the unscaled sky shape at the diffusivity
+    /// zenith, W m⁻² sr⁻¹: 3–16 µm from the model at 0.02 µm, 16 µm–∞ a
+    /// blackbody at the air temperature.
+    fn broadband_sky(&self) -> Result<f64> {
         let g = SpectralGrid::uniform(3.0, 16.0, 0.02)?;
         let model = g.integrate(&self.sky_shape(DIFFUSIVITY_ZENITH_DEG, &g)?);
         let t = self.met.air_temperature_k;
@@ -576,7 +605,6 @@ impl BuiltinAtmosphere {
             / std::f64::consts::PI;
         let below16 = SpectralGrid::uniform(0.5, 16.0, 0.005)?;
         let bb_below = below16.integrate(&below16.blackbody(&self.planck, t));
-        let total = model + (sigma_t4_pi - bb_below);
-        Ok(sky_longwave_w_m2 / std::f64::consts::PI / total)
+        Ok(model + (sigma_t4_pi - bb_below))
     }
 }
