@@ -867,6 +867,8 @@ fn the_registry_lists_every_parameter_and_the_list_is_a_params_file() {
     let mut wet = db.get("crop").unwrap().clone();
     // With kB⁻¹ from the canopy, so that its leaf width is a parameter.
     wet.surface_energy.as_mut().unwrap().heat_roughness = irsig::material::HeatRoughness::Su2001;
+    // Leaves and soil apart, so that the clumping and the soil's porosity are parameters.
+    wet.surface_energy.as_mut().unwrap().canopy = irsig::material::CanopyModel::TwoSource;
     for row in registry::MATERIAL_PARAMETERS {
         // The surface-energy rows on a material that has the block.
         let m = if row.name.starts_with("surface_energy.") {

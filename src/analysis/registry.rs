@@ -319,6 +319,30 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         "characteristic leaf dimension for kB⁻¹ (su2001): grass blades ≈ 5 mm to broad leaves ≈ 0.3 m (Campbell & Norman 1998, Introduction to Environmental Biophysics, ch. 7)"
     ),
     surface_param!(
+        "clumping_index",
+        "1",
+        0.3,
+        1.0,
+        (0.0, 1.0, true),
+        |s| (s.canopy == crate::material::CanopyModel::TwoSource).then(|| s.clumping()),
+        |s, v| if v != s.clumping() {
+            s.clumping_index = Some(v)
+        },
+        "two_source foliage clumping Ω: row crops and shrubs 0.5–0.9, random leaves 1 (Kustas & Norman 1999, Agric. For. Meteorol. 94:13; Campbell & Norman 1998, ch. 15)"
+    ),
+    surface_param!(
+        "saturation_m3_m3",
+        "m³/m³",
+        0.3,
+        0.6,
+        FRACTION,
+        |s| (s.canopy == crate::material::CanopyModel::TwoSource).then(|| s.saturation()),
+        |s, v| if v != s.saturation() {
+            s.saturation_m3_m3 = Some(v)
+        },
+        "two_source soil porosity for the soil's evaporation resistance: sand 0.395 to clay 0.482 (Clapp & Hornberger 1978, Water Resour. Res. 14:601, Table 2); irsig widens to 0.3–0.6"
+    ),
+    surface_param!(
         "skin_conductance_w_m2_k",
         "W/(m²·K)",
         3.0,
