@@ -783,25 +783,29 @@ impl Tangent {
         // X = Σ_{j<c} Φʲ Ψ: sensitivity of the real run's start state to the
         // sources, nodes × src.
         let mut x = vec![0.0; nodes * src];
+        // One period's map of a node-by-source matrix: `Φ·term`.
+        let period_step = |term: &[f64]| -> Vec<f64> {
+            let phi = |i: usize, l: usize| self.period[i * cols + src + l];
+            let mut next = vec![0.0; nodes * src];
+            for i in 0..nodes {
+                for l in 0..nodes {
+                    let f = phi(i, l);
+                    if f == 0.0 {
+                        continue;
+                    }
+                    for j in 0..src {
+                        next[i * src + j] += f * term[l * src + j];
+                    }
+                }
+            }
+            next
+        };
         if cycles > 0 && !self.period.is_empty() {
             let psi = |i: usize, j: usize| self.period[i * cols + j];
-            let phi = |i: usize, l: usize| self.period[i * cols + src + l];
             let mut term: Vec<f64> = (0..nodes * src).map(|q| psi(q / src, q % src)).collect();
             x.copy_from_slice(&term);
             for _ in 1..cycles {
-                let mut next = vec![0.0; nodes * src];
-                for i in 0..nodes {
-                    for l in 0..nodes {
-                        let f = phi(i, l);
-                        if f == 0.0 {
-                            continue;
-                        }
-                        for j in 0..src {
-                            next[i * src + j] += f * term[l * src + j];
-                        }
-                    }
-                }
-                term = next;
+                term = period_step(&term);
                 x.iter_mut().zip(&term).for_each(|(a, b)| *a += b);
             }
         }
@@ -810,7 +814,6 @@ impl Tangent {
             && cycles > 0
             && !self.period.is_empty()
         {
-            let phi = |i: usize, l: usize| self.period[i * cols + src + l];
             let mut term = vec![0.0; nodes * src];
             for i in 0..nodes {
                 for (k, &w) in init.weights.iter().enumerate().take(r) {
@@ -822,19 +825,7 @@ impl Tangent {
                 }
             }
             for _ in 0..cycles {
-                let mut next = vec![0.0; nodes * src];
-                for i in 0..nodes {
-                    for l in 0..nodes {
-                        let f = phi(i, l);
-                        if f == 0.0 {
-                            continue;
-                        }
-                        for j in 0..src {
-                            next[i * src + j] += f * term[l * src + j];
-                        }
-                    }
-                }
-                term = next;
+                term = period_step(&term);
             }
             x.iter_mut().zip(&term).for_each(|(a, b)| *a += b);
         }
