@@ -142,12 +142,10 @@ impl PerHit {
         let per = facets.per_facet.max(1) as f32;
         let mixed = (0..n)
             .map(|f| {
-                let s = solar.sun_fraction(f);
-                let c = solar.cos_incidence(f);
-                image
-                    .records
-                    .iter()
-                    .any(|&k| c[k] > 0.0 && s[k] > 0.0 && s[k] < 1.0)
+                image.records.iter().any(|&k| {
+                    let s = solar.sun_fraction_at(f, k);
+                    solar.cos_incidence_at(f, k) > 0.0 && s > 0.0 && s < 1.0
+                })
             })
             .collect();
         PerHit {
@@ -208,12 +206,11 @@ impl PerHit {
                     if b == u32::MAX {
                         return (lo, hi);
                     }
-                    let c = self.solar.cos_incidence(f);
                     let row = &self.rows[b as usize * r..(b as usize + 1) * r];
                     let m: f32 = row
                         .iter()
                         .zip(&self.records)
-                        .map(|(g, &k)| (g * c[k].max(0.0)).abs())
+                        .map(|(g, &k)| (g * self.solar.cos_incidence_at(f, k).max(0.0)).abs())
                         .sum();
                     (lo.min(t - m), hi.max(t + m))
                 },
@@ -274,17 +271,17 @@ impl PerHit {
         let mut state = vec![NONE; hits.len() * r];
         let mut coarse = vec![false; hits.len() * r];
         for (j, &(f, _)) in hits.iter().enumerate() {
-            let c = self.solar.cos_incidence(f as usize);
+            let c = |k: usize| self.solar.cos_incidence_at(f as usize, self.records[k]);
             let st = &mut state[j * r..(j + 1) * r];
             let co = &mut coarse[j * r..(j + 1) * r];
             let mut k = 0;
             while k < r {
-                if c[self.records[k]] <= 0.0 {
+                if c(k) <= 0.0 {
                     k += 1;
                     continue;
                 }
                 let a = k;
-                while k + 1 < r && c[self.records[k + 1]] > 0.0 {
+                while k + 1 < r && c(k + 1) > 0.0 {
                     k += 1;
                 }
                 st[a..=k].fill(UNKNOWN);
@@ -351,7 +348,8 @@ impl PerHit {
         let mut delta: Vec<f32> = Vec::new();
         for (j, &(f, _)) in hits.iter().enumerate() {
             let f = f as usize;
-            let (s, c) = (self.solar.sun_fraction(f), self.solar.cos_incidence(f));
+            let s = |k: usize| self.solar.sun_fraction_at(f, k);
+            let c = |k: usize| self.solar.cos_incidence_at(f, k);
             let b = self.block_of[f] as usize;
             let row = &self.rows[b * r..(b + 1) * r];
             let st = &mut state[j * r..(j + 1) * r];
@@ -370,10 +368,10 @@ impl PerHit {
                 if v == NONE {
                     continue;
                 }
-                let h = s[self.records[k]].clamp(0.0, 1.0);
+                let h = s(self.records[k]).clamp(0.0, 1.0);
                 let own = if v == LIT { 1.0 } else { 0.0 };
                 if own != h {
-                    let d = c[self.records[k]].max(0.0) * (own - h);
+                    let d = c(self.records[k]).max(0.0) * (own - h);
                     dt += row[k] * d;
                     diff.push((k, d));
                 }
@@ -386,7 +384,7 @@ impl PerHit {
                 sun_fraction: match st[r - 1] {
                     LIT => 1.0,
                     SHADED => 0.0,
-                    _ => s[self.records[r - 1]],
+                    _ => s(self.records[r - 1]),
                 },
             });
         }
