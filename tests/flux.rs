@@ -628,6 +628,8 @@ fn stock_materials_on_measured_forcing() {
             "crop two_source",
             "grass two_source",
             "crop growing two_source",
+            "crop growing leafgrowth",
+            "crop growing leafgrowth two_source",
         ] {
             if name.contains("growing") && !us_crt {
                 continue;
@@ -640,6 +642,11 @@ fn stock_materials_on_measured_forcing() {
                     }
                     if name.contains("growing") {
                         us_crt_heights(s);
+                    }
+                    // Leaves that grow with the height up to the stock LAI:
+                    // METRIC's field-crop 6.8 m⁻¹ (materials docs).
+                    if name.contains("leafgrowth") {
+                        s.leaf_area_per_height_per_m = Some(6.8);
                     }
                     // A diagnostic, not a stock value: the crop r_s,min of
                     // Noilhan & Planton (1989) and Noah's cropland table.
