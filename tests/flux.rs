@@ -588,8 +588,10 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
 /// The thermal model on measured forcing, as a user would validate it: the
 /// stock `crop` (a closed field crop, the surface of both sites: soybean)
 /// and `grass`, uncalibrated; each also with kB⁻¹ from its canopy
-/// (`su2001`); at US-CRT the crop growing to the README's heights; and,
-/// as a diagnostic of the partition, the crop with r_s,min = 40 s/m.
+/// (`su2001`); as two sources; at US-CRT the crop growing to the README's
+/// heights, with its leaves growing with them (LAI = min(6.8 h, LAI)); and,
+/// as diagnostics of the partition, the crop with r_s,min = 40 s/m and the
+/// growing two-source crop with LAI 5.
 /// Printed for the validation page (`docs/physics/validation.md`).
 /// Asserted: the stock crop, with either heat roughness and growing,
 /// beats the naive "T_surface = T_air" on both sites (issue 16's goal for
@@ -630,6 +632,7 @@ fn stock_materials_on_measured_forcing() {
             "crop growing two_source",
             "crop growing leafgrowth",
             "crop growing leafgrowth two_source",
+            "crop growing leafgrowth lai5 two_source",
         ] {
             if name.contains("growing") && !us_crt {
                 continue;
@@ -647,6 +650,11 @@ fn stock_materials_on_measured_forcing() {
                     // METRIC's field-crop 6.8 m⁻¹ (materials docs).
                     if name.contains("leafgrowth") {
                         s.leaf_area_per_height_per_m = Some(6.8);
+                    }
+                    // A diagnostic, not a stock value: a closed soybean
+                    // canopy of LAI 5 instead of the stock crop's 3.
+                    if name.contains("lai5") {
+                        s.leaf_area_index = 5.0;
                     }
                     // A diagnostic, not a stock value: the crop r_s,min of
                     // Noilhan & Planton (1989) and Noah's cropland table.

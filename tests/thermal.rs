@@ -1774,3 +1774,64 @@ fn mean_steady_start_settles_slow_surfaces() {
         assert!(mean <= bound, "{name}: {mean} K vs {first_air} K");
     }
 }
+
+/// Leaves that grow with the canopy height (`leaf_area_per_height_per_m`,
+/// a): where the phenology gives no LAI, the LAI at each record is
+/// `min(a·h, LAI)`; a phenology's own LAI wins; without `a` the LAI is the
+/// block's at every height; and a growth that reaches the full LAI at every
+/// date gives exactly the exchange without it.
+#[test]
+fn leaves_grow_with_the_canopy_height() {
+    use irsig::material::{Phenology, PhenologyPoint, SurfaceEnergySpec};
+    use irsig::thermal::latent::SurfaceResistance;
+    use irsig::thermal::{Exchange, LandSurface};
+    let db = irsig::material::stock::stock().unwrap();
+    let crop = db.get("crop").unwrap().clone();
+    let pt = |date: &str, h: f64, lai: Option<f64>| PhenologyPoint {
+        date: date.parse().unwrap(),
+        canopy_height_m: Some(h),
+        leaf_area_index: lai,
+    };
+    let heights = Phenology::try_from(vec![
+        pt("1970-01-01", 0.15, None),
+        pt("1970-01-11", 0.9, None),
+    ])
+    .unwrap();
+    let lai_at = |spec: &SurfaceEnergySpec, day: f64| {
+        match LandSurface::from_spec(spec)
+            .unwrap()
+            .on(day * 86_400.0)
+            .resistance
+        {
+            SurfaceResistance::Canopy(js) => js.leaf_area_index,
+            r => panic!("{r:?}"),
+        }
+    };
+    let mut spec = crop.surface_energy.unwrap();
+    spec.phenology = heights;
+    assert_eq!(lai_at(&spec, 0.0), 3.0);
+    spec.leaf_area_per_height_per_m = Some(6.8);
+    assert!((lai_at(&spec, 0.0) - 6.8 * 0.15).abs() < 1e-12);
+    // Day 2: h = 0.15 + 0.075·2 = 0.3 m.
+    assert!((lai_at(&spec, 2.0) - 6.8 * 0.3).abs() < 1e-12);
+    assert_eq!(lai_at(&spec, 10.0), 3.0);
+    // A constant canopy grows to min(a·h, LAI) too: 1 m gives the full 3.
+    let mut still = crop.surface_energy.unwrap();
+    still.leaf_area_per_height_per_m = Some(2.0);
+    assert_eq!(lai_at(&still, 5.0), 2.0);
+    // A phenology that gives the LAI keeps it.
+    let mut given = spec;
+    given.phenology = Phenology::try_from(vec![pt("1970-01-01", 0.15, Some(0.5))]).unwrap();
+    assert_eq!(lai_at(&given, 0.0), 0.5);
+    // Reaching the full LAI everywhere: exactly the model without growth.
+    let (forcing, _) = synthetic_days(true);
+    let exchange = |a: Option<f64>| {
+        let mut s = spec;
+        s.leaf_area_per_height_per_m = a;
+        let mut m = crop.clone();
+        m.surface_energy = Some(s);
+        Exchange::new(&SlabProperties::from_material(&m).unwrap(), &forcing).unwrap()
+    };
+    assert_eq!(exchange(Some(1e3)), exchange(None));
+    assert_ne!(exchange(Some(6.8)), exchange(None));
+}

@@ -778,6 +778,17 @@ mod tests {
             parse(s).problems().into_iter().map(|(f, _)| f).collect()
         };
         let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3"#;
+        for a in ["0", "-6.8"] {
+            assert_eq!(
+                fields(&format!(r#"{{{base}, "leaf_area_per_height_per_m": {a}}}"#)),
+                ["leaf_area_per_height_per_m"]
+            );
+        }
+        assert!(fields(&format!(r#"{{{base}, "leaf_area_per_height_per_m": 6.8}}"#)).is_empty());
+        assert_eq!(
+            fields(r#"{"kind": "bare_soil", "leaf_area_per_height_per_m": 6.8}"#),
+            ["leaf_area_per_height_per_m"]
+        );
         assert!(
             fields(&format!(
                 r#"{{{base}, "phenology": [{{"date": "2011-08-01"}}, {{"date": "2011-07-01"}}]}}"#
