@@ -2194,7 +2194,10 @@ fn calibrated_crop_predicts_the_second_half_of_both_flux_sites() {
         assert!(rmse <= 1.5, "{file}: second-half RMSE {rmse}");
         if growing {
             let c = constant_lai_rmse.unwrap();
-            assert!(rmse < c - 0.2, "{file}: growing {rmse} K, constant LAI {c} K");
+            assert!(
+                rmse < c - 0.2,
+                "{file}: growing {rmse} K, constant LAI {c} K"
+            );
         }
     }
 }

@@ -1667,8 +1667,8 @@ fn a_wet_two_source_canopy_dries_and_returns_to_the_dry_solution() {
         forcing.direct_normal_w_m2[k] = day.direct_normal_w_m2[j];
         forcing.diffuse_horizontal_w_m2[k] = day.diffuse_horizontal_w_m2[j];
         forcing.sky_longwave_w_m2[k] = day.sky_longwave_w_m2[j];
-        forcing.global_horizontal_w_m2[k] = day.diffuse_horizontal_w_m2[j]
-            + day.direct_normal_w_m2[j] * f64::from(day_cos[j]);
+        forcing.global_horizontal_w_m2[k] =
+            day.diffuse_horizontal_w_m2[j] + day.direct_normal_w_m2[j] * f64::from(day_cos[j]);
         cos.push(day_cos[j]);
     }
     let sun = vec![1.0f32; n];
@@ -1797,15 +1797,13 @@ fn leaves_grow_with_the_canopy_height() {
         pt("1970-01-11", 0.9, None),
     ])
     .unwrap();
-    let lai_at = |spec: &SurfaceEnergySpec, day: f64| {
-        match LandSurface::from_spec(spec)
-            .unwrap()
-            .on(day * 86_400.0)
-            .resistance
-        {
-            SurfaceResistance::Canopy(js) => js.leaf_area_index,
-            r => panic!("{r:?}"),
-        }
+    let lai_at = |spec: &SurfaceEnergySpec, day: f64| match LandSurface::from_spec(spec)
+        .unwrap()
+        .on(day * 86_400.0)
+        .resistance
+    {
+        SurfaceResistance::Canopy(js) => js.leaf_area_index,
+        r => panic!("{r:?}"),
     };
     let mut spec = crop.surface_energy.unwrap();
     spec.phenology = heights;

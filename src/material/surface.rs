@@ -328,7 +328,7 @@ pub struct SurfaceEnergySpec {
     /// A canopy that grows: dated heights and leaf area indices
     /// ([`Phenology`]; default none: constant). The canopy's roughness,
     /// displacement, stomatal conductance and kB⁻¹ follow it; its heat
-    /// capacity and rain store keep the block's `leaf_area_index`.
+    /// capacity and the big leaf's rain store keep the block's `leaf_area_index`.
     #[serde(default, skip_serializing_if = "Phenology::is_empty")]
     #[schemars(with = "Vec<PhenologyPoint>")]
     pub phenology: Phenology,

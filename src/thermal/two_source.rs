@@ -48,6 +48,11 @@
 //! The leaves hold no heat (NKA95): `Rn_c = H_c + LE_c`; the soil surface
 //! is the front node of the material's slab: `G = Rn_s − H_s − LE_s`.
 //!
+//! **Rain.** Leaves and soil each hold a Deardorff (1978) store; a wet
+//! fraction δ of a source evaporates through its boundary layer alone, so
+//! the vapour conductances become `ρc_p/γ ((1 − δ_c)/(r_x + r_st) + δ_c/r_x)`
+//! and `ρc_p/γ ((1 − δ_s)/(r_soil + r_ss) + δ_s/r_soil)` ([`wet`]).
+//!
 //! **Radiometric temperature** (NKA95 eq. 1–2): at view zenith θ,
 //! `T_rad⁴ = f_c(θ) T_c⁴ + (1 − f_c(θ)) T_s⁴` with
 //! `f_c(θ) = 1 − exp(−0.5 Ω LAI/cos θ)`. The solver gives it at nadir
@@ -287,7 +292,8 @@ pub(crate) fn wet(
         if k + 1 < forcing.len() && (leaves > 0.0 || soil > 0.0) {
             let dt = forcing.times_s[k + 1] - forcing.times_s[k];
             let lambda = latent_heat_of_vaporisation_j_kg(x.air.temperature_k());
-            let (le_c, le_s) = TwoSourceStep::new(x, t_c[k], t_s[k]).wet_latent_w_m2(t_c[k], t_s[k]);
+            let (le_c, le_s) =
+                TwoSourceStep::new(x, t_c[k], t_s[k]).wet_latent_w_m2(t_c[k], t_s[k]);
             leaves = (leaves - le_c.max(0.0) / lambda * dt).max(0.0);
             soil = (soil - le_s.max(0.0) / lambda * dt).max(0.0);
         }
@@ -958,7 +964,11 @@ mod tests {
         let mut forcing = Forcing::constant(&times, 293.0, 2.5, 0.0, 0.0, 360.0);
         let surface = props.surface.unwrap();
         let mut xs: Vec<TwoSourceInputs> = (0..times.len())
-            .map(|k| inputs_at(&surface, &forcing, k, 0.8, 0.97).unwrap().unwrap())
+            .map(|k| {
+                inputs_at(&surface, &forcing, k, 0.8, 0.97)
+                    .unwrap()
+                    .unwrap()
+            })
             .collect();
         let t = vec![293.0; times.len()];
         assert!(!wet(&mut xs, &forcing, &t, &t));
