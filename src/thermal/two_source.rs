@@ -261,10 +261,11 @@ pub const SOIL_STORE_MM: f64 = 1.0;
 /// resistance), and each store empties at its wet part's evaporation
 /// `δ ρc_p/(γ r)·max(e°(T) − e_ac, 0)/λ` (kg m⁻² s⁻¹ = mm s⁻¹) over the
 /// interval after the record, at the reference temperatures `t_c`, `t_s`.
-/// Sets the wet fractions of `inputs` (one per record of `forcing`);
+/// Sets the wet fractions of `inputs` (one per record of `forcing`, and
+/// of `t_c` and `t_s`; records beyond the shortest are left as they are);
 /// returns whether any record is wet. No rain: every fraction 0, exactly
 /// the dry network.
-pub(crate) fn wet(
+pub fn wet(
     inputs: &mut [TwoSourceInputs],
     forcing: &super::Forcing,
     t_c: &[f64],
@@ -273,7 +274,8 @@ pub(crate) fn wet(
     use super::latent::psychrometrics::latent_heat_of_vaporisation_j_kg;
     let (mut leaves, mut soil) = (0.0f64, 0.0f64);
     let mut any = false;
-    for (k, x) in inputs.iter_mut().enumerate() {
+    let n = forcing.len().min(t_c.len()).min(t_s.len());
+    for (k, x) in inputs.iter_mut().enumerate().take(n) {
         let rain = forcing.precipitation_mm[k].max(0.0);
         let lai = x.leaf_area_index.max(0.0);
         let cover = 1.0 - (-0.5 * x.params.clumping_index * lai).exp();
@@ -289,7 +291,7 @@ pub(crate) fn wet(
         };
         x.soil_wet_fraction = (soil / SOIL_STORE_MM).powf(2.0 / 3.0);
         any |= leaves > 0.0 || soil > 0.0;
-        if k + 1 < forcing.len() && (leaves > 0.0 || soil > 0.0) {
+        if k + 1 < n && (leaves > 0.0 || soil > 0.0) {
             let dt = forcing.times_s[k + 1] - forcing.times_s[k];
             let lambda = latent_heat_of_vaporisation_j_kg(x.air.temperature_k());
             let (le_c, le_s) =
