@@ -617,6 +617,24 @@ fn stock_materials_on_measured_forcing() {
         ])
         .unwrap();
     };
+    // US-CRT's measured soil water (the first half's mean of its SWC
+    // column, %), for the variant given the site's soil state.
+    let us_crt_soil_water = {
+        let path = util::shared_data("flux").join("us-crt_2011/us-crt_2011_jul06-aug16.csv");
+        let mut r = csv::Reader::from_path(path).unwrap();
+        let col = r
+            .headers()
+            .unwrap()
+            .iter()
+            .position(|h| h == "soil_water_content_pct")
+            .unwrap();
+        let v: Vec<f64> = r
+            .records()
+            .take(us_crt_subset().first_half().len())
+            .filter_map(|row| row.unwrap().get(col)?.parse::<f64>().ok())
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64 / 100.0
+    };
     for d in [bondville_subset(), us_crt_subset()] {
         let us_crt = d.site() == FluxSite::UsCrt2011;
         for name in [
@@ -633,8 +651,9 @@ fn stock_materials_on_measured_forcing() {
             "crop growing leafgrowth",
             "crop growing leafgrowth two_source",
             "crop growing leafgrowth lai5 two_source",
+            "crop growing two_source swc",
         ] {
-            if name.contains("growing") && !us_crt {
+            if (name.contains("growing") || name.contains("swc")) && !us_crt {
                 continue;
             }
             let stock = name.split(' ').next().unwrap();
@@ -655,6 +674,14 @@ fn stock_materials_on_measured_forcing() {
                     // canopy of LAI 5 instead of the stock crop's 3.
                     if name.contains("lai5") {
                         s.leaf_area_index = 5.0;
+                    }
+                    // The site's soil state instead of the stock loam's: its
+                    // measured soil water and the porosity of its silty clay
+                    // (0.492, Clapp & Hornberger 1978 Table 2).
+                    if name.contains("swc") {
+                        s.soil_moisture_m3_m3 = us_crt_soil_water;
+                        s.saturation_m3_m3 = Some(0.492);
+                        println!("US-CRT first-half soil water {us_crt_soil_water:.3} m³/m³");
                     }
                     // A diagnostic, not a stock value: the crop r_s,min of
                     // Noilhan & Planton (1989) and Noah's cropland table.
