@@ -590,8 +590,9 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
 /// and `grass`, uncalibrated; each also with kB⁻¹ from its canopy
 /// (`su2001`); as two sources; at US-CRT the crop growing to the README's
 /// heights, with its leaves growing with them (LAI = min(6.8 h, LAI)); and,
-/// as diagnostics of the partition, the crop with r_s,min = 40 s/m and the
-/// growing two-source crop with LAI 5.
+/// as diagnostics of the partition, the crop with r_s,min = 40 s/m, the
+/// growing two-source crop with LAI 5, and with US-CRT's measured soil
+/// water and the porosity of its silty clay.
 /// Printed for the validation page (`docs/physics/validation.md`).
 /// Asserted: the stock crop, with either heat roughness and growing,
 /// beats the naive "T_surface = T_air" on both sites (issue 16's goal for
