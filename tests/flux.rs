@@ -716,14 +716,21 @@ fn stock_materials_on_measured_forcing() {
                 );
             }
             let c = &r.day_closed;
+            // A two-source canopy has no single exchange coefficient to
+            // apply to the measured temperature.
+            let h_at_measured = if r.rmse_hemispherical.is_some() {
+                "—".to_string()
+            } else {
+                format!("{:.0}", c.h_model_at_measured_t)
+            };
             println!(
                 "{:?}: stock {name}, daytime: H closure-corrected (Bowen) {:.0} W/m², LE \
-                 closure-corrected {:.0}; model H at the measured surface temperature {:.0}; \
-                 G model {:.0} vs measured {:.0}; Rn model {:.0} vs measured {:.0} W/m²",
+                 closure-corrected {:.0}; model H at the measured surface temperature \
+                 {h_at_measured}; G model {:.0} vs measured {:.0}; Rn model {:.0} vs measured \
+                 {:.0} W/m²",
                 d.site(),
                 c.h_closed,
                 c.le_closed,
-                c.h_model_at_measured_t,
                 c.g_model,
                 c.g_measured,
                 c.rn_model,
