@@ -337,7 +337,7 @@ pub struct SurfaceEnergySpec {
     /// leaf area index, the canopy's LAI at each record is
     /// `min(a·h, leaf_area_index)`: the leaves grow with the height up to
     /// the block's LAI, the full canopy's. FAO-56 (Allen et al. 1998)
-    /// Box 4: LAI = 24 h for clipped grass; METRIC's short-crop roughness
+    /// ch. 2 (with eq. 5): LAI = 24 h for clipped grass; METRIC's short-crop roughness
     /// z_om = 0.018 LAI (Allen, Tasumi & Trezza 2007, J. Irrig. Drain. Eng.
     /// 133:380) with FAO-56's z_om = 0.123 h: a = 0.123/0.018 = 6.8 m⁻¹ for
     /// field crops.
