@@ -588,8 +588,11 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
 /// The thermal model on measured forcing, as a user would validate it: the
 /// stock `crop` (a closed field crop, the surface of both sites: soybean)
 /// and `grass`, uncalibrated; each also with kB⁻¹ from its canopy
-/// (`su2001`); at US-CRT the crop growing to the README's heights; and,
-/// as a diagnostic of the partition, the crop with r_s,min = 40 s/m.
+/// (`su2001`); as two sources; at US-CRT the crop growing to the README's
+/// heights, with its leaves growing with them (LAI = min(6.8 h, LAI)); and,
+/// as diagnostics of the partition, the crop with r_s,min = 40 s/m, the
+/// growing two-source crop with LAI 5, and with US-CRT's measured soil
+/// water and the porosity of its silty clay.
 /// Printed for the validation page (`docs/physics/validation.md`).
 /// Asserted: the stock crop, with either heat roughness and growing,
 /// beats the naive "T_surface = T_air" on both sites (issue 16's goal for
@@ -615,6 +618,24 @@ fn stock_materials_on_measured_forcing() {
         ])
         .unwrap();
     };
+    // US-CRT's measured soil water (the first half's mean of its SWC
+    // column, %), for the variant given the site's soil state.
+    let us_crt_soil_water = {
+        let path = util::shared_data("flux").join("us-crt_2011/us-crt_2011_jul06-aug16.csv");
+        let mut r = csv::Reader::from_path(path).unwrap();
+        let col = r
+            .headers()
+            .unwrap()
+            .iter()
+            .position(|h| h == "soil_water_content_pct")
+            .unwrap();
+        let v: Vec<f64> = r
+            .records()
+            .take(us_crt_subset().first_half().len())
+            .filter_map(|row| row.unwrap().get(col)?.parse::<f64>().ok())
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64 / 100.0
+    };
     for d in [bondville_subset(), us_crt_subset()] {
         let us_crt = d.site() == FluxSite::UsCrt2011;
         for name in [
@@ -628,8 +649,12 @@ fn stock_materials_on_measured_forcing() {
             "crop two_source",
             "grass two_source",
             "crop growing two_source",
+            "crop growing leafgrowth",
+            "crop growing leafgrowth two_source",
+            "crop growing leafgrowth lai5 two_source",
+            "crop growing two_source swc",
         ] {
-            if name.contains("growing") && !us_crt {
+            if (name.contains("growing") || name.contains("swc")) && !us_crt {
                 continue;
             }
             let stock = name.split(' ').next().unwrap();
@@ -640,6 +665,24 @@ fn stock_materials_on_measured_forcing() {
                     }
                     if name.contains("growing") {
                         us_crt_heights(s);
+                    }
+                    // Leaves that grow with the height up to the stock LAI:
+                    // METRIC's field-crop 6.8 m⁻¹ (materials docs).
+                    if name.contains("leafgrowth") {
+                        s.leaf_area_per_height_per_m = Some(6.8);
+                    }
+                    // A diagnostic, not a stock value: a closed soybean
+                    // canopy of LAI 5 instead of the stock crop's 3.
+                    if name.contains("lai5") {
+                        s.leaf_area_index = 5.0;
+                    }
+                    // The site's soil state instead of the stock loam's: its
+                    // measured soil water and the porosity of its silty clay
+                    // (0.492, Clapp & Hornberger 1978 Table 2).
+                    if name.contains("swc") {
+                        s.soil_moisture_m3_m3 = us_crt_soil_water;
+                        s.saturation_m3_m3 = Some(0.492);
+                        println!("US-CRT first-half soil water {us_crt_soil_water:.3} m³/m³");
                     }
                     // A diagnostic, not a stock value: the crop r_s,min of
                     // Noilhan & Planton (1989) and Noah's cropland table.
@@ -673,14 +716,21 @@ fn stock_materials_on_measured_forcing() {
                 );
             }
             let c = &r.day_closed;
+            // A two-source canopy has no single exchange coefficient to
+            // apply to the measured temperature.
+            let h_at_measured = if r.rmse_hemispherical.is_some() {
+                "—".to_string()
+            } else {
+                format!("{:.0}", c.h_model_at_measured_t)
+            };
             println!(
                 "{:?}: stock {name}, daytime: H closure-corrected (Bowen) {:.0} W/m², LE \
-                 closure-corrected {:.0}; model H at the measured surface temperature {:.0}; \
-                 G model {:.0} vs measured {:.0}; Rn model {:.0} vs measured {:.0} W/m²",
+                 closure-corrected {:.0}; model H at the measured surface temperature \
+                 {h_at_measured}; G model {:.0} vs measured {:.0}; Rn model {:.0} vs measured \
+                 {:.0} W/m²",
                 d.site(),
                 c.h_closed,
                 c.le_closed,
-                c.h_model_at_measured_t,
                 c.g_model,
                 c.g_measured,
                 c.rn_model,

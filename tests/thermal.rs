@@ -1418,6 +1418,7 @@ fn stock_variant(name: &str) -> SlabProperties {
         let s = m.surface_energy.as_mut().unwrap();
         match w {
             "su2001" => s.heat_roughness = HeatRoughness::Su2001,
+            "two_source" => s.canopy = irsig::material::CanopyModel::TwoSource,
             "growing" => {
                 let pt = |date: &str, h: f64, lai: f64| PhenologyPoint {
                     date: date.parse().unwrap(),
@@ -1599,11 +1600,11 @@ fn a_wet_surface_dries_and_returns_to_the_dry_solution() {
         let t_ref: Vec<f64> = rained.surface_temperature_k.clone();
         let mut ex_dry = Exchange::new(&props, &forcing).unwrap();
         let delta = WetStore::of(&props).wet(&wet, &t_ref, &mut ex_dry).unwrap();
+        let dried = delta.iter().rposition(|&d| d > 0.0).unwrap();
         let diff: Vec<f64> = (0..n)
             .map(|k| rained.surface_temperature_k[k] - dry.surface_temperature_k[k])
             .collect();
         let noon = shower + 20;
-        let dried = delta.iter().rposition(|&d| d > 0.0).unwrap();
         eprintln!(
             "{name}: wet until record {dried} ({:.1} h after the shower); at 12:00 {:+.2} K; \
              at midnight {:+.4} K",
@@ -1641,6 +1642,81 @@ fn a_wet_surface_dries_and_returns_to_the_dry_solution() {
             );
         }
     }
+}
+
+/// A two-source canopy wet by rain (leaves and soil each hold a store,
+/// `irsig::thermal::two_source`) cools, dries and returns to the dry
+/// solution: the stock crop as two sources under four clear days (the
+/// synthetic days' first day repeated) with a 4 mm shower at 07:00 on the
+/// second. Its leaves hold 0.6 mm and dry within hours; the soil under
+/// them holds 1 mm and, shaded, dries over a day. Without rain no source
+/// is wet and the solution is the dry one; before the shower the two runs
+/// agree to the reference passes' convergence (1e-7 K).
+#[test]
+fn a_wet_two_source_canopy_dries_and_returns_to_the_dry_solution() {
+    use irsig::thermal::Exchange;
+    let (day, day_cos) = synthetic_days(true);
+    let per_day = 96;
+    let n = 4 * per_day + 1;
+    let times: Vec<f64> = (0..n).map(|i| i as f64 * 900.0).collect();
+    let mut forcing = Forcing::constant(&times, 288.0, 2.0, 0.0, 0.0, 0.0);
+    let mut cos = Vec::with_capacity(n);
+    for k in 0..n {
+        let j = k % per_day;
+        forcing.air_temperature_k[k] = day.air_temperature_k[j];
+        forcing.direct_normal_w_m2[k] = day.direct_normal_w_m2[j];
+        forcing.diffuse_horizontal_w_m2[k] = day.diffuse_horizontal_w_m2[j];
+        forcing.sky_longwave_w_m2[k] = day.sky_longwave_w_m2[j];
+        forcing.global_horizontal_w_m2[k] =
+            day.diffuse_horizontal_w_m2[j] + day.direct_normal_w_m2[j] * f64::from(day_cos[j]);
+        cos.push(day_cos[j]);
+    }
+    let sun = vec![1.0f32; n];
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let opts = SolveOptions::default();
+    let props = stock_variant("crop two_source");
+    let mut wet = forcing.clone();
+    let shower = per_day + 28; // 07:00 of the second day
+    wet.precipitation_mm[shower] = 4.0;
+    let dry = thermal::solve(&props, &forcing, &inputs, &opts).unwrap();
+    let rained = thermal::solve(&props, &wet, &inputs, &opts).unwrap();
+    let ex = Exchange::new(&props, &wet).unwrap();
+    let ex_dry = Exchange::new(&props, &forcing).unwrap();
+    assert!(!ex_dry.two_source.iter().any(|s| s.is_wet()));
+    assert!(!ex.two_source[shower - 1].is_wet() && ex.two_source[shower].is_wet());
+    let dried = ex.two_source.iter().rposition(|s| s.is_wet()).unwrap();
+    let diff: Vec<f64> = (0..n)
+        .map(|k| rained.surface_temperature_k[k] - dry.surface_temperature_k[k])
+        .collect();
+    let max = diff.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    let hourly: Vec<String> = diff[shower..]
+        .iter()
+        .step_by(4)
+        .map(|d| format!("{d:+.2}"))
+        .collect();
+    eprintln!(
+        "crop two_source: wet until record {dried} ({:.1} h after the shower); largest \
+         change {max:.2} K; at the end {:+.4} K; hourly from the shower: {}",
+        (dried - shower) as f64 / 4.0,
+        diff[n - 1],
+        hourly.join(" ")
+    );
+    assert!(
+        diff[..shower].iter().all(|d| d.abs() < 1e-5),
+        "before the rain"
+    );
+    assert!(
+        diff[shower + 1..shower + 24].iter().all(|&d| d < 0.0),
+        "a wet canopy cools"
+    );
+    assert!(max > 0.3, "the shower shows: {max} K");
+    assert!(dried > shower && dried < n - per_day / 2, "dries ({dried})");
+    // After drying, the difference decays toward 0 (the soil's memory).
+    assert!(
+        diff[n - 1].abs() < 0.2 * max,
+        "returns ({} of {max})",
+        diff[n - 1]
+    );
 }
 
 /// Spin-up from the steady state of the first day's mean forcing
@@ -1697,4 +1773,63 @@ fn mean_steady_start_settles_slow_surfaces() {
         };
         assert!(mean <= bound, "{name}: {mean} K vs {first_air} K");
     }
+}
+
+/// Leaves that grow with the canopy height (`leaf_area_per_height_per_m`,
+/// a): where the phenology gives no LAI, the LAI at each record is
+/// `min(a·h, LAI)`; a phenology's own LAI wins; without `a` the LAI is the
+/// block's at every height; and a growth that reaches the full LAI at every
+/// date gives exactly the exchange without it.
+#[test]
+fn leaves_grow_with_the_canopy_height() {
+    use irsig::material::{Phenology, PhenologyPoint, SurfaceEnergySpec};
+    use irsig::thermal::latent::SurfaceResistance;
+    use irsig::thermal::{Exchange, LandSurface};
+    let db = irsig::material::stock::stock().unwrap();
+    let crop = db.get("crop").unwrap().clone();
+    let pt = |date: &str, h: f64, lai: Option<f64>| PhenologyPoint {
+        date: date.parse().unwrap(),
+        canopy_height_m: Some(h),
+        leaf_area_index: lai,
+    };
+    let heights = Phenology::try_from(vec![
+        pt("1970-01-01", 0.15, None),
+        pt("1970-01-11", 0.9, None),
+    ])
+    .unwrap();
+    let lai_at = |spec: &SurfaceEnergySpec, day: f64| match LandSurface::from_spec(spec)
+        .unwrap()
+        .on(day * 86_400.0)
+        .resistance
+    {
+        SurfaceResistance::Canopy(js) => js.leaf_area_index,
+        r => panic!("{r:?}"),
+    };
+    let mut spec = crop.surface_energy.unwrap();
+    spec.phenology = heights;
+    assert_eq!(lai_at(&spec, 0.0), 3.0);
+    spec.leaf_area_per_height_per_m = Some(6.8);
+    assert!((lai_at(&spec, 0.0) - 6.8 * 0.15).abs() < 1e-12);
+    // Day 2: h = 0.15 + 0.075·2 = 0.3 m.
+    assert!((lai_at(&spec, 2.0) - 6.8 * 0.3).abs() < 1e-12);
+    assert_eq!(lai_at(&spec, 10.0), 3.0);
+    // A constant canopy grows to min(a·h, LAI) too: 1 m gives the full 3.
+    let mut still = crop.surface_energy.unwrap();
+    still.leaf_area_per_height_per_m = Some(2.0);
+    assert_eq!(lai_at(&still, 5.0), 2.0);
+    // A phenology that gives the LAI keeps it.
+    let mut given = spec;
+    given.phenology = Phenology::try_from(vec![pt("1970-01-01", 0.15, Some(0.5))]).unwrap();
+    assert_eq!(lai_at(&given, 0.0), 0.5);
+    // Reaching the full LAI everywhere: exactly the model without growth.
+    let (forcing, _) = synthetic_days(true);
+    let exchange = |a: Option<f64>| {
+        let mut s = spec;
+        s.leaf_area_per_height_per_m = a;
+        let mut m = crop.clone();
+        m.surface_energy = Some(s);
+        Exchange::new(&SlabProperties::from_material(&m).unwrap(), &forcing).unwrap()
+    };
+    assert_eq!(exchange(Some(1e3)), exchange(None));
+    assert_ne!(exchange(Some(6.8)), exchange(None));
 }

@@ -295,6 +295,18 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         "mown lawn 0.02 m to tall forest 40 m"
     ),
     surface_param!(
+        "leaf_area_per_height_per_m",
+        "1/m",
+        1.0,
+        30.0,
+        POSITIVE,
+        |s| s
+            .leaf_area_per_height_per_m
+            .filter(|_| s.kind == SurfaceKind::Canopy),
+        |s, v| s.leaf_area_per_height_per_m = Some(v),
+        "leaf area per metre of canopy height (LAI = min(a·h, LAI)): field crops 6.8 (METRIC z_om = 0.018 LAI, Allen et al. 2007, with FAO-56's z_om = 0.123 h) to clipped grass 24 (FAO-56 ch. 2, with eq. 5); irsig widens to 1–30 (taller, sparser crops below)"
+    ),
+    surface_param!(
         "roughness_length_m",
         "m",
         1.0e-4,

@@ -139,6 +139,11 @@ impl Phenology {
         self.points[..self.len].iter().flatten()
     }
 
+    /// Whether any entry gives a leaf area index.
+    pub fn gives_leaf_area(&self) -> bool {
+        self.points().any(|p| p.leaf_area_index.is_some())
+    }
+
     /// Whether no entry is given (a constant canopy).
     pub fn is_empty(&self) -> bool {
         self.len == 0
@@ -323,10 +328,21 @@ pub struct SurfaceEnergySpec {
     /// A canopy that grows: dated heights and leaf area indices
     /// ([`Phenology`]; default none: constant). The canopy's roughness,
     /// displacement, stomatal conductance and kB⁻¹ follow it; its heat
-    /// capacity and rain store keep the block's `leaf_area_index`.
+    /// capacity and the big leaf's rain store keep the block's `leaf_area_index`.
     #[serde(default, skip_serializing_if = "Phenology::is_empty")]
     #[schemars(with = "Vec<PhenologyPoint>")]
     pub phenology: Phenology,
+    /// Leaf area per metre of canopy height, m⁻¹ (canopy; default none:
+    /// the LAI does not follow the height). Where the phenology gives no
+    /// leaf area index, the canopy's LAI at each record is
+    /// `min(a·h, leaf_area_index)`: the leaves grow with the height up to
+    /// the block's LAI, the full canopy's. FAO-56 (Allen et al. 1998)
+    /// ch. 2 (with eq. 5): LAI = 24 h for clipped grass; METRIC's short-crop roughness
+    /// z_om = 0.018 LAI (Allen, Tasumi & Trezza 2007, J. Irrig. Drain. Eng.
+    /// 133:380) with FAO-56's z_om = 0.123 h: a = 0.123/0.018 = 6.8 m⁻¹ for
+    /// field crops.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leaf_area_per_height_per_m: Option<f64>,
     /// Whether the canopy is a layer over the material's slab (default: true
     /// for a canopy). A tree crown modelled as a thin leaf slab with an
     /// exposed back sets `false`: the leaves are the slab.
@@ -592,6 +608,21 @@ impl SurfaceEnergySpec {
         if let Some(w) = self.leaf_width_m {
             check(&mut p, "leaf_width_m", w, w > 0.0, "a width > 0 m");
         }
+        if let Some(a) = self.leaf_area_per_height_per_m {
+            check(
+                &mut p,
+                "leaf_area_per_height_per_m",
+                a,
+                a > 0.0 && a.is_finite(),
+                "a leaf area per metre of height > 0 m⁻¹",
+            );
+            if self.kind != SurfaceKind::Canopy {
+                p.push((
+                    "leaf_area_per_height_per_m",
+                    "only a canopy has leaves (kind \"canopy\")".to_string(),
+                ));
+            }
+        }
         if self.heat_roughness == HeatRoughness::Su2001 && self.kind == SurfaceKind::Water {
             p.push((
                 "heat_roughness",
@@ -747,6 +778,17 @@ mod tests {
             parse(s).problems().into_iter().map(|(f, _)| f).collect()
         };
         let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3"#;
+        for a in ["0", "-6.8"] {
+            assert_eq!(
+                fields(&format!(r#"{{{base}, "leaf_area_per_height_per_m": {a}}}"#)),
+                ["leaf_area_per_height_per_m"]
+            );
+        }
+        assert!(fields(&format!(r#"{{{base}, "leaf_area_per_height_per_m": 6.8}}"#)).is_empty());
+        assert_eq!(
+            fields(r#"{"kind": "bare_soil", "leaf_area_per_height_per_m": 6.8}"#),
+            ["leaf_area_per_height_per_m"]
+        );
         assert!(
             fields(&format!(
                 r#"{{{base}, "phenology": [{{"date": "2011-08-01"}}, {{"date": "2011-07-01"}}]}}"#

@@ -98,6 +98,11 @@ pub struct LandSurface {
     /// area indices replace `canopy_height_m` and the LAI at each record
     /// ([`LandSurface::on`]).
     pub phenology: Phenology,
+    /// Leaf area per metre of canopy height, m⁻¹: where the phenology
+    /// gives no LAI, the LAI at each record is `min(a·h, LAI)` (the
+    /// leaves grow with the height up to the full canopy's; None: the LAI
+    /// does not follow the height; [`LandSurface::on`]).
+    pub leaf_area_per_height_per_m: Option<f64>,
     /// Canopy height h, m (0 without a canopy).
     pub canopy_height_m: f64,
     /// Whether d and z_om follow the canopy height (FAO-56: d = 2/3 h,
@@ -160,6 +165,9 @@ impl LandSurface {
             two_source,
             canopy_kb,
             phenology: spec.phenology,
+            leaf_area_per_height_per_m: spec
+                .leaf_area_per_height_per_m
+                .filter(|_| spec.kind == SurfaceKind::Canopy),
             canopy_height_m: spec.canopy_height_m.unwrap_or(0.0),
             roughness_from_height: spec.kind == SurfaceKind::Canopy
                 && spec.roughness_length_m.is_none(),
@@ -209,16 +217,22 @@ impl LandSurface {
     /// phenology's height and leaf area index then (itself without one).
     /// The height sets d = 2/3 h and z_om = 0.123 h (FAO-56) unless the
     /// material gives its roughness; the LAI sets the stomatal resistance
-    /// `r_s,min/LAI` and kB⁻¹.
+    /// `r_s,min/LAI` and kB⁻¹. Where the phenology gives no LAI and the
+    /// surface has a leaf area per height `a`, the LAI is `min(a·h, LAI)`.
     pub fn on(&self, unix_s: f64) -> LandSurface {
-        if self.phenology.is_empty() {
+        if !self.grows() {
             return *self;
         }
         let lai0 = match self.resistance {
             SurfaceResistance::Canopy(js) => js.leaf_area_index,
             _ => 0.0,
         };
-        let (h, lai) = self.phenology.at(unix_s, self.canopy_height_m, lai0);
+        let (h, mut lai) = self.phenology.at(unix_s, self.canopy_height_m, lai0);
+        if let Some(a) = self.leaf_area_per_height_per_m
+            && !self.phenology.gives_leaf_area()
+        {
+            lai = (a * h).min(lai0);
+        }
         let mut s = *self;
         s.canopy_height_m = h;
         if self.roughness_from_height {
@@ -233,6 +247,12 @@ impl LandSurface {
             c.canopy_height_m = h;
         }
         s
+    }
+
+    /// Whether the canopy changes through the run: a phenology, or leaves
+    /// that follow the height ([`LandSurface::on`]).
+    pub fn grows(&self) -> bool {
+        !self.phenology.is_empty() || self.leaf_area_per_height_per_m.is_some()
     }
 
     /// Checks the skin; errors name the field.
@@ -483,7 +503,9 @@ impl Exchange {
     /// until they change by less than [`super::two_source::CONVERGED_K`],
     /// then with the resistances held until they change by less than
     /// 1e-7 K (at most [`TWO_SOURCE_PASSES`] passes in all). The weather's
-    /// rain does not wet it (no interception store).
+    /// rain wets leaves and soil ([`super::two_source::wet`]), the stores
+    /// evolving at each resistance-updating pass's reference temperatures
+    /// and held with the resistances.
     ///
     /// # Errors
     /// Humidity or pressure of a record out of range (naming it); the
@@ -506,13 +528,14 @@ impl Exchange {
             .ok_or_else(|| Error::invalid("surface_energy.canopy", "not two_source"))?;
             inputs.push(x);
         }
-        let steps = |t_c: &[f64], t_s: &[f64]| -> Vec<TwoSourceStep> {
+        let steps = |inputs: &[two_source::TwoSourceInputs], t_c: &[f64], t_s: &[f64]| {
             inputs
                 .iter()
                 .zip(t_c.iter().zip(t_s))
                 .map(|(x, (&c, &s))| TwoSourceStep::new(x, c, s))
-                .collect()
+                .collect::<Vec<_>>()
         };
+        let rain = forcing.precipitation_mm.iter().any(|&p| p > 0.0);
         let sun = vec![1.0f32; n];
         let cos: Vec<f32> = inputs.iter().map(|x| x.cos_zenith as f32).collect();
         let facet = FacetInputs::new(&sun, &cos, 1.0);
@@ -526,7 +549,7 @@ impl Exchange {
         let mut ex = Exchange {
             sensible_w_m2_k: vec![0.0; n],
             vapour_conductance_w_m2_pa: vec![0.0; n],
-            two_source: steps(&t_c, &t_s),
+            two_source: steps(&inputs, &t_c, &t_s),
         };
         // Passes that update the resistances (stability, the soil's free
         // convection) with the linearisation until the reference settles to
@@ -557,7 +580,10 @@ impl Exchange {
                     .map(|(x, (&c, &s))| x.relinearised(c, s))
                     .collect()
             } else {
-                steps(&t_c, &t_s)
+                if rain {
+                    two_source::wet(&mut inputs, forcing, &t_c, &t_s);
+                }
+                steps(&inputs, &t_c, &t_s)
             };
         }
         Ok(ex)
@@ -615,7 +641,7 @@ impl Exchange {
                 let mut sensible = Vec::with_capacity(n);
                 let mut vapour = Vec::with_capacity(n);
                 for (k, &t) in surface_k.iter().enumerate().take(n) {
-                    let (h, g) = if surface.phenology.is_empty() {
+                    let (h, g) = if !surface.grows() {
                         LandSurface::exchange_at(&constant, forcing, k, t)?
                     } else {
                         let now = surface.on(forcing.start_unix_s + forcing.times_s[k]);

@@ -48,6 +48,11 @@
 //! The leaves hold no heat (NKA95): `Rn_c = H_c + LE_c`; the soil surface
 //! is the front node of the material's slab: `G = Rn_s − H_s − LE_s`.
 //!
+//! **Rain.** Leaves and soil each hold a Deardorff (1978) store; a wet
+//! fraction δ of a source evaporates through its boundary layer alone, so
+//! the vapour conductances become `ρc_p/γ ((1 − δ_c)/(r_x + r_st) + δ_c/r_x)`
+//! and `ρc_p/γ ((1 − δ_s)/(r_soil + r_ss) + δ_s/r_soil)` ([`wet`]).
+//!
 //! **Radiometric temperature** (NKA95 eq. 1–2): at view zenith θ,
 //! `T_rad⁴ = f_c(θ) T_c⁴ + (1 − f_c(θ)) T_s⁴` with
 //! `f_c(θ) = 1 − exp(−0.5 Ω LAI/cos θ)`. The solver gives it at nadir
@@ -151,6 +156,10 @@ pub struct TwoSourceInputs {
     pub solar_absorptivity: f64,
     /// Hemispherical emissivity ε of leaves and soil.
     pub emissivity: f64,
+    /// Wet fraction δ_c of the leaves (rain they hold; 0: dry), [0, 1].
+    pub leaf_wet_fraction: f64,
+    /// Wet fraction δ_s of the soil surface (0: dry), [0, 1].
+    pub soil_wet_fraction: f64,
 }
 
 /// The soil surface's resistance to evaporation of Sellers, Heiser & Hall
@@ -231,7 +240,80 @@ pub(crate) fn inputs_at(
         params,
         solar_absorptivity,
         emissivity,
+        leaf_wet_fraction: 0.0,
+        soil_wet_fraction: 0.0,
     }))
+}
+
+/// Capacity of the soil surface's rain store, mm (the bare soil's of
+/// [`super::WetStore`]).
+pub const SOIL_STORE_MM: f64 = 1.0;
+
+/// Rain held by the leaves and by the soil surface of a two-source canopy,
+/// the interception reservoir of Deardorff (1978, J. Geophys. Res.
+/// 83(C4):1889) as Noilhan & Planton (1989, Mon. Weather Rev. 117:536)
+/// §2c hold it, one store per source: the leaves catch the nadir cover
+/// `f_c = 1 − exp(−0.5 Ω LAI)` of each record's rain up to `0.2·LAI` mm
+/// (Dickinson 1984); the rest and their overflow reach the soil surface,
+/// which holds [`SOIL_STORE_MM`]; more runs off. A wet fraction
+/// `δ = (W/W_max)^⅔` of each source evaporates through its boundary layer
+/// alone (`r_x` for leaves, `r_soil` for soil, no stomatal or soil-surface
+/// resistance), and each store empties at its wet part's evaporation
+/// `δ ρc_p/(γ r)·max(e°(T) − e_ac, 0)/λ` (kg m⁻² s⁻¹ = mm s⁻¹) over the
+/// interval after the record, at the reference temperatures `t_c`, `t_s`.
+/// Sets the wet fractions of `inputs` (one per record of `forcing`, and
+/// of `t_c` and `t_s`; records beyond the shortest are left as they are);
+/// returns whether any record is wet. No rain: every fraction 0, exactly
+/// the dry network.
+pub fn wet(
+    inputs: &mut [TwoSourceInputs],
+    forcing: &super::Forcing,
+    t_c: &[f64],
+    t_s: &[f64],
+) -> bool {
+    use super::latent::psychrometrics::latent_heat_of_vaporisation_j_kg;
+    let (mut leaves, mut soil) = (0.0f64, 0.0f64);
+    let mut any = false;
+    let n = forcing.len().min(t_c.len()).min(t_s.len());
+    for (k, x) in inputs.iter_mut().enumerate().take(n) {
+        let rain = forcing.precipitation_mm[k].max(0.0);
+        let lai = x.leaf_area_index.max(0.0);
+        let cover = 1.0 - (-0.5 * x.params.clumping_index * lai).exp();
+        let capacity = 0.2 * lai;
+        leaves += cover * rain;
+        let overflow = (leaves - capacity).max(0.0);
+        leaves = leaves.min(capacity);
+        soil = (soil + (1.0 - cover) * rain + overflow).min(SOIL_STORE_MM);
+        x.leaf_wet_fraction = if capacity > 0.0 {
+            (leaves / capacity).powf(2.0 / 3.0)
+        } else {
+            0.0
+        };
+        x.soil_wet_fraction = (soil / SOIL_STORE_MM).powf(2.0 / 3.0);
+        any |= leaves > 0.0 || soil > 0.0;
+        if k + 1 < n && (leaves > 0.0 || soil > 0.0) {
+            let dt = forcing.times_s[k + 1] - forcing.times_s[k];
+            let lambda = latent_heat_of_vaporisation_j_kg(x.air.temperature_k());
+            let (le_c, le_s) =
+                TwoSourceStep::new(x, t_c[k], t_s[k]).wet_latent_w_m2(t_c[k], t_s[k]);
+            leaves = (leaves - le_c.max(0.0) / lambda * dt).max(0.0);
+            soil = (soil - le_s.max(0.0) / lambda * dt).max(0.0);
+        }
+    }
+    any
+}
+
+/// Vapour conductance `ρc_p/γ · ((1 − δ)/(r_b + r_surf) + δ/r_b)`, W m⁻²
+/// Pa⁻¹, of a source with boundary-layer resistance `r_b`, surface
+/// resistance `r_surf` and wet fraction δ (Deardorff 1978); δ = 0 is the
+/// dry `ρc_p/(γ (r_b + r_surf))` exactly.
+fn vapour_conductance(rho_cp: f64, gamma: f64, r_b: f64, r_surf: f64, delta: f64) -> f64 {
+    let dry = rho_cp / (gamma * (r_b + r_surf));
+    if delta > 0.0 {
+        (1.0 - delta) * dry + delta * rho_cp / (gamma * r_b)
+    } else {
+        dry
+    }
 }
 
 fn stomatal(js: &JarvisStewart, air: &AirState, sw: f64, theta: f64) -> f64 {
@@ -303,6 +385,9 @@ pub struct TwoSourceStep {
     w_a: f64,
     w_c: f64,
     w_s: f64,
+    /// The wet parts of `w_c` and `w_s`: `δ ρc_p/(γ r)` of r_x and r_soil.
+    w_c_wet: f64,
+    w_s_wet: f64,
     eps_sigma: f64,
     tau_l: f64,
     /// The leaves' share of a facet's absorbed incoming radiation.
@@ -366,8 +451,22 @@ impl TwoSourceStep {
         let r_a = a.resistance_s_m(u, t_ac, air.temperature_k());
         let g_a = rho_cp / r_a;
         let w_a = g_a / gamma;
-        let w_c = rho_cp / (gamma * (r_x + x.stomatal_resistance_s_m));
-        let w_s = rho_cp / (gamma * (r_soil + x.soil_surface_resistance_s_m));
+        let w_c = vapour_conductance(
+            rho_cp,
+            gamma,
+            r_x,
+            x.stomatal_resistance_s_m,
+            x.leaf_wet_fraction,
+        );
+        let w_s = vapour_conductance(
+            rho_cp,
+            gamma,
+            r_soil,
+            x.soil_surface_resistance_s_m,
+            x.soil_wet_fraction,
+        );
+        let w_c_wet = x.leaf_wet_fraction * rho_cp / (gamma * r_x);
+        let w_s_wet = x.soil_wet_fraction * rho_cp / (gamma * r_soil);
         let tau_b = if x.cos_zenith > 0.0 {
             (-BEAM_EXTINCTION * omega_lai / (2.0 * x.cos_zenith).sqrt()).exp()
         } else {
@@ -397,6 +496,8 @@ impl TwoSourceStep {
             w_a,
             w_c,
             w_s,
+            w_c_wet,
+            w_s_wet,
             eps_sigma: eps * STEFAN_BOLTZMANN_W_M2_K4,
             tau_l,
             phi,
@@ -449,6 +550,23 @@ impl TwoSourceStep {
     /// Whether the surface has leaves.
     pub fn has_canopy(&self) -> bool {
         self.d > 0.0
+    }
+
+    /// The latent heat of the wet parts of leaves and soil (the rain they
+    /// hold evaporating, [`wet`]) with leaves at `t_c` and soil at `t_s`,
+    /// W m⁻² each.
+    pub fn wet_latent_w_m2(&self, t_c: f64, t_s: f64) -> (f64, f64) {
+        let sw = self.w_a + self.w_c + self.w_s;
+        let e_ac = (self.w_a * self.air_vapour_pa + self.w_c * es(t_c) + self.w_s * es(t_s)) / sw;
+        (
+            self.w_c_wet * (es(t_c) - e_ac),
+            self.w_s_wet * (es(t_s) - e_ac),
+        )
+    }
+
+    /// Whether leaves or soil hold rain at this record ([`wet`]).
+    pub fn is_wet(&self) -> bool {
+        self.w_c_wet > 0.0 || self.w_s_wet > 0.0
     }
 
     /// The leaves' share φ of a facet's absorbed incoming radiation.
@@ -637,6 +755,8 @@ mod tests {
             },
             solar_absorptivity: 0.8,
             emissivity: 0.97,
+            leaf_wet_fraction: 0.0,
+            soil_wet_fraction: 0.0,
         }
     }
 
@@ -771,7 +891,8 @@ mod tests {
         assert!(f.canopy_k > wet.canopy_k(open_source(&x), t_w) + 1.0);
     }
 
-    /// A two-source crop solved through a diurnal cycle: on the open
+    /// A two-source crop solved through a diurnal cycle, dry and with a
+    /// 3 mm shower at 08:00 held by leaves and soil ([`wet`]): on the open
     /// reference surface both sources close at every record (the leaves to
     /// 1e-6 W m⁻², the soil's G equal to the slab's front flux), and the
     /// output is the nadir composite of leaves and soil.
@@ -793,32 +914,96 @@ mod tests {
             forcing.air_temperature_k[k] = 296.0 + 5.0 * sun;
         }
         let n = times.len();
-        let ex = Exchange::new(&props, &forcing).unwrap();
-        assert_eq!(ex.two_source.len(), n);
-        let sun = vec![1.0f32; n];
-        let cos = vec![1.0f32; n];
-        let facet = FacetInputs::new(&sun, &cos, 1.0);
-        let mut opts = SolveOptions::default();
-        opts.spinup.tolerance_k = 0.0;
-        let sol = crate::thermal::solve_with(&props, &forcing, &ex, &facet, &opts).unwrap();
-        let sources = crate::thermal::source_history_with(&props, &forcing, &ex, &facet).unwrap();
-        let mut worst: f64 = 0.0;
-        for k in 0..n {
-            let f = ex.two_source[k].fluxes(sources.front_w_m2[k], sol.soil_temperature_k[k]);
-            worst = worst
-                .max(f.canopy_residual_w_m2().abs())
-                .max((f.ground_w_m2 - sol.net_front_flux_w_m2[k]).abs());
-            assert_eq!(f.canopy_k, sol.canopy_temperature_k[k]);
-            let t4 = sol.surface_temperature_k[k].powi(4);
-            assert!(t4 < f.canopy_k.powi(4).max(f.soil_k.powi(4)) + 1e-3);
-            assert!(t4 > f.canopy_k.powi(4).min(f.soil_k.powi(4)) - 1e-3);
+        for rain in [false, true] {
+            let mut forcing = forcing.clone();
+            if rain {
+                forcing.precipitation_mm[16] = 3.0;
+            }
+            let ex = Exchange::new(&props, &forcing).unwrap();
+            assert_eq!(ex.two_source.len(), n);
+            assert_eq!(ex.two_source.iter().any(|s| s.is_wet()), rain);
+            assert!(!ex.two_source[15].is_wet() && ex.two_source[16].is_wet() == rain);
+            let sun = vec![1.0f32; n];
+            let cos = vec![1.0f32; n];
+            let facet = FacetInputs::new(&sun, &cos, 1.0);
+            let mut opts = SolveOptions::default();
+            opts.spinup.tolerance_k = 0.0;
+            let sol = crate::thermal::solve_with(&props, &forcing, &ex, &facet, &opts).unwrap();
+            let sources =
+                crate::thermal::source_history_with(&props, &forcing, &ex, &facet).unwrap();
+            let mut worst: f64 = 0.0;
+            for k in 0..n {
+                let f = ex.two_source[k].fluxes(sources.front_w_m2[k], sol.soil_temperature_k[k]);
+                worst = worst
+                    .max(f.canopy_residual_w_m2().abs())
+                    .max((f.ground_w_m2 - sol.net_front_flux_w_m2[k]).abs());
+                assert_eq!(f.canopy_k, sol.canopy_temperature_k[k]);
+                let t4 = sol.surface_temperature_k[k].powi(4);
+                assert!(t4 < f.canopy_k.powi(4).max(f.soil_k.powi(4)) + 1e-3);
+                assert!(t4 > f.canopy_k.powi(4).min(f.soil_k.powi(4)) - 1e-3);
+            }
+            assert!(worst < 1e-6, "rain {rain}: largest imbalance {worst} W/m²");
+            // The slab's own budget closes as for any surface.
+            let e = sol.energy;
+            let rel = (e.front_in_j_m2 + e.back_in_j_m2 - e.stored_change_j_m2).abs()
+                / e.stored_change_j_m2.abs().max(1e3);
+            assert!(rel < 1e-6, "rain {rain}: {e:?}");
         }
-        assert!(worst < 1e-6, "largest imbalance {worst} W/m²");
-        // The slab's own budget closes as for any surface.
-        let e = sol.energy;
-        let rel = (e.front_in_j_m2 + e.back_in_j_m2 - e.stored_change_j_m2).abs()
-            / e.stored_change_j_m2.abs().max(1e3);
-        assert!(rel < 1e-6, "{e:?}");
+    }
+
+    /// The rain stores of a two-source canopy: the leaves hold at most
+    /// 0.2·LAI mm and catch the nadir cover's share of the rain, the soil
+    /// the rest up to 1 mm; a wet source evaporates through its boundary
+    /// layer alone (fully wet leaves with shut stomata still evaporate),
+    /// and no rain leaves the network exactly dry.
+    #[test]
+    fn rain_wets_leaves_and_soil_and_dries() {
+        let db = crate::material::stock::stock().unwrap();
+        let mut m = db.get("crop").unwrap().clone();
+        m.surface_energy.as_mut().unwrap().canopy = crate::material::CanopyModel::TwoSource;
+        let props = SlabProperties::from_material(&m).unwrap();
+        let times: Vec<f64> = (0..=48).map(|i| i as f64 * 1800.0).collect();
+        let mut forcing = Forcing::constant(&times, 293.0, 2.5, 0.0, 0.0, 360.0);
+        let surface = props.surface.unwrap();
+        let mut xs: Vec<TwoSourceInputs> = (0..times.len())
+            .map(|k| {
+                inputs_at(&surface, &forcing, k, 0.8, 0.97)
+                    .unwrap()
+                    .unwrap()
+            })
+            .collect();
+        let t = vec![293.0; times.len()];
+        assert!(!wet(&mut xs, &forcing, &t, &t));
+        let dry = xs[3];
+        forcing.precipitation_mm[2] = 0.2;
+        assert!(wet(&mut xs, &forcing, &t, &t));
+        assert_eq!(xs[1].leaf_wet_fraction, 0.0);
+        // LAI 3: cover 1 − e^−1.5 = 0.777 of 0.2 mm on leaves holding 0.6
+        // mm, the rest on 1 mm of soil.
+        let cover = 1.0 - (-1.5f64).exp();
+        let expect_c = (cover * 0.2 / 0.6f64).powf(2.0 / 3.0);
+        let expect_s = ((1.0 - cover) * 0.2f64).powf(2.0 / 3.0);
+        assert!((xs[2].leaf_wet_fraction - expect_c).abs() < 1e-12);
+        assert!((xs[2].soil_wet_fraction - expect_s).abs() < 1e-12);
+        // Drying: the fractions fall and reach 0 within the day.
+        assert!(xs[3].leaf_wet_fraction < xs[2].leaf_wet_fraction);
+        assert_eq!(xs.last().unwrap().leaf_wet_fraction, 0.0);
+        // A wet leaf evaporates more than a dry one; with shut stomata the
+        // wet part alone.
+        let mut shut = xs[2];
+        shut.stomatal_resistance_s_m = f64::INFINITY;
+        let step = TwoSourceStep::new(&shut, 295.0, 295.0);
+        let (le_c, _) = step.wet_latent_w_m2(295.0, 295.0);
+        assert!(le_c > 0.0);
+        assert!(
+            TwoSourceStep::new(&xs[2], 295.0, 295.0).conductances()[4]
+                > TwoSourceStep::new(&dry, 295.0, 295.0).conductances()[4]
+        );
+        // Heavy rain fills both stores to their capacities.
+        forcing.precipitation_mm[2] = 20.0;
+        wet(&mut xs, &forcing, &t, &t);
+        assert_eq!(xs[2].leaf_wet_fraction, 1.0);
+        assert_eq!(xs[2].soil_wet_fraction, 1.0);
     }
 
     /// A clumping index out of (0, 1] or a negative leaf area index in a
