@@ -49,6 +49,7 @@
 //! longwave E_sky/π.
 
 use super::PathSpectra;
+use super::aerosol::{self, Aerosol, AerosolGrid, Season};
 use super::lines;
 use super::lowtran;
 use super::profile::Profile;
@@ -177,6 +178,9 @@ pub struct BuiltinParams {
     /// the analytic profile (US 1976 temperatures, exponential water
     /// vapour with [`BuiltinParams::water_scale_height_m`], no ozone).
     pub profile: Option<Profile>,
+    /// LOWTRAN 7's aerosol ([`super::aerosol`]); `None`: clear air
+    /// (gases only). Default: rural, 23 km visibility.
+    pub aerosol: Option<Aerosol>,
 }
 
 impl Default for BuiltinParams {
@@ -187,6 +191,7 @@ impl Default for BuiltinParams {
             max_segment_m: 1000.0,
             max_segment_rise_m: 250.0,
             profile: None,
+            aerosol: Some(Aerosol::default()),
         }
     }
 }
@@ -300,6 +305,9 @@ impl BuiltinAtmosphere {
             "params",
             "scale height and segment sizes must be positive".into(),
         )?;
+        if let Some(a) = params.aerosol {
+            Aerosol::new(a.model, a.visibility_km)?;
+        }
         Ok(BuiltinAtmosphere {
             met,
             params,
@@ -333,6 +341,16 @@ impl BuiltinAtmosphere {
     /// The parameters.
     pub fn params(&self) -> &BuiltinParams {
         &self.params
+    }
+
+    /// The season of the aerosol's tropospheric and stratospheric profiles:
+    /// LOWTRAN 7's choice for its model atmospheres (fall–winter for the
+    /// two winter profiles), spring–summer on the analytic profile.
+    pub fn aerosol_season(&self) -> Season {
+        match self.params.profile {
+            Some(Profile::MidLatitudeWinter | Profile::SubArcticWinter) => Season::FallWinter,
+            _ => Season::SpringSummer,
+        }
     }
 
     /// The air at altitude `z_m` (m above sea level).
@@ -448,6 +466,10 @@ impl BuiltinAtmosphere {
         let mut w_bm = [0.0f64; lowtran::REGIONS.len()];
         let mut xl = vec![vec![0.0f64; line_bands.len()]; n];
         let mut xlb = vec![vec![0.0f64; line_bands.len()]; n];
+        let aerosol = self
+            .params
+            .aerosol
+            .map(|a| AerosolGrid::new(a, self.aerosol_season(), wl));
         // Fixed segment boundaries k·step from the sensor, so a longer path
         // shares all the segments of a shorter one (exact monotonicity).
         let mut s0 = 0.0;
@@ -495,6 +517,14 @@ impl BuiltinAtmosphere {
             let self_w = col_w * n_w / lowtran::LOSCHMIDT_M3;
             let foreign_w = col_w * (n_air - n_w).max(0.0) / lowtran::LOSCHMIDT_M3;
             let w260 = ((296.0 - t) / 36.0).clamp(0.0, 1.0);
+            if let Some(aer) = &aerosol {
+                // LOWTRAN 7's aerosol extinction at the segment's own
+                // humidity, emitting like the gases (IMULT = 0).
+                let rh = 100.0 * st.water_pa / saturation_vapour_pressure_pa(t);
+                let z_aer =
+                    aerosol::profile_altitude_km(z.max(self.met.ground_altitude_m), self.met.ground_altitude_m);
+                aer.add_optical_depth(z_aer, rh.clamp(0.0, 100.0), ds, &mut cont);
+            }
             for i in 0..n {
                 let [c296, c260, cf] = h2o_cont[i];
                 cont[i] += n2_cia(nu[i]) * n2_path + (c296 + w260 * c260) * self_w + cf * foreign_w;

@@ -24,6 +24,7 @@
 //! spectra. It must not know scenes, facets or sensors beyond a position and
 //! a view direction.
 
+pub mod aerosol;
 pub mod builtin;
 pub mod lines;
 pub mod lowtran;
@@ -32,6 +33,7 @@ pub mod profile;
 pub mod table;
 pub mod tape7;
 
+pub use aerosol::{Aerosol, AerosolModel};
 pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 pub use lut::{Tape7Lut, Tape7Run};
 pub use profile::{Profile, ProfileLevel};
