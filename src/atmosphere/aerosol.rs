@@ -495,7 +495,10 @@ mod tests {
         assert_eq!(t.ext[2][2][3], 1.0);
         assert_eq!(t.bst_ext[0], 2.0752);
         assert_eq!(t.zht.len(), 33);
-        assert_eq!((t.hz2k[1][0], t.hz2k[1][1], t.hz2k[1][2]), (0.158, 0.0991, 0.0621));
+        assert_eq!(
+            (t.hz2k[1][0], t.hz2k[1][1], t.hz2k[1][2]),
+            (0.158, 0.0991, 0.0621)
+        );
         assert_eq!((t.trop[1][1][3], t.trop[0][1][3]), (0.0272, 0.0346));
         assert_eq!(t.upper[32], 9.31e-10);
         // Every coefficient normalised to 1 at 0.55 µm.
@@ -514,12 +517,18 @@ mod tests {
             let a = Aerosol::new(AerosolModel::Rural, v).unwrap();
             let b = a.extinction_055_km(Season::SpringSummer, 0.0)[0];
             let want = 3.912 / v - 0.0116;
-            assert!((b - want).abs() < 0.005 * want.max(0.1), "{v} km: {b} vs {want}");
+            assert!(
+                (b - want).abs() < 0.005 * want.max(0.1),
+                "{v} km: {b} vs {want}"
+            );
         }
         assert!(Aerosol::new(AerosolModel::Rural, 0.0).is_err());
         assert!(Aerosol::new(AerosolModel::Rural, f64::NAN).is_err());
         let e = AerosolModel::from_name("desert").unwrap_err().to_string();
-        assert!(e.contains("desert") && e.contains("rural, urban, maritime"), "{e}");
+        assert!(
+            e.contains("desert") && e.contains("rural, urban, maritime"),
+            "{e}"
+        );
         assert_eq!(AerosolModel::from_name("none").unwrap(), None);
     }
 

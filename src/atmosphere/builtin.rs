@@ -26,18 +26,22 @@
 //!    Hartmann (1989), as a continuum.
 //! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
-//! 4. Not modelled: aerosols and scattering. On the six AFGL profiles the
-//!    zenith path is within 4 % in τ̄ and 7 % in L of LOWTRAN 7 (without
-//!    aerosol) in 8–12, 8–14, 3–5 and 3.5–4.5 µm, on the tropical one
-//!    within 7 % of MODTRAN in τ̄, and the mid-latitude summer window and
-//!    3–5 µm sky fluxes within 1.3 % of RRTMG (docs/physics/atmosphere.md
-//!    has the comparisons).
+//! 4. LOWTRAN 7's aerosol ([`super::aerosol`], [`BuiltinParams::aerosol`]):
+//!    rural (default, 23 km visibility), urban or maritime in the boundary
+//!    layer over its tropospheric and stratospheric background, its
+//!    extinction added to the optical depth and emitting with it (LOWTRAN 7
+//!    without multiple scattering). Not modelled: scattered radiance. On the
+//!    six AFGL profiles the zenith path is within 4 % in τ̄ and 7 % in L of
+//!    LOWTRAN 7, with and without aerosol, in 8–12, 8–14, 3–5 and
+//!    3.5–4.5 µm, on the tropical one within 7 % of MODTRAN in τ̄, and the
+//!    mid-latitude summer window and 3–5 µm clear-sky fluxes within 1.3 % of
+//!    RRTMG (docs/physics/atmosphere.md has the comparisons).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
 //! the continua's optical depth and the band models, and path radiance
 //! L_u = Σ B(λ, T_i)·(τ(s_i) − τ(s_{i+1})) (Schwarzschild's equation without
-//! scattering). τ → 1 and L_u → 0 as the range → 0; τ falls and L_u rises
+//! a scattering source; the aerosol's extinction emits like absorption). τ → 1 and L_u → 0 as the range → 0; τ falls and L_u rises
 //! with range and water vapour.
 //!
 //! **Sky.** The downwelling radiance of an isotropic equivalent sky is the
@@ -521,8 +525,10 @@ impl BuiltinAtmosphere {
                 // LOWTRAN 7's aerosol extinction at the segment's own
                 // humidity, emitting like the gases (IMULT = 0).
                 let rh = 100.0 * st.water_pa / saturation_vapour_pressure_pa(t);
-                let z_aer =
-                    aerosol::profile_altitude_km(z.max(self.met.ground_altitude_m), self.met.ground_altitude_m);
+                let z_aer = aerosol::profile_altitude_km(
+                    z.max(self.met.ground_altitude_m),
+                    self.met.ground_altitude_m,
+                );
                 aer.add_optical_depth(z_aer, rh.clamp(0.0, 100.0), ds, &mut cont);
             }
             for i in 0..n {

@@ -5,7 +5,8 @@
 //! - [`Atmosphere`] is the closed set of models the render integrator calls:
 //!   `None` (vacuum), [`BuiltinAtmosphere`] (needs nothing external; see
 //!   [`builtin`] for the model and its sources, on the analytic profile or
-//!   one of the six AFGL model atmospheres of [`profile`]) and [`Tape7Lut`]
+//!   one of the six AFGL model atmospheres of [`profile`], with LOWTRAN 7's
+//!   aerosol of [`aerosol`]) and [`Tape7Lut`]
 //!   (a table of MODTRAN runs, see [`lut`]).
 //! - The sky depends on direction: [`Atmosphere::sky_radiance_toward`]
 //!   (what a ray leaving the scene sees), [`Atmosphere::sky_radiance`] (the
