@@ -1083,7 +1083,7 @@ mod standard {
             println!("worst {k}: τ̄ {:.1} %, L {:.1} %", 100.0 * t, 100.0 * l);
         }
         println!(
-            "worst aerosol change in 8–12/8–14 µm L: {:.1} %",
+            "worst aerosol change in L (where > 0.05 W m⁻² sr⁻¹): {:.1} %",
             100.0 * worst_change
         );
         // Six profiles × (four bands at zenith + 8–12 µm at 60°) without
