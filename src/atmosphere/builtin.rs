@@ -212,6 +212,18 @@ pub struct BuiltinAtmosphere {
     broadband: Broadband,
 }
 
+/// What the built-in model's paths need of one spectral grid
+/// ([`BuiltinAtmosphere::prepare`]).
+#[derive(Debug, Clone)]
+pub struct PreparedGrid {
+    wl: Vec<f64>,
+    nu: Vec<f64>,
+    windows: lines::LineWindows,
+    band_model: lowtran::BandModelGrid,
+    h2o_cont: Vec<[f64; 3]>,
+    aerosol: Option<AerosolGrid>,
+}
+
 /// A once-computed broadband sky integral, W m⁻² sr⁻¹. Not part of the
 /// atmosphere's identity: two atmospheres are equal whether or not either
 /// has computed it.
@@ -427,6 +439,47 @@ impl BuiltinAtmosphere {
         range_m: f64,
         grid: &SpectralGrid,
     ) -> Result<PathSpectra> {
+        self.path_prepared(
+            &self.prepare(grid),
+            sensor_altitude_m,
+            target_altitude_m,
+            range_m,
+        )
+    }
+
+    /// What [`BuiltinAtmosphere::path`] needs of `grid` whatever the path
+    /// (line windows, band-model samples, continuum and aerosol
+    /// coefficients), for many paths on one grid
+    /// ([`BuiltinAtmosphere::path_prepared`]).
+    pub fn prepare(&self, grid: &SpectralGrid) -> PreparedGrid {
+        let wl = grid.wavelengths_um().to_vec();
+        let nu: Vec<f64> = wl.iter().map(|l| 1e4 / l).collect();
+        let windows = lines::LineWindows::new(lines::co2_bands(), &nu);
+        let band_model = lowtran::BandModelGrid::new(&nu, &lines::window_widths(&nu));
+        let h2o_cont: Vec<[f64; 3]> = nu.iter().map(|&v| lowtran::continuum(v)).collect();
+        let aerosol = self
+            .params
+            .aerosol
+            .map(|a| AerosolGrid::new(a, self.aerosol_season(), &wl));
+        PreparedGrid {
+            wl,
+            nu,
+            windows,
+            band_model,
+            h2o_cont,
+            aerosol,
+        }
+    }
+
+    /// [`BuiltinAtmosphere::path`] on a grid prepared by this atmosphere's
+    /// [`BuiltinAtmosphere::prepare`] (the same values).
+    pub fn path_prepared(
+        &self,
+        prepared: &PreparedGrid,
+        sensor_altitude_m: f64,
+        target_altitude_m: f64,
+        range_m: f64,
+    ) -> Result<PathSpectra> {
         if !(range_m.is_finite() && range_m >= 0.0) {
             return Err(Error::invalid(
                 "range_m",
@@ -443,8 +496,15 @@ impl BuiltinAtmosphere {
                 ),
             ));
         }
-        let n = grid.len();
-        let wl = grid.wavelengths_um();
+        let PreparedGrid {
+            wl,
+            nu,
+            windows,
+            band_model,
+            h2o_cont,
+            aerosol,
+        } = prepared;
+        let n = wl.len();
         let mut tau = vec![1.0; n];
         let mut lu = vec![0.0; n];
         if range_m == 0.0 {
@@ -461,19 +521,11 @@ impl BuiltinAtmosphere {
         } else {
             self.params.max_segment_m
         };
-        let nu: Vec<f64> = wl.iter().map(|l| 1e4 / l).collect();
         let mut cont = vec![0.0; n];
         let line_bands = lines::co2_bands();
-        let windows = lines::LineWindows::new(line_bands, &nu);
-        let band_model = lowtran::BandModelGrid::new(&nu, &lines::window_widths(&nu));
-        let h2o_cont: Vec<[f64; 3]> = nu.iter().map(|&v| lowtran::continuum(v)).collect();
         let mut w_bm = [0.0f64; lowtran::REGIONS.len()];
         let mut xl = vec![vec![0.0f64; line_bands.len()]; n];
         let mut xlb = vec![vec![0.0f64; line_bands.len()]; n];
-        let aerosol = self
-            .params
-            .aerosol
-            .map(|a| AerosolGrid::new(a, self.aerosol_season(), wl));
         // Fixed segment boundaries k·step from the sensor, so a longer path
         // shares all the segments of a shorter one (exact monotonicity).
         let mut s0 = 0.0;
@@ -489,7 +541,7 @@ impl BuiltinAtmosphere {
                 .filter(|&b| windows.active(b))
                 .map(|b| {
                     (
-                        lines::layer_parameters(line_bands, &windows, b, t, p_atm),
+                        lines::layer_parameters(line_bands, windows, b, t, p_atm),
                         st.co2_g_m3 * ds,
                     )
                 })
@@ -521,7 +573,7 @@ impl BuiltinAtmosphere {
             let self_w = col_w * n_w / lowtran::LOSCHMIDT_M3;
             let foreign_w = col_w * (n_air - n_w).max(0.0) / lowtran::LOSCHMIDT_M3;
             let w260 = ((296.0 - t) / 36.0).clamp(0.0, 1.0);
-            if let Some(aer) = &aerosol {
+            if let Some(aer) = aerosol {
                 // LOWTRAN 7's aerosol extinction at the segment's own
                 // humidity, emitting like the gases (IMULT = 0).
                 let rh = 100.0 * st.water_pa / saturation_vapour_pressure_pa(t);
