@@ -26,18 +26,22 @@
 //!    Hartmann (1989), as a continuum.
 //! 3. The N₂ collision-induced fundamental band near 4.3 µm (Lafferty et
 //!    al. 1996), optical depth ∝ n_N₂² (see [`N2_CIA_INTEGRAL`]).
-//! 4. Not modelled: aerosols and scattering. On the six AFGL profiles the
-//!    zenith path is within 4 % in τ̄ and 7 % in L of LOWTRAN 7 (without
-//!    aerosol) in 8–12, 8–14, 3–5 and 3.5–4.5 µm, on the tropical one
-//!    within 7 % of MODTRAN in τ̄, and the mid-latitude summer window and
-//!    3–5 µm sky fluxes within 1.3 % of RRTMG (docs/physics/atmosphere.md
-//!    has the comparisons).
+//! 4. LOWTRAN 7's aerosol ([`super::aerosol`], [`BuiltinParams::aerosol`]):
+//!    rural (default, 23 km visibility), urban or maritime in the boundary
+//!    layer over its tropospheric and stratospheric background, its
+//!    extinction added to the optical depth and emitting with it (LOWTRAN 7
+//!    without multiple scattering). Not modelled: scattered radiance. On the
+//!    six AFGL profiles the zenith path is within 4 % in τ̄ and 7 % in L of
+//!    LOWTRAN 7, with and without aerosol, in 8–12, 8–14, 3–5 and
+//!    3.5–4.5 µm, on the tropical one within 7 % of MODTRAN in τ̄, and the
+//!    mid-latitude summer window and 3–5 µm clear-sky fluxes within 1.3 % of
+//!    RRTMG (docs/physics/atmosphere.md has the comparisons).
 //!
 //! **Radiative transfer.** Along the slant path from the sensor, in segments
 //! of at most 1 km and 250 m of altitude: cumulative transmittance τ(s) from
 //! the continua's optical depth and the band models, and path radiance
 //! L_u = Σ B(λ, T_i)·(τ(s_i) − τ(s_{i+1})) (Schwarzschild's equation without
-//! scattering). τ → 1 and L_u → 0 as the range → 0; τ falls and L_u rises
+//! a scattering source; the aerosol's extinction emits like absorption). τ → 1 and L_u → 0 as the range → 0; τ falls and L_u rises
 //! with range and water vapour.
 //!
 //! **Sky.** The downwelling radiance of an isotropic equivalent sky is the
@@ -49,6 +53,7 @@
 //! longwave E_sky/π.
 
 use super::PathSpectra;
+use super::aerosol::{self, Aerosol, AerosolGrid, Season};
 use super::lines;
 use super::lowtran;
 use super::profile::Profile;
@@ -177,6 +182,9 @@ pub struct BuiltinParams {
     /// the analytic profile (US 1976 temperatures, exponential water
     /// vapour with [`BuiltinParams::water_scale_height_m`], no ozone).
     pub profile: Option<Profile>,
+    /// LOWTRAN 7's aerosol ([`super::aerosol`]); `None`: clear air
+    /// (gases only). Default: rural, 23 km visibility.
+    pub aerosol: Option<Aerosol>,
 }
 
 impl Default for BuiltinParams {
@@ -187,6 +195,7 @@ impl Default for BuiltinParams {
             max_segment_m: 1000.0,
             max_segment_rise_m: 250.0,
             profile: None,
+            aerosol: Some(Aerosol::default()),
         }
     }
 }
@@ -201,6 +210,18 @@ pub struct BuiltinAtmosphere {
     /// ([`BuiltinAtmosphere::sky_scale`]), computed once: it depends only on
     /// the fields above, which do not change after construction.
     broadband: Broadband,
+}
+
+/// What the built-in model's paths need of one spectral grid
+/// ([`BuiltinAtmosphere::prepare`]).
+#[derive(Debug, Clone)]
+pub struct PreparedGrid {
+    wl: Vec<f64>,
+    nu: Vec<f64>,
+    windows: lines::LineWindows,
+    band_model: lowtran::BandModelGrid,
+    h2o_cont: Vec<[f64; 3]>,
+    aerosol: Option<AerosolGrid>,
 }
 
 /// A once-computed broadband sky integral, W m⁻² sr⁻¹. Not part of the
@@ -300,6 +321,9 @@ impl BuiltinAtmosphere {
             "params",
             "scale height and segment sizes must be positive".into(),
         )?;
+        if let Some(a) = params.aerosol {
+            Aerosol::new(a.model, a.visibility_km)?;
+        }
         Ok(BuiltinAtmosphere {
             met,
             params,
@@ -333,6 +357,16 @@ impl BuiltinAtmosphere {
     /// The parameters.
     pub fn params(&self) -> &BuiltinParams {
         &self.params
+    }
+
+    /// The season of the aerosol's tropospheric and stratospheric profiles:
+    /// LOWTRAN 7's choice for its model atmospheres (fall–winter for the
+    /// two winter profiles), spring–summer on the analytic profile.
+    pub fn aerosol_season(&self) -> Season {
+        match self.params.profile {
+            Some(Profile::MidLatitudeWinter | Profile::SubArcticWinter) => Season::FallWinter,
+            _ => Season::SpringSummer,
+        }
     }
 
     /// The air at altitude `z_m` (m above sea level).
@@ -405,6 +439,47 @@ impl BuiltinAtmosphere {
         range_m: f64,
         grid: &SpectralGrid,
     ) -> Result<PathSpectra> {
+        self.path_prepared(
+            &self.prepare(grid),
+            sensor_altitude_m,
+            target_altitude_m,
+            range_m,
+        )
+    }
+
+    /// What [`BuiltinAtmosphere::path`] needs of `grid` whatever the path
+    /// (line windows, band-model samples, continuum and aerosol
+    /// coefficients), for many paths on one grid
+    /// ([`BuiltinAtmosphere::path_prepared`]).
+    pub fn prepare(&self, grid: &SpectralGrid) -> PreparedGrid {
+        let wl = grid.wavelengths_um().to_vec();
+        let nu: Vec<f64> = wl.iter().map(|l| 1e4 / l).collect();
+        let windows = lines::LineWindows::new(lines::co2_bands(), &nu);
+        let band_model = lowtran::BandModelGrid::new(&nu, &lines::window_widths(&nu));
+        let h2o_cont: Vec<[f64; 3]> = nu.iter().map(|&v| lowtran::continuum(v)).collect();
+        let aerosol = self
+            .params
+            .aerosol
+            .map(|a| AerosolGrid::new(a, self.aerosol_season(), &wl));
+        PreparedGrid {
+            wl,
+            nu,
+            windows,
+            band_model,
+            h2o_cont,
+            aerosol,
+        }
+    }
+
+    /// [`BuiltinAtmosphere::path`] on a grid prepared by this atmosphere's
+    /// [`BuiltinAtmosphere::prepare`] (the same values).
+    pub fn path_prepared(
+        &self,
+        prepared: &PreparedGrid,
+        sensor_altitude_m: f64,
+        target_altitude_m: f64,
+        range_m: f64,
+    ) -> Result<PathSpectra> {
         if !(range_m.is_finite() && range_m >= 0.0) {
             return Err(Error::invalid(
                 "range_m",
@@ -421,8 +496,15 @@ impl BuiltinAtmosphere {
                 ),
             ));
         }
-        let n = grid.len();
-        let wl = grid.wavelengths_um();
+        let PreparedGrid {
+            wl,
+            nu,
+            windows,
+            band_model,
+            h2o_cont,
+            aerosol,
+        } = prepared;
+        let n = wl.len();
         let mut tau = vec![1.0; n];
         let mut lu = vec![0.0; n];
         if range_m == 0.0 {
@@ -439,12 +521,8 @@ impl BuiltinAtmosphere {
         } else {
             self.params.max_segment_m
         };
-        let nu: Vec<f64> = wl.iter().map(|l| 1e4 / l).collect();
         let mut cont = vec![0.0; n];
         let line_bands = lines::co2_bands();
-        let windows = lines::LineWindows::new(line_bands, &nu);
-        let band_model = lowtran::BandModelGrid::new(&nu, &lines::window_widths(&nu));
-        let h2o_cont: Vec<[f64; 3]> = nu.iter().map(|&v| lowtran::continuum(v)).collect();
         let mut w_bm = [0.0f64; lowtran::REGIONS.len()];
         let mut xl = vec![vec![0.0f64; line_bands.len()]; n];
         let mut xlb = vec![vec![0.0f64; line_bands.len()]; n];
@@ -463,7 +541,7 @@ impl BuiltinAtmosphere {
                 .filter(|&b| windows.active(b))
                 .map(|b| {
                     (
-                        lines::layer_parameters(line_bands, &windows, b, t, p_atm),
+                        lines::layer_parameters(line_bands, windows, b, t, p_atm),
                         st.co2_g_m3 * ds,
                     )
                 })
@@ -495,6 +573,16 @@ impl BuiltinAtmosphere {
             let self_w = col_w * n_w / lowtran::LOSCHMIDT_M3;
             let foreign_w = col_w * (n_air - n_w).max(0.0) / lowtran::LOSCHMIDT_M3;
             let w260 = ((296.0 - t) / 36.0).clamp(0.0, 1.0);
+            if let Some(aer) = aerosol {
+                // LOWTRAN 7's aerosol extinction at the segment's own
+                // humidity, emitting like the gases (IMULT = 0).
+                let rh = 100.0 * st.water_pa / saturation_vapour_pressure_pa(t);
+                let z_aer = aerosol::profile_altitude_km(
+                    z.max(self.met.ground_altitude_m),
+                    self.met.ground_altitude_m,
+                );
+                aer.add_optical_depth(z_aer, rh.clamp(0.0, 100.0), ds, &mut cont);
+            }
             for i in 0..n {
                 let [c296, c260, cf] = h2o_cont[i];
                 cont[i] += n2_cia(nu[i]) * n2_path + (c296 + w260 * c260) * self_w + cf * foreign_w;

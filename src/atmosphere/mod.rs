@@ -5,7 +5,8 @@
 //! - [`Atmosphere`] is the closed set of models the render integrator calls:
 //!   `None` (vacuum), [`BuiltinAtmosphere`] (needs nothing external; see
 //!   [`builtin`] for the model and its sources, on the analytic profile or
-//!   one of the six AFGL model atmospheres of [`profile`]) and [`Tape7Lut`]
+//!   one of the six AFGL model atmospheres of [`profile`], with LOWTRAN 7's
+//!   aerosol of [`aerosol`]) and [`Tape7Lut`]
 //!   (a table of MODTRAN runs, see [`lut`]).
 //! - The sky depends on direction: [`Atmosphere::sky_radiance_toward`]
 //!   (what a ray leaving the scene sees), [`Atmosphere::sky_radiance`] (the
@@ -24,6 +25,7 @@
 //! spectra. It must not know scenes, facets or sensors beyond a position and
 //! a view direction.
 
+pub mod aerosol;
 pub mod builtin;
 pub mod lines;
 pub mod lowtran;
@@ -32,6 +34,7 @@ pub mod profile;
 pub mod table;
 pub mod tape7;
 
+pub use aerosol::{Aerosol, AerosolModel};
 pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 pub use lut::{Tape7Lut, Tape7Run};
 pub use profile::{Profile, ProfileLevel};
@@ -269,27 +272,64 @@ impl Atmosphere {
 
     /// τ₂(λ) and L_u(λ) along `geom` on `grid`.
     pub fn path(&self, geom: &PathGeometry, grid: &SpectralGrid) -> Result<PathSpectra> {
+        self.prepare(grid).path(geom)
+    }
+
+    /// [`Atmosphere::path`] for many geometries on one `grid`: what the
+    /// model needs of the grid computed once.
+    pub fn prepare<'a>(&'a self, grid: &'a SpectralGrid) -> PreparedPaths<'a> {
+        PreparedPaths {
+            atmosphere: self,
+            grid,
+            builtin: match self {
+                Atmosphere::Builtin(b) => Some(b.prepare(grid)),
+                _ => None,
+            },
+        }
+    }
+}
+
+/// Paths on one spectral grid ([`Atmosphere::prepare`]).
+#[derive(Debug, Clone)]
+pub struct PreparedPaths<'a> {
+    atmosphere: &'a Atmosphere,
+    grid: &'a SpectralGrid,
+    builtin: Option<builtin::PreparedGrid>,
+}
+
+impl PreparedPaths<'_> {
+    /// τ₂(λ) and L_u(λ) along `geom` ([`Atmosphere::path`]).
+    pub fn path(&self, geom: &PathGeometry) -> Result<PathSpectra> {
+        let grid = self.grid;
         if !(geom.range_m.is_finite() && geom.range_m >= 0.0) {
             return Err(Error::invalid(
                 "range_m",
                 format!("expected a range ≥ 0 m, got {}", geom.range_m),
             ));
         }
-        match self {
-            Atmosphere::None => Ok(PathSpectra {
+        match (self.atmosphere, &self.builtin) {
+            (Atmosphere::None, _) => Ok(PathSpectra {
                 transmittance: vec![1.0; grid.len()],
                 path_radiance: vec![0.0; grid.len()],
             }),
-            Atmosphere::Builtin(b) => b.path(
+            (Atmosphere::Builtin(b), Some(p)) => b.path_prepared(
+                p,
+                geom.sensor_altitude_m,
+                geom.target_altitude_m,
+                geom.range_m,
+            ),
+            (Atmosphere::Builtin(b), None) => b.path(
                 geom.sensor_altitude_m,
                 geom.target_altitude_m,
                 geom.range_m,
                 grid,
             ),
-            Atmosphere::Tape7Lut(l) => l.path(geom.view_zenith_deg(), geom.range_m, grid),
+            (Atmosphere::Tape7Lut(l), _) => l.path(geom.view_zenith_deg(), geom.range_m, grid),
         }
     }
+}
 
+impl Atmosphere {
     /// Sky radiance (E_ds + E_de)/π, W·m⁻²·sr⁻¹·µm⁻¹, on `grid`. The tape7
     /// table uses its sky runs at the diffusivity zenith (52.96°) as given
     /// (their band coverage does not allow broadband scaling), or the grey

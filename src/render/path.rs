@@ -3,7 +3,7 @@
 use rayon::prelude::*;
 
 use crate::Result;
-use crate::atmosphere::{Atmosphere, PathGeometry};
+use crate::atmosphere::{Atmosphere, PathGeometry, PreparedPaths};
 use crate::radiometry::Band;
 use crate::sensor::{Geometry, Sensor};
 
@@ -77,15 +77,14 @@ impl PathTables {
                 .collect()
         };
         let sensor_alt = ground_altitude_m + height;
-        let path = |b: &Band, target: f64, r: f64| -> Result<(Vec<f64>, Vec<f64>)> {
-            let p = atmosphere.path(
-                &PathGeometry {
-                    sensor_altitude_m: sensor_alt,
-                    target_altitude_m: target,
-                    range_m: r,
-                },
-                b.grid(),
-            )?;
+        // What the model needs of a band's grid is the same for every node
+        // of the band: prepared once per band.
+        let path = |b: &PreparedPaths, target: f64, r: f64| -> Result<(Vec<f64>, Vec<f64>)> {
+            let p = b.path(&PathGeometry {
+                sensor_altitude_m: sensor_alt,
+                target_altitude_m: target,
+                range_m: r,
+            })?;
             Ok((p.transmittance, p.path_radiance))
         };
         // Every node is independent: bands, heights and ranges in parallel
@@ -93,6 +92,7 @@ impl PathTables {
         let tables = bands
             .par_iter()
             .map(|b| -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
+                let b = &atmosphere.prepare(b.grid());
                 let per_height = heights
                     .par_iter()
                     .map(|&z| -> Result<Vec<(Vec<f64>, Vec<f64>)>> {

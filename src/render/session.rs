@@ -29,7 +29,9 @@ use super::shade::{Conditions, SceneOptics, ShadeOptions, Shader, Sky, SunInput,
 use super::state::{FacetStates, FacetTimeState};
 use super::tile::{TileInfo, tile_is_complete, tile_path, tile_rows, write_tile};
 use super::{Fnv, RenderConfig, write_outputs_geo};
-use crate::atmosphere::{Atmosphere, BuiltinAtmosphere, Profile, SurfaceMet, Tape7Lut};
+use crate::atmosphere::{
+    Aerosol, AerosolModel, Atmosphere, BuiltinAtmosphere, Profile, SurfaceMet, Tape7Lut,
+};
 use crate::progress::{NoProgress, Progress, Stage};
 use crate::radiometry::Band;
 use crate::scene::Scene;
@@ -56,6 +58,9 @@ pub enum AtmosphereConfig {
         co2_ppmv: Option<f64>,
         /// Water-vapour scale height, m (default 2000).
         water_scale_height_m: Option<f64>,
+        /// LOWTRAN 7's aerosol (`"aerosol"`, `"visibility_km"`); `None`:
+        /// clear air (`"aerosol": "none"`). Default: rural, 23 km.
+        aerosol: Option<Aerosol>,
     },
     /// The built-in layered model on an AFGL model atmosphere, the weather
     /// at the image time blended into its lowest layers
@@ -66,6 +71,8 @@ pub enum AtmosphereConfig {
         profile: Option<Profile>,
         /// CO₂ volume mixing ratio, ppmv (default 420).
         co2_ppmv: Option<f64>,
+        /// As for [`AtmosphereConfig::Builtin`].
+        aerosol: Option<Aerosol>,
     },
     /// A table of MODTRAN tape7 runs, listed in an index JSON file (relative
     /// to the scene file).
@@ -87,6 +94,13 @@ impl schemars::JsonSchema for AtmosphereConfig {
             .chain(Profile::ALL.map(Profile::name))
             .collect();
         let profiles: Vec<&str> = Profile::ALL.map(Profile::name).to_vec();
+        let aerosols: Vec<&str> = std::iter::once("none")
+            .chain(AerosolModel::ALL.map(AerosolModel::name))
+            .collect();
+        let aerosol = serde_json::json!({ "type": "string", "enum": aerosols,
+            "description": "LOWTRAN 7's boundary-layer aerosol (default rural); none: clear air" });
+        let visibility = serde_json::json!({ "type": "number", "exclusiveMinimum": 0,
+            "description": "visibility at the ground, km (default 23; urban 5)" });
         schemars::json_schema!({
             "description": "The atmosphere between scene and sensor, and the sky. Absent: the built-in layered model on the AFGL profile of the site's latitude and the month.",
             "oneOf": [
@@ -98,13 +112,15 @@ impl schemars::JsonSchema for AtmosphereConfig {
                   "properties": {
                       "model": { "const": "builtin" },
                       "co2_ppmv": { "type": "number", "description": "CO₂ volume mixing ratio, ppmv (default 420)" },
-                      "water_scale_height_m": { "type": "number", "description": "water-vapour scale height, m (default 2000)" }
+                      "water_scale_height_m": { "type": "number", "description": "water-vapour scale height, m (default 2000)" },
+                      "aerosol": aerosol, "visibility_km": visibility
                   } },
                 { "type": "object", "additionalProperties": false, "required": ["model"],
                   "properties": {
                       "model": { "const": "standard" },
                       "profile": { "type": "string", "enum": profiles },
-                      "co2_ppmv": { "type": "number", "description": "CO₂ volume mixing ratio, ppmv (default 420)" }
+                      "co2_ppmv": { "type": "number", "description": "CO₂ volume mixing ratio, ppmv (default 420)" },
+                      "aerosol": aerosol, "visibility_km": visibility
                   } },
                 { "type": "object", "additionalProperties": false, "required": ["model", "index"],
                   "properties": {
@@ -122,7 +138,31 @@ impl Default for AtmosphereConfig {
         AtmosphereConfig::Standard {
             profile: None,
             co2_ppmv: None,
+            aerosol: Some(Aerosol::default()),
         }
+    }
+}
+
+/// The aerosol of a built-in atmosphere object from its `aerosol` and
+/// `visibility_km`: absent, LOWTRAN's rural 23 km (a visibility alone sets
+/// the rural aerosol's); `"none"`, clear air; a model without a visibility,
+/// the model's default (LOWTRAN's: 23 km, urban 5 km).
+fn aerosol_config(
+    name: Option<&str>,
+    visibility_km: Option<f64>,
+) -> std::result::Result<Option<Aerosol>, String> {
+    let model = match name {
+        None => Some(AerosolModel::Rural),
+        Some(n) => AerosolModel::from_name(n).map_err(|e| e.to_string())?,
+    };
+    match (model, visibility_km) {
+        (None, Some(_)) => {
+            Err("visibility_km: a visibility needs an aerosol, not \"aerosol\": \"none\"".into())
+        }
+        (None, None) => Ok(None),
+        (Some(m), v) => Aerosol::new(m, v.unwrap_or(m.default_visibility_km()))
+            .map(Some)
+            .map_err(|e| e.to_string()),
     }
 }
 
@@ -134,10 +174,14 @@ enum AtmosphereObject {
     Builtin {
         co2_ppmv: Option<f64>,
         water_scale_height_m: Option<f64>,
+        aerosol: Option<String>,
+        visibility_km: Option<f64>,
     },
     Standard {
         profile: Option<String>,
         co2_ppmv: Option<f64>,
+        aerosol: Option<String>,
+        visibility_km: Option<f64>,
     },
     Tape7 {
         index: PathBuf,
@@ -154,6 +198,7 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                 "builtin" => AtmosphereConfig::Builtin {
                     co2_ppmv: None,
                     water_scale_height_m: None,
+                    aerosol: Some(Aerosol::default()),
                 },
                 "standard" => AtmosphereConfig::default(),
                 other => AtmosphereConfig::Standard {
@@ -169,6 +214,7 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                         )
                     })?),
                     co2_ppmv: None,
+                    aerosol: Some(Aerosol::default()),
                 },
             });
         }
@@ -180,16 +226,22 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                 AtmosphereObject::Builtin {
                     co2_ppmv,
                     water_scale_height_m,
+                    aerosol,
+                    visibility_km,
                 } => AtmosphereConfig::Builtin {
                     co2_ppmv,
                     water_scale_height_m,
+                    aerosol: aerosol_config(aerosol.as_deref(), visibility_km)?,
                 },
                 AtmosphereObject::Standard {
                     profile: p,
                     co2_ppmv,
+                    aerosol,
+                    visibility_km,
                 } => AtmosphereConfig::Standard {
                     profile: p.as_deref().map(profile).transpose()?,
                     co2_ppmv,
+                    aerosol: aerosol_config(aerosol.as_deref(), visibility_km)?,
                 },
                 AtmosphereObject::Tape7 { index } => AtmosphereConfig::Tape7 { index },
             },
@@ -209,8 +261,12 @@ pub(crate) fn atmosphere_at(
         AtmosphereConfig::Builtin {
             co2_ppmv,
             water_scale_height_m,
+            aerosol,
         } => {
-            let mut p = crate::atmosphere::BuiltinParams::default();
+            let mut p = crate::atmosphere::BuiltinParams {
+                aerosol: *aerosol,
+                ..Default::default()
+            };
             if let Some(c) = co2_ppmv {
                 p.co2_ppmv = *c;
             }
@@ -222,13 +278,18 @@ pub(crate) fn atmosphere_at(
                 p,
             )?)
         }
-        AtmosphereConfig::Standard { profile, co2_ppmv } => {
+        AtmosphereConfig::Standard {
+            profile,
+            co2_ppmv,
+            aerosol,
+        } => {
             let profile = profile.unwrap_or_else(|| {
                 use chrono::Datelike;
                 Profile::for_site(scene.site.latitude_deg, record.time.month())
             });
             let mut p = crate::atmosphere::BuiltinParams {
                 profile: Some(profile),
+                aerosol: *aerosol,
                 ..Default::default()
             };
             if let Some(c) = co2_ppmv {
