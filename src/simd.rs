@@ -3,10 +3,11 @@
 //! irsig's release build targets the x86-64 baseline (SSE2: 4 lanes of
 //! `f32`), so that one binary runs on any x86-64 CPU. The few loops that
 //! dominate the scene thermal stage (Green's-matrix products, background
-//! and reflected-shortwave sums) run through [`vectorized`], which compiles
-//! them a second time for AVX2 + FMA (8 lanes) and picks that copy when the
-//! CPU has it — the runtime dispatch of the `pulp` crate, so no `unsafe`
-//! here.
+//! and reflected-shortwave sums, the tangent-linear model's steps and
+//! folds in `f64`) run through [`vectorized`], which compiles them a second
+//! time for AVX2 + FMA (8 lanes of `f32`, 4 of `f64`) and picks that copy
+//! when the CPU has it — the runtime dispatch of the `pulp` crate, so no
+//! `unsafe` here.
 //!
 //! Owns nothing but the dispatch. The loops must keep each lane's
 //! operations in the same order on every path (no reassociation across

@@ -1165,3 +1165,74 @@ fn second_order_at_curvature_nodes_matches_every_record() {
         }
     }
 }
+
+/// The compact solar history writes the linearised solve's
+/// `clamp(s, 0, 1)·max(cos θ, 0)` directly, from its lit day records only
+/// (the fast path); it must equal, bit for bit, the product the
+/// `SolarSource` trait forms from the two decoded histories (the
+/// reference), for facets that face the sun, face away from it part of the
+/// day, are double-sided or face down, and at night.
+#[test]
+fn compact_sunlit_cosine_matches_the_two_histories() {
+    use irsig::exposure::SolarHistory;
+    use irsig::thermal::scene::{SolarArrays, SolarSource};
+    let steps = 12;
+    // The sun rises at record 3 and sets after record 9.
+    let sun: Vec<Vec3> = (0..steps)
+        .map(|k| {
+            let a = (k as f32 - 3.0) / 7.0 * std::f32::consts::PI;
+            Vec3::new(-a.cos(), 0.3, a.sin()).normalize()
+        })
+        .collect();
+    let normal = [
+        Vec3::Z,
+        Vec3::X,
+        -Vec3::X,
+        -Vec3::X,
+        -Vec3::Z,
+        Vec3::new(0.2, -0.3, 0.9).normalize(),
+    ];
+    let double_sided = [false, false, false, true, false, false];
+    let n = normal.len();
+    let points = 4;
+    // Lit fractions in quarters, 0 with the sun down.
+    let frac: Vec<f32> = (0..n * steps)
+        .map(|i| {
+            let (f, r) = (i / steps, i % steps);
+            if sun[r].z > 0.0 {
+                ((f * 7 + r * 3) % 5) as f32 / 4.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let hist = SolarHistory::from_fractions(&frac, &sun, points, &normal, &double_sided).unwrap();
+    let (mut lit, mut dark) = (0, 0);
+    for f in 0..n {
+        let (sf, cos) = (hist.sun_fraction(f), hist.cos_incidence(f));
+        let reference_source = SolarArrays {
+            records: steps,
+            sun_fraction: &sf,
+            cos_incidence: &cos,
+        };
+        let mut reference = vec![0.0f32; steps];
+        reference_source.sunlit_cos_into(0, &mut reference);
+        let mut fast = vec![f32::NAN; steps];
+        SolarSource::sunlit_cos_into(&hist, f, &mut fast);
+        for r in 0..steps {
+            assert_eq!(
+                fast[r].to_bits(),
+                reference[r].to_bits(),
+                "facet {f}, record {r}: {} vs {}",
+                fast[r],
+                reference[r]
+            );
+            let expected = sf[r].clamp(0.0, 1.0) * cos[r].max(0.0);
+            assert_eq!(reference[r].to_bits(), expected.to_bits());
+        }
+        lit += reference.iter().filter(|&&v| v > 0.0).count();
+        dark += reference.iter().filter(|&&v| v == 0.0).count();
+    }
+    // Both kinds of record are exercised.
+    assert!(lit >= 15 && dark >= 30, "lit {lit}, dark {dark}");
+}

@@ -74,6 +74,21 @@ impl SolarSource for SolarHistory {
     fn cos_incidence_into(&self, facet: usize, out: &mut [f32]) {
         SolarHistory::cos_incidence_into(self, facet, out);
     }
+    /// Only the day records with lit sample points: elsewhere the product
+    /// is zero (the sunlit fraction is), so the cosine is not needed.
+    fn sunlit_cos_into(&self, facet: usize, out: &mut [f32]) {
+        out.fill(0.0);
+        let (normal, double_sided) = (self.normal[facet], self.double_sided[facet]);
+        let m = self.points as f32;
+        for (d, &r) in self.day.iter().enumerate() {
+            let lit = self.lit_points(facet, d);
+            if lit != 0 {
+                let s = (lit as f32 / m).clamp(0.0, 1.0);
+                let c = crate::geometry::sun_cosine(normal, double_sided, self.sun[r as usize]);
+                out[r as usize] = s * c.max(0.0);
+            }
+        }
+    }
 }
 
 /// The records `window` (indices into the history, in order) of a solar
@@ -980,11 +995,22 @@ fn solve_windows(
         point_response: None,
     };
     let mut responses: Vec<Option<ImageResponse>> = vec![None; history.windows.len()];
-    let mut solved: Vec<(&[usize], Vec<f32>, Option<ImageResponse>)> = Vec::new();
+    // The image time whose solve serves each image time (itself, or the
+    // first with the same window): copied to the others after the loop,
+    // so that a single window is never copied.
+    let first_of: Vec<usize> = history
+        .windows
+        .iter()
+        .map(|w| {
+            history
+                .windows
+                .iter()
+                .position(|v| v == w)
+                .expect("a window is its own")
+        })
+        .collect();
     for (i, w) in history.windows.iter().enumerate() {
-        if let Some((_, t, pr)) = solved.iter().find(|(v, _, _)| *v == w.as_slice()) {
-            out.surface_temperature_k[i] = t.clone();
-            responses[i] = pr.clone();
+        if first_of[i] != i {
             continue;
         }
         let last = w.len() - 1;
@@ -1044,9 +1070,14 @@ fn solve_windows(
             .next()
             .unwrap_or_default();
         add_passes(&mut out.passes, &r.passes);
-        out.surface_temperature_k[i] = t.clone();
-        responses[i] = pr.clone();
-        solved.push((w.as_slice(), t, pr));
+        out.surface_temperature_k[i] = t;
+        responses[i] = pr;
+    }
+    for (i, &j) in first_of.iter().enumerate() {
+        if j != i {
+            out.surface_temperature_k[i] = out.surface_temperature_k[j].clone();
+            responses[i] = responses[j].clone();
+        }
     }
     Ok((out, responses))
 }

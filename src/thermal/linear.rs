@@ -653,10 +653,28 @@ impl Tangent {
     /// derivatives `dq/dT` (front, back) at the step's start, stage 1 and
     /// end, the record interval `k` and the interval fractions `phi` of those
     /// three instants.
+    ///
+    /// Runs compiled for the widest vector instructions the CPU has
+    /// ([`crate::simd::vectorized`]); every column's operations are the
+    /// same in the same order on every path, so the result does not depend
+    /// on it.
     pub(crate) fn step(&mut self, dt: f64, deriv: [(f64, f64); 3], k: usize, phi: [f64; 3]) {
         if !self.active {
             return;
         }
+        crate::simd::vectorized(TangentStep {
+            tangent: self,
+            dt,
+            deriv,
+            k,
+            phi,
+        });
+    }
+
+    /// [`Tangent::step`] of an active tangent, inlined into the dispatched
+    /// copy.
+    #[inline(always)]
+    fn step_impl(&mut self, dt: f64, deriv: [(f64, f64); 3], k: usize, phi: [f64; 3]) {
         let (nodes, cols) = (self.nodes, self.cols);
         let n = nodes - 1;
         let act = self.active_columns(k);
@@ -751,6 +769,7 @@ impl Tangent {
     /// record interval `k` of the real run: the sources of records
     /// `0..=k + 1` (a source acts only from its record on: causality) and
     /// the initial state; the other columns are zero and stay so.
+    #[inline(always)]
     fn active_columns(&self, k: usize) -> [(usize, usize); 3] {
         let r = self.records;
         let a = (k + 2).min(r);
@@ -761,6 +780,7 @@ impl Tangent {
 
     /// Add the unit source perturbations of records `k` and `k + 1` with
     /// weights `w_k`, `w_k1` to the boundary rows of `rhs`.
+    #[inline(always)]
     fn add_sources(&mut self, k: usize, w_k: f64, w_k1: f64) {
         let cols = self.cols;
         let r = self.records;
@@ -777,7 +797,17 @@ impl Tangent {
 
     /// The Green's matrices `[t][k]` (front←front, front←back, back←front,
     /// back←back) with `cycles` spin-up cycles folded in.
-    fn green(&self, cycles: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+    /// Vectorised like [`Tangent::step`].
+    fn green(&self, cycles: usize) -> GreenMatrices {
+        crate::simd::vectorized(TangentGreen {
+            tangent: self,
+            cycles,
+        })
+    }
+
+    /// [`Tangent::green`], inlined into the dispatched copy.
+    #[inline(always)]
+    fn green_impl(&self, cycles: usize) -> GreenMatrices {
         let (nodes, cols, r) = (self.nodes, self.cols, self.records);
         let src = cols - nodes;
         // X = Σ_{j<c} Φʲ Ψ: sensitivity of the real run's start state to the
@@ -868,12 +898,33 @@ impl Tangent {
     }
 }
 
+/// [`Tangent::step_impl`] for [`crate::simd::vectorized`].
+#[inline(always)]
+fn tangent_step(tangent: &mut Tangent, dt: f64, deriv: [(f64, f64); 3], k: usize, phi: [f64; 3]) {
+    tangent.step_impl(dt, deriv, k, phi)
+}
+
+crate::simd::simd_kernel!(TangentStep<'a> { tangent: &'a mut Tangent, dt: f64, deriv: [(f64, f64); 3], k: usize, phi: [f64; 3] } -> () => tangent_step);
+
+/// The Green's matrices `[t][k]`: front←front, front←back, back←front,
+/// back←back.
+type GreenMatrices = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// [`Tangent::green_impl`] for [`crate::simd::vectorized`].
+#[inline(always)]
+fn tangent_green(tangent: &Tangent, cycles: usize) -> GreenMatrices {
+    tangent.green_impl(cycles)
+}
+
+crate::simd::simd_kernel!(TangentGreen<'a> { tangent: &'a Tangent, cycles: usize } -> GreenMatrices => tangent_green);
+
 /// Solve `(C − c A − c D) X = rhs` for the `active` column ranges of
 /// `cols` right-hand sides (node-major; the other columns are untouched),
 /// `A` the conduction operator, `D = diag(d_front, 0, …, d_back)`; with a
 /// fixed back the last row is `X_n = rhs_n` (Thomas algorithm, Press et al.,
 /// *Numerical Recipes*, 3rd ed., §2.4).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn solve_tridiagonal(
     capacity: &[f64],
     conductance: &[f64],

@@ -30,6 +30,19 @@ pub trait SolarSource: Sync + std::fmt::Debug {
     /// record into `out` (0 at night or behind a single-sided facet; `|n·s|`
     /// for a double-sided one).
     fn cos_incidence_into(&self, facet: usize, out: &mut [f32]);
+    /// Writes `clamp(s, 0, 1)·max(cos θ, 0)` of `facet` at every record
+    /// into `out` (`records()` values): the direct sunlight per unit
+    /// direct-normal irradiance that the linearised solve reads. The default
+    /// forms it from the two histories above; a compact history may write
+    /// it directly (the same values, bit for bit).
+    fn sunlit_cos_into(&self, facet: usize, out: &mut [f32]) {
+        let mut cos = vec![0.0; out.len()];
+        self.sun_fraction_into(facet, out);
+        self.cos_incidence_into(facet, &mut cos);
+        for (o, c) in out.iter_mut().zip(&cos) {
+            *o = o.clamp(0.0, 1.0) * c.max(0.0);
+        }
+    }
 }
 
 /// A solar history as two plain facet-major arrays, `[facet·R + record]`.

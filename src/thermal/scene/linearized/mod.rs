@@ -62,7 +62,7 @@ use rayon::prelude::*;
 use self::kernels::accumulate_rows;
 use self::nodes::CurvatureNodes;
 use self::passes::{PassPlan, Slots};
-use self::reference::{Diff, FacetState, Reference, sunlit_cos};
+use self::reference::{Diff, FacetState, Reference};
 use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
@@ -399,28 +399,41 @@ impl Facets<'_> {
             &how.lp.options,
         )
         .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
+        let mut sc = vec![0.0; self.forcing.len()];
+        self.sunlit_cos_into(facet, &mut sc);
         Ok(Reference::new(
             lin,
             how.rows,
             how.images,
             model,
             self.state(facet),
+            sc,
             how.nodes,
         ))
     }
 
-    /// The inputs a facet's sources are made of.
-    fn state(&self, facet: usize) -> FacetState<'_> {
+    /// The scalar inputs a facet's sources are made of.
+    #[inline]
+    fn state(&self, facet: usize) -> FacetState {
         let inputs = self.inputs;
         let f = inputs.shape_factor[facet];
-        let refl = inputs.reflected(facet);
         FacetState {
             f,
             f_back: inputs.back_shape_factor(facet).unwrap_or(1.0 - f),
-            sun_fraction: inputs.sun_fraction(facet),
-            cos_incidence: inputs.cos_incidence(facet),
-            reflected_direct: refl.direct,
-            b: refl.diffuse as f32,
+            b: inputs.reflected(facet).diffuse as f32,
+        }
+    }
+
+    /// `s·max(cos θ, 0) + a` of `facet` at every record into `out`: its
+    /// direct sunlight and the reflected shortwave that weighs like it
+    /// (`α E_dn`; [`SourceModel`]), decoded without a copy of either
+    /// history.
+    #[inline]
+    fn sunlit_cos_into(&self, facet: usize, out: &mut [f32]) {
+        self.inputs.solar.sunlit_cos_into(facet, out);
+        let refl = self.inputs.reflected(facet).direct;
+        if !refl.is_empty() {
+            out.iter_mut().zip(refl).for_each(|(o, a)| *o += a);
         }
     }
 }
@@ -604,7 +617,10 @@ impl<'a> Groups<'a> {
     fn daily_mean_source(&self, facets: &Facets, f: usize, g: usize) -> f64 {
         let r = facets.forcing.len();
         let st = facets.state(f);
-        let sun: f64 = sunlit_cos(&st)
+        let mut sc = vec![0.0; r];
+        facets.sunlit_cos_into(f, &mut sc);
+        let sun: f64 = sc
+            .iter()
             .zip(&self.sun32[g])
             .map(|(sc, w)| (sc * w) as f64)
             .sum();
@@ -681,9 +697,7 @@ impl Bins {
                 |s, (f, g)| {
                     let rep = centre_refs[g].as_ref().expect("non-empty group");
                     let st = facets.state(f);
-                    s.sc.iter_mut()
-                        .zip(sunlit_cos(&st))
-                        .for_each(|(o, v)| *o = v);
+                    facets.sunlit_cos_into(f, &mut s.sc);
                     let d = Diff::of(&st, &rep.facet);
                     let p = |j: usize| rep.probe(j, &s.sc, d);
                     (f, [p(rows.first), p(rows.last), p(rows.mean)])

@@ -9,7 +9,7 @@
 use rayon::prelude::*;
 
 use super::kernels::{columns, curvature, dot, matvec_cols};
-use super::reference::{Coarse, Diff, NodeGreen, Reference, sunlit_cos};
+use super::reference::{Coarse, Diff, NodeGreen, Reference};
 use super::{CHUNK, Facets, Groups, Scratch};
 use crate::thermal;
 use crate::thermal::scene::{FacetThermal, SceneInputs};
@@ -209,11 +209,8 @@ impl PassPlan<'_> {
             self.image_from_base(rep, base, f, bgc, s, o);
             return;
         }
-        let st = facets.state(f);
-        let diff = Diff::of(&st, &rep.facet);
-        s.sc.iter_mut()
-            .zip(sunlit_cos(&st))
-            .for_each(|(o, v)| *o = v);
+        let diff = Diff::of(&facets.state(f), &rep.facet);
+        facets.sunlit_cos_into(f, &mut s.sc);
         if !full {
             // Pass 1, image records only.
             for (i, v) in o.iter_mut().enumerate() {

@@ -13,36 +13,17 @@ use super::kernels::{GREEN_PADDING, dot};
 use super::nodes::CurvatureNodes;
 use crate::thermal::{Linearization, SourceModel};
 
-/// What a facet's sources are made of (see [`SourceModel`]): its shape
-/// factors, its sun histories and its reflected shortwave.
-#[derive(Clone)]
-pub(super) struct FacetState<'a> {
+/// What a facet's sources are made of besides its `s·max(cos θ, 0) + a`
+/// history (see [`SourceModel`]): its shape factors and its reflected
+/// diffuse coefficient.
+#[derive(Clone, Copy)]
+pub(super) struct FacetState {
     /// Shape factor of the front face.
     pub f: f32,
     /// Shape factor of the back face (`1 − F` for a single-sided facet).
     pub f_back: f32,
-    /// Sunlit fraction per record (decoded from the compact history).
-    pub sun_fraction: Vec<f32>,
-    /// Cosine of incidence per record (decoded).
-    pub cos_incidence: Vec<f32>,
-    /// Reflected shortwave per unit direct-normal irradiance per record
-    /// (`a`; empty: none).
-    pub reflected_direct: &'a [f32],
     /// Reflected shortwave per unit diffuse-horizontal irradiance (`b`).
     pub b: f32,
-}
-
-/// `s·max(cos θ, 0) + a` at each record: the facet's direct sunlight and
-/// the reflected shortwave that weighs like it (`α E_dn`; [`SourceModel`]).
-pub(super) fn sunlit_cos<'b>(st: &'b FacetState<'_>) -> impl Iterator<Item = f32> + 'b {
-    let refl = st.reflected_direct;
-    st.sun_fraction
-        .iter()
-        .zip(&st.cos_incidence)
-        .enumerate()
-        .map(move |(k, (s, c))| {
-            s.clamp(0.0, 1.0) * c.max(0.0) + refl.get(k).copied().unwrap_or(0.0)
-        })
 }
 
 /// The reference facet's own inputs, from which a facet's differences are
@@ -144,18 +125,19 @@ pub(super) struct Coarse {
 }
 
 impl Reference {
-    /// Lays out `lin` (the linearisation about the facet `st`) for the
-    /// probed `rows` and the property set's source `model`.
+    /// Lays out `lin` (the linearisation about the facet `st` with
+    /// `s·max(cos θ, 0) + a` history `sc`) for the probed `rows` and the
+    /// property set's source `model`.
     pub fn new(
         lin: Linearization,
         rows: &[usize],
         images: usize,
         model: &SourceModel,
         st: FacetState,
+        sc: Vec<f32>,
         nodes: Option<&CurvatureNodes>,
     ) -> Reference {
         let r = lin.records;
-        let sc: Vec<f32> = sunlit_cos(&st).collect();
         let sun = model.front_per_sunlit_cos();
         let ref_sun: Vec<f64> = sc.iter().zip(sun).map(|(&c, w)| c as f64 * w).collect();
         let times = |g: &[f64], v: &[f64]| -> Vec<f32> {
