@@ -63,7 +63,7 @@ use self::kernels::accumulate_rows;
 use self::nodes::CurvatureNodes;
 use self::passes::{PassPlan, Slots};
 use self::reference::{Diff, FacetState, Reference, sunlit_cos};
-use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
+use super::{FacetReflected, FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
 };
@@ -363,7 +363,13 @@ impl Facets<'_> {
     /// The slab model's inputs of `facet` with its solar history `sun`,
     /// `cos` ([`SceneInputs::sun_fraction`], [`SceneInputs::cos_incidence`]),
     /// with the air as background.
-    fn slab_inputs<'b>(&'b self, facet: usize, sun: &'b [f32], cos: &'b [f32]) -> FacetInputs<'b> {
+    fn slab_inputs<'b>(
+        &'b self,
+        facet: usize,
+        sun: &'b [f32],
+        cos: &'b [f32],
+        refl: &'b FacetReflected,
+    ) -> FacetInputs<'b> {
         let inputs = self.inputs;
         FacetInputs {
             sun_fraction: sun,
@@ -371,7 +377,7 @@ impl Facets<'_> {
             shape_factor: inputs.shape_factor[facet] as f64,
             back_shape_factor: inputs.back_shape_factor(facet).map(f64::from),
             background: Background::Air,
-            reflected: inputs.reflected(facet),
+            reflected: refl.as_reflected(),
         }
     }
 
@@ -395,7 +401,7 @@ impl Facets<'_> {
             self.props_of(facet),
             self.forcing,
             &self.exchanges[pi as usize],
-            &self.slab_inputs(facet, &sun, &cos),
+            &self.slab_inputs(facet, &sun, &cos, &self.inputs.reflected(facet)),
             &how.lp.options,
         )
         .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
@@ -410,7 +416,7 @@ impl Facets<'_> {
     }
 
     /// The inputs a facet's sources are made of.
-    fn state(&self, facet: usize) -> FacetState<'_> {
+    fn state(&self, facet: usize) -> FacetState {
         let inputs = self.inputs;
         let f = inputs.shape_factor[facet];
         let refl = inputs.reflected(facet);

@@ -16,7 +16,7 @@ use crate::thermal::{Linearization, SourceModel};
 /// What a facet's sources are made of (see [`SourceModel`]): its shape
 /// factors, its sun histories and its reflected shortwave.
 #[derive(Clone)]
-pub(super) struct FacetState<'a> {
+pub(super) struct FacetState {
     /// Shape factor of the front face.
     pub f: f32,
     /// Shape factor of the back face (`1 − F` for a single-sided facet).
@@ -26,16 +26,16 @@ pub(super) struct FacetState<'a> {
     /// Cosine of incidence per record (decoded).
     pub cos_incidence: Vec<f32>,
     /// Reflected shortwave per unit direct-normal irradiance per record
-    /// (`a`; empty: none).
-    pub reflected_direct: &'a [f32],
+    /// (`a`; empty: none; decoded).
+    pub reflected_direct: Vec<f32>,
     /// Reflected shortwave per unit diffuse-horizontal irradiance (`b`).
     pub b: f32,
 }
 
 /// `s·max(cos θ, 0) + a` at each record: the facet's direct sunlight and
 /// the reflected shortwave that weighs like it (`α E_dn`; [`SourceModel`]).
-pub(super) fn sunlit_cos<'b>(st: &'b FacetState<'_>) -> impl Iterator<Item = f32> + 'b {
-    let refl = st.reflected_direct;
+pub(super) fn sunlit_cos(st: &FacetState) -> impl Iterator<Item = f32> + '_ {
+    let refl = &st.reflected_direct;
     st.sun_fraction
         .iter()
         .zip(&st.cos_incidence)
