@@ -608,11 +608,22 @@ fn compact_reflected_shortwave_equals_the_exhaustive_records() {
     let exp = compute_exposure(&*tracer, &geo, &[], &steps, &stratified(64)).unwrap();
     let (n, r) = (geo.facet_count(), steps.len());
     let albedo: Vec<f32> = (0..n)
-        .map(|f| if exp.facets.normal[f].z > 0.5 { 0.3 } else { 0.5 })
+        .map(|f| {
+            if exp.facets.normal[f].z > 0.5 {
+                0.3
+            } else {
+                0.5
+            }
+        })
         .collect();
     let ground_albedo = 0.2f32;
-    let day: Vec<u32> = (0..r as u32).filter(|&k| steps[k as usize].z > 0.0).collect();
-    assert!(day.len() > 40 && day.len() < r - 40, "two nights in the window");
+    let day: Vec<u32> = (0..r as u32)
+        .filter(|&k| steps[k as usize].z > 0.0)
+        .collect();
+    assert!(
+        day.len() > 40 && day.len() < r - 40,
+        "two nights in the window"
+    );
     // E⁰ per unit E_dn, every record.
     let e0: Vec<Vec<f32>> = (0..n)
         .map(|f| {

@@ -468,11 +468,7 @@ fn direct_bounce(
         leaving.resize(n * b, 0.0);
         lit.resize(n, false);
         ground.clear();
-        ground.extend(
-            block
-                .iter()
-                .map(|&d| surfaces.sun_dirs[day[d] as usize].z),
-        );
+        ground.extend(block.iter().map(|&d| surfaces.sun_dirs[day[d] as usize].z));
         leaving
             .par_chunks_mut(b)
             .zip(lit.par_iter_mut())

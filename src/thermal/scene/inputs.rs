@@ -274,9 +274,7 @@ impl<'a> SceneInputs<'a> {
         }
         if !self.reflected_slot.is_empty() || !self.reflected_direct.is_empty() {
             let k = self.reflected_slots();
-            if self.reflected_slot.len() != self.records
-                || self.reflected_direct.len() != n * k
-            {
+            if self.reflected_slot.len() != self.records || self.reflected_direct.len() != n * k {
                 return Err(Error::invalid(
                     "reflected_direct",
                     format!(

@@ -63,7 +63,9 @@ use self::kernels::accumulate_rows;
 use self::nodes::CurvatureNodes;
 use self::passes::{PassPlan, Slots};
 use self::reference::{Diff, FacetState, Reference, sunlit_cos};
-use super::{FacetReflected, FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
+use super::{
+    FacetReflected, FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures,
+};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
 };
