@@ -582,6 +582,145 @@ fn later_bounces_at_nodes_match_every_record() {
     }
 }
 
+/// The reflected shortwave is held on the day records only and computed
+/// block by block with each facet's `E⁰` recomputed from the solar history
+/// (no per-record copy): decoded, it equals bit for bit the exhaustive
+/// per-record Jacobi iteration written out here over every record (night
+/// records exactly 0), for one and three bounces; the thermal inputs
+/// decode the same values, also through a window's slots; a slot out of
+/// range is refused, naming it. A street canyon (H/W = 1) over 36 h at
+/// 15 min (two nights), the sun sweeping across it so that the walls'
+/// shadows cross the road.
+#[test]
+fn compact_reflected_shortwave_equals_the_exhaustive_records() {
+    use irsig::exposure::reflected::{NIGHT, reflected_shortwave_strided};
+    use irsig::thermal::scene::SceneInputs;
+    let (geo, _, _) = fine_canyon(10.0, 10.0);
+    let steps: Vec<Vec3> = (0..=144)
+        .map(|i| {
+            let hour = (i as f32 * 0.25) % 24.0;
+            let s = (std::f32::consts::PI * (hour - 6.0) / 12.0).sin();
+            let elev = if s > 0.0 { 60.0 * s } else { -10.0 };
+            sun(elev, 90.0 + 180.0 * ((hour - 6.0) / 12.0).clamp(0.0, 1.0))
+        })
+        .collect();
+    let tracer = trace::build(&geo, Backend::Embree).unwrap();
+    let exp = compute_exposure(&*tracer, &geo, &[], &steps, &stratified(64)).unwrap();
+    let (n, r) = (geo.facet_count(), steps.len());
+    let albedo: Vec<f32> = (0..n)
+        .map(|f| {
+            if exp.facets.normal[f].z > 0.5 {
+                0.3
+            } else {
+                0.5
+            }
+        })
+        .collect();
+    let ground_albedo = 0.2f32;
+    let day: Vec<u32> = (0..r as u32)
+        .filter(|&k| steps[k as usize].z > 0.0)
+        .collect();
+    assert!(
+        day.len() > 40 && day.len() < r - 40,
+        "two nights in the window"
+    );
+    // E⁰ per unit E_dn, every record.
+    let e0: Vec<Vec<f32>> = (0..n)
+        .map(|f| {
+            let (s, c) = (exp.solar.sun_fraction(f), exp.solar.cos_incidence(f));
+            s.iter()
+                .zip(&c)
+                .map(|(s, c)| s.clamp(0.0, 1.0) * c.max(0.0))
+                .collect()
+        })
+        .collect();
+    for bounces in [1u32, 3] {
+        // The exhaustive iteration, record by record.
+        let mut prev = vec![vec![0.0f32; r]; n];
+        for _ in 0..bounces {
+            let next: Vec<Vec<f32>> = (0..n)
+                .map(|i| {
+                    (0..r)
+                        .map(|k| {
+                            let z = steps[k].z;
+                            if z <= 0.0 {
+                                return 0.0;
+                            }
+                            let mut o = exp.sky.ground_weight[i] * ground_albedo * z;
+                            for e in exp.sky.background(i) {
+                                let j = e.facet as usize;
+                                o += e.weight * (albedo[j] * (e0[j][k] + prev[j][k]));
+                            }
+                            o
+                        })
+                        .collect()
+                })
+                .collect();
+            prev = next;
+        }
+        let refl = reflected_shortwave_strided(
+            &exp.sky,
+            &exp.solar,
+            &albedo,
+            ground_albedo,
+            &steps,
+            bounces,
+            1,
+        )
+        .unwrap();
+        // Held: one value per facet and day record.
+        assert_eq!(refl.day, day);
+        assert_eq!(refl.direct.len(), n * day.len());
+        assert_eq!(refl.slot.len(), r);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut lit_records = 0;
+        for (f, want) in prev.iter().enumerate() {
+            let got = refl.direct(f);
+            assert_eq!(bits(&got), bits(want), "facet {f}, {bounces} bounces");
+            for k in 0..r {
+                assert_eq!(refl.direct_at(f, k), want[k]);
+                if refl.slot[k] == NIGHT {
+                    assert_eq!(got[k].to_bits(), 0, "night record {k}");
+                }
+            }
+            lit_records += got.iter().filter(|&&a| a > 0.0).count();
+        }
+        assert!(lit_records > n * day.len() / 2, "{lit_records}");
+        // The thermal inputs decode the same coefficients, over the whole
+        // history and over a window of it.
+        let mut with = exp.clone();
+        with.reflected = refl.clone();
+        let inputs = SceneInputs::from(&with);
+        inputs.validate().unwrap();
+        let window: Vec<usize> = (30..130).step_by(3).collect();
+        let slots: Vec<u32> = window.iter().map(|&k| refl.slot[k]).collect();
+        for (f, all) in prev.iter().enumerate() {
+            let d = inputs.reflected(f);
+            assert_eq!(bits(&d.direct), bits(all));
+            assert_eq!(d.diffuse, refl.diffuse[f] as f64);
+            let w = SceneInputs {
+                reflected_slot: &slots,
+                records: window.len(),
+                ..inputs
+            };
+            let got = w.reflected(f).direct;
+            let want: Vec<f32> = window.iter().map(|&k| all[k]).collect();
+            assert_eq!(bits(&got), bits(&want));
+        }
+        // A slot beyond the values held is refused, named.
+        let mut bad = refl.slot.clone();
+        bad[day[0] as usize] = day.len() as u32;
+        let e = SceneInputs {
+            reflected_slot: &bad,
+            ..inputs
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains(&format!("reflected_slot[{}]", day[0])), "{e}");
+    }
+}
+
 /// Masson (2000), Boundary-Layer Meteorol. 94, 357–397, eqs. 8–9: sky view
 /// factors of the road and walls of an infinite canyon.
 #[test]

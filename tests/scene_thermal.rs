@@ -331,6 +331,7 @@ fn scene_inputs_that_do_not_fit_are_rejected() {
         background_offsets: &offsets,
         background: &entries,
         reflected_direct: &[],
+        reflected_slot: &[],
         reflected_diffuse: &[],
         wind: &[],
     };

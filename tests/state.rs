@@ -437,6 +437,11 @@ fn cli_bench_facets_reports_the_stages_facets_per_second_and_peak_memory() {
         assert!(num(k) >= 0.0, "{k}: {r}");
     }
     assert!(num("thermal_s") > 0.0 && num("rays_s") > 0.0, "{r}");
+    // The reflected shortwave is part of the thermal passes' time.
+    assert!(
+        num("reflected_s") > 0.0 && num("reflected_s") < num("thermal_s"),
+        "{r}"
+    );
     let per_s = facets / (num("rays_s") + num("thermal_s"));
     assert!((num("facets_per_s") - per_s).abs() <= 1e-6 * per_s, "{r}");
     // Linux reports the peak resident set; it is the process's whole.

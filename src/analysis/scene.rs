@@ -547,16 +547,24 @@ impl SceneStudy {
     /// `sun`: the facet's sunlit fraction and cosine of incidence per record
     /// (decoded from the compact solar history: [`Self::solar_of`]).
     /// The solar history of facet `f`: sunlit fraction and cosine of
-    /// incidence per record.
-    fn solar_of(&self, f: usize) -> (Vec<f32>, Vec<f32>) {
+    /// incidence per record, and its reflected direct coefficient per
+    /// record (decoded from the day records; empty without reflected
+    /// shortwave).
+    fn solar_of(&self, f: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
         let s = &self.exposure.solar;
-        (s.sun_fraction(f), s.cos_incidence(f))
+        let r = &self.exposure.reflected;
+        let refl = if r.facet_count() == 0 {
+            Vec::new()
+        } else {
+            r.direct(f)
+        };
+        (s.sun_fraction(f), s.cos_incidence(f), refl)
     }
 
     fn inputs<'a>(
         &'a self,
         f: usize,
-        sun: &'a (Vec<f32>, Vec<f32>),
+        sun: &'a (Vec<f32>, Vec<f32>, Vec<f32>),
         background: Background<'a>,
     ) -> FacetInputs<'a> {
         let s = &self.exposure;
@@ -570,7 +578,7 @@ impl SceneStudy {
                 Reflected::NONE
             } else {
                 Reflected {
-                    direct: s.reflected.direct(f),
+                    direct: &sun.2,
                     diffuse: s.reflected.diffuse[f] as f64,
                 }
             },

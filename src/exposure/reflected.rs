@@ -39,6 +39,16 @@
 //! sun sweeping over it within 4 % of what the later bounces add,
 //! `docs/physics/reflected-and-wind.md`).
 //!
+//! Memory: the result is held on the day records only (night records are
+//! exactly 0: no direct sunlight); the first bounce is written straight
+//! into it; each facet's `E⁰` is recomputed from the compact solar history
+//! where a bounce needs it (never held per record); the leaving
+//! irradiances `ρ_j (E⁰_j + R_j)` are held for one block of [`BLOCK`]
+//! records at a time, so a bounce's transient is 64 bytes per facet; the
+//! later bounces hold one value per facet and node (two from the third
+//! bounce on). The values are those of the plain per-record iteration bit
+//! for bit (`tests/exposure.rs`).
+//!
 //! # Approximations
 //! - Lambertian reflection (no specular glint from glass or water).
 //! - A double-sided facet's background is the mean over its faces (as
@@ -69,27 +79,87 @@ pub const BOUNCES: u32 = 2;
 
 /// The reflected shortwave of every facet, per unit of the weather's
 /// irradiances (module docs): `R_i(t) = E_dn(t) a_i(t) + E_d(t) b_i`, W m⁻².
+///
+/// The direct coefficient `a_i` is held on the **day records** only (the
+/// sun above the horizon, the same records for every facet, as the
+/// [`SolarHistory`] holds its lit counts): at night there is no direct
+/// sunlight to reflect, so `a_i` is exactly 0 there (the diffuse term
+/// `E_d(t) b_i` follows the weather's diffuse irradiance, itself 0 at
+/// night, through the constant `b_i`). Memory: 4 bytes per facet and day
+/// record (≈ 250 at 62 day records) instead of 4 per record.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReflectedShortwave {
     /// Records per facet, `R`.
     pub records: usize,
-    /// `a_i(t)`: reflected irradiance per unit direct-normal irradiance,
-    /// facet-major `[facet·R + record]` (dimensionless).
+    /// The records with the sun above the horizon (`z > 0`), ascending.
+    pub day: Vec<u32>,
+    /// For each record, its index in [`Self::day`], or [`NIGHT`] when the
+    /// sun is down (`R` entries).
+    pub slot: Vec<u32>,
+    /// `a_i` at the day records: reflected irradiance per unit
+    /// direct-normal irradiance, facet-major `[facet·day.len() + d]`
+    /// (dimensionless).
     pub direct: Vec<f32>,
     /// `b_i`: reflected irradiance per unit diffuse-horizontal irradiance,
     /// per facet (dimensionless).
     pub diffuse: Vec<f32>,
 }
 
+/// [`ReflectedShortwave::slot`] of a record with the sun down.
+pub const NIGHT: u32 = u32::MAX;
+
 impl ReflectedShortwave {
+    /// All zeros for `facets` facets over the records of `sun_dirs` (unit
+    /// vectors toward the sun, one per record).
+    pub fn zeros(facets: usize, sun_dirs: &[Vec3]) -> ReflectedShortwave {
+        let day = super::solar::day_records(sun_dirs);
+        let mut slot = vec![NIGHT; sun_dirs.len()];
+        for (d, &k) in day.iter().enumerate() {
+            slot[k as usize] = d as u32;
+        }
+        ReflectedShortwave {
+            records: sun_dirs.len(),
+            direct: vec![0.0; facets * day.len()],
+            day,
+            slot,
+            diffuse: vec![0.0; facets],
+        }
+    }
+
     /// Number of facets.
     pub fn facet_count(&self) -> usize {
         self.diffuse.len()
     }
 
-    /// `a_i` of `facet` at every record.
-    pub fn direct(&self, facet: usize) -> &[f32] {
-        &self.direct[facet * self.records..(facet + 1) * self.records]
+    /// `a_i` of `facet` at the day records ([`Self::day`]), as held.
+    pub fn direct_day(&self, facet: usize) -> &[f32] {
+        let nd = self.day.len();
+        &self.direct[facet * nd..(facet + 1) * nd]
+    }
+
+    /// Writes `a_i` of `facet` at every record into `out` (`records`
+    /// values; 0 at night).
+    pub fn direct_into(&self, facet: usize, out: &mut [f32]) {
+        let row = self.direct_day(facet);
+        for (o, &s) in out.iter_mut().zip(&self.slot) {
+            *o = if s == NIGHT { 0.0 } else { row[s as usize] };
+        }
+    }
+
+    /// `a_i` of `facet` at every record (decoded).
+    pub fn direct(&self, facet: usize) -> Vec<f32> {
+        let mut v = vec![0.0; self.records];
+        self.direct_into(facet, &mut v);
+        v
+    }
+
+    /// `a_i` of `facet` at `record`.
+    #[inline]
+    pub fn direct_at(&self, facet: usize, record: usize) -> f32 {
+        match self.slot[record] {
+            NIGHT => 0.0,
+            d => self.direct[facet * self.day.len() + d as usize],
+        }
     }
 
     /// Reflected irradiance of `facet` at `record`, W m⁻², for the
@@ -101,8 +171,16 @@ impl ReflectedShortwave {
         direct_normal_w_m2: f64,
         diffuse_horizontal_w_m2: f64,
     ) -> f64 {
-        direct_normal_w_m2 * self.direct[facet * self.records + record] as f64
+        direct_normal_w_m2 * self.direct_at(facet, record) as f64
             + diffuse_horizontal_w_m2 * self.diffuse[facet] as f64
+    }
+
+    /// Heap bytes held.
+    pub fn heap_bytes(&self) -> usize {
+        4 * (self.day.capacity()
+            + self.slot.capacity()
+            + self.direct.capacity()
+            + self.diffuse.capacity())
     }
 }
 
@@ -191,41 +269,12 @@ pub fn reflected_shortwave_strided(
             format!("expected a fraction in [0, 1], got {a}"),
         ));
     }
-    let mut out = ReflectedShortwave {
-        records: r,
-        direct: vec![0.0; n * r],
-        diffuse: vec![0.0; n],
-    };
+    let mut out = ReflectedShortwave::zeros(n, sun_dirs);
     if bounces == 0 || n == 0 {
         return Ok(out);
     }
-    // Daytime records (the only ones with direct sunlight).
-    let day: Vec<usize> = (0..r).filter(|&k| sun_dirs[k].z > 0.0).collect();
-    let ground_direct: Vec<f32> = day.iter().map(|&k| sun_dirs[k].z).collect();
-    let nd = day.len();
-    // E⁰ per unit E_dn on the day records, facet-major `[f·nd + d]`, and
-    // per unit E_d.
+    // E⁰ per unit E_d.
     let e0_diffuse: Vec<f32> = (0..n).map(|f| sky.mean_shape_factor(f)).collect();
-    if nd == 0 {
-        // No daytime record: only the diffuse coefficient.
-        let mut refl_diffuse = vec![0.0f32; n];
-        for _ in 0..bounces {
-            let leaving: Vec<f32> = (0..n)
-                .map(|j| albedo[j] * (e0_diffuse[j] + refl_diffuse[j]))
-                .collect();
-            refl_diffuse = diffuse_bounce(sky, ground_albedo, &leaving);
-        }
-        out.diffuse = refl_diffuse;
-        return Ok(out);
-    }
-    // E⁰ per unit E_dn on the day records, facet-major `[f·nd + d]`.
-    let mut e0_direct = vec![0.0f32; n * nd];
-    e0_direct.par_chunks_mut(nd).enumerate().for_each(|(f, e)| {
-        let (s, c) = (solar.sun_fraction(f), solar.cos_incidence(f));
-        for (e, &k) in e.iter_mut().zip(&day) {
-            *e = s[k].clamp(0.0, 1.0) * c[k].max(0.0);
-        }
-    });
     let mut refl_diffuse = vec![0.0f32; n];
     for _ in 0..bounces {
         let leaving_diffuse: Vec<f32> = e0_diffuse
@@ -236,170 +285,219 @@ pub fn reflected_shortwave_strided(
             .collect();
         refl_diffuse = diffuse_bounce(sky, ground_albedo, &leaving_diffuse);
     }
-    // The first bounce at every day record: ρ_j E⁰_j per unit E_dn leaves
-    // each facet.
-    let mut refl_direct = vec![0.0f32; n * nd];
-    let mut scratch = (Vec::new(), Vec::new());
+    out.diffuse = refl_diffuse;
+    let nd = out.day.len();
+    if nd == 0 {
+        // No daytime record: only the diffuse coefficient.
+        return Ok(out);
+    }
     let surfaces = Surfaces {
         sky,
+        solar,
         ground_albedo,
         albedo,
+        sun_dirs,
+        solar_day: out
+            .day
+            .iter()
+            .map(|&k| solar.day.binary_search(&k).ok())
+            .collect(),
     };
+    // The first bounce at every day record, written straight into the
+    // output: ρ_j E⁰_j per unit E_dn leaves each facet.
+    let all: Vec<usize> = (0..nd).collect();
+    let mut scratch = Scratch::default();
     direct_bounce(
-        surfaces,
-        &ground_direct,
-        &e0_direct,
-        None,
-        &mut refl_direct,
+        &surfaces,
+        &out.day,
+        &all,
+        Previous::None,
+        &mut out.direct,
         &mut scratch,
     );
+    if bounces < 2 {
+        return Ok(out);
+    }
+    // The later bounces at the nodes (every day record when `stride` is
+    // 1: the plain iteration), their addition to the first linear in
+    // between.
     let stride = stride.max(1);
-    if bounces > 1 && stride == 1 {
-        // The reference: every bounce at every day record.
-        let mut next = vec![0.0f32; n * nd];
-        for _ in 1..bounces {
-            direct_bounce(
-                surfaces,
-                &ground_direct,
-                &e0_direct,
-                Some(&refl_direct),
-                &mut next,
-                &mut scratch,
-            );
-            std::mem::swap(&mut refl_direct, &mut next);
-        }
-    } else if bounces > 1 {
-        // The later bounces at the nodes, their addition to the first
-        // linear in between.
-        let nodes: Vec<usize> = (0..nd)
-            .filter(|&d| {
-                d % stride == 0
-                    || d + 1 == nd
-                    || day[d + 1] != day[d] + 1
-                    || (d > 0 && day[d - 1] + 1 != day[d])
-            })
-            .collect();
-        let nc = nodes.len();
-        let at_nodes = |v: &[f32]| -> Vec<f32> {
-            let mut o = vec![0.0f32; n * nc];
-            o.par_chunks_mut(nc)
-                .zip(v.par_chunks(nd))
-                .for_each(|(o, v)| o.iter_mut().zip(&nodes).for_each(|(o, &d)| *o = v[d]));
-            o
-        };
-        let (e0_c, first_c) = (at_nodes(&e0_direct), at_nodes(&refl_direct));
-        let ground_c: Vec<f32> = nodes.iter().map(|&d| ground_direct[d]).collect();
-        let mut cur = first_c.clone();
+    let day = &out.day;
+    let nodes: Vec<usize> = (0..nd)
+        .filter(|&d| {
+            d % stride == 0
+                || d + 1 == nd
+                || day[d + 1] != day[d] + 1
+                || (d > 0 && day[d - 1] + 1 != day[d])
+        })
+        .collect();
+    let nc = nodes.len();
+    let mut cur = vec![0.0f32; n * nc];
+    direct_bounce(
+        &surfaces,
+        day,
+        &nodes,
+        Previous::First(&out.direct),
+        &mut cur,
+        &mut scratch,
+    );
+    if bounces > 2 {
         let mut next = vec![0.0f32; n * nc];
-        for _ in 1..bounces {
+        for _ in 2..bounces {
             direct_bounce(
-                surfaces,
-                &ground_c,
-                &e0_c,
-                Some(&cur),
+                &surfaces,
+                day,
+                &nodes,
+                Previous::AtNodes(&cur),
                 &mut next,
                 &mut scratch,
             );
             std::mem::swap(&mut cur, &mut next);
         }
-        // Free what the bounces needed before the last steps touch new pages
-        // (these temporaries set the peak memory of a large scene).
-        drop((next, e0_c, e0_direct));
-        // R⁽ᴺ⁾ = R⁽¹⁾ + the later bounces' addition, linear between nodes.
-        refl_direct
-            .par_chunks_mut(nd)
-            .zip(cur.par_chunks(nc).zip(first_c.par_chunks(nc)))
-            .for_each(|(o, (last, first))| {
-                let add = |c: usize| last[c] - first[c];
-                for c in 0..nc {
-                    o[nodes[c]] = last[c];
-                    if c + 1 < nc {
-                        let (a, b) = (nodes[c], nodes[c + 1]);
-                        for (d, v) in o.iter_mut().enumerate().take(b).skip(a + 1) {
-                            let t = (d - a) as f32 / (b - a) as f32;
-                            *v += add(c) + t * (add(c + 1) - add(c));
-                        }
+    }
+    drop(scratch);
+    // R⁽ᴺ⁾ = R⁽¹⁾ + the later bounces' addition, linear between nodes.
+    out.direct
+        .par_chunks_mut(nd)
+        .zip(cur.par_chunks(nc))
+        .for_each_init(Vec::new, |add, (o, last)| {
+            add.clear();
+            add.extend(nodes.iter().zip(last).map(|(&d, l)| l - o[d]));
+            for c in 0..nc {
+                o[nodes[c]] = last[c];
+                if c + 1 < nc {
+                    let (a, b) = (nodes[c], nodes[c + 1]);
+                    for (d, v) in o.iter_mut().enumerate().take(b).skip(a + 1) {
+                        let t = (d - a) as f32 / (b - a) as f32;
+                        *v += add[c] + t * (add[c + 1] - add[c]);
                     }
                 }
-            });
-    }
-    out.direct
-        .par_chunks_mut(r)
-        .zip(refl_direct.par_chunks(nd))
-        .for_each(|(o, rd)| {
-            for (&v, &k) in rd.iter().zip(&day) {
-                o[k] = v;
             }
         });
-    out.diffuse = refl_diffuse;
     Ok(out)
 }
 
+/// Day records per block of the bounces' gathers: the leaving irradiances
+/// of every facet are held for one block of records at a time (16 `f32`,
+/// one 64-byte cache line per facet), not for every day record.
+const BLOCK: usize = 16;
+
 /// What reflects: the sky view's background lists, the ground's albedo
-/// beyond the scene and each facet's.
-#[derive(Clone, Copy)]
+/// beyond the scene and each facet's, and the solar history from which each
+/// facet's own direct irradiance `E⁰` is recomputed where it is needed.
 struct Surfaces<'a> {
     sky: &'a SkyView,
+    solar: &'a SolarHistory,
     ground_albedo: f32,
     albedo: &'a [f32],
+    /// Unit vectors toward the sun per record (the ground's irradiance).
+    sun_dirs: &'a [Vec3],
+    /// Per day record of the output, its index among the solar history's
+    /// day records (`None`: the history has the sun down there, so no
+    /// facet is lit).
+    solar_day: Vec<Option<usize>>,
 }
 
-/// One bounce of the direct coefficient at the day records of `e0`
-/// (`m` per facet, facet-major): `out_i = g_i ρ_g z + Σ_j F_ij ρ_j (E⁰_j +
-/// R_j)` with `R` = `refl` the previous bounce's (`None`: the first
-/// bounce, `R = 0`) and `z` = `ground_direct`
-/// (the sine of the sun's elevation) at those records. Sources that send
-/// nothing (no albedo, never lit) are skipped: adding their zeros changes
-/// nothing. `scratch` holds the leaving irradiances between calls.
+impl Surfaces<'_> {
+    /// `E⁰` of facet `j` per unit `E_dn` at the output's day record `d`
+    /// (record `k`): `s max(cos θ, 0)`, the sunlit fraction from the lit
+    /// count and the cosine from the normal and the sun, as
+    /// [`SolarHistory::sun_fraction_into`] and
+    /// [`SolarHistory::cos_incidence_into`] decode them.
+    #[inline]
+    fn e0(&self, j: usize, d: usize, k: usize) -> f32 {
+        let h = self.solar;
+        let s = match self.solar_day[d] {
+            Some(x) => h.lit_points(j, x) as f32 / h.points as f32,
+            None => 0.0,
+        };
+        let c = crate::geometry::sun_cosine(h.normal[j], h.double_sided[j], h.sun[k]);
+        s.clamp(0.0, 1.0) * c.max(0.0)
+    }
+}
+
+/// The previous bounce's direct coefficient `R` that a bounce adds to
+/// each facet's `E⁰`.
+#[derive(Clone, Copy)]
+enum Previous<'a> {
+    /// None: the first bounce (`R = 0`).
+    None,
+    /// The first bounce at every day record (`[facet·day + d]`), read at
+    /// the nodes.
+    First(&'a [f32]),
+    /// A later bounce at the nodes (`[facet·nodes + c]`).
+    AtNodes(&'a [f32]),
+}
+
+/// A bounce's buffers, reused from block to block and bounce to bounce.
+#[derive(Default)]
+struct Scratch {
+    /// `ρ_j (E⁰_j + R_j)` of every facet over one block of records.
+    leaving: Vec<f32>,
+    /// Whether any of it is not zero, per facet.
+    lit: Vec<bool>,
+    /// The sine of the sun's elevation over the block.
+    ground: Vec<f32>,
+}
+
+/// One bounce of the direct coefficient at the day records `at` (indices
+/// into `day`; `m = at.len()` per facet in `out`, facet-major):
+/// `out_i = g_i ρ_g z + Σ_j F_ij ρ_j (E⁰_j + R_j)` with `R` the previous
+/// bounce's and `z` the sine of the sun's elevation. It goes [`BLOCK`]
+/// records at a time, so the leaving irradiances are held for one block;
+/// sources that send nothing over the block (no albedo, not lit) are
+/// skipped: adding their zeros changes nothing.
 fn direct_bounce(
-    surfaces: Surfaces,
-    ground_direct: &[f32],
-    e0: &[f32],
-    refl: Option<&[f32]>,
+    surfaces: &Surfaces,
+    day: &[u32],
+    at: &[usize],
+    prev: Previous,
     out: &mut [f32],
-    scratch: &mut (Vec<f32>, Vec<bool>),
+    scratch: &mut Scratch,
 ) {
-    let Surfaces {
-        sky,
-        ground_albedo,
-        albedo,
-    } = surfaces;
-    let m = ground_direct.len();
-    let n = albedo.len();
-    // ρ_j (E⁰_j + R_j), and whether any of it is not zero.
-    let (leaving, lit) = scratch;
-    leaving.resize(n * m, 0.0);
-    lit.resize(n, false);
-    leaving
-        .par_chunks_mut(m)
-        .zip(lit.par_iter_mut())
-        .zip(e0.par_chunks(m))
-        .zip(albedo.par_iter())
-        .enumerate()
-        .for_each(|(j, (((l, lit), e), &a))| {
-            match refl {
-                Some(refl) => {
-                    let rr = &refl[j * m..(j + 1) * m];
-                    for ((l, e), rr) in l.iter_mut().zip(e).zip(rr) {
-                        *l = a * (e + rr);
-                    }
+    let (sky, albedo) = (surfaces.sky, surfaces.albedo);
+    let (n, m, nd) = (albedo.len(), at.len(), day.len());
+    let Scratch {
+        leaving,
+        lit,
+        ground,
+    } = scratch;
+    for c0 in (0..m).step_by(BLOCK) {
+        let block = &at[c0..(c0 + BLOCK).min(m)];
+        let b = block.len();
+        leaving.resize(n * b, 0.0);
+        lit.resize(n, false);
+        ground.clear();
+        ground.extend(block.iter().map(|&d| surfaces.sun_dirs[day[d] as usize].z));
+        leaving
+            .par_chunks_mut(b)
+            .zip(lit.par_iter_mut())
+            .enumerate()
+            .for_each(|(j, (l, lit))| {
+                let a = albedo[j];
+                for (i, (l, &d)) in l.iter_mut().zip(block).enumerate() {
+                    let e = surfaces.e0(j, d, day[d] as usize);
+                    *l = match prev {
+                        Previous::None => a * e,
+                        Previous::First(r) => a * (e + r[j * nd + d]),
+                        Previous::AtNodes(r) => a * (e + r[j * m + c0 + i]),
+                    };
                 }
-                None => l.iter_mut().zip(e).for_each(|(l, e)| *l = a * e),
-            }
-            *lit = l.iter().any(|&x| x != 0.0);
+                *lit = l.iter().any(|&x| x != 0.0);
+            });
+        let (leaving, lit, ground) = (&*leaving, &*lit, &*ground);
+        out.par_chunks_mut(m).enumerate().for_each(|(i, out)| {
+            let g = sky.ground_weight[i] * surfaces.ground_albedo;
+            crate::simd::vectorized(GatherBounce {
+                out: &mut out[c0..c0 + b],
+                g,
+                z: ground,
+                entries: sky.background(i),
+                leaving,
+                lit,
+            })
         });
-    out.par_chunks_mut(m).enumerate().for_each(|(i, out)| {
-        let g = sky.ground_weight[i] * ground_albedo;
-        let entries = sky.background(i);
-        crate::simd::vectorized(GatherBounce {
-            out,
-            g,
-            z: ground_direct,
-            entries,
-            leaving,
-            lit,
-        })
-    });
+    }
 }
 
 crate::simd::simd_kernel!(GatherBounce<'a> {

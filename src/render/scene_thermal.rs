@@ -40,6 +40,10 @@ use crate::trace::{Coherence, Ray, Tracer};
 use crate::weather::{WeatherHistory, WeatherRecord};
 use crate::{Error, Location, Result};
 
+// The exposure's night records are the thermal inputs' records without a
+// reflected-shortwave slot.
+const _: () = assert!(crate::exposure::reflected::NIGHT == crate::thermal::scene::NO_SLOT);
+
 impl<'a> From<&'a Exposure> for SceneInputs<'a> {
     /// The exposure's per-facet results as the thermal solve's inputs
     /// (borrowed, no copies).
@@ -55,6 +59,7 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
             background_offsets: &e.sky.offsets,
             background: &e.sky.entries,
             reflected_direct: &e.reflected.direct,
+            reflected_slot: &e.reflected.slot,
             reflected_diffuse: &e.reflected.diffuse,
             wind: &[],
         }
@@ -1026,28 +1031,21 @@ fn solve_windows(
                 params,
             )?
         } else {
-            let n = exposure.facets.len();
-            let steps = exposure.solar.steps;
-            let gather = |v: &[f32]| -> Vec<f32> {
-                let mut o = Vec::with_capacity(n * w.len());
-                for f in 0..n {
-                    o.extend(w.iter().map(|&r| v[f * steps + r]));
-                }
-                o
-            };
             let solar = SolarWindow {
                 solar: &exposure.solar,
                 window: w,
             };
-            let refl = if exposure.reflected.direct.is_empty() {
+            // The window's records read the reflected coefficients where
+            // the whole history holds them (no copy).
+            let slot: Vec<u32> = if exposure.reflected.slot.is_empty() {
                 Vec::new()
             } else {
-                gather(&exposure.reflected.direct)
+                w.iter().map(|&r| exposure.reflected.slot[r]).collect()
             };
             let mut inputs = SceneInputs::from(exposure);
             inputs.records = w.len();
             inputs.solar = &solar;
-            inputs.reflected_direct = &refl;
+            inputs.reflected_slot = &slot;
             inputs.wind = wind;
             let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
             let forcing = Forcing::from_records(&records)?;

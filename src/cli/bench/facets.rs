@@ -47,6 +47,8 @@ struct FacetsReport {
     rays_s: f64,
     /// Thermal passes.
     thermal_s: f64,
+    /// Of `thermal_s`: the sunlight reflected between facets.
+    reflected_s: f64,
     /// Facets per second through rays and thermal passes.
     facets_per_s: f64,
     /// Peak resident memory of the process (`VmHWM`), bytes.
@@ -160,6 +162,7 @@ pub(super) fn run(a: FacetsArgs) -> anyhow::Result<()> {
         bvh_build_s: t.bvh_build.as_secs_f64(),
         rays_s: stage - thermal_s,
         thermal_s,
+        reflected_s: t.reflected_shortwave.as_secs_f64(),
         facets_per_s: facets as f64 / stage.max(1e-9),
         peak_rss_bytes: peak,
         peak_bytes_per_facet: peak.map(|p| p as f64 / facets.max(1) as f64),
@@ -177,6 +180,7 @@ pub(super) fn run(a: FacetsArgs) -> anyhow::Result<()> {
     outln!("  BVH builds               {:8.3} s", r.bvh_build_s);
     outln!("  rays (sun, sky, ground)  {:8.3} s", r.rays_s);
     outln!("  thermal passes           {:8.3} s", r.thermal_s);
+    outln!("    of which reflected     {:8.3} s", r.reflected_s);
     outln!("  per-facet stage          {:8.0} facets/s", r.facets_per_s);
     match (r.peak_rss_bytes, r.peak_bytes_per_facet) {
         (Some(p), Some(b)) => outln!(

@@ -79,6 +79,30 @@ impl SolarSource for SolarArrays<'_> {
     }
 }
 
+/// [`SceneInputs::reflected_slot`] of a record whose reflected direct
+/// coefficient is 0 (the sun down).
+pub const NO_SLOT: u32 = u32::MAX;
+
+/// The shortwave reflected onto one facet, decoded
+/// ([`SceneInputs::reflected`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FacetReflected {
+    /// Per unit direct-normal irradiance at each record; empty: none.
+    pub direct: Vec<f32>,
+    /// Per unit diffuse-horizontal irradiance.
+    pub diffuse: f64,
+}
+
+impl FacetReflected {
+    /// As the slab model takes it, borrowed.
+    pub fn as_reflected(&self) -> Reflected<'_> {
+        Reflected {
+            direct: &self.direct,
+            diffuse: self.diffuse,
+        }
+    }
+}
+
 /// The ray-traced inputs of every facet of a scene, in global facet order:
 /// `n` facets, `R` records per history (one per weather record).
 ///
@@ -110,9 +134,14 @@ pub struct SceneInputs<'a> {
     /// facet.
     pub background: &'a [BackgroundEntry],
     /// Shortwave reflected onto each facet per unit direct-normal
-    /// irradiance, facet-major `[facet·R + record]`
-    /// ([`crate::thermal::Reflected::direct`]); empty: none.
+    /// irradiance ([`crate::thermal::Reflected::direct`]) at the records
+    /// that hold it (the day records: [`Self::reflected_slot`]),
+    /// facet-major `[facet·K + slot]`, `K` slots per facet.
     pub reflected_direct: &'a [f32],
+    /// For each record, the slot of `reflected_direct` that holds its
+    /// coefficient, or [`NO_SLOT`] where it is 0 (the sun down); `R`
+    /// entries, or none for no reflected shortwave.
+    pub reflected_slot: &'a [u32],
     /// Shortwave reflected onto each facet per unit diffuse-horizontal
     /// irradiance, per facet ([`crate::thermal::Reflected::diffuse`]);
     /// empty: none.
@@ -163,16 +192,55 @@ impl<'a> SceneInputs<'a> {
         }
     }
 
-    /// The shortwave reflected onto `facet` ([`crate::thermal::Reflected`]).
+    /// Slots of `reflected_direct` per facet.
+    fn reflected_slots(&self) -> usize {
+        self.reflected_direct
+            .len()
+            .checked_div(self.facet_count())
+            .unwrap_or(0)
+    }
+
+    /// The shortwave reflected onto `facet` ([`crate::thermal::Reflected`]),
+    /// its direct coefficient decoded at every record (0 where it has no
+    /// slot; empty for none).
+    pub fn reflected(&self, facet: usize) -> FacetReflected {
+        let direct = if self.reflected_slot.is_empty() {
+            Vec::new()
+        } else {
+            let k = self.reflected_slots();
+            let row = &self.reflected_direct[facet * k..(facet + 1) * k];
+            self.reflected_slot
+                .iter()
+                .map(|&s| if s == NO_SLOT { 0.0 } else { row[s as usize] })
+                .collect()
+        };
+        FacetReflected {
+            direct,
+            diffuse: self.reflected_diffuse(facet),
+        }
+    }
+
+    /// The reflected shortwave's diffuse coefficient of `facet`: per unit
+    /// diffuse-horizontal irradiance (0 for none); [`Self::reflected`]'s
+    /// `diffuse` without decoding the direct part.
     #[inline]
-    pub fn reflected(&self, facet: usize) -> Reflected<'a> {
-        Reflected {
-            direct: if self.reflected_direct.is_empty() {
-                &[]
-            } else {
-                &self.reflected_direct[facet * self.records..(facet + 1) * self.records]
-            },
-            diffuse: self.reflected_diffuse.get(facet).map_or(0.0, |&b| b as f64),
+    pub fn reflected_diffuse(&self, facet: usize) -> f64 {
+        self.reflected_diffuse.get(facet).map_or(0.0, |&b| b as f64)
+    }
+
+    /// Adds `facet`'s reflected direct coefficient at every record to `out`
+    /// (one per record): [`Self::reflected`]'s `direct` without a vector.
+    #[inline]
+    pub fn add_reflected_direct(&self, facet: usize, out: &mut [f32]) {
+        if self.reflected_slot.is_empty() {
+            return;
+        }
+        let k = self.reflected_slots();
+        let row = &self.reflected_direct[facet * k..(facet + 1) * k];
+        for (o, &s) in out.iter_mut().zip(self.reflected_slot) {
+            if s != NO_SLOT {
+                *o += row[s as usize];
+            }
         }
     }
 
@@ -241,13 +309,30 @@ impl<'a> SceneInputs<'a> {
                 ),
             ));
         }
-        for (name, len, optional) in [("reflected_direct", self.reflected_direct.len(), true)] {
-            if len != n * self.records && !(optional && len == 0) {
+        if !self.reflected_slot.is_empty() || !self.reflected_direct.is_empty() {
+            let k = self.reflected_slots();
+            if self.reflected_slot.len() != self.records || self.reflected_direct.len() != n * k {
                 return Err(Error::invalid(
-                    name,
+                    "reflected_direct",
                     format!(
-                        "expected {} records for each of {n} facets, got {len} values",
-                        self.records
+                        "expected one slot per record ({}) and the same number of values for \
+                         each of {n} facets, got {} slots and {} values",
+                        self.records,
+                        self.reflected_slot.len(),
+                        self.reflected_direct.len()
+                    ),
+                ));
+            }
+            if let Some(r) = self
+                .reflected_slot
+                .iter()
+                .position(|&s| s != NO_SLOT && s as usize >= k)
+            {
+                return Err(Error::invalid(
+                    format!("reflected_slot[{r}]"),
+                    format!(
+                        "expected a slot below {k} (the values per facet) or none, got {}",
+                        self.reflected_slot[r]
                     ),
                 ));
             }

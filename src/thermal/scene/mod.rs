@@ -41,7 +41,7 @@ pub mod per_class;
 
 use std::time::Duration;
 
-pub use inputs::{SceneInputs, SolarArrays, SolarSource};
+pub use inputs::{FacetReflected, NO_SLOT, SceneInputs, SolarArrays, SolarSource};
 pub use linearized::LinearizedParams;
 pub use per_class::Dedup;
 

@@ -197,13 +197,14 @@ fn solve_classes(
                 unreachable!("representatives are solved facets")
             };
             let (sun, cos) = (ctx.inputs.sun_fraction(f), ctx.inputs.cos_incidence(f));
+            let refl = ctx.inputs.reflected(f);
             let inputs = FacetInputs {
                 sun_fraction: &sun,
                 cos_incidence: &cos,
                 shape_factor: ctx.inputs.shape_factor[f] as f64,
                 back_shape_factor: ctx.inputs.back_shape_factor(f).map(f64::from),
                 background,
-                reflected: ctx.inputs.reflected(f),
+                reflected: refl.as_reflected(),
             };
             let pi = pi as usize;
             let sol = thermal::solve_with(

@@ -63,7 +63,9 @@ use self::kernels::accumulate_rows;
 use self::nodes::CurvatureNodes;
 use self::passes::{PassPlan, Slots};
 use self::reference::{Diff, FacetState, Reference};
-use super::{FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures};
+use super::{
+    FacetReflected, FacetThermal, PassStats, PropertySets, SceneInputs, SceneTemperatures,
+};
 use crate::thermal::{
     self, Background, Exchange, FacetInputs, Forcing, SlabProperties, SolveOptions, SourceModel,
 };
@@ -363,7 +365,13 @@ impl Facets<'_> {
     /// The slab model's inputs of `facet` with its solar history `sun`,
     /// `cos` ([`SceneInputs::sun_fraction`], [`SceneInputs::cos_incidence`]),
     /// with the air as background.
-    fn slab_inputs<'b>(&'b self, facet: usize, sun: &'b [f32], cos: &'b [f32]) -> FacetInputs<'b> {
+    fn slab_inputs<'b>(
+        &'b self,
+        facet: usize,
+        sun: &'b [f32],
+        cos: &'b [f32],
+        refl: &'b FacetReflected,
+    ) -> FacetInputs<'b> {
         let inputs = self.inputs;
         FacetInputs {
             sun_fraction: sun,
@@ -371,7 +379,7 @@ impl Facets<'_> {
             shape_factor: inputs.shape_factor[facet] as f64,
             back_shape_factor: inputs.back_shape_factor(facet).map(f64::from),
             background: Background::Air,
-            reflected: inputs.reflected(facet),
+            reflected: refl.as_reflected(),
         }
     }
 
@@ -395,7 +403,7 @@ impl Facets<'_> {
             self.props_of(facet),
             self.forcing,
             &self.exchanges[pi as usize],
-            &self.slab_inputs(facet, &sun, &cos),
+            &self.slab_inputs(facet, &sun, &cos, &self.inputs.reflected(facet)),
             &how.lp.options,
         )
         .map_err(|e| Error::Other(format!("thermal model of facet {facet}: {e}")))?;
@@ -420,7 +428,7 @@ impl Facets<'_> {
         FacetState {
             f,
             f_back: inputs.back_shape_factor(facet).unwrap_or(1.0 - f),
-            b: inputs.reflected(facet).diffuse as f32,
+            b: inputs.reflected_diffuse(facet) as f32,
         }
     }
 
@@ -431,10 +439,7 @@ impl Facets<'_> {
     #[inline]
     fn sunlit_cos_into(&self, facet: usize, out: &mut [f32]) {
         self.inputs.solar.sunlit_cos_into(facet, out);
-        let refl = self.inputs.reflected(facet).direct;
-        if !refl.is_empty() {
-            out.iter_mut().zip(refl).for_each(|(o, a)| *o += a);
-        }
+        self.inputs.add_reflected_direct(facet, out);
     }
 }
 
