@@ -491,11 +491,27 @@ impl Shader<'_> {
         }
     }
 
+    /// Each gathered hit's place in the path's tables (its `node`, `rx`
+    /// and `ax`, [`GreyHit`]), in a pass of its own: the range lookup is a
+    /// chain of dependent loads per hit, which a short loop overlaps from
+    /// hit to hit.
+    pub(super) fn grey_locate(&self, grey: &mut [GreyHit]) {
+        let gt = &self.grey_tables;
+        let rn = gt.range_nodes;
+        for hit in grey {
+            let (ri, rx) = gt.locate(hit.range);
+            let (ai, ax) = gt.locate_height(hit.z);
+            hit.node = (ai * rn + ri - 1) as u32;
+            hit.rx = rx;
+            hit.ax = ax;
+        }
+    }
+
     /// A gathered hit's place in the grey path's tables: its facet's
     /// record, material `mi`, the emissivity angle row `a0` and the
-    /// fraction `ta` toward `a0 + 1`, the range node `ri` and fraction
-    /// `rx` from `ri − 1`, the height node `ai` and fraction `ax` toward
-    /// `ai + 1`, and the diffuse-reflected sun `sd` of its seen face.
+    /// fraction `ta` toward `a0 + 1`, the path node and fractions of
+    /// [`Shader::grey_locate`], and the diffuse-reflected sun `sd` of its
+    /// seen face.
     #[inline(always)]
     fn grey_place(&self, hit: &GreyHit) -> GreyPlace<'_> {
         let gt = &self.grey_tables;
@@ -504,8 +520,6 @@ impl Shader<'_> {
         let th = hit.theta;
         // θ ≥ 0: truncation is the floor.
         let a0 = (th as usize).min(ANGLE_ROWS - 2);
-        let (ri, rx) = gt.locate(hit.range);
-        let (ai, ax) = gt.locate_height(hit.z);
         let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
             g.sd
         } else {
@@ -516,9 +530,9 @@ impl Shader<'_> {
             mi,
             a0,
             ta: th - a0 as f32,
-            n0: ai * gt.range_nodes + ri - 1,
-            rx,
-            ax,
+            n0: hit.node as usize,
+            rx: hit.rx,
+            ax: hit.ax,
             sd,
         }
     }
