@@ -110,10 +110,6 @@ pub(super) struct GreyTables {
     pub(super) heights: Vec<f32>,
     /// `1 / (heights[a + 1] − heights[a])`.
     pub(super) inv_height_spacing: Vec<f32>,
-    /// First guess of the height node below height `z`:
-    /// `(z − heights[0]) · height_scale` (exact for the even spacing of
-    /// [`PathTables`], refined for any spacing).
-    pub(super) height_scale: f32,
     /// Ranges of the nodes, m (empty without a path: every hit is at
     /// node 1, fraction 0).
     pub(super) ranges: Vec<f32>,
@@ -192,17 +188,12 @@ impl GreyTables {
         };
         let heights: Vec<f32> = heights.iter().map(|&x| x as f32).collect();
         let inv_height_spacing = heights.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
-        let height_scale = match (heights.first(), heights.last()) {
-            (Some(&lo), Some(&hi)) if hi > lo => (heights.len() - 1) as f32 / (hi - lo),
-            _ => 0.0,
-        };
         GreyTables {
             bands: nb,
             temperatures: nt,
             range_nodes: if ranges.is_empty() { r } else { ranges.len() },
             heights,
             inv_height_spacing,
-            height_scale,
             ranges,
             inv_spacing,
             sqrt_scale,
@@ -252,20 +243,9 @@ impl GreyTables {
         if x.len() < 2 {
             return (0, 0.0);
         }
-        let top = x.len() - 2;
-        // A guess from the even spacing, then one step each way without a
-        // branch, then the loops, which find the same node from any start
-        // (the node of the definition: the last `a ≤ top` with
-        // `x[a] ≤ z`, or 0) and rarely run: a scan from node 0, whose
-        // length followed the hits' heights, mispredicted often.
-        let mut a = (((z - x[0]) * self.height_scale) as usize).min(top);
-        a += usize::from((a < top) & (x[a + 1] <= z));
-        a -= usize::from((a > 0) & (x[a] > z));
-        while a < top && x[a + 1] <= z {
+        let mut a = 0;
+        while a + 2 < x.len() && x[a + 1] <= z {
             a += 1;
-        }
-        while a > 0 && x[a] > z {
-            a -= 1;
         }
         (a, ((z - x[a]) * self.inv_height_spacing[a]).clamp(0.0, 1.0))
     }
@@ -294,6 +274,37 @@ pub(super) fn grey_terms_band(
 #[inline(always)]
 fn lerp(a: f32, b: f32, x: f32) -> f32 {
     a + x * (b - a)
+}
+
+/// One height node's Planck integrals `Σq·B(T)` of `NB` bands for
+/// [`Shader::grey_pass`]: linear in temperature (fraction `f` from the
+/// entries at `o` to the next temperature node's, `NB` on), then in range
+/// (fraction `rx` toward the next range node's, `rs` on).
+#[inline(always)]
+fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32) -> [f32; NB] {
+    let a = &pl[o..o + 2 * NB];
+    let c = &pl[o + rs..o + rs + 2 * NB];
+    // (Loops, not `array::from_fn`, which was not always inlined.)
+    let mut v = [0f32; NB];
+    for (b, v) in v.iter_mut().enumerate() {
+        *v = lerp(lerp(a[b], a[NB + b], f), lerp(c[b], c[NB + b], f), rx);
+    }
+    v
+}
+
+/// One height node's sky, sun and path terms `[Σq·L_sky, Σq·E_s, Σw·L_u]`
+/// of `NB` bands, linear in range (fraction `rx` from the entries at `q`
+/// to the next range node's, `3·NB` on).
+#[inline(always)]
+fn grey_node_terms<const NB: usize>(nd: &[f32], q: usize, rx: f32) -> [[f32; NB]; 3] {
+    let s = &nd[q..q + 6 * NB];
+    let mut v = [[0f32; NB]; 3];
+    for (j, v) in v.iter_mut().enumerate() {
+        for (b, v) in v.iter_mut().enumerate() {
+            *v = lerp(s[j * NB + b], s[(3 + j) * NB + b], rx);
+        }
+    }
+    v
 }
 
 /// One height node's grey-path terms of band `b` of `nb`
@@ -526,15 +537,8 @@ impl Shader<'_> {
         }
     }
 
-    /// [`Shader::grey_pass`] with `NB` bands (1 or 2): the same sums as
-    /// [`Shader::grey_pass_any`], the terms of all bands side by side in
-    /// small arrays so that each interpolation step is one vector
-    /// operation over them.
+    /// [`Shader::grey_pass`] with `NB` bands.
     fn grey_pass_n<const NB: usize>(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
-        // Lanes of the temperature step: 4·NB (surface and background
-        // temperature, each at two range nodes).
-        const W: usize = 8;
-        assert!(NB <= 2, "grey_pass_n: at most two bands");
         let gt = &self.grey_tables;
         debug_assert_eq!(gt.bands, NB);
         let (out, _) = out.split_at_mut(NB * n);
@@ -546,35 +550,6 @@ impl Shader<'_> {
         let rs = nt * NB;
         let two = gt.heights.len() >= 2;
         let (hp, hq) = (gt.range_nodes * nt * NB, 3 * gt.range_nodes * NB);
-        // One height node's `[ΣqB(T), ΣqB(T_bg), Σq·L_sky, Σq·E_s, Σw·L_u]`
-        // (NB each, in that order in `x`): temperature first, then range,
-        // as the reference.
-        let node = |t0: usize, g0: usize, q: usize, ft: f32, fg: f32, rx: f32, x: &mut [f32; 10]| {
-            let (mut lo, mut hi, mut fr) = ([0f32; W], [0f32; W], [0f32; W]);
-            for (j, (o, f)) in [(t0, ft), (t0 + rs, ft), (g0, fg), (g0 + rs, fg)]
-                .into_iter()
-                .enumerate()
-            {
-                let e = &pl[o..o + 2 * NB];
-                for b in 0..NB {
-                    lo[j * NB + b] = e[b];
-                    hi[j * NB + b] = e[NB + b];
-                    fr[j * NB + b] = f;
-                }
-            }
-            let mut v = [0f32; W];
-            for k in 0..W {
-                v[k] = lerp(lo[k], hi[k], fr[k]);
-            }
-            for b in 0..NB {
-                x[b] = lerp(v[b], v[NB + b], rx);
-                x[NB + b] = lerp(v[2 * NB + b], v[3 * NB + b], rx);
-            }
-            let s = &nd[q..q + 6 * NB];
-            for k in 0..3 * NB {
-                x[2 * NB + k] = lerp(s[k], s[3 * NB + k], rx);
-            }
-        };
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
@@ -584,22 +559,28 @@ impl Shader<'_> {
             let t0 = (p.n0 * nt + g.kt as usize) * NB;
             let g0 = (p.n0 * nt + g.kg as usize) * NB;
             let q = 3 * p.n0 * NB;
-            let mut x = [0f32; 10];
-            node(t0, g0, q, g.ft, g.fg, p.rx, &mut x);
+            // Temperature first, then range, then height, as the reference.
+            let mut bt = grey_planck::<NB>(pl, t0, rs, g.ft, p.rx);
+            let mut bg = grey_planck::<NB>(pl, g0, rs, g.fg, p.rx);
+            let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, p.rx);
             if two {
-                let mut x1 = [0f32; 10];
-                node(t0 + hp, g0 + hp, q + hq, g.ft, g.fg, p.rx, &mut x1);
-                for k in 0..5 * NB {
-                    x[k] = lerp(x[k], x1[k], p.ax);
+                let bt1 = grey_planck::<NB>(pl, t0 + hp, rs, g.ft, p.rx);
+                let bg1 = grey_planck::<NB>(pl, g0 + hp, rs, g.fg, p.rx);
+                let [sky1, sun1, lu1] = grey_node_terms::<NB>(nd, q + hq, p.rx);
+                for b in 0..NB {
+                    bt[b] = lerp(bt[b], bt1[b], p.ax);
+                    bg[b] = lerp(bg[b], bg1[b], p.ax);
+                    sky[b] = lerp(sky[b], sky1[b], p.ax);
+                    sun[b] = lerp(sun[b], sun1[b], p.ax);
+                    lu[b] = lerp(lu[b], lu1[b], p.ax);
                 }
             }
             let e = &ep[(p.mi * ANGLE_ROWS + p.a0) * NB..][..2 * NB];
             for b in 0..NB {
-                let [bt, bg, sky, sun, lu] = [0, 1, 2, 3, 4].map(|j| x[j * NB + b]);
                 let eps = lerp(e[b], e[NB + b], p.ta);
                 let r = (1.0 - eps - tr).max(0.0);
-                let env = g.big_f * sky + one_f * bg;
-                out[b * n + i] = eps * bt + r * (env + p.sd * sun) + tr * env + lu;
+                let env = g.big_f * sky[b] + one_f * bg[b];
+                out[b * n + i] = eps * bt[b] + r * (env + p.sd * sun[b]) + tr * env + lu[b];
             }
         }
     }
@@ -830,11 +811,10 @@ mod tests {
         }
     }
 
-    /// [`GreyTables::locate_height`] (first guess from the even spacing,
-    /// then a branch-free step each way, then the loops) finds the node of
-    /// its definition — the last `a ≤ len − 2` with `x[a] ≤ z`, else 0 —
-    /// for even, uneven and single-step spacings, at, between, below and
-    /// above the nodes, and for a NaN height.
+    /// [`GreyTables::locate_height`] finds the node of its definition —
+    /// the last `a ≤ len − 2` with `x[a] ≤ z`, else 0 — for even, uneven
+    /// and single-step spacings, at, between, below and above the nodes,
+    /// and for a NaN height.
     #[test]
     fn locate_height_finds_the_node_of_any_height_for_any_spacing() {
         fn brute(x: &[f32], z: f32) -> (usize, f32) {
@@ -856,7 +836,10 @@ mod tests {
                 let (a, u) = t.locate_height(z);
                 let (b, v) = brute(&x, z);
                 assert_eq!(a, b, "height {z} with nodes {x:?}");
-                assert!((u - v).abs() <= 1e-6, "height {z}: fraction {u} against {v}");
+                assert!(
+                    (u - v).abs() <= 1e-6,
+                    "height {z}: fraction {u} against {v}"
+                );
             }
             let (a, _) = t.locate_height(f32::NAN);
             assert_eq!(a, 0, "NaN height with nodes {x:?}");

@@ -86,17 +86,24 @@ impl Shader<'_> {
     /// of the hits left to the spectral reference appended to `slow`
     /// (their `out` values untouched).
     ///
-    /// Hits on materials grey in every band (without secondary rays, on
-    /// the Planck table) take the grey path in three passes over the batch
-    /// — per hit the facet's record, `d·n_g` and the range; the view
-    /// zeniths of all of them at once (a loop that vectorises); then per
-    /// band `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
-    /// [`super::band::GreyTables`], with `q` the range-interpolated path weights — so
-    /// that no per-hit latency chain stalls the others. Other hits take
-    /// the per-hit fused spectral sums.
+    /// One pass over the batch reads one byte per hit, its facet's rule
+    /// ([`super::RULE_GREY`] …): hits on materials grey in every band
+    /// (without secondary rays, on the Planck table) that need no per-hit
+    /// state at their range and no shadow ray of their own go straight to
+    /// the grey path; only the others have their per-hit states
+    /// ([`crate::render::per_hit`], all traced in one call) and shadow
+    /// rays toward the sun (one call) looked up, then join the grey path
+    /// or take the per-hit fused spectral sums. The grey path then runs in
+    /// three more passes — the view zeniths of all its hits at once (a loop
+    /// that vectorises); their path nodes (a chain of dependent loads per
+    /// hit, overlapped from hit to hit in a short loop); then per band
+    /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
+    /// [`super::band::GreyTables`], with `q` the range-interpolated path
+    /// weights — so that no per-hit latency chain stalls the others.
     ///
     /// With `truth`, the truth values of the pixel-centre rays it names are
-    /// written as the batch is read ([`Shader::truth_of`]).
+    /// written once their states and shadow rays are known
+    /// ([`Shader::truth_of`]).
     pub fn shade_fast(
         &self,
         rays: &[Ray],
