@@ -76,6 +76,18 @@ impl Default for PerHitParams {
     }
 }
 
+/// Which hits on a facet [`PerHit::wants`] gives their own temperature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PerHitRule {
+    /// None.
+    Never,
+    /// All (the facet's sample points disagree at some window record).
+    Always,
+    /// Those at ranges where the facet is large against the pixel
+    /// footprint ([`PerHit::large`]).
+    ByRange,
+}
+
 /// A hit's own thermal state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HitState {
@@ -176,15 +188,42 @@ impl PerHit {
     }
 
     /// Whether a hit on `facet` at range `range_m` seen with pixel angle
-    /// `pixel_angle_rad` (0: unknown) gets its own temperature.
+    /// `pixel_angle_rad` (0: unknown) gets its own temperature:
+    /// [`PerHit::rule`], with [`PerHit::large`] where it depends on the
+    /// range.
     #[inline]
     pub fn wants(&self, facet: usize, range_m: f32, pixel_angle_rad: f32) -> bool {
-        if self.block_of.get(facet).is_none_or(|&b| b == u32::MAX) {
-            return false;
+        match self.rule(facet, pixel_angle_rad) {
+            PerHitRule::Never => false,
+            PerHitRule::Always => true,
+            PerHitRule::ByRange => self.large(facet, range_m, pixel_angle_rad),
         }
-        self.mixed[facet]
-            || (pixel_angle_rad > 0.0
-                && self.spacing[facet] > self.params.size_px * range_m * pixel_angle_rad)
+    }
+
+    /// The part of [`PerHit::wants`] that is the same for every hit on
+    /// `facet` (pixel angle `pixel_angle_rad`): never (no response, or
+    /// neither mixed nor a known pixel angle), always (its sample points
+    /// disagree), or by range ([`PerHit::large`]).
+    #[inline]
+    pub fn rule(&self, facet: usize, pixel_angle_rad: f32) -> PerHitRule {
+        if self.block_of.get(facet).is_none_or(|&b| b == u32::MAX) {
+            PerHitRule::Never
+        } else if self.mixed[facet] {
+            PerHitRule::Always
+        } else if pixel_angle_rad > 0.0 {
+            PerHitRule::ByRange
+        } else {
+            PerHitRule::Never
+        }
+    }
+
+    /// Whether `facet` (one of [`PerHitRule::ByRange`]) is large against
+    /// the pixel footprint at range `range_m`: its sample spacing over
+    /// [`PerHitParams::size_px`] footprints `range_m · pixel_angle_rad`.
+    #[inline]
+    pub fn large(&self, facet: usize, range_m: f32, pixel_angle_rad: f32) -> bool {
+        pixel_angle_rad > 0.0
+            && self.spacing[facet] > self.params.size_px * range_m * pixel_angle_rad
     }
 
     /// The range of temperatures the hits on a facet can take, K: each

@@ -491,11 +491,27 @@ impl Shader<'_> {
         }
     }
 
+    /// Each gathered hit's place in the path's tables (its `node`, `rx`
+    /// and `ax`, [`GreyHit`]), in a pass of its own: the range lookup is a
+    /// chain of dependent loads per hit, which a short loop overlaps from
+    /// hit to hit.
+    pub(super) fn grey_locate(&self, grey: &mut [GreyHit]) {
+        let gt = &self.grey_tables;
+        let rn = gt.range_nodes;
+        for hit in grey {
+            let (ri, rx) = gt.locate(hit.range);
+            let (ai, ax) = gt.locate_height(hit.z);
+            hit.node = (ai * rn + ri - 1) as u32;
+            hit.rx = rx;
+            hit.ax = ax;
+        }
+    }
+
     /// A gathered hit's place in the grey path's tables: its facet's
     /// record, material `mi`, the emissivity angle row `a0` and the
-    /// fraction `ta` toward `a0 + 1`, the range node `ri` and fraction
-    /// `rx` from `ri − 1`, the height node `ai` and fraction `ax` toward
-    /// `ai + 1`, and the diffuse-reflected sun `sd` of its seen face.
+    /// fraction `ta` toward `a0 + 1`, the path node and fractions of
+    /// [`Shader::grey_locate`], and the diffuse-reflected sun `sd` of its
+    /// seen face.
     #[inline(always)]
     fn grey_place(&self, hit: &GreyHit) -> GreyPlace<'_> {
         let gt = &self.grey_tables;
@@ -504,8 +520,6 @@ impl Shader<'_> {
         let th = hit.theta;
         // θ ≥ 0: truncation is the floor.
         let a0 = (th as usize).min(ANGLE_ROWS - 2);
-        let (ri, rx) = gt.locate(hit.range);
-        let (ai, ax) = gt.locate_height(hit.z);
         let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
             g.sd
         } else {
@@ -516,9 +530,9 @@ impl Shader<'_> {
             mi,
             a0,
             ta: th - a0 as f32,
-            n0: ai * gt.range_nodes + ri - 1,
-            rx,
-            ax,
+            n0: hit.node as usize,
+            rx: hit.rx,
+            ax: hit.ax,
             sd,
         }
     }
@@ -794,6 +808,41 @@ mod tests {
                 assert_eq!(i, j, "range {r} with nodes {x:?}");
                 assert!((f - g).abs() <= 1e-6, "range {r}: fraction {f} against {g}");
             }
+        }
+    }
+
+    /// [`GreyTables::locate_height`] finds the node of its definition —
+    /// the last `a ≤ len − 2` with `x[a] ≤ z`, else 0 — for even, uneven
+    /// and single-step spacings, at, between, below and above the nodes,
+    /// and for a NaN height.
+    #[test]
+    fn locate_height_finds_the_node_of_any_height_for_any_spacing() {
+        fn brute(x: &[f32], z: f32) -> (usize, f32) {
+            let top = x.len() - 2;
+            let a = (1..=top).filter(|&k| x[k] <= z).count();
+            (a, ((z - x[a]) / (x[a + 1] - x[a])).clamp(0.0, 1.0))
+        }
+        let even: Vec<f64> = (0..=7).map(|a| -3.0 + 45.0 * a as f64 / 7.0).collect();
+        let uneven = vec![0.0, 1.0, 30.0, 31.0, 90.0];
+        for heights in [even, uneven, vec![2.0, 27.0]] {
+            let t = GreyTables::new(&[], &[], &[], &heights, &[]);
+            let x = t.heights.clone();
+            let mut probes: Vec<f32> = x.clone();
+            probes.extend(x.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+            probes.extend(x.iter().map(|&v| v + 1e-4));
+            probes.extend(x.iter().map(|&v| v - 1e-4));
+            probes.extend([-1e4, 1e4, f32::INFINITY, f32::NEG_INFINITY]);
+            for z in probes {
+                let (a, u) = t.locate_height(z);
+                let (b, v) = brute(&x, z);
+                assert_eq!(a, b, "height {z} with nodes {x:?}");
+                assert!(
+                    (u - v).abs() <= 1e-6,
+                    "height {z}: fraction {u} against {v}"
+                );
+            }
+            let (a, _) = t.locate_height(f32::NAN);
+            assert_eq!(a, 0, "NaN height with nodes {x:?}");
         }
     }
 }

@@ -2,13 +2,11 @@
 //! the stages' tables, for the hits that need no secondary ray; the others
 //! go to the spectral reference ([`super::spectral`]).
 
-use glam::Vec3;
-
 use super::Shader;
-use super::hit::{GreyHit, acos_deg};
+use super::hit::{GreyHit, HitStates, acos_deg};
 use super::sources::{SunRays, sky_node};
 use super::truth::{TruthBlock, TruthOut};
-use crate::render::per_hit::HitState;
+use super::{RULE_GREY, RULE_PER_HIT_BY_RANGE};
 use crate::trace::{Hit, Ray};
 
 /// Which primary hits [`Shader::fast_primary`] leaves to the spectral
@@ -29,15 +27,12 @@ pub enum FastMiss {
 #[derive(Debug, Default)]
 pub struct FastScratch {
     pub(super) grey: Vec<GreyHit>,
+    /// Rays of the batch whose hits are not plain grey (see
+    /// [`Shader::shade_fast`]).
+    pub(super) special: Vec<u32>,
     pub(super) sun: SunRays,
     pub(super) bands: Vec<f32>,
-    /// Per ray of the batch: index into `states` (`u32::MAX`: the facet's
-    /// state).
-    pub(super) state_of: Vec<u32>,
-    /// Per-hit states of the batch's hits that have one.
-    pub(super) states: Vec<HitState>,
-    /// `(facet, point)` of those hits.
-    pub(super) points: Vec<(u32, Vec3)>,
+    pub(super) states: HitStates,
 }
 
 impl Shader<'_> {
@@ -91,17 +86,24 @@ impl Shader<'_> {
     /// of the hits left to the spectral reference appended to `slow`
     /// (their `out` values untouched).
     ///
-    /// Hits on materials grey in every band (without secondary rays, on
-    /// the Planck table) take the grey path in three passes over the batch
-    /// — per hit the facet's record, `d·n_g` and the range; the view
-    /// zeniths of all of them at once (a loop that vectorises); then per
-    /// band `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
-    /// [`super::band::GreyTables`], with `q` the range-interpolated path weights — so
-    /// that no per-hit latency chain stalls the others. Other hits take
-    /// the per-hit fused spectral sums.
+    /// One pass over the batch reads one byte per hit, its facet's rule
+    /// ([`super::RULE_GREY`] …): hits on materials grey in every band
+    /// (without secondary rays, on the Planck table) that need no per-hit
+    /// state at their range and no shadow ray of their own go straight to
+    /// the grey path; only the others have their per-hit states
+    /// ([`crate::render::per_hit`], all traced in one call) and shadow
+    /// rays toward the sun (one call) looked up, then join the grey path
+    /// or take the per-hit fused spectral sums. The grey path then runs in
+    /// three more passes — the view zeniths of all its hits at once (a loop
+    /// that vectorises); their path nodes (a chain of dependent loads per
+    /// hit, overlapped from hit to hit in a short loop); then per band
+    /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
+    /// [`super::band::GreyTables`], with `q` the range-interpolated path
+    /// weights — so that no per-hit latency chain stalls the others.
     ///
     /// With `truth`, the truth values of the pixel-centre rays it names are
-    /// written as the batch is read ([`Shader::truth_of`]).
+    /// written once their states and shadow rays are known
+    /// ([`Shader::truth_of`]).
     pub fn shade_fast(
         &self,
         rays: &[Ray],
@@ -109,27 +111,21 @@ impl Shader<'_> {
         out: &mut [f32],
         slow: &mut Vec<usize>,
         sc: &mut FastScratch,
-        mut truth: Option<TruthOut<'_, '_>>,
+        truth: Option<TruthOut<'_, '_>>,
     ) {
         let n = rays.len();
         let nb = self.fast.len();
         debug_assert!(hits.len() == n && out.len() >= nb * n);
         sc.grey.clear();
+        sc.special.clear();
         sc.bands.resize(nb, 0.0);
-        self.per_hit_states(rays, hits, sc);
-        {
-            let state_of = &sc.state_of;
-            let has_state = |i: usize| state_of.get(i).is_some_and(|&k| k != u32::MAX);
-            self.sun_visibility(rays, hits, has_state, &mut sc.sun);
-        }
-        // The next pixel-centre ray and its column.
-        let (mut next, mut col) = match &truth {
-            Some(t) if !t.layers.is_empty() && !t.layers[0].is_empty() => (t.first, 0usize),
-            _ => (usize::MAX, 0),
-        };
-        let mut block = TruthBlock::new();
+        // Pass 1, per ray: misses, and hits on facets whose rule
+        // ([`Shader::rule`]) is the plain grey path (no per-hit state at
+        // this range, no shadow ray of their own) straight to the grey
+        // path; the others to `special`.
+        let ph = self.conditions.per_hit.as_deref();
+        let beta = self.pixel_angle_rad;
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
-            let centre = i == next;
             let Some(h) = hit else {
                 let up = ray.dir.z >= 0.0;
                 let (k, f) = sky_node(ray.dir.z as f64, ray.dir.length() as f64);
@@ -140,29 +136,50 @@ impl Shader<'_> {
                         fb.miss_ground
                     } as f32;
                 }
-                if let (true, Some(t)) = (centre, &mut truth) {
-                    block.push(t, col, crate::render::MISS_TRUTH);
-                    (next, col) = t.advance(col);
-                }
                 continue;
             };
             let f = self.facet_of(h);
-            let range = h.t * ray.dir.length();
-            let state = sc
-                .state_of
-                .get(i)
-                .filter(|&&k| k != u32::MAX)
-                .map(|&k| sc.states[k as usize]);
-            let vis = sc.sun.of(i);
-            if let (true, Some(t)) = (centre, &mut truth) {
-                let mut v = self.truth_of_hit(f, range, state);
-                if let Some(x) = vis {
-                    v[4] = x;
+            let rule = self.rule[f];
+            if rule & !RULE_PER_HIT_BY_RANGE == RULE_GREY {
+                let range = h.t * ray.dir.length();
+                let by_range = rule & RULE_PER_HIT_BY_RANGE != 0;
+                let n2 = ray.dir.length_squared() * h.ng.length_squared();
+                if !(by_range && ph.is_some_and(|p| p.large(f, range, beta)))
+                    && n2 > 0.0
+                    && n2.is_finite()
+                {
+                    let z = ray.origin.z + ray.dir.z * h.t;
+                    let dn = ray.dir.dot(h.ng);
+                    sc.grey.push(GreyHit::new(i, f, [dn, n2, range, z], false));
+                    continue;
                 }
-                block.push(t, col, v);
-                (next, col) = t.advance(col);
             }
-            if let Some(st) = state {
+            sc.special.push(i as u32);
+        }
+        // The special hits' per-hit states and shadow rays.
+        self.per_hit_states_of(
+            rays,
+            hits,
+            sc.special.iter().map(|&i| i as usize),
+            &mut sc.states,
+        );
+        {
+            let st = &sc.states;
+            self.sun_visibility_of(
+                rays,
+                hits,
+                sc.special.iter().map(|&i| i as usize),
+                |i| st.has(i),
+                &mut sc.sun,
+            );
+        }
+        for &i in &sc.special {
+            let i = i as usize;
+            let (ray, Some(h)) = (&rays[i], &hits[i]) else {
+                continue;
+            };
+            let f = self.facet_of(h);
+            if let Some(st) = sc.states.of(i) {
                 if self
                     .fast_general(ray, h, Some(st), None, &mut sc.bands)
                     .is_err()
@@ -175,17 +192,14 @@ impl Shader<'_> {
                 }
                 continue;
             }
+            let vis = sc.sun.of(i);
             let n2 = ray.dir.length_squared() * h.ng.length_squared();
             if self.grey[f].mi != u32::MAX && n2 > 0.0 && n2.is_finite() {
-                sc.grey.push(GreyHit {
-                    ray: i as u32,
-                    facet: f as u32,
-                    dn: ray.dir.dot(h.ng),
-                    theta: n2,
-                    range,
-                    z: ray.origin.z + ray.dir.z * h.t,
-                    shaded: vis == Some(0.0),
-                });
+                let range = h.t * ray.dir.length();
+                let z = ray.origin.z + ray.dir.z * h.t;
+                let dn = ray.dir.dot(h.ng);
+                sc.grey
+                    .push(GreyHit::new(i, f, [dn, n2, range, z], vis == Some(0.0)));
                 continue;
             }
             if self.fast_general(ray, h, None, vis, &mut sc.bands).is_err() {
@@ -196,18 +210,52 @@ impl Shader<'_> {
                 out[b * n + i] = v;
             }
         }
-        if let Some(t) = &mut truth {
-            // `col`: the columns written.
-            block.flush(t, col);
+        if let Some(t) = truth {
+            self.truth_pass(rays, hits, sc, t);
         }
         // View zeniths, degrees: cos θ = |d·n_g| / (|d|·|n_g|).
         for g in &mut sc.grey {
             g.theta = acos_deg((g.dn.abs() / g.theta.sqrt()).min(1.0));
         }
         if self.grey_terms.is_empty() {
+            self.grey_locate(&mut sc.grey);
             self.grey_pass(sc, n, out);
         } else {
             self.grey_terms_pass(sc, n, out);
         }
+    }
+
+    /// The truth values of a batch's pixel-centre rays (those `truth`
+    /// names), from the hits' per-hit states and shadow rays in `sc`.
+    fn truth_pass(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        sc: &FastScratch,
+        mut t: TruthOut<'_, '_>,
+    ) {
+        if t.layers.is_empty() || t.layers[0].is_empty() {
+            return;
+        }
+        let mut block = TruthBlock::new();
+        let (mut i, mut col) = (t.first, 0usize);
+        while i < rays.len() {
+            let v = match &hits[i] {
+                None => crate::render::MISS_TRUTH,
+                Some(h) => {
+                    let f = self.facet_of(h);
+                    let range = h.t * rays[i].dir.length();
+                    let mut v = self.truth_of_hit(f, range, sc.states.of(i));
+                    if let Some(x) = sc.sun.of(i) {
+                        v[4] = x;
+                    }
+                    v
+                }
+            };
+            block.push(&mut t, col, v);
+            (i, col) = t.advance(col);
+        }
+        // `col`: the columns written.
+        block.flush(&mut t, col);
     }
 }

@@ -6,7 +6,6 @@
 use glam::Vec3;
 
 use super::Shader;
-use super::fast::FastScratch;
 use crate::geometry::SceneGeometry;
 use crate::render::per_hit::HitState;
 use crate::trace::{Hit, Ray};
@@ -72,6 +71,35 @@ pub(super) fn acos_deg(x: f32) -> f32 {
     (1.0 - x).max(0.0).sqrt() * p * (180.0 / std::f32::consts::PI)
 }
 
+/// The per-hit states of a batch's hits ([`Shader::per_hit_states_of`]).
+#[derive(Debug, Default)]
+pub(super) struct HitStates {
+    /// Per ray of the batch: index into `states` (`u32::MAX`: the facet's
+    /// state); empty without per-hit temperatures.
+    pub(super) state_of: Vec<u32>,
+    /// Per-hit states of the batch's hits that have one.
+    pub(super) states: Vec<HitState>,
+    /// `(facet, point)` of those hits.
+    pub(super) points: Vec<(u32, Vec3)>,
+}
+
+impl HitStates {
+    /// The state of ray `i`, if it has its own.
+    #[inline]
+    pub(super) fn of(&self, i: usize) -> Option<HitState> {
+        match self.state_of.get(i) {
+            Some(&k) if k != u32::MAX => Some(self.states[k as usize]),
+            _ => None,
+        }
+    }
+
+    /// Whether ray `i` has its own state.
+    #[inline]
+    pub(super) fn has(&self, i: usize) -> bool {
+        self.state_of.get(i).is_some_and(|&k| k != u32::MAX)
+    }
+}
+
 /// A hit on the grey path, as [`Shader::shade_fast`] gathers it.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct GreyHit {
@@ -89,12 +117,53 @@ pub(super) struct GreyHit {
     pub(super) z: f32,
     /// The hit's own shadow ray found the sun blocked.
     pub(super) shaded: bool,
+    /// Where it reads the path's tables ([`Shader::grey_locate`]; with a
+    /// path only): path node of range node `ri − 1` at height node `ai`,
+    /// the fraction `rx` from range node `ri − 1` toward `ri` and `ax`
+    /// from height node `ai` toward `ai + 1`.
+    pub(super) node: u32,
+    pub(super) rx: f32,
+    pub(super) ax: f32,
+}
+
+impl GreyHit {
+    /// A hit of ray `ray` on facet `facet` before [`Shader::shade_fast`]'s
+    /// later passes: `dn` = `d·n_g`, `n2` = `|d|²·|n_g|²`, slant range
+    /// (m), height `z` (m).
+    #[inline]
+    pub(super) fn new(
+        ray: usize,
+        facet: usize,
+        [dn, n2, range, z]: [f32; 4],
+        shaded: bool,
+    ) -> Self {
+        GreyHit {
+            ray: ray as u32,
+            facet: facet as u32,
+            dn,
+            theta: n2,
+            range,
+            z,
+            shaded,
+            node: 0,
+            rx: 0.0,
+            ax: 0.0,
+        }
+    }
 }
 
 impl Shader<'_> {
-    /// The per-hit states of the hits of a batch whose facets want one
-    /// into `sc` (`state_of`, `states`).
-    pub(super) fn per_hit_states(&self, rays: &[Ray], hits: &[Option<Hit>], sc: &mut FastScratch) {
+    /// The per-hit states of the hits of a batch whose facets want one,
+    /// among the rays `which`, into `sc` (`state_of`, per ray of the
+    /// batch: index into `states`, `u32::MAX` for none), all traced in one
+    /// call of [`crate::render::per_hit::PerHit::states`].
+    pub(super) fn per_hit_states_of(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        which: impl IntoIterator<Item = usize>,
+        sc: &mut HitStates,
+    ) {
         sc.state_of.clear();
         sc.states.clear();
         let Some(ph) = &self.conditions.per_hit else {
@@ -102,8 +171,10 @@ impl Shader<'_> {
         };
         sc.state_of.resize(rays.len(), u32::MAX);
         sc.points.clear();
-        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
-            let Some(h) = hit else { continue };
+        for i in which {
+            let (ray, Some(h)) = (&rays[i], &hits[i]) else {
+                continue;
+            };
             let f = self.facet_of(h);
             if ph.wants(f, h.t * ray.dir.length(), self.pixel_angle_rad) {
                 sc.state_of[i] = sc.points.len() as u32;

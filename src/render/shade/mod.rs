@@ -151,7 +151,21 @@ pub struct Shader<'a> {
     /// Per material: the Beckmann `m²` of its glint lobe (0: no glint;
     /// [`super::glint`]).
     glint_m2: Vec<f64>,
+    /// Per facet: what [`Shader::shade_fast`] does with a hit on it, one
+    /// byte of `RULE_*` flags ([`Shader::facet_rules`]).
+    rule: Vec<u8>,
 }
+
+/// [`Shader::rule`]: the facet is on the grey path ([`grey_facets`]).
+pub(super) const RULE_GREY: u8 = 1;
+/// Its hits trace their own shadow ray ([`sun_ray_facets`]).
+pub(super) const RULE_SUN_RAY: u8 = 2;
+/// Its hits all take a per-hit state
+/// ([`crate::render::per_hit::PerHitRule::Always`]).
+pub(super) const RULE_PER_HIT: u8 = 4;
+/// Its hits take a per-hit state at ranges where it is large against the
+/// pixel footprint ([`crate::render::per_hit::PerHitRule::ByRange`]).
+pub(super) const RULE_PER_HIT_BY_RANGE: u8 = 8;
 
 impl std::fmt::Debug for Shader<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -402,14 +416,51 @@ impl<'a> Shader<'a> {
             sun_dir,
             sun_ray,
             glint_m2,
-        })
+            rule: Vec::new(),
+        }
+        .with_rules())
     }
 
     /// The same shader with the angular size of a pixel (rad), for the
     /// per-hit rule's pixel footprint ([`super::per_hit`]).
     pub fn with_pixel_angle(mut self, rad: f64) -> Self {
         self.pixel_angle_rad = rad as f32;
+        self.with_rules()
+    }
+
+    /// The shader with its per-facet rules ([`Shader::facet_rules`]).
+    fn with_rules(mut self) -> Self {
+        self.rule = self.facet_rules();
         self
+    }
+
+    /// Per facet, the `RULE_*` flags of a hit on it: on the grey path
+    /// ([`RULE_GREY`]), tracing its own shadow ray ([`RULE_SUN_RAY`]),
+    /// taking a per-hit state always ([`RULE_PER_HIT`]) or by range
+    /// ([`RULE_PER_HIT_BY_RANGE`]) — so that [`Shader::shade_fast`] reads
+    /// one byte per hit to find the hits that need none of the per-hit
+    /// work.
+    fn facet_rules(&self) -> Vec<u8> {
+        use crate::render::per_hit::PerHitRule;
+        let ph = self.conditions.per_hit.as_deref();
+        (0..self.grey.len())
+            .into_par_iter()
+            .map(|f| {
+                let mut r = 0;
+                if self.grey[f].mi != u32::MAX {
+                    r |= RULE_GREY;
+                }
+                if self.sun_ray[f] {
+                    r |= RULE_SUN_RAY;
+                }
+                match ph.map(|p| p.rule(f, self.pixel_angle_rad)) {
+                    Some(PerHitRule::Always) => r |= RULE_PER_HIT,
+                    Some(PerHitRule::ByRange) => r |= RULE_PER_HIT_BY_RANGE,
+                    Some(PerHitRule::Never) | None => {}
+                }
+                r
+            })
+            .collect()
     }
 
     /// Number of spectral values per ray (all bands).

@@ -222,14 +222,29 @@ impl Shader<'_> {
         has_state: impl Fn(usize) -> bool,
         sr: &mut SunRays,
     ) {
+        self.sun_visibility_of(rays, hits, 0..rays.len(), has_state, sr);
+    }
+
+    /// [`Shader::sun_visibility`] of the batch's rays `which` only (the
+    /// others keep [`VIS_FACET`]).
+    pub(super) fn sun_visibility_of(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        which: impl IntoIterator<Item = usize>,
+        has_state: impl Fn(usize) -> bool,
+        sr: &mut SunRays,
+    ) {
         sr.vis.clear();
         sr.rays.clear();
         sr.idx.clear();
         let Some(sun) = self.sun_dir else { return };
         sr.vis.resize(rays.len(), VIS_FACET);
         let s = &self.conditions.surface;
-        for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
-            let Some(h) = hit else { continue };
+        for i in which {
+            let (ray, Some(h)) = (&rays[i], &hits[i]) else {
+                continue;
+            };
             let f = self.facet_of(h);
             if !self.sun_ray[f] || has_state(i) {
                 continue;

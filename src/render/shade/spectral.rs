@@ -3,10 +3,11 @@
 //! transmission.
 
 use super::Shader;
-use super::hit::ANGLE_ROWS;
+use super::hit::{ANGLE_ROWS, HitStates};
 use super::sources::SunRays;
 use super::surface::hit_temperature;
 use crate::radiometry::{SurfaceInputs, leaving_radiance};
+use crate::render::per_hit::HitState;
 use crate::trace::{Coherence, Hit, Ray};
 
 impl Shader<'_> {
@@ -75,18 +76,12 @@ impl Shader<'_> {
                 refl[i] = k;
             }
         }
+        // The hits' per-hit states, all traced in one call, then their
+        // shadow rays.
+        let mut states = HitStates::default();
+        self.per_hit_states_of(rays, hits, 0..rays.len(), &mut states);
         let mut sun = SunRays::default();
-        let has_state = |i: usize| {
-            let (Some(ph), Some(h)) = (&self.conditions.per_hit, &hits[i]) else {
-                return false;
-            };
-            ph.wants(
-                self.facet_of(h),
-                h.t * rays[i].dir.length(),
-                self.pixel_angle_rad,
-            )
-        };
-        self.sun_visibility(rays, hits, has_state, &mut sun);
+        self.sun_visibility(rays, hits, |i| states.has(i), &mut sun);
         let mut scratch = LeavingScratch::new(n);
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
             let o = &mut out[i * n..(i + 1) * n];
@@ -99,20 +94,23 @@ impl Shader<'_> {
             let behind =
                 (trans[i] != usize::MAX).then(|| &sec_spec[trans[i] * n..(trans[i] + 1) * n]);
             let lit = sun.of(i);
-            self.leaving_into(ray, h, lit, spec_in, behind, &mut scratch, o);
+            let state = states.of(i);
+            self.leaving_into(ray, h, state, lit, spec_in, behind, &mut scratch, o);
         }
     }
 
     /// The spectral radiance leaving hit `h` toward the origin of `ray`:
     /// the stages' inputs at the hit (surface terms, sources) handed to the
     /// reference big equation, [`crate::radiometry::leaving_radiance`],
-    /// band by band; `vis` the hit's own sun visibility where it traced a
-    /// shadow ray.
+    /// band by band; `state` the hit's per-hit state where it has one
+    /// ([`Shader::per_hit_states_of`]), `vis` its own sun visibility where
+    /// it traced a shadow ray.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn leaving_into(
         &self,
         ray: &Ray,
         h: &Hit,
+        state: Option<HitState>,
         vis: Option<f32>,
         spec_in: Option<&[f64]>,
         behind: Option<&[f64]>,
@@ -128,7 +126,7 @@ impl Shader<'_> {
         let theta = cos_view.acos().to_degrees();
         let a0 = (theta.floor() as usize).min(ANGLE_ROWS - 2);
         let ta = theta - a0 as f64;
-        let (t_hit, sun_fraction) = hit_temperature(s, f, self.hit_state(ray, h));
+        let (t_hit, sun_fraction) = hit_temperature(s, f, state);
         let sun_fraction = vis.unwrap_or(sun_fraction);
         // The glint lobe toward the viewer: the hit's own visibility (a
         // specular facet always traces it while the sun faces it).
