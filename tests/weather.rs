@@ -396,6 +396,7 @@ fn sample_history() -> WeatherHistory {
         total_sky_cover: 0.2,
         opaque_sky_cover: 0.1,
         precipitation_mm: 0.0,
+        visibility_km: None,
     };
     WeatherHistory::new(
         vec![
