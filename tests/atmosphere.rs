@@ -1351,3 +1351,70 @@ mod standard {
         assert!(p.path_radiance.iter().all(|&l| l == 0.0));
     }
 }
+
+/// Issue 17: where the scene's built-in atmosphere names no `visibility_km`, the
+/// weather's visibility at the image time sets the aerosol's (an EPW's field 25),
+/// clamped to LOWTRAN 7's table (2–50 km); a missing visibility (9999) keeps the
+/// model's default (rural 23 km, urban 5 km); a scene's `visibility_km` always wins;
+/// `"aerosol": "none"` stays clear air. The bundled town's weather has no visibility:
+/// its renders keep rural 23 km.
+#[test]
+fn weather_visibility_sets_the_aerosol_unless_the_scene_names_one() {
+    use irsig::atmosphere::{Aerosol, AerosolModel};
+    use irsig::render::session::AtmosphereConfig;
+    let config = |v: serde_json::Value| serde_json::from_value::<AtmosphereConfig>(v).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut vis = [8.0; 24];
+    vis[17..].copy_from_slice(&[9999.0; 7]); // hour-ending 18:00..24:00 missing
+    let p = dir.path().join("vis.epw");
+    std::fs::write(&p, crate::weather::epw_visibility_day(&vis)).unwrap();
+    let h = irsig::weather::load(&p).unwrap();
+    let time = |s: &str| chrono::DateTime::parse_from_rfc3339(s).unwrap();
+    let day = h.at(time("1990-06-21T10:00:00-05:00")).unwrap();
+    let night = h.at(time("1990-06-21T21:00:00-05:00")).unwrap();
+    assert_eq!(night.visibility_km, None);
+    let rural = |v: f64| Some(Aerosol::new(AerosolModel::Rural, v).unwrap());
+
+    for c in [
+        AtmosphereConfig::default(),
+        config(serde_json::json!("builtin")),
+        config(serde_json::json!("tropical")),
+        config(serde_json::json!({"model": "standard"})),
+        config(serde_json::json!({"model": "builtin", "aerosol": "rural"})),
+    ] {
+        assert_eq!(c.aerosol_at(&day), (rural(8.0), None), "{c:?}");
+        assert_eq!(c.aerosol_at(&night), (rural(23.0), None), "{c:?}");
+    }
+    // The model's own default where the weather has none.
+    let urban = config(serde_json::json!({"model": "standard", "aerosol": "urban"}));
+    let u = |v: f64| Some(Aerosol::new(AerosolModel::Urban, v).unwrap());
+    assert_eq!(urban.aerosol_at(&day), (u(8.0), None));
+    assert_eq!(urban.aerosol_at(&night), (u(5.0), None));
+    // An explicit visibility wins, also outside the table.
+    for v in [40.0, 60.0] {
+        let c = config(serde_json::json!({"model": "standard", "visibility_km": v}));
+        assert_eq!(c.aerosol_at(&day), (rural(v), None));
+        assert_eq!(c.aerosol_at(&night), (rural(v), None));
+    }
+    let none = config(serde_json::json!({"model": "builtin", "aerosol": "none"}));
+    assert_eq!(none.aerosol_at(&day), (None, None));
+    assert_eq!(
+        config(serde_json::json!("none")).aerosol_at(&day),
+        (None, None)
+    );
+    // Observed visibilities beyond LOWTRAN's table are clamped, and say so.
+    let std = AtmosphereConfig::default();
+    for (v, used) in [(0.0, 2.0), (0.5, 2.0), (80.0, 50.0)] {
+        let r = irsig::weather::WeatherRecord {
+            visibility_km: Some(v),
+            ..day
+        };
+        assert_eq!(std.aerosol_at(&r), (rural(used), Some(v)));
+    }
+
+    // The town: a CSV without visibility, rural 23 km at every record.
+    let town = irsig::weather::load(&util::repo_path("scenes/town/weather.csv")).unwrap();
+    for r in town.records() {
+        assert_eq!(std.aerosol_at(r), (rural(23.0), None));
+    }
+}

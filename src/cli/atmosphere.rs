@@ -91,7 +91,12 @@ pub struct Args {
     /// weather record's visibility with --weather where the file has one
     /// (clamped to LOWTRAN's table, 2–50 km), else the model's (23 km;
     /// urban 5 km).
-    #[arg(long, value_name = "KM", conflicts_with = "tape7_index")]
+    #[arg(
+        long,
+        value_name = "KM",
+        conflicts_with = "tape7_index",
+        allow_negative_numbers = true
+    )]
     pub visibility_km: Option<f64>,
     /// The band.
     #[command(flatten)]
