@@ -106,7 +106,7 @@ impl schemars::JsonSchema for AtmosphereConfig {
         let aerosol = serde_json::json!({ "type": "string", "enum": aerosols,
             "description": "LOWTRAN 7's boundary-layer aerosol (default rural); none: clear air" });
         let visibility = serde_json::json!({ "type": "number", "exclusiveMinimum": 0,
-            "description": "visibility at the ground, km (default 23; urban 5)" });
+            "description": "visibility at the ground, km (default: the weather's at the image time where it has one, else 23; urban 5)" });
         schemars::json_schema!({
             "description": "The atmosphere between scene and sensor, and the sky. Absent: the built-in layered model on the AFGL profile of the site's latitude and the month.",
             "oneOf": [
