@@ -1418,3 +1418,69 @@ fn weather_visibility_sets_the_aerosol_unless_the_scene_names_one() {
         assert_eq!(std.aerosol_at(r), (rural(23.0), None));
     }
 }
+
+/// Issue 17: a render whose weather gives a visibility outside LOWTRAN's table (here
+/// 0.5 km at every record, the town's weather with a `visibility_km` column) gets one
+/// `warning:` naming the weather file, the visibility and the 2 km the aerosol takes;
+/// the town's own weather (no visibility) and a scene's explicit `visibility_km` get
+/// none.
+#[test]
+fn weather_visibility_outside_the_table_warns_once_for_the_render() {
+    use irsig::render::session::{Session, visibility_warnings};
+    let dir = tempfile::tempdir().unwrap();
+    let town = std::fs::read_to_string(util::repo_path("scenes/town/weather.csv")).unwrap();
+    let mut header_seen = false;
+    let foggy: String = town
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.trim().is_empty() {
+                format!("{l}\n")
+            } else if !header_seen {
+                header_seen = true;
+                format!("{l},visibility_km\n")
+            } else {
+                format!("{l},0.5\n")
+            }
+        })
+        .collect();
+    let foggy_path = dir.path().join("foggy.csv");
+    std::fs::write(&foggy_path, foggy).unwrap();
+    let scene = |weather: &std::path::Path, atmosphere: serde_json::Value| {
+        let s = serde_json::json!({
+            "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160.0,
+                     "utc_offset_hours": -4.0},
+            "time": "2025-06-20T14:00:00-04:00",
+            "weather": {"file": weather},
+            "materials": [util::repo_path("scenes/materials.json")],
+            "atmosphere": atmosphere,
+            "objects": [{"name": "ground", "material": "asphalt",
+                         "shapes": [{"plane": {"size": [50.0, 50.0]}}]}],
+            "sensors": [{"type": "frame", "name": "cam", "width": 4, "height": 4,
+                         "fov_deg": 30.0, "position": [0.0, -40.0, 40.0],
+                         "look_at": [0.0, 0.0, 0.0],
+                         "bands": [{"name": "LWIR", "response": [8.0, 12.0]}]}]
+        });
+        let p = dir.path().join("scene.json");
+        std::fs::write(&p, serde_json::to_string(&s).unwrap()).unwrap();
+        Session::open(&p, irsig::trace::Backend::Embree).unwrap()
+    };
+    let std = serde_json::json!("standard");
+    let s = scene(&foggy_path, std.clone());
+    let w = visibility_warnings(&s, &[]);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("foggy.csv") && w[0].contains("0.5 km") && w[0].contains("2 km"),
+        "{w:?}"
+    );
+    let times: Vec<_> = (12..15)
+        .map(|h| {
+            chrono::DateTime::parse_from_rfc3339(&format!("2025-06-20T{h}:00:00-04:00")).unwrap()
+        })
+        .collect();
+    let w = visibility_warnings(&s, &times);
+    assert!(w.len() == 1 && w[0].contains("2 more image times"), "{w:?}");
+    let explicit = serde_json::json!({"model": "standard", "visibility_km": 10.0});
+    assert!(visibility_warnings(&scene(&foggy_path, explicit), &[]).is_empty());
+    let town = util::repo_path("scenes/town/weather.csv");
+    assert!(visibility_warnings(&scene(&town, std), &[]).is_empty());
+}
