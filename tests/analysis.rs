@@ -774,6 +774,7 @@ fn params_file_parses_applies_and_reports_errors() {
         total_sky_cover: 0.2,
         opaque_sky_cover: 0.1,
         precipitation_mm: 0.0,
+        visibility_km: None,
     };
     let w = ps.apply_weather(&[2.0, 0.0, 0.9], &[rec]).unwrap();
     assert_eq!(w[0].air_temperature_k, 295.15);

@@ -1351,3 +1351,136 @@ mod standard {
         assert!(p.path_radiance.iter().all(|&l| l == 0.0));
     }
 }
+
+/// Issue 17: where the scene's built-in atmosphere names no `visibility_km`, the
+/// weather's visibility at the image time sets the aerosol's (an EPW's field 25),
+/// clamped to LOWTRAN 7's table (2–50 km); a missing visibility (9999) keeps the
+/// model's default (rural 23 km, urban 5 km); a scene's `visibility_km` always wins;
+/// `"aerosol": "none"` stays clear air. The bundled town's weather has no visibility:
+/// its renders keep rural 23 km.
+#[test]
+fn weather_visibility_sets_the_aerosol_unless_the_scene_names_one() {
+    use irsig::atmosphere::{Aerosol, AerosolModel};
+    use irsig::render::session::AtmosphereConfig;
+    let config = |v: serde_json::Value| serde_json::from_value::<AtmosphereConfig>(v).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut vis = [8.0; 24];
+    vis[17..].copy_from_slice(&[9999.0; 7]); // hour-ending 18:00..24:00 missing
+    let p = dir.path().join("vis.epw");
+    std::fs::write(&p, crate::weather::epw_visibility_day(&vis)).unwrap();
+    let h = irsig::weather::load(&p).unwrap();
+    let time = |s: &str| chrono::DateTime::parse_from_rfc3339(s).unwrap();
+    let day = h.at(time("1990-06-21T10:00:00-05:00")).unwrap();
+    let night = h.at(time("1990-06-21T21:00:00-05:00")).unwrap();
+    assert_eq!(night.visibility_km, None);
+    let rural = |v: f64| Some(Aerosol::new(AerosolModel::Rural, v).unwrap());
+
+    for c in [
+        AtmosphereConfig::default(),
+        config(serde_json::json!("builtin")),
+        config(serde_json::json!("tropical")),
+        config(serde_json::json!({"model": "standard"})),
+        config(serde_json::json!({"model": "builtin", "aerosol": "rural"})),
+    ] {
+        assert_eq!(c.aerosol_at(&day), (rural(8.0), None), "{c:?}");
+        assert_eq!(c.aerosol_at(&night), (rural(23.0), None), "{c:?}");
+    }
+    // The model's own default where the weather has none.
+    let urban = config(serde_json::json!({"model": "standard", "aerosol": "urban"}));
+    let u = |v: f64| Some(Aerosol::new(AerosolModel::Urban, v).unwrap());
+    assert_eq!(urban.aerosol_at(&day), (u(8.0), None));
+    assert_eq!(urban.aerosol_at(&night), (u(5.0), None));
+    // An explicit visibility wins, also outside the table.
+    for v in [40.0, 60.0] {
+        let c = config(serde_json::json!({"model": "standard", "visibility_km": v}));
+        assert_eq!(c.aerosol_at(&day), (rural(v), None));
+        assert_eq!(c.aerosol_at(&night), (rural(v), None));
+    }
+    let none = config(serde_json::json!({"model": "builtin", "aerosol": "none"}));
+    assert_eq!(none.aerosol_at(&day), (None, None));
+    assert_eq!(
+        config(serde_json::json!("none")).aerosol_at(&day),
+        (None, None)
+    );
+    // Observed visibilities beyond LOWTRAN's table are clamped, and say so.
+    let std = AtmosphereConfig::default();
+    for (v, used) in [(0.0, 2.0), (0.5, 2.0), (80.0, 50.0)] {
+        let r = irsig::weather::WeatherRecord {
+            visibility_km: Some(v),
+            ..day
+        };
+        assert_eq!(std.aerosol_at(&r), (rural(used), Some(v)));
+    }
+
+    // The town: a CSV without visibility, rural 23 km at every record.
+    let town = irsig::weather::load(&util::repo_path("scenes/town/weather.csv")).unwrap();
+    for r in town.records() {
+        assert_eq!(std.aerosol_at(r), (rural(23.0), None));
+    }
+}
+
+/// Issue 17: a render whose weather gives a visibility outside LOWTRAN's table (here
+/// 0.5 km at every record, the town's weather with a `visibility_km` column) gets one
+/// `warning:` naming the weather file, the visibility and the 2 km the aerosol takes;
+/// the town's own weather (no visibility) and a scene's explicit `visibility_km` get
+/// none.
+#[test]
+fn weather_visibility_outside_the_table_warns_once_for_the_render() {
+    use irsig::render::session::{Session, visibility_warnings};
+    let dir = tempfile::tempdir().unwrap();
+    let town = std::fs::read_to_string(util::repo_path("scenes/town/weather.csv")).unwrap();
+    let mut header_seen = false;
+    let foggy: String = town
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.trim().is_empty() {
+                format!("{l}\n")
+            } else if !header_seen {
+                header_seen = true;
+                format!("{l},visibility_km\n")
+            } else {
+                format!("{l},0.5\n")
+            }
+        })
+        .collect();
+    let foggy_path = dir.path().join("foggy.csv");
+    std::fs::write(&foggy_path, foggy).unwrap();
+    let scene = |weather: &std::path::Path, atmosphere: serde_json::Value| {
+        let s = serde_json::json!({
+            "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160.0,
+                     "utc_offset_hours": -4.0},
+            "time": "2025-06-20T14:00:00-04:00",
+            "weather": {"file": weather},
+            "materials": [util::repo_path("scenes/materials.json")],
+            "atmosphere": atmosphere,
+            "objects": [{"name": "ground", "material": "asphalt",
+                         "shapes": [{"plane": {"size": [50.0, 50.0]}}]}],
+            "sensors": [{"type": "frame", "name": "cam", "width": 4, "height": 4,
+                         "fov_deg": 30.0, "position": [0.0, -40.0, 40.0],
+                         "look_at": [0.0, 0.0, 0.0],
+                         "bands": [{"name": "LWIR", "response": [8.0, 12.0]}]}]
+        });
+        let p = dir.path().join("scene.json");
+        std::fs::write(&p, serde_json::to_string(&s).unwrap()).unwrap();
+        Session::open(&p, irsig::trace::Backend::Embree).unwrap()
+    };
+    let std = serde_json::json!("standard");
+    let s = scene(&foggy_path, std.clone());
+    let w = visibility_warnings(&s, &[]);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].contains("foggy.csv") && w[0].contains("0.5 km") && w[0].contains("2 km"),
+        "{w:?}"
+    );
+    let times: Vec<_> = (12..15)
+        .map(|h| {
+            chrono::DateTime::parse_from_rfc3339(&format!("2025-06-20T{h}:00:00-04:00")).unwrap()
+        })
+        .collect();
+    let w = visibility_warnings(&s, &times);
+    assert!(w.len() == 1 && w[0].contains("2 more image times"), "{w:?}");
+    let explicit = serde_json::json!({"model": "standard", "visibility_km": 10.0});
+    assert!(visibility_warnings(&scene(&foggy_path, explicit), &[]).is_empty());
+    let town = util::repo_path("scenes/town/weather.csv");
+    assert!(visibility_warnings(&scene(&town, std), &[]).is_empty());
+}

@@ -533,6 +533,24 @@ const CASES: &[Case] = &[
         expect: &["--range", "≥ 0"],
     },
     Case {
+        name: "atmosphere: unknown aerosol lists the valid ones",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--aerosol", "fog"],
+        expect: &["--aerosol", "fog", "rural", "urban", "maritime", "none"],
+    },
+    Case {
+        name: "atmosphere: visibility not above 0",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--visibility-km", "-2"],
+        expect: &["--visibility-km", "> 0 km", "-2"],
+    },
+    Case {
+        name: "atmosphere: visibility without an aerosol",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "8-12", "--aerosol", "none", "--visibility-km", "5"],
+        expect: &["--visibility-km", "--aerosol none"],
+    },
+    Case {
         name: "atmosphere: band outside the model",
         files: &[],
         args: &["atmosphere", "--profile", "tropical", "--band", "1-2"],
@@ -727,7 +745,11 @@ fn atmosphere_json_has_the_issue_keys() {
         "--json",
     ]);
     let keys: Vec<&String> = up.as_object().unwrap().keys().collect();
-    assert_eq!(keys, ["path_radiance_w_m2_sr", "transmittance"]);
+    assert_eq!(keys, ["aerosol", "path_radiance_w_m2_sr", "transmittance"]);
+    assert_eq!(
+        up["aerosol"],
+        serde_json::json!({"model": "rural", "visibility_km": 23.0})
+    );
     let (tau, l) = (
         up["transmittance"].as_f64().unwrap(),
         up["path_radiance_w_m2_sr"].as_f64().unwrap(),
@@ -755,6 +777,96 @@ fn atmosphere_json_has_the_issue_keys() {
         down["path_radiance_w_m2_sr"].as_f64().unwrap(),
     );
     assert!(td > tau && td < 1.0 && ld > 0.0 && ld < l, "{down}");
+}
+
+/// Issue 17: `irsig atmosphere --aerosol` and `--visibility-km`. Down 1 km in 8–12 µm:
+/// clear air (`--aerosol none`) transmits more and emits less than LOWTRAN's rural
+/// aerosol at 23 km, which transmits more than at 5 km; the text and JSON name the
+/// aerosol. With `--weather`, the record's visibility sets the aerosol's (5 km in the
+/// file: the same path as `--visibility-km 5`), an explicit `--visibility-km` wins,
+/// and a missing visibility (9999) keeps 23 km.
+#[test]
+fn atmosphere_aerosol_options_and_weather_visibility() {
+    let run = |args: &[&str]| -> (serde_json::Value, String) {
+        let out = Command::new(irsig_bin()).args(args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let s = String::from_utf8(out.stdout).unwrap();
+        (serde_json::from_str(&s).unwrap_or_default(), s)
+    };
+    let base = [
+        "atmosphere",
+        "--profile",
+        "mid-latitude-summer",
+        "--band",
+        "8-12",
+    ];
+    let json =
+        |extra: &[&str]| -> serde_json::Value { run(&[&base[..], extra, &["--json"]].concat()).0 };
+    let tau = |v: &serde_json::Value| v["transmittance"].as_f64().unwrap();
+    let lu = |v: &serde_json::Value| v["path_radiance_w_m2_sr"].as_f64().unwrap();
+    let clear = json(&["--aerosol", "none"]);
+    let v23 = json(&[]);
+    let v5 = json(&["--aerosol", "rural", "--visibility-km", "5"]);
+    assert_eq!(clear["aerosol"], serde_json::Value::Null);
+    assert_eq!(
+        v5["aerosol"],
+        serde_json::json!({"model": "rural", "visibility_km": 5.0})
+    );
+    assert!(
+        tau(&clear) > tau(&v23) && tau(&v23) > tau(&v5),
+        "{clear} {v23} {v5}"
+    );
+    assert!(tau(&clear) - tau(&v5) > 0.01, "{clear} {v5}");
+    assert!(lu(&clear) < lu(&v5), "{clear} {v5}");
+    let urban = json(&["--aerosol", "urban"]);
+    assert_eq!(
+        urban["aerosol"],
+        serde_json::json!({"model": "urban", "visibility_km": 5.0})
+    );
+    let text = run(&[&base[..], &["--visibility-km", "5"]].concat()).1;
+    assert!(
+        text.contains("aerosol rural (LOWTRAN 7), visibility 5 km"),
+        "{text}"
+    );
+    let text = run(&[&base[..], &["--aerosol", "none"]].concat()).1;
+    assert!(text.contains("no aerosol (gases only)"), "{text}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let weather = |name: &str, v: f64| -> String {
+        let p = dir.path().join(name);
+        std::fs::write(&p, crate::weather::epw_visibility_day(&[v; 24])).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let (hazy, missing) = (weather("hazy.epw", 5.0), weather("missing.epw", 9999.0));
+    let w = |file: &str, extra: &[&str]| -> serde_json::Value {
+        let args = [
+            &[
+                "atmosphere",
+                "--weather",
+                file,
+                "--time",
+                "1990-06-21T10:00:00-05:00",
+            ][..],
+            &["--band", "8-12", "--json"],
+            extra,
+        ]
+        .concat();
+        run(&args).0
+    };
+    let from_file = w(&hazy, &[]);
+    assert_eq!(
+        from_file["aerosol"],
+        serde_json::json!({"model": "rural", "visibility_km": 5.0})
+    );
+    assert_eq!(from_file, w(&missing, &["--visibility-km", "5"]));
+    let explicit = w(&hazy, &["--visibility-km", "40"]);
+    assert_eq!(explicit["aerosol"]["visibility_km"], 40.0);
+    assert!(tau(&explicit) > tau(&from_file), "{explicit} {from_file}");
+    assert_eq!(w(&missing, &[])["aerosol"]["visibility_km"], 23.0);
 }
 
 /// Copy the folder `from` into `to` (recursively).

@@ -150,6 +150,7 @@ fn weather(hours: usize) -> impl Strategy<Value = Vec<WeatherRecord>> {
                     total_sky_cover: cover,
                     opaque_sky_cover: cover,
                     precipitation_mm: 0.0,
+                    visibility_km: None,
                 }
             })
             .collect()

@@ -396,6 +396,7 @@ fn sample_history() -> WeatherHistory {
         total_sky_cover: 0.2,
         opaque_sky_cover: 0.1,
         precipitation_mm: 0.0,
+        visibility_km: None,
     };
     WeatherHistory::new(
         vec![
@@ -1087,4 +1088,109 @@ fn precipitation_from_epw_and_through_irsig_csv() {
     let mut w = Vec::new();
     weather::write_csv(&dry, &[], &mut w).unwrap();
     assert!(!String::from_utf8(w).unwrap().contains("precipitation"));
+}
+
+// ---------------------------------------------------------------- visibility (issue 17)
+
+/// EPW text of one day, 1990-06-21, under the Rochester fixture's header: hour-ending
+/// rows 1..24, the visibility of hour `h` being `vis[h - 1]` km in field 25 (9999 is
+/// EPW's "missing").
+pub(crate) fn epw_visibility_day(vis: &[f64; 24]) -> String {
+    let fixture =
+        std::fs::read_to_string(util::repo_path("tests/data/weather/rochester_sample.epw"))
+            .unwrap();
+    let mut out: String = fixture.lines().take(8).map(|l| format!("{l}\n")).collect();
+    for (h, v) in (1..=24).zip(vis) {
+        out.push_str(&format!(
+            "1990,6,21,{h},60,?9?9?9?9E0?9?9?9?9?9?9?9?9?9?9?9?9?9?9?9*9*9?9?9?9,20.0,10.0,53,99800,0,1321,330,0,0,0,0,0,0,0,200,1.5,2,1,{v},77777,9,999999999,25,0.1,0,88,0.0,0.0,0.0\n"
+        ));
+    }
+    out
+}
+
+/// EPW field 25 is the visibility in km, 9999 missing. EPW stamps readings at the hour's
+/// end and irsig places the record at mid-hour: the visibility there is the two
+/// readings' mean in extinction (1/V, as LOWTRAN interpolates), and a missing reading
+/// leaves the nearer one's (missing at mid-hour after a missing stamp). TMY3's `Hvis (m)`
+/// reads in km: the Rochester fixtures agree (16 100 m = 16.1 km).
+#[test]
+fn epw_visibility_is_field_25_and_9999_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut vis = [16.1; 24];
+    vis[11] = 4.0; // hour-ending 12:00
+    vis[12] = 9999.0; // 13:00
+    vis[13] = 9999.0; // 14:00
+    let p = write_tmp(&dir, "vis.epw", &epw_visibility_day(&vis));
+    let h = weather::load(&p).unwrap();
+    let at = |s: &str| h.at(t(s)).unwrap().visibility_km;
+    // Far from the change: the readings' own value.
+    assert!(close(at("1990-06-21T05:00:00-05:00").unwrap(), 16.1, 1e-12));
+    // The record of hour-ending 12:00, at 11:30: mean extinction of 16.1 and 4 km.
+    let mean = 1.0 / (0.5 / 16.1 + 0.5 / 4.0);
+    assert!(close(at("1990-06-21T11:30:00-05:00").unwrap(), mean, 1e-12));
+    assert!(mean < 0.5 * (16.1 + 4.0));
+    // 12:30 (readings 4 km and missing) and 13:30 (both missing): no visibility.
+    assert_eq!(at("1990-06-21T12:30:00-05:00"), None);
+    assert_eq!(at("1990-06-21T13:30:00-05:00"), None);
+    // Between 11:30 and 12:30: the nearer record's.
+    assert!(close(at("1990-06-21T11:45:00-05:00").unwrap(), mean, 1e-12));
+    assert_eq!(at("1990-06-21T12:15:00-05:00"), None);
+    // After the gap, the reading again.
+    assert!(close(at("1990-06-21T15:30:00-05:00").unwrap(), 16.1, 1e-12));
+
+    let epw = weather::load(&util::repo_path("tests/data/weather/rochester_sample.epw")).unwrap();
+    let tmy3 = weather::load(&util::repo_path(
+        "tests/data/weather/rochester_sample_tmy3.csv",
+    ))
+    .unwrap();
+    for r in epw.records().iter().chain(tmy3.records()) {
+        assert!(close(r.visibility_km.unwrap(), 16.1, 1e-9), "{r:?}");
+    }
+}
+
+/// irsig CSV takes an optional `visibility_km` column (empty cells missing) that
+/// `write_csv` writes only where some record has a visibility, and reads back; a
+/// negative visibility is an error naming the line and the column. The bundled town's
+/// weather has none.
+#[test]
+fn irsig_csv_visibility_column_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut vis = [9999.0; 24];
+    vis[..12].copy_from_slice(&[7.5; 12]);
+    let p = write_tmp(&dir, "vis.epw", &epw_visibility_day(&vis));
+    let h = weather::load(&p).unwrap();
+    let mut out = Vec::new();
+    weather::write_csv(&h, &[], &mut out).unwrap();
+    let csv = String::from_utf8(out).unwrap();
+    assert!(csv.lines().any(|l| l.ends_with(",visibility_km")), "{csv}");
+    let q = write_tmp(&dir, "vis.csv", &csv);
+    let back = weather::load(&q).unwrap();
+    let a: Vec<Option<f64>> = h.records().iter().map(|r| r.visibility_km).collect();
+    let b: Vec<Option<f64>> = back.records().iter().map(|r| r.visibility_km).collect();
+    assert_eq!(a.iter().filter(|v| v.is_some()).count(), 12, "{a:?}");
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.is_some(), y.is_some(), "{a:?} {b:?}");
+        if let (Some(x), Some(y)) = (x, y) {
+            assert!(close(*x, *y, 1e-3), "{x} {y}");
+        }
+    }
+
+    let bad = "time,air_temperature_k,dew_point_k,wind_speed_m_s,direct_normal_w_m2,\
+               diffuse_horizontal_w_m2,global_horizontal_w_m2,visibility_km\n\
+               2025-06-21T12:00:00-04:00,295,285,2,0,0,0,10\n\
+               2025-06-21T13:00:00-04:00,295,285,2,0,0,0,-3\n";
+    let e = weather::load(&write_tmp(&dir, "bad.csv", bad))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bad.csv") && e.contains("line 3") && e.contains("visibility_km"),
+        "{e}"
+    );
+
+    let town = weather::load(&util::repo_path("scenes/town/weather.csv")).unwrap();
+    assert!(town.records().iter().all(|r| r.visibility_km.is_none()));
+    let mut out = Vec::new();
+    weather::write_csv(&town, &[], &mut out).unwrap();
+    assert!(!String::from_utf8(out).unwrap().contains("visibility_km"));
 }

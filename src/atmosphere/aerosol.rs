@@ -305,7 +305,31 @@ fn trop_node(t: &Tables, season: Season, k: usize, vis: f64) -> f64 {
     }
 }
 
+/// The visibilities LOWTRAN 7 tabulates its boundary-layer aerosol at
+/// (HZ2K), km: beyond them [`Aerosol`] extrapolates in 1/V.
+pub const VISIBILITY_TABLE_KM: (f64, f64) = (2.0, 50.0);
+
 impl Aerosol {
+    /// This aerosol with an observed visibility (a weather record's, km):
+    /// `None` leaves it as it is; a value is clamped to
+    /// [`VISIBILITY_TABLE_KM`] (0 km in fog or 80 km on a clear day would
+    /// otherwise take LOWTRAN's table far beyond its data). The second
+    /// value is the observed visibility where it was clamped.
+    pub fn with_observed_visibility(self, visibility_km: Option<f64>) -> (Aerosol, Option<f64>) {
+        let Some(v) = visibility_km.filter(|v| !v.is_nan()) else {
+            return (self, None);
+        };
+        let (lo, hi) = VISIBILITY_TABLE_KM;
+        let c = v.clamp(lo, hi);
+        (
+            Aerosol {
+                model: self.model,
+                visibility_km: c,
+            },
+            (c != v).then_some(v),
+        )
+    }
+
     /// An aerosol; the visibility must be finite and positive.
     pub fn new(model: AerosolModel, visibility_km: f64) -> Result<Self> {
         if !(visibility_km.is_finite() && visibility_km > 0.0) {

@@ -5,7 +5,10 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use irsig::atmosphere::{Atmosphere, PathGeometry, Profile, SkyConditions};
+use irsig::atmosphere::{
+    Aerosol, AerosolModel, Atmosphere, BuiltinAtmosphere, BuiltinParams, PathGeometry, Profile,
+    SkyConditions, SurfaceMet,
+};
 
 use super::args::{parse_site, parse_time};
 
@@ -16,6 +19,31 @@ pub enum Look {
     Up,
     /// From the sensor down to the target.
     Down,
+}
+
+/// The boundary-layer aerosol of the built-in model (LOWTRAN 7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AerosolArg {
+    /// Continental air away from towns and industry (LOWTRAN's default;
+    /// 23 km visibility unless given).
+    Rural,
+    /// Rural air with 20 % soot-like particles (5 km unless given).
+    Urban,
+    /// Sea salt over a continental background (23 km unless given).
+    Maritime,
+    /// No aerosol: gases only (clear air).
+    None,
+}
+
+impl AerosolArg {
+    fn model(self) -> Option<AerosolModel> {
+        match self {
+            AerosolArg::Rural => Some(AerosolModel::Rural),
+            AerosolArg::Urban => Some(AerosolModel::Urban),
+            AerosolArg::Maritime => Some(AerosolModel::Maritime),
+            AerosolArg::None => None,
+        }
+    }
 }
 
 /// Arguments of `irsig atmosphere`.
@@ -47,6 +75,29 @@ pub struct Args {
     /// A MODTRAN tape7 table (index JSON, see docs/formats.md).
     #[arg(long, value_name = "FILE", conflicts_with = "profile")]
     pub tape7_index: Option<PathBuf>,
+    /// LOWTRAN 7's boundary-layer aerosol of the built-in model (as a
+    /// scene's `"aerosol"`; see docs/physics/atmosphere.md). Not for
+    /// --tape7-index, whose MODTRAN runs carry their own.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "MODEL",
+        default_value_t = AerosolArg::Rural,
+        conflicts_with = "tape7_index"
+    )]
+    pub aerosol: AerosolArg,
+    /// Visibility (meteorological range) at the ground, km, > 0: sets the
+    /// aerosol's amount (as a scene's `"visibility_km"`). Default: the
+    /// weather record's visibility with --weather where the file has one
+    /// (clamped to LOWTRAN's table, 2–50 km), else the model's (23 km;
+    /// urban 5 km).
+    #[arg(
+        long,
+        value_name = "KM",
+        conflicts_with = "tape7_index",
+        allow_negative_numbers = true
+    )]
+    pub visibility_km: Option<f64>,
     /// The band.
     #[command(flatten)]
     pub band: super::args::BandArgs,
@@ -82,14 +133,42 @@ pub struct Args {
     /// altitudes and the zenith).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub range: Option<f64>,
-    /// Print JSON: `{"transmittance": …, "path_radiance_w_m2_sr": …}`.
+    /// Print JSON: `{"transmittance": …, "path_radiance_w_m2_sr": …,
+    /// "aerosol": {"model": …, "visibility_km": …} | null}`.
     #[arg(long)]
     pub json: bool,
 }
 
-/// The atmosphere, the sky conditions and the ground altitude (m above
-/// sea level) the arguments describe.
-fn model(args: &Args) -> anyhow::Result<(Atmosphere, SkyConditions, f64, String)> {
+/// The atmosphere the arguments describe, with the sky conditions, the
+/// ground altitude (m above sea level), a description and the built-in
+/// model's aerosol (`None`: clear air or a tape7 table).
+struct Model {
+    atmosphere: Atmosphere,
+    sky: SkyConditions,
+    ground_m: f64,
+    what: String,
+    aerosol: Option<Aerosol>,
+}
+
+/// The aerosol `--aerosol` and `--visibility-km` ask for, before any
+/// weather (`None`: clear air).
+fn aerosol_arg(args: &Args) -> anyhow::Result<Option<Aerosol>> {
+    let Some(m) = args.aerosol.model() else {
+        anyhow::ensure!(
+            args.visibility_km.is_none(),
+            "--visibility-km: a visibility needs an aerosol, not --aerosol none"
+        );
+        return Ok(None);
+    };
+    let v = args.visibility_km.unwrap_or(m.default_visibility_km());
+    anyhow::ensure!(
+        v.is_finite() && v > 0.0,
+        "--visibility-km: expected a visibility > 0 km, got {v}"
+    );
+    Ok(Some(Aerosol::new(m, v)?))
+}
+
+fn model(args: &Args) -> anyhow::Result<Model> {
     let profile = args
         .profile
         .as_deref()
@@ -102,8 +181,15 @@ fn model(args: &Args) -> anyhow::Result<(Atmosphere, SkyConditions, f64, String)
             air_temperature_k: 288.15,
             sky_longwave_w_m2: f64::NAN,
         };
-        return Ok((a, sky, 0.0, format!("tape7 table {}", index.display())));
+        return Ok(Model {
+            atmosphere: a,
+            sky,
+            ground_m: 0.0,
+            what: format!("tape7 table {}", index.display()),
+            aerosol: None,
+        });
     }
+    let aerosol = aerosol_arg(args)?;
     if let Some(file) = &args.weather {
         let time = parse_time("--time", args.time.as_deref().unwrap_or_default())?;
         let mut opts = irsig::weather::LoadOptions::default();
@@ -121,26 +207,65 @@ fn model(args: &Args) -> anyhow::Result<(Atmosphere, SkyConditions, f64, String)
             use chrono::Datelike;
             Profile::for_site(site.latitude_deg, rec.time.month())
         });
-        let a = Atmosphere::builtin_profile(profile, &rec, site.altitude_m)?;
+        // As in a render: the record's visibility unless one is given.
+        let aerosol = match aerosol {
+            Some(a) if args.visibility_km.is_none() => {
+                let (a, clamped) = a.with_observed_visibility(rec.visibility_km);
+                if let Some(v) = clamped {
+                    let (lo, hi) = irsig::atmosphere::aerosol::VISIBILITY_TABLE_KM;
+                    eprintln!(
+                        "warning: {}: visibility {v} km at {} is outside LOWTRAN 7's aerosol \
+                         table ({lo}–{hi} km): the aerosol takes {} km",
+                        file.display(),
+                        rec.time.to_rfc3339(),
+                        a.visibility_km
+                    );
+                }
+                Some(a)
+            }
+            a => a,
+        };
+        let a = Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+            SurfaceMet::from_weather(&rec, site.altitude_m),
+            BuiltinParams {
+                profile: Some(profile),
+                aerosol,
+                ..BuiltinParams::default()
+            },
+        )?);
         let sky = SkyConditions {
             air_temperature_k: rec.air_temperature_k,
             sky_longwave_w_m2: rec.sky_longwave_w_m2,
         };
-        return Ok((
-            a,
+        return Ok(Model {
+            atmosphere: a,
             sky,
-            site.altitude_m,
-            format!("{profile} under {}", file.display()),
-        ));
+            ground_m: site.altitude_m,
+            what: format!("{profile} under {}", file.display()),
+            aerosol,
+        });
     }
     let profile = profile.context("give --profile, --weather or --tape7-index")?;
-    let a = Atmosphere::standard(profile, 0.0)?;
+    let a = Atmosphere::Builtin(BuiltinAtmosphere::with_params(
+        SurfaceMet::of_profile(profile, 0.0),
+        BuiltinParams {
+            profile: Some(profile),
+            aerosol,
+            ..BuiltinParams::default()
+        },
+    )?);
     let t = profile.level(0.0).temperature_k;
     let sky = SkyConditions {
         air_temperature_k: t,
         sky_longwave_w_m2: f64::NAN,
     };
-    Ok((a, sky, 0.0, profile.to_string()))
+    Ok(Model {
+        atmosphere: a,
+        sky,
+        ground_m: 0.0,
+        what: profile.to_string(),
+        aerosol,
+    })
 }
 
 /// Run `irsig atmosphere`.
@@ -166,7 +291,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let band = args.band.band()?;
-    let (atmos, sky, ground_m, what) = model(&args)?;
+    let Model {
+        atmosphere: atmos,
+        sky,
+        ground_m,
+        what,
+        aerosol,
+    } = model(&args)?;
     let wl = band.wavelengths_um();
     let (lo, hi) = (wl[0], wl[wl.len() - 1]);
     if let Some((a, b)) = atmos.spectral_range_um() {
@@ -219,13 +350,31 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let tau = band.mean(&p.transmittance);
     let lu = band.integrate(&p.path_radiance);
+    let builtin = matches!(atmos, Atmosphere::Builtin(_));
     if args.json {
+        let aerosol_json = aerosol.map(
+            |a| serde_json::json!({ "model": a.model.name(), "visibility_km": a.visibility_km }),
+        );
         outln!(
             "{}",
-            serde_json::json!({ "transmittance": tau, "path_radiance_w_m2_sr": lu })
+            serde_json::json!({
+                "transmittance": tau,
+                "path_radiance_w_m2_sr": lu,
+                "aerosol": aerosol_json
+            })
         );
     } else {
         outln!("{what}, band {lo}–{hi} µm, {geometry}:");
+        if builtin {
+            match aerosol {
+                Some(a) => outln!(
+                    "  aerosol {} (LOWTRAN 7), visibility {} km",
+                    a.model,
+                    a.visibility_km
+                ),
+                None => outln!("  no aerosol (gases only)"),
+            }
+        }
         outln!("  band-mean transmittance {tau:.4}");
         let bt = band
             .brightness_temperature(lu)

@@ -141,6 +141,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ) {
         eprintln!("warning: {w}");
     }
+    for w in irsig::render::session::visibility_warnings(&session, &times) {
+        eprintln!("warning: {w}");
+    }
     if let Some(n) = args.facet_samples {
         session.config.facet_samples = n;
     }

@@ -61,6 +61,10 @@ pub enum AtmosphereConfig {
         /// LOWTRAN 7's aerosol (`"aerosol"`, `"visibility_km"`); `None`:
         /// clear air (`"aerosol": "none"`). Default: rural, 23 km.
         aerosol: Option<Aerosol>,
+        /// The scene names no `visibility_km`: the weather's visibility at
+        /// the image time, where it has one, replaces the aerosol's
+        /// ([`AtmosphereConfig::aerosol_at`]).
+        weather_visibility: bool,
     },
     /// The built-in layered model on an AFGL model atmosphere, the weather
     /// at the image time blended into its lowest layers
@@ -73,6 +77,8 @@ pub enum AtmosphereConfig {
         co2_ppmv: Option<f64>,
         /// As for [`AtmosphereConfig::Builtin`].
         aerosol: Option<Aerosol>,
+        /// As for [`AtmosphereConfig::Builtin`].
+        weather_visibility: bool,
     },
     /// A table of MODTRAN tape7 runs, listed in an index JSON file (relative
     /// to the scene file).
@@ -100,7 +106,7 @@ impl schemars::JsonSchema for AtmosphereConfig {
         let aerosol = serde_json::json!({ "type": "string", "enum": aerosols,
             "description": "LOWTRAN 7's boundary-layer aerosol (default rural); none: clear air" });
         let visibility = serde_json::json!({ "type": "number", "exclusiveMinimum": 0,
-            "description": "visibility at the ground, km (default 23; urban 5)" });
+            "description": "visibility at the ground, km (default: the weather's at the image time where it has one, else 23; urban 5)" });
         schemars::json_schema!({
             "description": "The atmosphere between scene and sensor, and the sky. Absent: the built-in layered model on the AFGL profile of the site's latitude and the month.",
             "oneOf": [
@@ -139,6 +145,7 @@ impl Default for AtmosphereConfig {
             profile: None,
             co2_ppmv: None,
             aerosol: Some(Aerosol::default()),
+            weather_visibility: true,
         }
     }
 }
@@ -199,6 +206,7 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                     co2_ppmv: None,
                     water_scale_height_m: None,
                     aerosol: Some(Aerosol::default()),
+                    weather_visibility: true,
                 },
                 "standard" => AtmosphereConfig::default(),
                 other => AtmosphereConfig::Standard {
@@ -215,6 +223,7 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                     })?),
                     co2_ppmv: None,
                     aerosol: Some(Aerosol::default()),
+                    weather_visibility: true,
                 },
             });
         }
@@ -232,6 +241,7 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                     co2_ppmv,
                     water_scale_height_m,
                     aerosol: aerosol_config(aerosol.as_deref(), visibility_km)?,
+                    weather_visibility: visibility_km.is_none(),
                 },
                 AtmosphereObject::Standard {
                     profile: p,
@@ -242,11 +252,86 @@ impl TryFrom<serde_json::Value> for AtmosphereConfig {
                     profile: p.as_deref().map(profile).transpose()?,
                     co2_ppmv,
                     aerosol: aerosol_config(aerosol.as_deref(), visibility_km)?,
+                    weather_visibility: visibility_km.is_none(),
                 },
                 AtmosphereObject::Tape7 { index } => AtmosphereConfig::Tape7 { index },
             },
         )
     }
+}
+
+impl AtmosphereConfig {
+    /// The built-in model's aerosol at the time of the weather `record`
+    /// (`None`: clear air, or no built-in model), and the record's
+    /// visibility where it lay outside LOWTRAN's table and was clamped.
+    ///
+    /// Where the scene names no `visibility_km`, the record's visibility
+    /// (the weather's at the image time, [`WeatherRecord::visibility_km`])
+    /// replaces the model's default, clamped to
+    /// [`crate::atmosphere::aerosol::VISIBILITY_TABLE_KM`]; a record without
+    /// one keeps the default (23 km; urban 5 km). A scene's
+    /// `visibility_km` always wins.
+    pub fn aerosol_at(&self, record: &WeatherRecord) -> (Option<Aerosol>, Option<f64>) {
+        match self {
+            AtmosphereConfig::Builtin {
+                aerosol: Some(a),
+                weather_visibility,
+                ..
+            }
+            | AtmosphereConfig::Standard {
+                aerosol: Some(a),
+                weather_visibility,
+                ..
+            } => {
+                if *weather_visibility {
+                    let (a, clamped) = a.with_observed_visibility(record.visibility_km);
+                    (Some(a), clamped)
+                } else {
+                    (Some(*a), None)
+                }
+            }
+            _ => (None, None),
+        }
+    }
+}
+
+/// `warning:` text for image times whose weather visibility lies outside
+/// LOWTRAN 7's table and is clamped for the aerosol
+/// ([`AtmosphereConfig::aerosol_at`]): one line naming the weather file,
+/// the first such time and how many there are. `times` empty: the scene's.
+pub fn visibility_warnings(session: &Session, times: &[DateTime<FixedOffset>]) -> Vec<String> {
+    let scene_time = [session.scene.time];
+    let times = if times.is_empty() {
+        &scene_time[..]
+    } else {
+        times
+    };
+    let clamped: Vec<(DateTime<FixedOffset>, f64, f64)> = times
+        .iter()
+        .filter_map(|t| {
+            let rec = session.weather.at(*t).ok()?;
+            let (a, c) = session.atmosphere.aerosol_at(&rec);
+            Some((*t, c?, a?.visibility_km))
+        })
+        .collect();
+    let Some(&(t, v, used)) = clamped.first() else {
+        return Vec::new();
+    };
+    let file = session.scene.weather.as_ref().map_or_else(
+        || "the weather".to_string(),
+        |w| w.path.display().to_string(),
+    );
+    let (lo, hi) = crate::atmosphere::aerosol::VISIBILITY_TABLE_KM;
+    vec![format!(
+        "{file}: visibility {v} km at {} is outside LOWTRAN 7's aerosol table \
+         ({lo}–{hi} km): the aerosol takes {used} km{}",
+        t.to_rfc3339(),
+        if clamped.len() > 1 {
+            format!(" (and at {} more image times)", clamped.len() - 1)
+        } else {
+            String::new()
+        }
+    )]
 }
 
 /// The atmosphere of `scene` under `config` at one image time, driven by
@@ -261,10 +346,10 @@ pub(crate) fn atmosphere_at(
         AtmosphereConfig::Builtin {
             co2_ppmv,
             water_scale_height_m,
-            aerosol,
+            ..
         } => {
             let mut p = crate::atmosphere::BuiltinParams {
-                aerosol: *aerosol,
+                aerosol: config.aerosol_at(record).0,
                 ..Default::default()
             };
             if let Some(c) = co2_ppmv {
@@ -279,9 +364,7 @@ pub(crate) fn atmosphere_at(
             )?)
         }
         AtmosphereConfig::Standard {
-            profile,
-            co2_ppmv,
-            aerosol,
+            profile, co2_ppmv, ..
         } => {
             let profile = profile.unwrap_or_else(|| {
                 use chrono::Datelike;
@@ -289,7 +372,7 @@ pub(crate) fn atmosphere_at(
             });
             let mut p = crate::atmosphere::BuiltinParams {
                 profile: Some(profile),
-                aerosol: *aerosol,
+                aerosol: config.aerosol_at(record).0,
                 ..Default::default()
             };
             if let Some(c) = co2_ppmv {

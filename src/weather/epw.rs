@@ -15,7 +15,7 @@
 //! 7 dew point °C (≥ 99.9), 8 RH % (≥ 999), 9 station pressure Pa (≥ 999 999),
 //! 12 horizontal infrared Wh/m² (≥ 9999), 13 GHI, 14 DNI, 15 DHI Wh/m² (≥ 9999),
 //! 20 wind direction ° (≥ 999), 21 wind speed m/s (≥ 999), 22 total and 23 opaque sky
-//! cover tenths (≥ 99).
+//! cover tenths (≥ 99), 24 visibility km (≥ 9999; field 25 counting from 1).
 //!
 //! Takes text, the path (for messages) and [`LoadOptions`]; gives records
 //! whose fields may be missing, the site, and the half-interval by which
@@ -194,6 +194,15 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         r.wind_speed_m_s = opt(21, 999.0)?;
         r.total_sky_cover = opt(22, 99.0)?.map(|t| t / 10.0);
         r.opaque_sky_cover = opt(23, 99.0)?.map(|t| t / 10.0);
+        // Horizontal visibility, km (field 25; 9999 is missing).
+        const VIS: &str = "visibility (km)";
+        r.visibility_km = match f.get(24).map(|c| c.trim()) {
+            None | Some("") => None,
+            Some(_) => {
+                let v = number(&f[24], &loc.clone().with_field(VIS), VIS)?;
+                (v < 9999.0).then_some(v)
+            }
+        };
         // Liquid precipitation depth, mm (field 34; older files end before it;
         // 999 or empty is missing).
         const PRECIP: &str = "liquid precipitation depth (mm)";

@@ -30,6 +30,7 @@ pub(crate) struct RawRecord {
     pub total_sky_cover: Option<f64>,
     pub opaque_sky_cover: Option<f64>,
     pub precipitation_mm: Option<f64>,
+    pub visibility_km: Option<f64>,
 }
 
 impl RawRecord {
@@ -50,6 +51,7 @@ impl RawRecord {
             total_sky_cover: None,
             opaque_sky_cover: None,
             precipitation_mm: None,
+            visibility_km: None,
         }
     }
 }
@@ -79,6 +81,8 @@ pub(crate) const RANGES: &[(&str, f64, f64, &str)] = &[
     ("total_sky_cover", 0.0, 1.0, "(fraction)"),
     ("opaque_sky_cover", 0.0, 1.0, "(fraction)"),
     ("precipitation_mm", 0.0, 500.0, "mm"),
+    // 0 (fog) to beyond the clearest air's ~300 km (Rayleigh scattering alone).
+    ("visibility_km", 0.0, 1000.0, "km"),
 ];
 
 fn check_value(field: &'static str, v: f64) -> std::result::Result<(), (&'static str, String)> {
@@ -128,6 +132,9 @@ pub(crate) fn check_record(r: &WeatherRecord) -> std::result::Result<(), (&'stat
     ];
     for (f, v) in fields {
         check_value(f, v)?;
+    }
+    if let Some(v) = r.visibility_km {
+        check_value("visibility_km", v)?;
     }
     check_dew(r.air_temperature_k, r.dew_point_k)
 }
@@ -209,6 +216,7 @@ pub(crate) fn complete(
             ("total_sky_cover", raw.total_sky_cover),
             ("opaque_sky_cover", raw.opaque_sky_cover),
             ("precipitation_mm", raw.precipitation_mm),
+            ("visibility_km", raw.visibility_km),
         ];
         for (f, v) in given {
             if let Some(v) = v {
@@ -390,6 +398,7 @@ pub(crate) fn complete(
             total_sky_cover: total,
             opaque_sky_cover: opaque,
             precipitation_mm: raw.precipitation_mm.unwrap_or(0.0),
+            visibility_km: raw.visibility_km,
         };
         check_record(&rec).map_err(|(f, m)| {
             err_at(
@@ -408,7 +417,8 @@ pub(crate) fn complete(
 /// Move records from their stamps to the instants their values represent
 /// ([`Timing`]): interval means to mid-interval; for [`Timing::SolarMeanEnding`] the
 /// readings at the stamps (air, humidity, pressure, wind, sky cover) are interpolated
-/// linearly to the mid-interval from the previous stamp, where that is exactly one
+/// linearly to the mid-interval from the previous stamp (visibility in its
+/// extinction, [`super::lerp_visibility_km`]), where that is exactly one
 /// interval earlier and both have the value (else the record keeps its own).
 fn place_at_represented_instants(mut records: Vec<RawRecord>, timing: Timing) -> Vec<RawRecord> {
     let shift = timing.placement();
@@ -434,6 +444,7 @@ fn place_at_represented_instants(mut records: Vec<RawRecord>, timing: Timing) ->
             b.wind_speed_m_s = mean(a.wind_speed_m_s, b.wind_speed_m_s);
             b.total_sky_cover = mean(a.total_sky_cover, b.total_sky_cover);
             b.opaque_sky_cover = mean(a.opaque_sky_cover, b.opaque_sky_cover);
+            b.visibility_km = super::lerp_visibility_km(a.visibility_km, b.visibility_km, 0.5);
             if let (Some(da), Some(db)) = (a.wind_direction_deg, b.wind_direction_deg) {
                 // Halfway along the shorter arc.
                 let mut d = db - da;

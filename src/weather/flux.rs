@@ -574,6 +574,7 @@ impl FluxDataset {
                 total_sky_cover: 0.5,
                 opaque_sky_cover: 0.5,
                 precipitation_mm: r.precipitation_mm.unwrap_or(0.0).max(0.0),
+                visibility_km: None,
             });
         }
         let history = WeatherHistory::new(out, Some(site))

@@ -14,6 +14,9 @@
 //! "records": [{"time": "RFC 3339", "air_temperature_k": …, …}]}` with the same field
 //! names; absent or `null` fields are missing values.
 //!
+//! Both take the optional `precipitation_mm` (mm since the previous record) and
+//! `visibility_km` (horizontal visibility at the ground, km) besides [`CSV_HEADER`]'s.
+//!
 //! Owns both formats, reading and writing. Takes text and the path (for
 //! messages); gives records whose fields may be missing. Must not know gap
 //! filling or interpolation in time ([`super::fill`], [`super::WeatherHistory`]).
@@ -58,15 +61,17 @@ fn set_field(r: &mut RawRecord, name: &str, v: Option<f64>) {
         "total_sky_cover" => r.total_sky_cover = v,
         "opaque_sky_cover" => r.opaque_sky_cover = v,
         "precipitation_mm" => r.precipitation_mm = v,
+        "visibility_km" => r.visibility_km = v,
         _ => {}
     }
 }
 
 pub(crate) fn read_csv(text: &str, path: &Path) -> Result<Parsed> {
-    // The columns of `CSV_HEADER`, and the optional `precipitation_mm`.
+    // The columns of `CSV_HEADER`, and the optional `precipitation_mm` and
+    // `visibility_km`.
     let known: Vec<&str> = CSV_HEADER
         .split(',')
-        .chain(std::iter::once("precipitation_mm"))
+        .chain(["precipitation_mm", "visibility_km"])
         .collect();
     let mut site = None;
     let mut timing = Timing::Instant;
@@ -192,6 +197,8 @@ struct JsonRecord {
     opaque_sky_cover: Option<f64>,
     #[serde(default)]
     precipitation_mm: Option<f64>,
+    #[serde(default)]
+    visibility_km: Option<f64>,
 }
 
 pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
@@ -232,6 +239,7 @@ pub(crate) fn read_json(text: &str, path: &Path) -> Result<Parsed> {
         r.total_sky_cover = j.total_sky_cover;
         r.opaque_sky_cover = j.opaque_sky_cover;
         r.precipitation_mm = j.precipitation_mm;
+        r.visibility_km = j.visibility_km;
         records.push(r);
     }
     Ok(Parsed {
@@ -283,21 +291,27 @@ pub fn write_csv(
     let mut out = csv::Writer::from_writer(w);
     // `precipitation_mm` only when the history has some, so that a dry
     // history writes the columns of `CSV_HEADER` alone.
+    // Likewise `visibility_km` only when some record has one (empty cells
+    // where others have none).
     let rain = history.records().iter().any(|r| r.precipitation_mm > 0.0);
+    let vis = history.records().iter().any(|r| r.visibility_km.is_some());
     let mut header: Vec<&str> = CSV_HEADER.split(',').collect();
     if rain {
         header.push("precipitation_mm");
     }
+    if vis {
+        header.push("visibility_km");
+    }
     out.write_record(&header)?;
     for r in history.records() {
-        let row = csv_row(r);
+        let mut row = csv_row(r).to_vec();
         if rain {
-            let mut row = row.to_vec();
             row.push(format!("{:.2}", r.precipitation_mm));
-            out.write_record(row)?;
-        } else {
-            out.write_record(row)?;
         }
+        if vis {
+            row.push(r.visibility_km.map_or(String::new(), |v| format!("{v:.3}")));
+        }
+        out.write_record(row)?;
     }
     out.flush()
 }

@@ -78,6 +78,12 @@ pub struct WeatherRecord {
     /// flux-tower rain). It wets surfaces (`irsig::thermal::surface`).
     #[serde(default)]
     pub precipitation_mm: f64,
+    /// Horizontal visibility (meteorological range) at the ground, km;
+    /// `None` where the file gives none (EPW field 25, `9999` = missing;
+    /// TMY3 `Hvis (m)`; irsig CSV/JSON `visibility_km`). It sets the
+    /// built-in atmosphere's aerosol (`irsig::atmosphere::aerosol`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub visibility_km: Option<f64>,
 }
 
 /// The weather file formats irsig reads.
@@ -401,6 +407,21 @@ fn interpolate(
         opaque_sky_cover: lerp(a.opaque_sky_cover, b.opaque_sky_cover, w),
         // An amount over the interval ending at `b`: the part of it up to `t`.
         precipitation_mm: w * b.precipitation_mm,
+        visibility_km: lerp_visibility_km(a.visibility_km, b.visibility_km, w),
+    }
+}
+
+/// Visibility at weight `w` (0 at `a`, 1 at `b`) between two readings:
+/// where both are given, linear in the extinction coefficient, which is
+/// 3.912/V (Koschmieder), as LOWTRAN 7 interpolates its boundary-layer
+/// aerosol in 1/V; where one is missing, the nearer reading (`b` at
+/// `w = ½`), which may itself be missing. A visibility of 0 (fog) is an
+/// infinite extinction: 0 wherever it weighs.
+pub(crate) fn lerp_visibility_km(a: Option<f64>, b: Option<f64>, w: f64) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) if w > 0.0 && w < 1.0 => Some(1.0 / ((1.0 - w) / a + w / b)),
+        _ if w < 0.5 => a,
+        _ => b,
     }
 }
 

@@ -228,6 +228,7 @@ pub fn town_history() -> Result<(WeatherHistory, Vec<String>)> {
             total_sky_cover: total,
             opaque_sky_cover: n,
             precipitation_mm: 0.0,
+            visibility_km: None,
         });
     }
     let comments = vec![

@@ -6,7 +6,8 @@
 //! Rows are hour-ending local standard time (`01:00`..`24:00`); solar values are the
 //! hour's totals (Wh/m² = mean W/m²), so an irradiance split uses the Sun at the hour's
 //! midpoint. Missing values are written −9900 (manual §4) or left empty. Columns are
-//! found by name; the units are those in the names (°C, %, mbar, m/s, tenths).
+//! found by name; the units are those in the names (°C, %, mbar, m/s, tenths,
+//! m for the horizontal visibility `Hvis`).
 //!
 //! Takes text, the path (for messages) and [`LoadOptions`]; gives records
 //! whose fields may be missing, the site, and the half-hour by which
@@ -30,7 +31,7 @@ const MISSING: f64 = -9900.0;
 const DATE: &str = "Date (MM/DD/YYYY)";
 const TIME: &str = "Time (HH:MM)";
 /// (column name, required)
-const COLUMNS: [(&str, bool); 11] = [
+const COLUMNS: [(&str, bool); 12] = [
     ("GHI (W/m^2)", true),
     ("DNI (W/m^2)", true),
     ("DHI (W/m^2)", true),
@@ -42,6 +43,7 @@ const COLUMNS: [(&str, bool); 11] = [
     ("Pressure (mbar)", false),
     ("Wdir (degrees)", false),
     ("Wspd (m/s)", true),
+    ("Hvis (m)", false),
 ];
 
 pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Parsed> {
@@ -181,6 +183,7 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         r.pressure_pa = get(8)?.map(|p| p * 100.0);
         r.wind_direction_deg = get(9)?;
         r.wind_speed_m_s = get(10)?;
+        r.visibility_km = get(11)?.map(|m| m / 1000.0);
         rows.push((stamp, r));
     }
     Ok(Parsed {
