@@ -311,13 +311,14 @@ fn range_bins(x: &[f32]) -> (Vec<u16>, f32) {
     // only clamp).
     let inner = &x[1..last];
     let span = inner[inner.len() - 1].max(0.0);
-    if !(span > 0.0) {
+    // (All finite: no NaN below.)
+    if span <= 0.0 {
         return none;
     }
     // Bins no wider than the closest two inner nodes, then twice as many
     // until the rounding of `r · scale` parts every two of them.
     let spacing = inner.windows(2).map(|w| w[1] - w[0]).fold(span, f32::min);
-    if !(spacing > 0.0) {
+    if spacing <= 0.0 {
         // Nodes out of order or repeated.
         return none;
     }
