@@ -116,8 +116,18 @@ pub(super) struct GreyTables {
     /// `1 / (ranges[i] − ranges[i − 1])`.
     pub(super) inv_spacing: Vec<f32>,
     /// First guess of the node of range `r`: `√r · sqrt_scale` (exact for
-    /// the quadratic spacing of [`PathTables`], refined for any spacing).
+    /// the quadratic spacing of [`PathTables`], refined for any spacing;
+    /// [`GreyTables::locate`], the reference of [`GreyTables::locate_binned`]).
     pub(super) sqrt_scale: f32,
+    /// Per range bin `k` (uniform bins, `k = ⌊r · bin_scale⌋` clamped to
+    /// the last bin, [`range_bin`]): the node `i` of the bin's smallest
+    /// ranges, `1 +` the number of nodes `1..last` in lower bins. No two of
+    /// those nodes share a bin, so a range's node is this or the next
+    /// ([`GreyTables::locate_binned`]). Empty when the nodes are too
+    /// unevenly spaced for [`GreyTables::MAX_BINS`] bins (or fewer than 3).
+    pub(super) range_bins: Vec<u16>,
+    /// Range bins per metre.
+    pub(super) bin_scale: f32,
     /// Temperature nodes (of the Planck table).
     pub(super) temperatures: usize,
     /// `Σ q_i·B(T_k)` of band `b` at `[(i · temperatures + k) · bands + b]`.
@@ -186,6 +196,7 @@ impl GreyTables {
             Some(&last) if last > 0.0 => (ranges.len() - 1) as f32 / last.sqrt(),
             _ => 0.0,
         };
+        let (range_bins, bin_scale) = range_bins(&ranges);
         let heights: Vec<f32> = heights.iter().map(|&x| x as f32).collect();
         let inv_height_spacing = heights.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
         GreyTables {
@@ -197,6 +208,8 @@ impl GreyTables {
             ranges,
             inv_spacing,
             sqrt_scale,
+            range_bins,
+            bin_scale,
             planck,
             node,
             eps,
@@ -218,7 +231,10 @@ impl GreyTables {
             return (1, 0.0);
         }
         let last = x.len() - 1;
-        let mut i = ((r.max(0.0).sqrt() * self.sqrt_scale) as usize + 1).min(last);
+        // (Saturating: `as` maps +∞ to `usize::MAX`.)
+        let mut i = ((r.max(0.0).sqrt() * self.sqrt_scale) as usize)
+            .saturating_add(1)
+            .min(last);
         // One step each way without a branch (the guess is exact up to
         // rounding for the quadratic spacing, so the loops below, which
         // find the same node from any start, then rarely run: a
@@ -231,6 +247,26 @@ impl GreyTables {
         while i > 1 && x[i - 1] > r {
             i -= 1;
         }
+        (i, ((r - x[i - 1]) * self.inv_spacing[i]).clamp(0.0, 1.0))
+    }
+
+    /// Most range bins of [`GreyTables::range_bins`] (16 KB of `u16`).
+    const MAX_BINS: usize = 8192;
+
+    /// [`GreyTables::locate`] from the range bins: the node of the bin's
+    /// smallest ranges, one step on if the range is at or beyond it — one
+    /// table load and one compare per hit, no square root and no loop.
+    /// Falls back to [`GreyTables::locate`] without bins.
+    #[inline(always)]
+    pub(super) fn locate_binned(&self, r: f32) -> (usize, f32) {
+        let bins = &self.range_bins;
+        if bins.is_empty() {
+            return self.locate(r);
+        }
+        let x = &self.ranges;
+        let last = x.len() - 1;
+        let mut i = bins[range_bin(r, self.bin_scale, bins.len())] as usize;
+        i += usize::from((i < last) & (x[i] <= r));
         (i, ((r - x[i - 1]) * self.inv_spacing[i]).clamp(0.0, 1.0))
     }
 
@@ -249,6 +285,62 @@ impl GreyTables {
         }
         (a, ((z - x[a]) * self.inv_height_spacing[a]).clamp(0.0, 1.0))
     }
+}
+
+/// The range bin of range `r` (m) among `bins` bins of `1 / scale` m:
+/// `⌊r · scale⌋`, clamped to `0..bins` (below 0 and NaN: bin 0; beyond,
+/// and +∞: the last bin). Non-decreasing in `r`, which is all that
+/// [`GreyTables::locate_binned`]'s exactness needs.
+#[inline(always)]
+fn range_bin(r: f32, scale: f32, bins: usize) -> usize {
+    // `as` saturates: negative and NaN to 0, +∞ to `usize::MAX`.
+    ((r * scale) as usize).min(bins - 1)
+}
+
+/// The range bins of [`GreyTables`] for nodes `x` (m, increasing) and their
+/// scale (bins per metre): as few bins as keep every node `1..last` in a
+/// bin of its own, at most [`GreyTables::MAX_BINS`] (else none: the nodes
+/// are too unevenly spaced, and [`GreyTables::locate`] serves).
+fn range_bins(x: &[f32]) -> (Vec<u16>, f32) {
+    let none = (Vec::new(), 0.0);
+    if x.len() < 3 || x.len() > usize::from(u16::MAX) || !x.iter().all(|v| v.is_finite()) {
+        return none;
+    }
+    let last = x.len() - 1;
+    // The nodes the lookup compares against: 1..last (node 0 and the last
+    // only clamp).
+    let inner = &x[1..last];
+    let span = inner[inner.len() - 1].max(0.0);
+    // (All finite: no NaN below.)
+    if span <= 0.0 {
+        return none;
+    }
+    // Bins no wider than the closest two inner nodes, then twice as many
+    // until the rounding of `r · scale` parts every two of them.
+    let spacing = inner.windows(2).map(|w| w[1] - w[0]).fold(span, f32::min);
+    if spacing <= 0.0 {
+        // Nodes out of order or repeated.
+        return none;
+    }
+    let mut bins = ((span / spacing).ceil() as usize).clamp(1, GreyTables::MAX_BINS) + 1;
+    while bins <= GreyTables::MAX_BINS {
+        let scale = bins as f32 / span;
+        let of = |v: f32| range_bin(v, scale, bins);
+        if inner.windows(2).all(|w| of(w[0]) < of(w[1])) {
+            // Node of bin k: 1 + the inner nodes in lower bins.
+            let mut table = vec![0u16; bins];
+            let mut j = 0;
+            for (k, t) in table.iter_mut().enumerate() {
+                while j < inner.len() && of(inner[j]) < k {
+                    j += 1;
+                }
+                *t = (1 + j) as u16;
+            }
+            return (table, scale);
+        }
+        bins *= 2;
+    }
+    none
 }
 
 /// One band of [`Shader::grey_terms_pass`]: with `ε` interpolated between
@@ -492,14 +584,13 @@ impl Shader<'_> {
     }
 
     /// Each gathered hit's place in the path's tables (its `node`, `rx`
-    /// and `ax`, [`GreyHit`]), in a pass of its own: the range lookup is a
-    /// chain of dependent loads per hit, which a short loop overlaps from
-    /// hit to hit.
+    /// and `ax`, [`GreyHit`]), in a pass of its own: the range from its
+    /// bin ([`GreyTables::locate_binned`]), the height by a short scan.
     pub(super) fn grey_locate(&self, grey: &mut [GreyHit]) {
         let gt = &self.grey_tables;
         let rn = gt.range_nodes;
         for hit in grey {
-            let (ri, rx) = gt.locate(hit.range);
+            let (ri, rx) = gt.locate_binned(hit.range);
             let (ai, ax) = gt.locate_height(hit.z);
             hit.node = (ai * rn + ri - 1) as u32;
             hit.rx = rx;
@@ -807,6 +898,83 @@ mod tests {
                 let (j, g) = brute(x, r);
                 assert_eq!(i, j, "range {r} with nodes {x:?}");
                 assert!((f - g).abs() <= 1e-6, "range {r}: fraction {f} against {g}");
+            }
+        }
+    }
+
+    /// [`GreyTables::locate_binned`] (one bin load, one compare) gives
+    /// exactly what the reference [`GreyTables::locate`] gives — node and
+    /// fraction bit for bit — for every range: the nodes and one ulp
+    /// either side, every bin edge and one ulp either side, a dense sweep,
+    /// below the first node, beyond the last, ±∞, −0 and NaN; for the path
+    /// tables' quadratic spacing at small and large scenes (where the bins
+    /// must exist, else this test would only compare the reference with
+    /// itself), for irregular spacings, three nodes, and for nodes too
+    /// unevenly spaced or repeated (no bins: the reference serves).
+    #[test]
+    fn locate_binned_equals_the_reference_for_every_range() {
+        let quadratic =
+            |max: f64| -> Vec<f64> { (0..48).map(|i| max * (i as f64 / 47.0).powi(2)).collect() };
+        let mut irregular = vec![0.0];
+        let mut seed = 0x9e37_79b9_u64;
+        for _ in 0..20 {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let step = 1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64 * 700.0;
+            irregular.push(irregular.last().unwrap() + step);
+        }
+        let cases: Vec<(Vec<f64>, bool)> = vec![
+            (quadratic(1.0), true),
+            (quadratic(2.0 * (300.0 + 400.0) + 1.0), true),
+            (quadratic(2.0 * (3000.0 + 25_000.0) + 1.0), true),
+            (quadratic(4.0e5), true),
+            (irregular, true),
+            (vec![0.0, 10.0, 35.0], true),
+            (vec![-20.0, 3.0, 7.0, 9.0], true),
+            (vec![0.0, 1.0, 1.0 + 1e-4, 1e5], false),
+            (vec![0.0, 5.0, 5.0, 9.0], false),
+            (vec![0.0, 10.0], false),
+        ];
+        for (ranges, binned) in cases {
+            let t = GreyTables::new(&[], &[], &ranges, &[], &[]);
+            assert_eq!(
+                !t.range_bins.is_empty(),
+                binned,
+                "bins for nodes {ranges:?}"
+            );
+            let x = &t.ranges;
+            let last = *x.last().unwrap();
+            let mut probes: Vec<f32> = Vec::new();
+            for &v in x {
+                probes.extend([v, v.next_up(), v.next_down()]);
+            }
+            for k in 0..=t.range_bins.len() {
+                let v = k as f32 / t.bin_scale;
+                probes.extend([v, v.next_up(), v.next_down()]);
+            }
+            probes.extend((0..20_000).map(|k| last * 1.2 * k as f32 / 20_000.0));
+            probes.extend([
+                -5.0,
+                -0.0,
+                0.0,
+                last * 10.0,
+                f32::MAX,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::NAN,
+            ]);
+            for r in probes {
+                let (i, f) = t.locate_binned(r);
+                let (j, g) = t.locate(r);
+                assert_eq!(i, j, "range {r} with nodes {x:?}");
+                assert!(
+                    f.to_bits() == g.to_bits() || (f.is_nan() && g.is_nan()),
+                    "range {r}: fraction {f} against {g}"
+                );
+                if !r.is_nan() {
+                    let (b, h) = brute(x, r);
+                    assert_eq!(i, b, "range {r} with nodes {x:?}");
+                    assert!((f - h).abs() <= 1e-6, "range {r}: {f} against {h}");
+                }
             }
         }
     }

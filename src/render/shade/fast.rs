@@ -95,8 +95,9 @@ impl Shader<'_> {
     /// rays toward the sun (one call) looked up, then join the grey path
     /// or take the per-hit fused spectral sums. The grey path then runs in
     /// three more passes — the view zeniths of all its hits at once (a loop
-    /// that vectorises); their path nodes (a chain of dependent loads per
-    /// hit, overlapped from hit to hit in a short loop); then per band
+    /// that vectorises); their path nodes (per hit a range bin's node and
+    /// one compare, [`super::band::GreyTables::locate_binned`], in a short
+    /// loop); then per band
     /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u` from
     /// [`super::band::GreyTables`], with `q` the range-interpolated path
     /// weights — so that no per-hit latency chain stalls the others.
