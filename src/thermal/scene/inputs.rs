@@ -204,16 +204,8 @@ impl<'a> SceneInputs<'a> {
     /// its direct coefficient decoded at every record (0 where it has no
     /// slot; empty for none).
     pub fn reflected(&self, facet: usize) -> FacetReflected {
-        let direct = if self.reflected_slot.is_empty() {
-            Vec::new()
-        } else {
-            let k = self.reflected_slots();
-            let row = &self.reflected_direct[facet * k..(facet + 1) * k];
-            self.reflected_slot
-                .iter()
-                .map(|&s| if s == NO_SLOT { 0.0 } else { row[s as usize] })
-                .collect()
-        };
+        let mut direct = vec![0.0; self.reflected_slot.len()];
+        self.add_reflected_direct(facet, &mut direct);
         FacetReflected {
             direct,
             diffuse: self.reflected_diffuse(facet),
