@@ -1472,6 +1472,18 @@ fn weather_visibility_outside_the_table_warns_once_for_the_render() {
         w[0].contains("foggy.csv") && w[0].contains("0.5 km") && w[0].contains("2 km"),
         "{w:?}"
     );
+    // `scene check` shows what `render` would warn.
+    let check = std::process::Command::new(env!("CARGO_BIN_EXE_irsig"))
+        .args(["scene", "check"])
+        .arg(dir.path().join("scene.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&check.stderr);
+    assert!(check.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("warning: {}", w[0])),
+        "scene check did not warn: {stderr}"
+    );
     let times: Vec<_> = (12..15)
         .map(|h| {
             chrono::DateTime::parse_from_rfc3339(&format!("2025-06-20T{h}:00:00-04:00")).unwrap()

@@ -131,7 +131,12 @@ fn check(
     } else {
         check_view(&scene)
     };
-    for w in scene.warnings.iter().chain(&view) {
+    let visibility = if load_only {
+        Vec::new()
+    } else {
+        irsig::render::session::scene_visibility_warnings(&scene, &times)
+    };
+    for w in scene.warnings.iter().chain(&view).chain(&visibility) {
         eprintln!("warning: {w}");
     }
     // What `render` checks before its first pixel, in the order it does.

@@ -300,7 +300,28 @@ impl AtmosphereConfig {
 /// ([`AtmosphereConfig::aerosol_at`]): one line naming the weather file,
 /// the first such time and how many there are. `times` empty: the scene's.
 pub fn visibility_warnings(session: &Session, times: &[DateTime<FixedOffset>]) -> Vec<String> {
-    let scene_time = [session.scene.time];
+    visibility_warnings_of(&session.scene, &session.atmosphere, &session.weather, times)
+}
+
+/// [`visibility_warnings`] for a scene not yet opened as a [`Session`]
+/// (`irsig scene check`): its `atmosphere` section and weather history;
+/// nothing where the section does not parse or there is no weather (those
+/// are errors of [`super::checks::render_problems`]).
+pub fn scene_visibility_warnings(scene: &Scene, times: &[DateTime<FixedOffset>]) -> Vec<String> {
+    let (Ok(sections), Some(weather)) = (super::sections::parse(scene), scene.weather.as_ref())
+    else {
+        return Vec::new();
+    };
+    visibility_warnings_of(scene, &sections.atmosphere, &weather.history, times)
+}
+
+fn visibility_warnings_of(
+    scene: &Scene,
+    atmosphere: &AtmosphereConfig,
+    weather: &WeatherHistory,
+    times: &[DateTime<FixedOffset>],
+) -> Vec<String> {
+    let scene_time = [scene.time];
     let times = if times.is_empty() {
         &scene_time[..]
     } else {
@@ -309,15 +330,15 @@ pub fn visibility_warnings(session: &Session, times: &[DateTime<FixedOffset>]) -
     let clamped: Vec<(DateTime<FixedOffset>, f64, f64)> = times
         .iter()
         .filter_map(|t| {
-            let rec = session.weather.at(*t).ok()?;
-            let (a, c) = session.atmosphere.aerosol_at(&rec);
+            let rec = weather.at(*t).ok()?;
+            let (a, c) = atmosphere.aerosol_at(&rec);
             Some((*t, c?, a?.visibility_km))
         })
         .collect();
     let Some(&(t, v, used)) = clamped.first() else {
         return Vec::new();
     };
-    let file = session.scene.weather.as_ref().map_or_else(
+    let file = scene.weather.as_ref().map_or_else(
         || "the weather".to_string(),
         |w| w.path.display().to_string(),
     );
