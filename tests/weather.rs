@@ -1090,6 +1090,56 @@ fn precipitation_from_epw_and_through_irsig_csv() {
     assert!(!String::from_utf8(w).unwrap().contains("precipitation"));
 }
 
+/// Rain from TMY3: `Lprecip depth (mm)` over `Lprecip quantity (hr)` hours ending at the
+/// row. The real Greensboro day has hourly readings (quantity 1): each record carries its
+/// row's depth. A depth over 3 h after two rows without readings is shared by the three.
+#[test]
+fn precipitation_from_tmy3_rows_and_accumulation_periods() {
+    let path = util::repo_path("tests/data/weather/723170TYA_jun21.csv");
+    let h = weather::load(&path).unwrap();
+    let rain: Vec<f64> = h.records().iter().map(|r| r.precipitation_mm).collect();
+    // The file's column (hours 01:00..24:00).
+    let col = [
+        76.0, 122.0, 5.0, 0.0, 0.0, 0.0, 0.0, 25.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 8.0, 0.0, 0.0,
+        0.0, 0.0, 0.0, 0.0, 0.0, 10.0, 15.0,
+    ];
+    assert_eq!(rain, col);
+    // 01:00 and 02:00 missing (−9900), 03:00: 9 mm over 3 h.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let names: Vec<&str> = lines[1].split(',').collect();
+    let depth = names
+        .iter()
+        .position(|n| *n == "Lprecip depth (mm)")
+        .unwrap();
+    let hours = names
+        .iter()
+        .position(|n| *n == "Lprecip quantity (hr)")
+        .unwrap();
+    let edit = |line: &str, d: &str, q: &str| {
+        let mut f: Vec<String> = line.split(',').map(str::to_string).collect();
+        f[depth] = d.into();
+        f[hours] = q.into();
+        f.join(",")
+    };
+    lines[2] = edit(&lines[2], "-9900", "-9900");
+    lines[3] = edit(&lines[3], "-9900", "-9900");
+    lines[4] = edit(&lines[4], "9", "3");
+    let dir = tempfile::tempdir().unwrap();
+    let h = weather::load(&write_tmp(&dir, "acc.csv", &lines.join("\n"))).unwrap();
+    let rain: Vec<f64> = h.records().iter().map(|r| r.precipitation_mm).collect();
+    assert_eq!(&rain[..4], &[3.0, 3.0, 3.0, 0.0], "{rain:?}");
+    // A negative depth is an error naming the line and the column.
+    lines[6] = edit(&lines[6], "-2", "1");
+    let e = weather::load(&write_tmp(&dir, "neg.csv", &lines.join("\n")))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("neg.csv:line 7") && e.contains("Lprecip depth (mm)"),
+        "{e}"
+    );
+}
+
 // ---------------------------------------------------------------- visibility (issue 17)
 
 /// EPW text of one day, 1990-06-21, under the Rochester fixture's header: hour-ending

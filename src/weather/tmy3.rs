@@ -9,6 +9,15 @@
 //! found by name; the units are those in the names (°C, %, mbar, m/s, tenths,
 //! m for the horizontal visibility `Hvis`).
 //!
+//! Rain: `Lprecip depth (mm)` is the liquid precipitation over the `Lprecip quantity (hr)`
+//! hours ending at the row (manual, table 1-4; empty or missing quantity: one hour). A
+//! depth over several hours is spread evenly over those rows, back to (not including) the
+//! previous row with a reading of its own, so each record carries the millimetres of its
+//! own hour ([`crate::weather::WeatherRecord::precipitation_mm`]). Rows without a reading
+//! are dry. NSRDB's TMY3 precipitation comes from a sparse gauge network and is known to be
+//! unreliable in amount; a wet-surface model (surface water stores that overflow) depends
+//! mostly on whether and when it rained.
+//!
 //! Takes text, the path (for messages) and [`LoadOptions`]; gives records
 //! whose fields may be missing, the site, and the half-hour by which
 //! irradiance lags the stamps. Must not fill gaps ([`super::fill`]).
@@ -31,7 +40,7 @@ const MISSING: f64 = -9900.0;
 const DATE: &str = "Date (MM/DD/YYYY)";
 const TIME: &str = "Time (HH:MM)";
 /// (column name, required)
-const COLUMNS: [(&str, bool); 12] = [
+const COLUMNS: [(&str, bool); 14] = [
     ("GHI (W/m^2)", true),
     ("DNI (W/m^2)", true),
     ("DHI (W/m^2)", true),
@@ -44,6 +53,8 @@ const COLUMNS: [(&str, bool); 12] = [
     ("Wdir (degrees)", false),
     ("Wspd (m/s)", true),
     ("Hvis (m)", false),
+    ("Lprecip depth (mm)", false),
+    ("Lprecip quantity (hr)", false),
 ];
 
 pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Parsed> {
@@ -113,6 +124,8 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
     }
 
     let mut rows = Vec::new();
+    // Per row: the precipitation reading (mm) and its accumulation period (h).
+    let mut rain: Vec<Option<(f64, f64)>> = Vec::new();
     for (i, line) in lines {
         if line.trim().is_empty() {
             continue;
@@ -184,11 +197,87 @@ pub(crate) fn read(text: &str, path: &Path, options: &LoadOptions) -> Result<Par
         r.wind_direction_deg = get(9)?;
         r.wind_speed_m_s = get(10)?;
         r.visibility_km = get(11)?.map(|m| m / 1000.0);
+        let depth = get(12)?;
+        if let Some(d) = depth.filter(|d| *d < 0.0) {
+            return Err(Error::parse(
+                loc.clone().with_field(COLUMNS[12].0),
+                format!("negative precipitation depth {d} mm"),
+            ));
+        }
+        let hours = get(13)?.unwrap_or(1.0);
+        if !(0.0..=744.0).contains(&hours) {
+            return Err(Error::parse(
+                loc.clone().with_field(COLUMNS[13].0),
+                format!("accumulation period {hours} h: expected 0..744 h"),
+            ));
+        }
+        rain.push(depth.map(|d| (d, hours)));
         rows.push((stamp, r));
+    }
+    for (k, mm) in spread_precipitation(&rain).into_iter().enumerate() {
+        rows[k].1.precipitation_mm = mm;
     }
     Ok(Parsed {
         records: calendar::place(rows, offset, options)?,
         site: Some(site),
         timing: Timing::SolarMeanEnding { interval_s: 3600 },
     })
+}
+
+/// Each row's own precipitation (mm) from TMY3's readings (`depth` mm over `hours` h
+/// ending at the row, `None` where the row has no reading): a depth over `n > 1` hours
+/// is shared evenly by its row and the `n − 1` rows before it, stopping after the
+/// previous row with a reading. Rows no reading reaches stay `None` (dry).
+fn spread_precipitation(readings: &[Option<(f64, f64)>]) -> Vec<Option<f64>> {
+    let mut out: Vec<Option<f64>> = vec![None; readings.len()];
+    let mut last_reading: Option<usize> = None;
+    for (i, r) in readings.iter().enumerate() {
+        let Some((depth, hours)) = *r else { continue };
+        let span = (hours.round() as usize).max(1);
+        let first = (i + 1).saturating_sub(span);
+        let first = last_reading.map_or(first, |l| first.max(l + 1));
+        let share = depth / (i + 1 - first) as f64;
+        for o in &mut out[first..=i] {
+            *o = Some(share);
+        }
+        last_reading = Some(i);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spread_precipitation;
+
+    #[test]
+    fn a_depth_over_several_hours_is_shared_by_the_rows_it_covers() {
+        // 6 mm over 3 h at row 4 (rows 2–4 have no reading of their own), 1 mm in row 1's
+        // own hour; 4 mm over 6 h at row 6 reaches back only to row 5 (row 4 has a reading).
+        let r = [
+            None,
+            Some((1.0, 1.0)),
+            None,
+            None,
+            Some((6.0, 3.0)),
+            None,
+            Some((4.0, 6.0)),
+        ];
+        assert_eq!(
+            spread_precipitation(&r),
+            vec![
+                None,
+                Some(1.0),
+                Some(2.0),
+                Some(2.0),
+                Some(2.0),
+                Some(2.0),
+                Some(2.0)
+            ]
+        );
+        // Quantity 0 (or missing, read as 1) keeps the depth in its own row.
+        assert_eq!(
+            spread_precipitation(&[None, Some((3.0, 0.0))]),
+            vec![None, Some(3.0)]
+        );
+    }
 }
