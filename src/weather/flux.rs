@@ -736,7 +736,7 @@ mod tests {
         // Winds at 2.5 m over a 0.6 m canopy, each with the u* of the
         // neutral log law (d = 0.4 m, z_om = 0.0738 m); records that are not
         // near-neutral, too calm or without u* do not count.
-        let (z, h) = (2.5, 0.6);
+        let (z, h): (f64, f64) = (2.5, 0.6);
         let ln = ((z - 2.0 / 3.0 * h) / (0.123 * h)).ln();
         let mut records: Vec<FluxRecord> = [2.5, 3.0, 4.0, 5.5, 7.0]
             .iter()
