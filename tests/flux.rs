@@ -22,6 +22,34 @@ fn us_crt_subset() -> FluxDataset {
     flux::load(&dir.join("us-crt_2011/us-crt_2011_jul06-aug16.csv")).unwrap()
 }
 
+/// US-CRT's canopy heights, from its README (site metadata): 0.15 m on
+/// 5 Jul, 0.45 m on 26 Jul, 0.975 m on 19 Aug 2011. No LAI is given.
+fn us_crt_heights() -> irsig::material::Phenology {
+    use irsig::material::{Phenology, PhenologyPoint};
+    let pt = |date: &str, h: f64| PhenologyPoint {
+        date: date.parse().unwrap(),
+        canopy_height_m: Some(h),
+        leaf_area_index: None,
+    };
+    Phenology::try_from(vec![
+        pt("2011-07-05", 0.15),
+        pt("2011-07-26", 0.45),
+        pt("2011-08-19", 0.975),
+    ])
+    .unwrap()
+}
+
+/// The height of US-CRT's wind and air measurement, which its metadata does
+/// not give, m: the neutral log law on its measured wind and friction
+/// velocity over the README's canopy heights
+/// ([`FluxDataset::log_law_wind_height_m`], the 42 days).
+fn us_crt_measurement_height_m() -> f64 {
+    let d = us_crt_subset();
+    let h = us_crt_heights();
+    d.log_law_wind_height_m(0..d.len(), |t| h.at(t.timestamp() as f64, 0.0, 0.0).0)
+        .unwrap()
+}
+
 /// Percentage of gaps of `field` over the whole file.
 fn gap_pct(d: &FluxDataset, field: impl Fn(&flux::FluxRecord) -> Option<f64>) -> f64 {
     100.0 * d.gaps(0..d.len(), field) as f64 / d.len() as f64
@@ -313,17 +341,21 @@ fn penman_monteith_on_measured_available_energy() {
     // Noilhan & Planton's crop values, against the measured LE on the
     // daytime records of each second half. Not fitted: canopy heights are
     // the READMEs' (US-CRT: 0.45 m on 26 Jul, 0.975 m on 19 Aug → 0.7 m) or
-    // assumed (Bondville, undocumented: 0.8 m), as are the LAI (3), the
-    // undocumented US-CRT sensor heights (3 m) and an unstressed soil.
+    // assumed (Bondville, undocumented: 0.8 m), as are the LAI (3) and an
+    // unstressed soil; US-CRT's undocumented sensor height is the log law's
+    // on its own wind and u* (2.7 m). Also the same with r_s = 0: the
+    // wet-surface rate, the most a canopy transpires on that energy.
     use irsig::thermal::latent::penman_monteith_latent_w_m2;
     use irsig::thermal::latent::{Aerodynamic, AirState, CanopyConditions, JarvisStewart};
     let mut ratios = Vec::new();
+    let mut wet_fractions = Vec::new();
+    let z_crt = us_crt_measurement_height_m();
     for (d, canopy_m) in [(bondville_subset(), 0.8), (us_crt_subset(), 0.7)] {
         let site = d.site();
         let aero = Aerodynamic::from_canopy_height(
             canopy_m,
-            site.wind_height_m().unwrap_or(3.0),
-            site.air_height_m().unwrap_or(3.0),
+            site.wind_height_m().unwrap_or(z_crt),
+            site.air_height_m().unwrap_or(z_crt),
         )
         .unwrap();
         let canopy = JarvisStewart {
@@ -340,7 +372,7 @@ fn penman_monteith_on_measured_available_energy() {
         canopy.validate().unwrap();
         let half = d.second_half();
         let (w, _) = d.weather(half.clone()).unwrap();
-        let (mut model, mut measured, mut closed) = (0.0, 0.0, 0.0);
+        let (mut model, mut measured, mut closed, mut wet) = (0.0, 0.0, 0.0, 0.0);
         let mut n = 0;
         for (r, wr) in d.records()[half].iter().zip(w.records()) {
             let (Some(rn), Some(g), Some(h), Some(le), Some(ts)) = (
@@ -369,6 +401,7 @@ fn penman_monteith_on_measured_available_energy() {
                 soil_moisture_m3_m3: 0.3,
             });
             model += penman_monteith_latent_w_m2(rn - g, &air, r_a, r_s).unwrap();
+            wet += penman_monteith_latent_w_m2(rn - g, &air, r_a, 0.0).unwrap();
             measured += le;
             // LE with the balance closed at the measured Bowen ratio.
             if h + le != 0.0 {
@@ -377,6 +410,13 @@ fn penman_monteith_on_measured_available_energy() {
             n += 1;
         }
         let (model, measured, closed) = (model / n as f64, measured / n as f64, closed / n as f64);
+        let wet = wet / n as f64;
+        println!(
+            "{site:?}: daytime mean LE of a wet surface (r_s = 0) {wet:.0} W/m²; measured / wet \
+             {:.2} (Bowen-closed {:.2})",
+            measured / wet,
+            closed / wet
+        );
         println!(
             "{site:?}: daytime mean LE, Penman–Monteith {model:.0} W/m², measured {measured:.0} \
              W/m² (Bowen-closed {closed:.0}); ratio {:.2} ({:.2} closed), n = {n}",
@@ -384,7 +424,18 @@ fn penman_monteith_on_measured_available_energy() {
             model / closed
         );
         ratios.push((site, n, model / measured));
+        wet_fractions.push(closed / wet);
     }
+    // Measured (closure-corrected) LE as a fraction of the wet-surface
+    // rate: US-CRT's soybean, on a wet soil after the rain of late July,
+    // evaporated at 0.87 of it, Bondville's in late August at 0.68. One
+    // canopy resistance cannot give both (docs/physics/validation.md).
+    assert!(
+        wet_fractions[1] - wet_fractions[0] > 0.1,
+        "measured / wet-surface LE: Bondville {}, US-CRT {}",
+        wet_fractions[0],
+        wet_fractions[1]
+    );
     // The canopy here is unstressed (no VPD or soil-water limitation), so
     // this is a potential rate: not below the measured one, and within a
     // factor of two of it. (Bondville, late summer 1998: 1.5.)
@@ -424,6 +475,9 @@ struct StockResult {
 #[derive(Debug, Default)]
 struct DayClosed {
     h_closed: f64,
+    /// H with the whole residual given to it, `Rn − G − LE` (the
+    /// non-closure as missing sensible heat).
+    h_residual: f64,
     le_closed: f64,
     h_model_at_measured_t: f64,
     g_model: f64,
@@ -532,6 +586,7 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
                     1.0
                 };
                 dc.h_closed += h * bowen;
+                dc.h_residual += rn - g - le;
                 dc.le_closed += le * bowen;
                 dc.h_model_at_measured_t += ex.sensible_w_m2_k[i] * (t_meas - w.air_temperature_k);
                 dc.g_model += rn_k - h_k - le_k;
@@ -558,6 +613,7 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
     let nc = nc.max(1) as f64;
     for v in [
         &mut dc.h_closed,
+        &mut dc.h_residual,
         &mut dc.le_closed,
         &mut dc.h_model_at_measured_t,
         &mut dc.g_model,
@@ -591,33 +647,30 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
 /// (`su2001`); as two sources; at US-CRT the crop growing to the README's
 /// heights, with its leaves growing with them (LAI = min(6.8 h, LAI)); and,
 /// as diagnostics of the partition, the crop with r_s,min = 40 s/m, the
-/// growing two-source crop with LAI 5, and with US-CRT's measured soil
-/// water and the porosity of its silty clay.
-/// Printed for the validation page (`docs/physics/validation.md`).
+/// growing two-source crop with LAI 5, with US-CRT's measured soil
+/// water and the porosity of its silty clay, and with Noah's cropland
+/// stomata (big leaf and two sources). US-CRT's materials are given its
+/// log-law measurement height. Printed for the validation page
+/// (`docs/physics/validation.md`).
 /// Asserted: the stock crop, with either heat roughness and growing,
 /// beats the naive "T_surface = T_air" on both sites (issue 16's goal for
 /// stock materials), and its daytime latent heat is the larger turbulent
-/// flux, as measured over these canopies.
+/// flux, as measured over these canopies; as two sources it meets issue
+/// 16's flux goals at Bondville (H within 30 %, LE within 25 % of the
+/// closure-corrected means) and the LE goal at US-CRT.
 #[test]
 #[ignore = "needs ../shared/data"]
 fn stock_materials_on_measured_forcing() {
-    use irsig::material::{HeatRoughness, Phenology, PhenologyPoint};
-    // US-CRT's canopy heights, from its README (site metadata): 0.15 m on
-    // 5 Jul, 0.45 m on 26 Jul, 0.975 m on 19 Aug 2011. No LAI is given: the
-    // stock crop's stays.
-    let us_crt_heights = |s: &mut irsig::material::SurfaceEnergySpec| {
-        let pt = |date: &str, h: f64| PhenologyPoint {
-            date: date.parse().unwrap(),
-            canopy_height_m: Some(h),
-            leaf_area_index: None,
-        };
-        s.phenology = Phenology::try_from(vec![
-            pt("2011-07-05", 0.15),
-            pt("2011-07-26", 0.45),
-            pt("2011-08-19", 0.975),
-        ])
-        .unwrap();
+    use irsig::material::HeatRoughness;
+    let grow = |s: &mut irsig::material::SurfaceEnergySpec| {
+        s.phenology = us_crt_heights();
     };
+    // Where US-CRT's wind and air were measured (its metadata does not say;
+    // the log law on its own wind and u* gives it): the user tells the
+    // material (`measurement_height_m`). Bondville's are the weather's
+    // defaults (wind 10 m; air 3 m, the 2 m raised to 2 m above the canopy).
+    let us_crt_z = us_crt_measurement_height_m();
+    println!("US-CRT wind and air height from the log law: {us_crt_z:.2} m");
     // US-CRT's measured soil water (the first half's mean of its SWC
     // column, %), for the variant given the site's soil state.
     let us_crt_soil_water = {
@@ -653,6 +706,8 @@ fn stock_materials_on_measured_forcing() {
             "crop growing leafgrowth two_source",
             "crop growing leafgrowth lai5 two_source",
             "crop growing two_source swc",
+            "crop noah",
+            "crop noah two_source",
         ] {
             if (name.contains("growing") || name.contains("swc")) && !us_crt {
                 continue;
@@ -660,11 +715,14 @@ fn stock_materials_on_measured_forcing() {
             let stock = name.split(' ').next().unwrap();
             let r = props_on_site(
                 &stock_props_with(stock, |s| {
+                    if us_crt {
+                        s.measurement_height_m = Some(us_crt_z);
+                    }
                     if name.contains("su2001") {
                         s.heat_roughness = HeatRoughness::Su2001;
                     }
                     if name.contains("growing") {
-                        us_crt_heights(s);
+                        grow(s);
                     }
                     // Leaves that grow with the height up to the stock LAI:
                     // METRIC's field-crop 6.8 m⁻¹ (materials docs).
@@ -688,6 +746,15 @@ fn stock_materials_on_measured_forcing() {
                     // Noilhan & Planton (1989) and Noah's cropland table.
                     if name.contains("rsmin40") {
                         s.min_stomatal_resistance_s_m = 40.0;
+                    }
+                    // A diagnostic, not a stock value: Noah's cropland
+                    // stomata (VEGPARM.TBL, Chen & Dudhia 2001: RS 40 s/m,
+                    // RGL 100 W/m², HS 36.25 (kg/kg)⁻¹; HS in NP89's linear
+                    // form, its first order: 36.25 · 0.622 / 1e5 Pa⁻¹).
+                    if name.contains("noah") {
+                        s.min_stomatal_resistance_s_m = 40.0;
+                        s.shortwave_limit_w_m2 = Some(100.0);
+                        s.vpd_sensitivity_per_pa = 36.25 * 0.622 / 1e5;
                     }
                     if name.contains("two_source") {
                         s.canopy = irsig::material::CanopyModel::TwoSource;
@@ -724,19 +791,42 @@ fn stock_materials_on_measured_forcing() {
                 format!("{:.0}", c.h_model_at_measured_t)
             };
             println!(
-                "{:?}: stock {name}, daytime: H closure-corrected (Bowen) {:.0} W/m², LE \
-                 closure-corrected {:.0}; model H at the measured surface temperature \
+                "{:?}: stock {name}, daytime: H closure-corrected (Bowen) {:.0} W/m² (the whole \
+                 residual to H: {:.0}), LE closure-corrected {:.0}; model H at the measured surface temperature \
                  {h_at_measured}; G model {:.0} vs measured {:.0}; Rn model {:.0} vs measured \
                  {:.0} W/m²",
                 d.site(),
                 c.h_closed,
+                c.h_residual,
                 c.le_closed,
                 c.g_model,
                 c.g_measured,
                 c.rn_model,
                 c.rn_measured
             );
-            if name.starts_with("crop") && !name.contains("rsmin40") {
+            // Issue 16's flux goals where the stock crop as two sources
+            // meets them: daytime H within 30 % and LE within 25 % of the
+            // closure-corrected means at Bondville, LE at US-CRT (its H is
+            // not met: docs/physics/validation.md).
+            if name == "crop two_source" {
+                let le_err = le_m / c.le_closed - 1.0;
+                assert!(
+                    le_err.abs() < 0.25,
+                    "{:?}: LE {le_m} vs {}",
+                    d.site(),
+                    c.le_closed
+                );
+                if !us_crt {
+                    let h_err = h_m / c.h_closed - 1.0;
+                    assert!(
+                        h_err.abs() < 0.30,
+                        "{:?}: H {h_m} vs {}",
+                        d.site(),
+                        c.h_closed
+                    );
+                }
+            }
+            if name.starts_with("crop") && !name.contains("rsmin40") && !name.contains("noah") {
                 assert!(
                     r.rmse < r.air_rmse,
                     "{:?}: stock crop RMSE {} K does not beat T_air {} K",
@@ -746,6 +836,150 @@ fn stock_materials_on_measured_forcing() {
                 );
                 assert!(le_m > h_m, "{:?}: LE {le_m} H {h_m}", d.site());
             }
+        }
+    }
+}
+
+/// Where the stock crop's daytime energy goes as two sources, by local
+/// standard hour over each second half (records with measured H, LE, Rn, G
+/// and surface temperature, global SW > 20 W/m²): the leaves' and the
+/// soil's H, LE and Rn, the soil's G, against the closure-corrected (Bowen)
+/// measured H and LE, Rn and the plates' G; the leaves', the soil's and the
+/// measured radiometric temperature above the air; the resistances r_a,
+/// r_x, r_st, r_soil, r_ss. US-CRT at its log-law measurement height.
+/// Printed for the validation page; asserted: the leaves' balance closes at
+/// every record, and at US-CRT most of the model's daytime H is the
+/// leaves' (the soil's is a sixth).
+#[test]
+#[ignore = "needs ../shared/data"]
+fn two_source_partition_by_hour() {
+    use irsig::analysis::facet::{FacetSpec, solve_free_facet};
+    use irsig::thermal::latent::AirState;
+    use irsig::thermal::latent::psychrometrics::AIR_SPECIFIC_HEAT_J_KG_K;
+    use irsig::thermal::{Exchange, Forcing, SolveOptions};
+    let z_crt = us_crt_measurement_height_m();
+    for d in [bondville_subset(), us_crt_subset()] {
+        let us_crt = d.site() == FluxSite::UsCrt2011;
+        let props = stock_props_with("crop", |s| {
+            s.canopy = irsig::material::CanopyModel::TwoSource;
+            if us_crt {
+                s.measurement_height_m = Some(z_crt);
+            }
+        });
+        let (history, _) = d.weather(0..d.len()).unwrap();
+        let (sol, _) = solve_free_facet(
+            &props,
+            history.records(),
+            &d.site().site(),
+            &FacetSpec::default(),
+            &SolveOptions::default(),
+        )
+        .unwrap();
+        let forcing = Forcing::from_records(history.records()).unwrap();
+        let ex = Exchange::new(&props, &forcing).unwrap();
+        let mut acc = vec![[0.0f64; 20]; 24];
+        for i in d.second_half() {
+            let r = &d.records()[i];
+            let w = &history.records()[i];
+            let (Some(h), Some(le), Some(rn), Some(g), Some(tm)) = (
+                r.sensible_heat_w_m2,
+                r.latent_heat_w_m2,
+                r.net_radiation_w_m2,
+                r.ground_heat_w_m2,
+                r.surface_temperature_k,
+            ) else {
+                continue;
+            };
+            if w.global_horizontal_w_m2 <= 20.0 {
+                continue;
+            }
+            let step = &ex.two_source[i];
+            let s = props.solar_absorptivity * w.global_horizontal_w_m2
+                + props.thermal_emissivity * w.sky_longwave_w_m2;
+            let t_s = sol.soil_temperature_k[i];
+            let f = step.fluxes(s, t_s);
+            assert!(
+                f.canopy_residual_w_m2().abs() < 1e-6 * f.net_radiation_canopy_w_m2.abs().max(1.0),
+                "{:?} record {i}: leaves' residual {}",
+                d.site(),
+                f.canopy_residual_w_m2()
+            );
+            let air = AirState::new(
+                forcing.air_temperature_k[i],
+                forcing.vapour_pressure_pa[i],
+                forcing.pressure_pa[i],
+            )
+            .unwrap();
+            let rho_cp = air.density_kg_m3() * AIR_SPECIFIC_HEAT_J_KG_K;
+            let gamma = air.psychrometric_constant_pa_k();
+            let [g_a, g_x, g_s, _, w_c, w_s] = step.conductances();
+            let (r_x, r_soil) = (rho_cp / g_x, rho_cp / g_s);
+            let bowen = if h + le != 0.0 {
+                (rn - g) / (h + le)
+            } else {
+                1.0
+            };
+            let t_a = w.air_temperature_k;
+            let v = [
+                1.0,
+                f.sensible_canopy_w_m2,
+                f.sensible_soil_w_m2,
+                f.latent_canopy_w_m2,
+                f.latent_soil_w_m2,
+                f.net_radiation_canopy_w_m2,
+                f.net_radiation_soil_w_m2,
+                f.ground_w_m2,
+                h * bowen,
+                le * bowen,
+                rn,
+                g,
+                f.canopy_k - t_a,
+                t_s - t_a,
+                tm - t_a,
+                rho_cp / g_a,
+                r_x,
+                (rho_cp / (gamma * w_c) - r_x).min(5000.0),
+                r_soil,
+                (rho_cp / (gamma * w_s) - r_soil).min(1e4),
+            ];
+            let hour = chrono::Timelike::hour(&w.time) as usize;
+            for (a, x) in acc[hour].iter_mut().zip(v) {
+                *a += x;
+            }
+        }
+        println!(
+            "{:?}, stock crop as two sources, daytime by local standard hour (W/m², K, s/m):\n\
+             hour    n   H_c   H_s  LE_c  LE_s  Rn_c  Rn_s     G | H_cl LE_cl   Rn    G | \
+             dT_c  dT_s dT_meas |  r_a   r_x  r_st r_soil  r_ss",
+            d.site()
+        );
+        let mut all = [0.0; 20];
+        let row = |label: String, a: &[f64; 20]| {
+            let m: Vec<String> = a[1..].iter().map(|x| format!("{:5.0}", x / a[0])).collect();
+            let t: Vec<String> = a[12..15]
+                .iter()
+                .map(|x| format!("{:+5.1}", x / a[0]))
+                .collect();
+            println!(
+                "{label:>4} {:4} {} | {} | {} | {}",
+                a[0],
+                m[..7].join(" "),
+                m[7..11].join(" "),
+                t.join(" "),
+                m[14..].join(" ")
+            );
+        };
+        for (hour, a) in acc.iter().enumerate() {
+            if a[0] > 0.0 {
+                row(format!("{hour}"), a);
+                for (s, x) in all.iter_mut().zip(a) {
+                    *s += x;
+                }
+            }
+        }
+        row("all".into(), &all);
+        if us_crt {
+            assert!(all[1] > 3.0 * all[2], "H_c {} H_s {}", all[1], all[2]);
         }
     }
 }

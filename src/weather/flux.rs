@@ -133,12 +133,14 @@ impl FluxSite {
                 ground: &["ground_heat_w_m2"],
                 surface_c: Some("surface_temperature_c"),
                 lw_up: None,
+                friction_velocity: None,
             },
             FluxSite::UsCrt2011 => SiteColumns {
                 wind: "wind_speed_m_s",
                 ground: &["ground_heat_w_m2_plate1", "ground_heat_w_m2_plate2"],
                 surface_c: None,
                 lw_up: Some("lw_up_w_m2"),
+                friction_velocity: Some("friction_velocity_m_s"),
             },
         }
     }
@@ -160,6 +162,7 @@ struct SiteColumns {
     ground: &'static [&'static str],
     surface_c: Option<&'static str>,
     lw_up: Option<&'static str>,
+    friction_velocity: Option<&'static str>,
 }
 
 /// Columns common to both datasets.
@@ -189,6 +192,8 @@ pub struct FluxRecord {
     pub pressure_pa: Option<f64>,
     /// Forcing wind speed, m s⁻¹ ([`FluxSite::wind_height_m`]).
     pub wind_speed_m_s: Option<f64>,
+    /// Friction velocity u* from the eddy covariance, m s⁻¹ (US-CRT only).
+    pub friction_velocity_m_s: Option<f64>,
     /// Global horizontal shortwave irradiance, W m⁻².
     pub global_horizontal_w_m2: Option<f64>,
     /// Downwelling longwave irradiance, W m⁻².
@@ -326,6 +331,7 @@ pub fn from_reader(reader: impl Read, path: &Path, emissivity: f64) -> Result<Fl
         Some(cols.wind),
         cols.surface_c,
         cols.lw_up,
+        cols.friction_velocity,
         Some("sensible_heat_w_m2"),
         Some("latent_heat_w_m2"),
     ];
@@ -407,6 +413,10 @@ pub fn from_reader(reader: impl Read, path: &Path, emissivity: f64) -> Result<Fl
             relative_humidity: num("relative_humidity_pct")?.map(|r| r / 100.0),
             pressure_pa: num("pressure_hpa")?.map(|p| p * 100.0),
             wind_speed_m_s: num(cols.wind)?,
+            friction_velocity_m_s: match cols.friction_velocity {
+                Some(c) => num(c)?,
+                None => None,
+            },
             global_horizontal_w_m2: num("sw_down_w_m2")?,
             sky_longwave_w_m2: lw_down,
             longwave_up_w_m2: lw_up,
@@ -594,6 +604,48 @@ impl FluxDataset {
         )
     }
 
+    /// The height of the wind measurement that the neutral logarithmic
+    /// profile implies, m, where the site documents none (US-CRT): the
+    /// median over the near-neutral records of `range` (|H| < 20 W m⁻²,
+    /// U ≥ 2.5 m s⁻¹, u* ≥ 0.1 m s⁻¹) of
+    /// `z = d + z_om exp(k U/u*)` (the log law `U = (u*/k) ln((z − d)/z_om)`
+    /// solved for z; k = 0.41), with FAO-56's `d = 2/3 h`, `z_om = 0.123 h`
+    /// (Allen et al. 1998, eq. 4) for the canopy height `h` that
+    /// `canopy_height_m` gives at a record's start. None without measured
+    /// friction velocity (Bondville) or without a near-neutral record.
+    pub fn log_law_wind_height_m(
+        &self,
+        range: Range<usize>,
+        canopy_height_m: impl Fn(DateTime<Utc>) -> f64,
+    ) -> Option<f64> {
+        const VON_KARMAN: f64 = 0.41;
+        let mut z: Vec<f64> = self.records[range]
+            .iter()
+            .filter_map(|r| {
+                let (u, us, h) = (
+                    r.wind_speed_m_s?,
+                    r.friction_velocity_m_s?,
+                    r.sensible_heat_w_m2?,
+                );
+                (u >= 2.5 && us >= 0.1 && h.abs() < 20.0).then(|| {
+                    let hc = canopy_height_m(r.start);
+                    2.0 / 3.0 * hc + 0.123 * hc * (VON_KARMAN * u / us).exp()
+                })
+            })
+            .filter(|z| z.is_finite())
+            .collect();
+        if z.is_empty() {
+            return None;
+        }
+        z.sort_by(f64::total_cmp);
+        let n = z.len();
+        Some(if n % 2 == 1 {
+            z[n / 2]
+        } else {
+            0.5 * (z[n / 2 - 1] + z[n / 2])
+        })
+    }
+
     /// Energy-balance closure over the records of `range` whose global
     /// shortwave exceeds `min_shortwave_w_m2` (e.g. 20 W m⁻² for daytime;
     /// −∞ for all) and whose Rn, G, H and LE are all present.
@@ -666,6 +718,7 @@ mod tests {
             relative_humidity: None,
             pressure_pa: None,
             wind_speed_m_s: v,
+            friction_velocity_m_s: None,
             global_horizontal_w_m2: None,
             sky_longwave_w_m2: None,
             longwave_up_w_m2: None,
@@ -676,6 +729,42 @@ mod tests {
             ground_heat_w_m2: None,
             precipitation_mm: None,
         }
+    }
+
+    #[test]
+    fn the_log_law_recovers_the_wind_height() {
+        // Winds at 2.5 m over a 0.6 m canopy, each with the u* of the
+        // neutral log law (d = 0.4 m, z_om = 0.0738 m); records that are not
+        // near-neutral, too calm or without u* do not count.
+        let (z, h): (f64, f64) = (2.5, 0.6);
+        let ln = ((z - 2.0 / 3.0 * h) / (0.123 * h)).ln();
+        let mut records: Vec<FluxRecord> = [2.5, 3.0, 4.0, 5.5, 7.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &u)| FluxRecord {
+                friction_velocity_m_s: Some(0.41 * u / ln),
+                sensible_heat_w_m2: Some(5.0),
+                ..rec(i, Some(u))
+            })
+            .collect();
+        let wrong = |i: usize, u: f64, us: Option<f64>, hf: f64| FluxRecord {
+            friction_velocity_m_s: us,
+            sensible_heat_w_m2: Some(hf),
+            ..rec(i, Some(u))
+        };
+        records.push(wrong(5, 3.0, Some(0.05), 5.0));
+        records.push(wrong(6, 3.0, Some(0.9), 150.0));
+        records.push(wrong(7, 1.0, Some(0.3), 5.0));
+        records.push(wrong(8, 3.0, None, 5.0));
+        let d = FluxDataset {
+            path: PathBuf::from("x.csv"),
+            site: FluxSite::UsCrt2011,
+            emissivity: 0.98,
+            records,
+        };
+        let est = d.log_law_wind_height_m(0..d.len(), |_| h).unwrap();
+        assert!((est - z).abs() < 1e-9, "{est}");
+        assert!(d.log_law_wind_height_m(5..9, |_| h).is_none());
     }
 
     #[test]
