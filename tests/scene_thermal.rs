@@ -1161,8 +1161,13 @@ fn second_order_at_curvature_nodes_matches_every_record() {
             );
             reuse_max = reuse_max.max(max);
         }
-        eprintln!("bins {bin_k} K: pass 1's first order reused vs formed again: max {reuse_max:.2e} K");
-        assert!(reuse_max < 1e-4, "reused vs formed again: max {reuse_max} K");
+        eprintln!(
+            "bins {bin_k} K: pass 1's first order reused vs formed again: max {reuse_max:.2e} K"
+        );
+        assert!(
+            reuse_max < 1e-4,
+            "reused vs formed again: max {reuse_max} K"
+        );
         assert!(reuse_max > 0.0, "the reused path was not taken");
         for (i, record) in images.iter().enumerate() {
             let (rms, max) = rms_max(
