@@ -1119,15 +1119,17 @@ fn second_order_at_curvature_nodes_matches_every_record() {
         &ThermalParams::per_class(None, options),
     )
     .unwrap();
-    let lin = |bin_k: f32, curvature_stride: usize| ThermalParams {
+    let lin_reuse = |bin_k: f32, curvature_stride: usize, reuse_first_pass: bool| ThermalParams {
         method: ThermalMethod::Linearized(LinearizedParams {
             bin_k,
             second_order: true,
             options,
             curvature_stride,
+            reuse_first_pass,
         }),
         ..Default::default()
     };
+    let lin = |bin_k: f32, curvature_stride: usize| lin_reuse(bin_k, curvature_stride, true);
     let solve = |p: &ThermalParams| {
         solve_facet_temperatures(&exp, &kinds, &props, &forcing, &images, p).unwrap()
     };
@@ -1141,6 +1143,32 @@ fn second_order_at_curvature_nodes_matches_every_record() {
             bin_k,
             irsig::thermal::scene::linearized::CURVATURE_STRIDE,
         ));
+        // The second pass's first order at the nodes taken from pass 1's
+        // histories (the default) against formed again from the sources
+        // (its reference path): equal to f32 rounding. They are not bit
+        // for bit equal (the fourth root of pass 1's `T⁴`), which shows
+        // that the default took the reused path.
+        let formed = solve(&lin_reuse(
+            bin_k,
+            irsig::thermal::scene::linearized::CURVATURE_STRIDE,
+            false,
+        ));
+        let mut reuse_max = 0.0f64;
+        for i in 0..images.len() {
+            let (_, max) = rms_max(
+                &nodes.surface_temperature_k[i],
+                &formed.surface_temperature_k[i],
+            );
+            reuse_max = reuse_max.max(max);
+        }
+        eprintln!(
+            "bins {bin_k} K: pass 1's first order reused vs formed again: max {reuse_max:.2e} K"
+        );
+        assert!(
+            reuse_max < 1e-4,
+            "reused vs formed again: max {reuse_max} K"
+        );
+        assert!(reuse_max > 0.0, "the reused path was not taken");
         for (i, record) in images.iter().enumerate() {
             let (rms, max) = rms_max(
                 &nodes.surface_temperature_k[i],

@@ -434,13 +434,37 @@ pub fn emission_curvature(radiative_w_m2_k4: f64, t_k: f64, dt_k: f64) -> f64 {
 /// eq. 11, its slope by eq. 13).
 #[inline]
 pub fn latent_curvature(vapour_conductance_w_m2_pa: f64, t_k: f64, dt_k: f64) -> f64 {
-    use super::latent::psychrometrics::{
-        saturation_vapour_pressure_pa as es, saturation_vapour_pressure_slope_pa_k as des,
-    };
     if vapour_conductance_w_m2_pa == 0.0 {
         return 0.0;
     }
-    -vapour_conductance_w_m2_pa * (es(t_k + dt_k) - es(t_k) - des(t_k) * dt_k)
+    latent_curvature_about(vapour_conductance_w_m2_pa, saturation_about(t_k), t_k, dt_k)
+}
+
+/// `(e°(T), e°′(T))` at `t_k`, Pa and Pa K⁻¹ (FAO-56 eqs. 11, 13): what
+/// [`latent_curvature_about`] takes of the point it expands about.
+#[inline]
+pub fn saturation_about(t_k: f64) -> (f64, f64) {
+    use super::latent::psychrometrics::{
+        saturation_vapour_pressure_pa as es, saturation_vapour_pressure_slope_pa_k as des,
+    };
+    (es(t_k), des(t_k))
+}
+
+/// [`latent_curvature`] with `(e°(T), e°′(T))` of `t_k` given
+/// ([`saturation_about`]; precomputed for a reference's records), W m⁻²:
+/// the same value, one exponential instead of three.
+#[inline]
+pub fn latent_curvature_about(
+    vapour_conductance_w_m2_pa: f64,
+    (es_t, des_t): (f64, f64),
+    t_k: f64,
+    dt_k: f64,
+) -> f64 {
+    use super::latent::psychrometrics::saturation_vapour_pressure_pa as es;
+    if vapour_conductance_w_m2_pa == 0.0 {
+        return 0.0;
+    }
+    -vapour_conductance_w_m2_pa * (es(t_k + dt_k) - es_t - des_t * dt_k)
 }
 
 /// Solves the reference facet with the nonlinear model and returns its

@@ -97,6 +97,13 @@ pub struct LinearizedParams {
     /// Default [`CURVATURE_STRIDE`]; 1 evaluates it at every record (the
     /// reference path).
     pub curvature_stride: usize,
+    /// With two passes and curvature nodes: the last pass takes a facet's
+    /// first-order change at the nodes from the history pass 1 kept of it
+    /// (its `T⁴`, for the backgrounds), adding only its background term,
+    /// and its image records from pass 1's, instead of forming both again
+    /// from its sources (default true; false forms them again, the
+    /// reference path). The two agree to rounding (`f32`; within 1e-4 K).
+    pub reuse_first_pass: bool,
 }
 
 /// Default [`LinearizedParams::curvature_stride`]: hourly nodes at 15-min
@@ -112,6 +119,7 @@ impl Default for LinearizedParams {
             second_order: false,
             options: SolveOptions::default(),
             curvature_stride: CURVATURE_STRIDE,
+            reuse_first_pass: true,
         }
     }
 }
@@ -226,6 +234,7 @@ pub(super) fn solve(
         slots: Slots::new(inputs, kinds, passes),
         image_records,
         second_order: lp.second_order,
+        reuse_first_pass: lp.reuse_first_pass,
     };
     let n = kinds.len();
     let mut stats = Vec::new();
@@ -236,7 +245,9 @@ pub(super) fn solve(
     for p in 0..passes {
         let t0 = Instant::now();
         let last = p + 1 == passes;
-        let (img, next4) = plan.run(last, prev4.as_deref(), base.as_deref());
+        // Pass 1's `T⁴` histories are first order with the air as
+        // background: the second pass may reuse them (`PassPlan::run`).
+        let (img, next4) = plan.run(last, prev4.as_deref(), base.as_deref(), p == 1);
         image = plan.image_temperatures(&img);
         prev4 = (!last).then_some(next4);
         if p == 0 {
@@ -344,13 +355,17 @@ impl Facets<'_> {
         }
         out.iter_mut().zip(&self.air4).for_each(|(o, a)| *o = g * a);
         // (slot, weight) of the solved facets seen, (MAX, w·T⁴) of the
-        // fixed ones, in entry order.
+        // fixed ones, in entry order. Every solved facet seen has a slot
+        // (`passes::Slots`), so only the fixed ones read their kind.
         items.clear();
         items.extend(entries.iter().map(|e| {
             let j = e.facet as usize;
-            match self.kinds[j] {
-                FacetThermal::Fixed(t) => (u32::MAX, e.weight * t.powi(4)),
-                FacetThermal::Solve(_) => (slot[j], e.weight),
+            match slot[j] {
+                u32::MAX => match self.kinds[j] {
+                    FacetThermal::Fixed(t) => (u32::MAX, e.weight * t.powi(4)),
+                    FacetThermal::Solve(_) => unreachable!("a solved facet seen has a slot"),
+                },
+                s => (s, e.weight),
             }
         }));
         accumulate_rows(prev4, items, out);

@@ -12,6 +12,7 @@ use super::kernels::{columns, curvature, dot, matvec_cols};
 use super::reference::{Coarse, Diff, NodeGreen, Reference};
 use super::{CHUNK, Facets, Groups, Scratch};
 use crate::thermal;
+use crate::thermal::linear::latent_curvature_about;
 use crate::thermal::scene::{FacetThermal, SceneInputs};
 
 /// The facets some facet sees: each gets a slot in the `T⁴` histories a
@@ -77,6 +78,9 @@ pub(super) struct PassPlan<'a> {
     pub image_records: &'a [usize],
     /// Add the second-order correction in the last pass.
     pub second_order: bool,
+    /// Let the second pass reuse pass 1's first order
+    /// ([`super::LinearizedParams::reuse_first_pass`]).
+    pub reuse_first_pass: bool,
 }
 
 /// What changes from pass to pass.
@@ -90,6 +94,10 @@ struct Pass<'a> {
     prev4: Option<&'a [f32]>,
     /// Pass 1's image records, `[facet·W + image]` (`None` in pass 1).
     base: Option<&'a [f32]>,
+    /// `prev4` is pass 1's (first order, air background), and the second
+    /// order may take its first-order change at the nodes from it
+    /// ([`PassPlan::second_order_from_first_pass`]).
+    reuse: bool,
 }
 
 impl PassPlan<'_> {
@@ -101,18 +109,21 @@ impl PassPlan<'_> {
     /// One pass: every facet's image records (`[facet·W + image]`,
     /// [`PassPlan::width`]) and, unless it is the `last`, the `T⁴`
     /// histories of the slotted facets (`[slot·R + record]`). Written in
-    /// place, chunk by chunk (no per-chunk copies).
+    /// place, chunk by chunk (no per-chunk copies). `prev_is_first`: `prev4`
+    /// is pass 1's.
     pub(super) fn run(
         &self,
         last: bool,
         prev4: Option<&[f32]>,
         base: Option<&[f32]>,
+        prev_is_first: bool,
     ) -> (Vec<f32>, Vec<f32>) {
         let pass = Pass {
             last,
             second: last && self.second_order,
             prev4,
             base,
+            reuse: self.reuse_first_pass && prev_is_first && prev4.is_some() && base.is_some(),
         };
         let n = self.facets.len();
         let r = self.facets.forcing.len();
@@ -209,6 +220,17 @@ impl PassPlan<'_> {
             self.image_from_base(rep, base, f, bgc, s, o);
             return;
         }
+        let slot = self.slots.of_facet[f];
+        if second
+            && pass.reuse
+            && slot != u32::MAX
+            && let (Some(coarse), Some(first4), Some(base)) = (&rep.coarse, pass.prev4, pass.base)
+        {
+            let r = facets.forcing.len();
+            let first4 = &first4[slot as usize * r..(slot as usize + 1) * r];
+            self.second_order_from_first_pass(rep, coarse, f, first4, base, bgc, s, o);
+            return;
+        }
         let diff = Diff::of(&facets.state(f), &rep.facet);
         facets.sunlit_cos_into(f, &mut s.sc);
         if !full {
@@ -301,6 +323,103 @@ impl PassPlan<'_> {
         }
     }
 
+    /// The second pass with the second-order correction at the curvature
+    /// nodes, for a facet pass 1 kept the history of (its `T⁴`, `first4`):
+    /// pass 1's first-order change `Δ¹ = T¹ − T_ref` at the front's nodes
+    /// plus the background term `G·(c·bg)` there is the change
+    /// [`PassPlan::second_order_at_nodes`] forms from the facet's sources
+    /// (its reference path), and pass 1's image records plus the
+    /// background term at the image rows ([`PassPlan::image_from_base`]) its
+    /// first order. Only the back node (an exposed back; pass 1 keeps the
+    /// front alone) is formed from the sources. The fourth root of the
+    /// `f32` `T⁴` costs ≈ 3·10⁻⁵ K of `Δ¹` (the `f32` resolution at 300 K),
+    /// far below what moves the curvature.
+    #[allow(clippy::too_many_arguments)]
+    fn second_order_from_first_pass(
+        &self,
+        rep: &Reference,
+        coarse: &Coarse,
+        f: usize,
+        first4: &[f32],
+        base: &[f32],
+        bgc: Option<(f32, f32)>,
+        s: &mut Scratch,
+        o: &mut [f32],
+    ) {
+        let facets = self.facets;
+        let nn = coarse.front.temperature_k.len();
+        let nodes = &coarse.records;
+        // The front's first-order change at the nodes: pass 1's, plus the
+        // background term.
+        for ((d, &t), tr) in s.d[..nn]
+            .iter_mut()
+            .zip(nodes)
+            .zip(&coarse.front.temperature_k)
+        {
+            *d = first4[t as usize].sqrt().sqrt() - tr;
+        }
+        if let Some((cf, cb)) = bgc {
+            columns(s.bg.iter().copied(), cf, &mut s.cols_bg);
+            matvec_cols(&coarse.front.from_front, &s.cols_bg, &mut s.d[..nn]);
+            if rep.has_back {
+                columns(s.bg.iter().copied(), cb, &mut s.cols_bg);
+                matvec_cols(&coarse.front.from_back, &s.cols_bg, &mut s.d[..nn]);
+            }
+        }
+        // The back node's, from the sources.
+        if rep.has_back {
+            let diff = Diff::of(&facets.state(f), &rep.facet);
+            facets.sunlit_cos_into(f, &mut s.sc);
+            let sun = &self.groups.sun32[self.groups.of_solved(f)];
+            columns(s.sc.iter().zip(sun).map(|(a, b)| a * b), 1.0, &mut s.cols);
+            Change { diff, bgc }.history(
+                &coarse.back,
+                rep.has_back,
+                &s.bg,
+                &s.cols,
+                &mut s.cols_bg,
+                &mut s.dback[..nn],
+            );
+        }
+        self.node_curvatures(rep, coarse, s);
+        self.image_from_base(rep, base, f, bgc, s, o);
+        for (i, v) in o.iter_mut().enumerate() {
+            let w = &coarse.weights_front[i * nn..(i + 1) * nn];
+            let mut x = dot(w, &s.curv[..nn]);
+            if rep.has_back {
+                let w = &coarse.weights_back[i * nn..(i + 1) * nn];
+                x += dot(w, &s.curv_back[..nn]);
+            }
+            *v += x;
+        }
+    }
+
+    /// The curvature at the nodes of the front (`s.curv`) and back
+    /// (`s.curv_back`) nodes from their first-order changes there (`s.d`,
+    /// `s.dback`).
+    fn node_curvatures(&self, rep: &Reference, coarse: &Coarse, s: &mut Scratch) {
+        let nn = coarse.front.temperature_k.len();
+        let (latent, sat) = (&coarse.front.latent, &coarse.front.saturation);
+        for (n, (c, (d, t))) in s.curv[..nn]
+            .iter_mut()
+            .zip(s.d.iter().zip(&coarse.front.temperature_k))
+            .enumerate()
+        {
+            *c = curvature(coarse.front.radiative, *t, *d);
+            if let (Some(&gv), Some(&e)) = (latent.get(n), sat.get(n)) {
+                *c += latent_curvature_about(gv, e, f64::from(*t), f64::from(*d)) as f32;
+            }
+        }
+        if rep.has_back {
+            for (c, (d, t)) in s.curv_back[..nn]
+                .iter_mut()
+                .zip(s.dback.iter().zip(&coarse.back.temperature_k))
+            {
+                *c = curvature(coarse.back.radiative, *t, *d);
+            }
+        }
+    }
+
     /// The last pass with the second-order correction at the curvature
     /// nodes (`super::nodes`): `T = T_ref + G ΔS + Σ_n w_n r(Δ_n)` at the
     /// image records, the first order `G ΔS` exact, `Δ_n` the first-order
@@ -337,25 +456,7 @@ impl PassPlan<'_> {
             );
         }
         // Its curvature there.
-        let latent = &coarse.front.latent;
-        for (n, (c, (d, t))) in s.curv[..nn]
-            .iter_mut()
-            .zip(s.d.iter().zip(&coarse.front.temperature_k))
-            .enumerate()
-        {
-            *c = curvature(coarse.front.radiative, *t, *d);
-            if let Some(&gv) = latent.get(n) {
-                *c += thermal::linear::latent_curvature(gv, f64::from(*t), f64::from(*d)) as f32;
-            }
-        }
-        if rep.has_back {
-            for (c, (d, t)) in s.curv_back[..nn]
-                .iter_mut()
-                .zip(s.dback.iter().zip(&coarse.back.temperature_k))
-            {
-                *c = curvature(coarse.back.radiative, *t, *d);
-            }
-        }
+        self.node_curvatures(rep, coarse, s);
         // The first-order sources at every record.
         let Change {
             diff: Diff { df, dfb, db },
@@ -411,7 +512,7 @@ impl PassPlan<'_> {
         } = change;
         let sun = &groups.sun32[g];
         let refl = &groups.refl_diffuse32[g];
-        let latent = &rep.front.latent;
+        let (latent, sat) = (&rep.front.latent, &rep.front.saturation);
         for (k, ((((((o, sc), rsc), w), sh), rd), (d, t))) in
             s.ds.iter_mut()
                 .zip(&s.sc)
@@ -423,8 +524,8 @@ impl PassPlan<'_> {
                 .enumerate()
         {
             *o = df * sh + db * rd + (sc - rsc) * w + curvature(rep.front.radiative, *t, *d);
-            if let Some(&gv) = latent.get(k) {
-                *o += thermal::linear::latent_curvature(gv, f64::from(*t), f64::from(*d)) as f32;
+            if let (Some(&gv), Some(&e)) = (latent.get(k), sat.get(k)) {
+                *o += latent_curvature_about(gv, e, f64::from(*t), f64::from(*d)) as f32;
             }
         }
         if let Some((cf, _)) = bgc {

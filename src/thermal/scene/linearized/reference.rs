@@ -65,6 +65,9 @@ pub(super) struct NodeGreen {
     /// Vapour conductance of this node's latent loss at each record,
     /// W m⁻² Pa⁻¹ (empty: none; only the front of an evaporating surface).
     pub latent: Vec<f64>,
+    /// `(e°, e°′)` at the reference's temperature at each record where
+    /// `latent` is not empty ([`crate::thermal::linear::saturation_about`]).
+    pub saturation: Vec<(f64, f64)>,
 }
 
 /// Probes of the front temperature: the rows of the image records (then
@@ -114,6 +117,8 @@ pub(super) struct Reference {
 /// the history products run over `N` rows instead of `R`), and the weights
 /// of the node curvatures in the image records.
 pub(super) struct Coarse {
+    /// The node records.
+    pub records: Vec<u32>,
     /// The front node at the node records.
     pub front: NodeGreen,
     /// The back node at the node records (empty without an exposed back).
@@ -208,6 +213,7 @@ impl Reference {
                 temperature_k: f32s(&lin.solution.surface_temperature_k),
                 radiative: lin.front_radiative_w_m2_k4 as f32,
                 latent: lin.front_vapour_conductance_w_m2_pa.clone(),
+                saturation: Vec::new(),
             },
             back: NodeGreen {
                 from_front: transpose(&lin.back_from_front),
@@ -219,6 +225,7 @@ impl Reference {
                 temperature_k: f32s(&lin.solution.back_temperature_k),
                 radiative: lin.back_radiative_w_m2_k4 as f32,
                 latent: Vec::new(),
+                saturation: Vec::new(),
             },
             probes: Probes {
                 rows_front: rows_of(&pf),
@@ -241,6 +248,7 @@ impl Reference {
                 sc,
             },
         };
+        reference.front.saturation = saturation_of(&reference.front);
         if let Some(nodes) = nodes {
             let c = Coarse::new(&lin, &reference, nodes, &pf, &pb, images);
             reference.coarse = Some(c);
@@ -324,6 +332,11 @@ impl Coarse {
             } else {
                 nodes.records.iter().map(|&t| full.latent[t]).collect()
             },
+            saturation: if full.saturation.is_empty() {
+                Vec::new()
+            } else {
+                nodes.records.iter().map(|&t| full.saturation[t]).collect()
+            },
         };
         let weights = |p: &[Vec<f64>]| -> Vec<f32> {
             p.iter()
@@ -332,12 +345,26 @@ impl Coarse {
                 .collect()
         };
         Coarse {
+            records: nodes.records.iter().map(|&t| t as u32).collect(),
             front: node(&lin.front_from_front, &lin.front_from_back, &rep.front),
             back: node(&lin.back_from_front, &lin.back_from_back, &rep.back),
             weights_front: weights(pf),
             weights_back: weights(pb),
         }
     }
+}
+
+/// `(e°, e°′)` at `node`'s temperature at each record, where it has a latent
+/// loss (empty otherwise), as the second order takes it (`f64` of the
+/// `f32` temperature).
+fn saturation_of(node: &NodeGreen) -> Vec<(f64, f64)> {
+    if node.latent.is_empty() {
+        return Vec::new();
+    }
+    node.temperature_k
+        .iter()
+        .map(|&t| crate::thermal::linear::saturation_about(f64::from(t)))
+        .collect()
 }
 
 /// The entries of `v` (one per record; empty stays empty) at the nodes.
