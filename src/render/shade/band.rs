@@ -92,15 +92,11 @@ impl Integrals {
 /// nodes of the plain weights `w`), per path node the sky, sun and path
 /// terms, and the grey emissivities of every material. Every table is
 /// band-interleaved (the bands of one entry are adjacent), so one hit reads
-/// each entry of all its bands from one place. The Planck integrals are
-/// stored per height interval (the two height nodes a hit interpolates
-/// between, adjacent: the lower node's bands, then the upper's), range
-/// node and temperature node, so that what a hit reads at one range node
-/// — two temperature nodes at two height nodes — is one run of
-/// `4 × bands` values (32 bytes for two bands): its surface temperature
-/// costs two such runs (two range nodes), its background temperature two
-/// more. Each inner height node is stored twice (top of one interval,
-/// bottom of the next).
+/// each entry of all its bands from one place; the Planck integrals are
+/// stored path node by path node, so the two temperature nodes a hit
+/// interpolates between are adjacent (one cache line) and the hits of a
+/// row, which share few path nodes, read a few kilobytes of the table
+/// whatever their temperatures.
 #[derive(Debug, Clone, Default)]
 pub(super) struct GreyTables {
     /// Bands.
@@ -134,12 +130,7 @@ pub(super) struct GreyTables {
     pub(super) bin_scale: f32,
     /// Temperature nodes (of the Planck table).
     pub(super) temperatures: usize,
-    /// Height nodes per height interval of `planck`: 2, or 1 with a single
-    /// height node.
-    pub(super) interval_heights: usize,
-    /// `Σ q·B(T_k)` of band `b` at height node `a + h` (`h <
-    /// interval_heights`), range node `i`:
-    /// `[(((a · range_nodes + i) · temperatures + k) · interval_heights + h) · bands + b]`.
+    /// `Σ q_i·B(T_k)` of band `b` at `[(i · temperatures + k) · bands + b]`.
     pub(super) planck: Vec<f32>,
     /// Per range node `i`: `Σ q_i·L_sky`, `Σ q_i·E_s` and `Σ w·L_u` of band
     /// `b` at `[(3·i + 0, 1, 2) · bands + b]`.
@@ -169,30 +160,16 @@ impl GreyTables {
             .first()
             .and_then(|b| b.first())
             .map_or(0, |(i, _)| i.planck.len());
-        // Path nodes per height node, and height nodes.
-        let rn = if ranges.is_empty() { r } else { ranges.len() };
-        let hn = (r / rn.max(1)).max(1);
-        // Height intervals of the Planck table, and height nodes in each.
-        let (intervals, ih) = if hn >= 2 { (hn - 1, 2) } else { (1, 1) };
-        let mut planck = vec![0f32; intervals * rn * nt * ih * nb];
+        let mut planck = vec![0f32; nt * r * nb];
         let mut node = vec![0f32; 3 * r * nb];
         for (b, band) in nodes.iter().enumerate() {
-            for (n, (ig, lu)) in band.iter().enumerate() {
-                // Path node n = a·rn + i: the bottom of interval a (h = 0)
-                // and the top of interval a − 1 (h = 1).
-                let (a, i) = (n / rn, n % rn);
-                let places = [(a, 0), (a.wrapping_sub(1), 1)];
-                for (ai, h) in places
-                    .into_iter()
-                    .filter(|&(ai, h)| ai < intervals && h < ih)
-                {
-                    for (k, &x) in ig.planck.iter().enumerate() {
-                        planck[(((ai * rn + i) * nt + k) * ih + h) * nb + b] = x as f32;
-                    }
+            for (i, (ig, lu)) in band.iter().enumerate() {
+                for (k, &x) in ig.planck.iter().enumerate() {
+                    planck[(i * nt + k) * nb + b] = x as f32;
                 }
-                node[3 * n * nb + b] = ig.sky as f32;
-                node[(3 * n + 1) * nb + b] = ig.sun as f32;
-                node[(3 * n + 2) * nb + b] = *lu as f32;
+                node[3 * i * nb + b] = ig.sky as f32;
+                node[(3 * i + 1) * nb + b] = ig.sun as f32;
+                node[(3 * i + 2) * nb + b] = *lu as f32;
             }
         }
         let grey_everywhere = |mi: usize| fast.iter().all(|fb| fb.grey[mi].is_some());
@@ -225,8 +202,7 @@ impl GreyTables {
         GreyTables {
             bands: nb,
             temperatures: nt,
-            interval_heights: ih,
-            range_nodes: rn,
+            range_nodes: if ranges.is_empty() { r } else { ranges.len() },
             heights,
             inv_height_spacing,
             ranges,
@@ -303,11 +279,10 @@ impl GreyTables {
         if x.len() < 2 {
             return (0, 0.0);
         }
-        // The inner nodes at or below z, counted without a branch (the
-        // nodes increase, so this is the last node at or below z; a
-        // data-dependent loop mispredicted where ground and roof hits
-        // alternate). NaN: 0.
-        let a: usize = x[1..x.len() - 1].iter().map(|&h| usize::from(h <= z)).sum();
+        let mut a = 0;
+        while a + 2 < x.len() && x[a + 1] <= z {
+            a += 1;
+        }
         (a, ((z - x[a]) * self.inv_height_spacing[a]).clamp(0.0, 1.0))
     }
 }
@@ -393,34 +368,18 @@ fn lerp(a: f32, b: f32, x: f32) -> f32 {
     a + x * (b - a)
 }
 
-/// The Planck integrals `Σq·B(T)` of `NB` bands for [`Shader::grey_pass`]
-/// from the run of `2·IH·NB` values at `o` ([`GreyTables::planck`]: the
-/// height nodes of temperature node `k`, then of `k + 1`) and the next
-/// range node's run `rs` on: linear in temperature (fraction `f`), then in
-/// range (fraction `rx`), then, with two height nodes (`IH = 2`), in
-/// height (fraction `ax`) — the reference's order.
+/// One height node's Planck integrals `Σq·B(T)` of `NB` bands for
+/// [`Shader::grey_pass`]: linear in temperature (fraction `f` from the
+/// entries at `o` to the next temperature node's, `NB` on), then in range
+/// (fraction `rx` toward the next range node's, `rs` on).
 #[inline(always)]
-fn grey_planck<const NB: usize, const IH: usize>(
-    pl: &[f32],
-    o: usize,
-    rs: usize,
-    [f, rx, ax]: [f32; 3],
-) -> [f32; NB] {
-    // (Runs of constant length: one bounds check each.)
-    let a = &pl[o..o + 2 * IH * NB];
-    let c = &pl[o + rs..o + rs + 2 * IH * NB];
-    let ts = IH * NB;
+fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32) -> [f32; NB] {
+    let a = &pl[o..o + 2 * NB];
+    let c = &pl[o + rs..o + rs + 2 * NB];
     // (Loops, not `array::from_fn`, which was not always inlined.)
     let mut v = [0f32; NB];
     for (b, v) in v.iter_mut().enumerate() {
-        *v = lerp(lerp(a[b], a[ts + b], f), lerp(c[b], c[ts + b], f), rx);
-    }
-    if IH == 2 {
-        for (b, v) in v.iter_mut().enumerate() {
-            let h = NB + b;
-            let up = lerp(lerp(a[h], a[ts + h], f), lerp(c[h], c[ts + h], f), rx);
-            *v = lerp(*v, up, ax);
-        }
+        *v = lerp(lerp(a[b], a[NB + b], f), lerp(c[b], c[NB + b], f), rx);
     }
     v
 }
@@ -443,20 +402,20 @@ fn grey_node_terms<const NB: usize>(nd: &[f32], q: usize, rx: f32) -> [[f32; NB]
 /// One height node's grey-path terms of band `b` of `nb`
 /// ([`Shader::grey_pass_any`]): `[Σq·B(T), Σq·B(T_bg), Σq·L_sky, Σq·E_s,
 /// Σw·L_u]`, the Planck integrals linear in temperature (fractions `ft`,
-/// `fg` from the entries at `t0`, `g0`; the next temperature node `ts` on)
+/// `fg` from the entries at `t0`, `g0`; the next temperature node `nb` on)
 /// then in range (fraction `rx`; the next range node `rs` on), the node
 /// terms at `q` linear in range (the next range node `3·nb` on).
 #[inline(always)]
 pub(super) fn grey_node(
     pl: &[f32],
     nd: &[f32],
-    [nb, ts, rs, b]: [usize; 4],
+    [nb, rs, b]: [usize; 3],
     [t0, g0, q]: [usize; 3],
     [ft, fg, rx]: [f32; 3],
 ) -> [f32; 5] {
     let bilerp = |o: usize, f: f32| {
-        let v0 = lerp(pl[o + b], pl[o + ts + b], f);
-        let v1 = lerp(pl[o + rs + b], pl[o + rs + ts + b], f);
+        let v0 = lerp(pl[o + b], pl[o + nb + b], f);
+        let v1 = lerp(pl[o + rs + b], pl[o + rs + nb + b], f);
         lerp(v0, v1, rx)
     };
     let node = |o: usize| lerp(nd[q + o + b], nd[q + o + 3 * nb + b], rx);
@@ -616,12 +575,10 @@ impl Shader<'_> {
     /// [`GreyTables`]: the offsets are computed once per hit, then each
     /// band is a few loads. One and two bands (the common cases) have
     /// their own loops with the band count known.
-    pub(super) fn grey_pass(&self, sc: &mut FastScratch, n: usize, out: &mut [f32]) {
-        match (self.grey_tables.bands, self.grey_tables.interval_heights) {
-            (1, 1) => self.grey_pass_n::<1, 1>(sc, n, out),
-            (1, 2) => self.grey_pass_n::<1, 2>(sc, n, out),
-            (2, 1) => self.grey_pass_n::<2, 1>(sc, n, out),
-            (2, 2) => self.grey_pass_n::<2, 2>(sc, n, out),
+    pub(super) fn grey_pass(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
+        match self.grey_tables.bands {
+            1 => self.grey_pass_n::<1>(sc, n, out),
+            2 => self.grey_pass_n::<2>(sc, n, out),
             _ => self.grey_pass_any(sc, n, out),
         }
     }
@@ -671,53 +628,39 @@ impl Shader<'_> {
         }
     }
 
-    /// [`Shader::grey_pass`] with `NB` bands and `IH` height nodes per
-    /// height interval, in two passes over the hits so that each loop is
-    /// short and the table reads of several hits are in flight at once:
-    /// first each hit's Planck integrals of its surface and background
-    /// temperatures (the reads scattered by temperature, four runs of
-    /// [`GreyTables::planck`]) into `sc.grey_planck`, then the node terms
-    /// (a few kilobytes of table), ε(θ) and the band radiance.
-    fn grey_pass_n<const NB: usize, const IH: usize>(
-        &self,
-        sc: &mut FastScratch,
-        n: usize,
-        out: &mut [f32],
-    ) {
+    /// [`Shader::grey_pass`] with `NB` bands.
+    fn grey_pass_n<const NB: usize>(&self, sc: &FastScratch, n: usize, out: &mut [f32]) {
         let gt = &self.grey_tables;
-        debug_assert_eq!((gt.bands, gt.interval_heights), (NB, IH));
+        debug_assert_eq!(gt.bands, NB);
         let (out, _) = out.split_at_mut(NB * n);
         let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
         let nt = gt.temperatures;
-        // Steps in the Planck table: to the next range node; in the node
-        // terms, to the next height node (`range_nodes` path nodes on).
-        let rs = nt * IH * NB;
-        let hq = 3 * gt.range_nodes * NB;
-        sc.grey_planck.clear();
-        sc.grey_planck.resize(2 * NB * sc.grey.len(), 0.0);
-        for (hit, v) in sc.grey.iter().zip(sc.grey_planck.chunks_exact_mut(2 * NB)) {
-            let g = &self.grey[hit.facet as usize];
-            let cell = hit.node as usize * nt;
-            let t0 = (cell + g.kt as usize) * IH * NB;
-            let g0 = (cell + g.kg as usize) * IH * NB;
-            let bt = grey_planck::<NB, IH>(pl, t0, rs, [g.ft, hit.rx, hit.ax]);
-            let bg = grey_planck::<NB, IH>(pl, g0, rs, [g.fg, hit.rx, hit.ax]);
-            v[..NB].copy_from_slice(&bt);
-            v[NB..].copy_from_slice(&bg);
-        }
-        for (hit, v) in sc.grey.iter().zip(sc.grey_planck.chunks_exact(2 * NB)) {
+        // Steps in the Planck table: to the next range node, to the next
+        // height node (`range_nodes` path nodes on); in the node terms, to
+        // the next height node.
+        let rs = nt * NB;
+        let two = gt.heights.len() >= 2;
+        let (hp, hq) = (gt.range_nodes * nt * NB, 3 * gt.range_nodes * NB);
+        for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
             let g = p.g;
             let tr = gt.tr[p.mi];
             let one_f = 1.0 - g.big_f;
-            let (bt, bg) = v.split_at(NB);
+            let t0 = (p.n0 * nt + g.kt as usize) * NB;
+            let g0 = (p.n0 * nt + g.kg as usize) * NB;
             let q = 3 * p.n0 * NB;
-            // Range, then height, as the reference.
+            // Temperature first, then range, then height, as the reference.
+            let mut bt = grey_planck::<NB>(pl, t0, rs, g.ft, p.rx);
+            let mut bg = grey_planck::<NB>(pl, g0, rs, g.fg, p.rx);
             let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, p.rx);
-            if IH == 2 {
+            if two {
+                let bt1 = grey_planck::<NB>(pl, t0 + hp, rs, g.ft, p.rx);
+                let bg1 = grey_planck::<NB>(pl, g0 + hp, rs, g.fg, p.rx);
                 let [sky1, sun1, lu1] = grey_node_terms::<NB>(nd, q + hq, p.rx);
                 for b in 0..NB {
+                    bt[b] = lerp(bt[b], bt1[b], p.ax);
+                    bg[b] = lerp(bg[b], bg1[b], p.ax);
                     sky[b] = lerp(sky[b], sky1[b], p.ax);
                     sun[b] = lerp(sun[b], sun1[b], p.ax);
                     lu[b] = lerp(lu[b], lu1[b], p.ax);
@@ -739,10 +682,9 @@ impl Shader<'_> {
         let nb = gt.bands;
         let (pl, nd, ep) = (&gt.planck[..], &gt.node[..], &gt.eps[..]);
         let nt = gt.temperatures;
-        let ih = gt.interval_heights;
-        let (ts, rs) = (ih * nb, nt * ih * nb);
-        let two = ih == 2;
-        let hq = 3 * gt.range_nodes * nb;
+        let rs = nt * nb;
+        let two = gt.heights.len() >= 2;
+        let (hp, hq) = (gt.range_nodes * nt * nb, 3 * gt.range_nodes * nb);
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
@@ -750,22 +692,21 @@ impl Shader<'_> {
             let tr = gt.tr[p.mi];
             let one_f = 1.0 - g.big_f;
             let e = (p.mi * ANGLE_ROWS + p.a0) * nb;
-            let t0 = (p.n0 * nt + g.kt as usize) * ts;
-            let g0 = (p.n0 * nt + g.kg as usize) * ts;
+            let t0 = (p.n0 * nt + g.kt as usize) * nb;
+            let g0 = (p.n0 * nt + g.kg as usize) * nb;
             let q = 3 * p.n0 * nb;
             for b in 0..nb {
                 let eps = lerp(ep[e + b], ep[e + nb + b], p.ta);
                 // Temperature first, then range, then height, as the
                 // reference.
                 let [mut bt, mut bg, mut sky, mut sun, mut lu] =
-                    grey_node(pl, nd, [nb, ts, rs, b], [t0, g0, q], [g.ft, g.fg, p.rx]);
+                    grey_node(pl, nd, [nb, rs, b], [t0, g0, q], [g.ft, g.fg, p.rx]);
                 if two {
-                    // The upper height node: the next `nb` entries.
                     let [bt1, bg1, sky1, sun1, lu1] = grey_node(
                         pl,
                         nd,
-                        [nb, ts, rs, b],
-                        [t0 + nb, g0 + nb, q + hq],
+                        [nb, rs, b],
+                        [t0 + hp, g0 + hp, q + hq],
                         [g.ft, g.fg, p.rx],
                     );
                     bt = lerp(bt, bt1, p.ax);

@@ -33,9 +33,6 @@ pub struct FastScratch {
     pub(super) sun: SunRays,
     pub(super) bands: Vec<f32>,
     pub(super) states: HitStates,
-    /// Per grey hit: the Planck integrals of its surface, then background
-    /// temperature, per band ([`Shader::grey_pass`]).
-    pub(super) grey_planck: Vec<f32>,
 }
 
 impl Shader<'_> {
