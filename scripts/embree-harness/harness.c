@@ -10,6 +10,10 @@
  * (batches shared among THREADS pthreads through an atomic counter, as
  * rayon shares irsig's) and prints the best of ROUNDS in Mray/s, plus the
  * number of hits (or occluded rays) to compare with irsig's answers.
+ * Environment: HARNESS_EMBREE_CONFIG is appended to the device's
+ * configuration string (e.g. `isa=avx2`); HARNESS_CPU_TIME=1 times with the
+ * process's CPU clock instead of the wall clock (rates per CPU-second, which
+ * a shared machine's load skews far less; use THREADS 1 with it).
  * Embree 3 API (Debian 12's libembree-dev). */
 #define _POSIX_C_SOURCE 200809L
 #include <embree3/rtcore.h>
@@ -148,7 +152,8 @@ static void *worker(void *arg) {
 
 static double now(void) {
   struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
+  const char *cpu = getenv("HARNESS_CPU_TIME");
+  clock_gettime(cpu && strcmp(cpu, "1") == 0 ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_MONOTONIC, &t);
   return t.tv_sec + 1e-9 * t.tv_nsec;
 }
 
@@ -161,8 +166,9 @@ int main(int argc, char **argv) {
   int threads = atoi(argv[2]), rounds = atoi(argv[3]);
   int robust = argc < 5 || strcmp(argv[4], "fast") != 0;
   const char *quality = argc < 6 ? "medium" : argv[5];
-  char cfg[64];
-  snprintf(cfg, sizeof cfg, "threads=%d", threads);
+  const char *extra = getenv("HARNESS_EMBREE_CONFIG");
+  char cfg[256];
+  snprintf(cfg, sizeof cfg, "threads=%d%s%s", threads, extra ? "," : "", extra ? extra : "");
   RTCDevice dev = rtcNewDevice(cfg);
   size_t n;
   float *tri = slurp(dir, "triangles.f32", &n);
