@@ -263,6 +263,7 @@ struct Scratch {
 }
 
 /// The scene-wide part of a sampling pattern ([`SkySampling::base`]).
+#[derive(Debug, Clone, PartialEq)]
 enum Base {
     /// The grid's directions, the same for every face.
     Grid(Vec<HemiSample>),
@@ -289,6 +290,25 @@ fn pattern<'a>(
             rotated_cosine_into(*m, jitter, (a + h, b + h), buf);
             buf
         }
+    }
+}
+
+/// The hemisphere patterns [`sky_view`] traces over facets' front faces,
+/// for tracing the same directions from other points of a facet (a hit's
+/// own sky view, `crate::render::per_hit`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FacePatterns(Base);
+
+impl FacePatterns {
+    /// The patterns of `sampling` with `seed`, as [`sky_view`] draws them.
+    pub fn new(sampling: SkySampling, seed: u64) -> FacePatterns {
+        FacePatterns(sampling.base(seed))
+    }
+
+    /// The front face's pattern of `facet` (local frame; `buf` holds it
+    /// when it is rotated).
+    pub fn front<'a>(&'a self, facet: usize, buf: &'a mut Vec<HemiSample>) -> &'a [HemiSample] {
+        pattern(&self.0, facet, false, buf)
     }
 }
 

@@ -19,9 +19,33 @@
 //! one dot product over the window's records per hit
 //! ([`crate::thermal::scene::PointResponse`]), with the point's `s_p` from
 //! one shadow ray toward the sun per record with the sun in front of the
-//! facet. The background, shape factor and everything else stay the
-//! facet's. Where `s_p = s_f` at every record the sum is exactly zero and
-//! the hit takes the facet's temperature bit for bit.
+//! facet. Where `s_p = s_f` at every record (and the hit takes no sky view
+//! of its own) the sum is exactly zero and the hit takes the facet's
+//! temperature bit for bit. The second order adds the curvature of the
+//! emission and, for an evaporating property set, of the latent loss
+//! ([`crate::thermal::linear::emission_curvature`],
+//! [`crate::thermal::linear::latent_curvature`]).
+//!
+//! # Sky view
+//! With [`PerHit::with_sky`], a hit that gets its own temperature on a
+//! facet whose hemisphere rays hit the scene ([`PerHit::own_sky`]) also
+//! gets its own shape factor `F_p` and background: the facet's own
+//! hemisphere pattern (the same directions as its sky view) traced from
+//! the hit point. The front source of the slab model is affine in `F`
+//! ([`crate::thermal::SourceModel::front_per_shape_factor`], `∂S/∂F` =
+//! `ε(E_sky − σT_air⁴) + αE_d`), and the scene solve's last pass adds the
+//! background `ε(1 − F)·σ(T_bg⁴ − T_air⁴)` with
+//! `T_bg⁴ = (g·T_air⁴ + Σ wᵢTᵢ⁴)/(g + Σ wᵢ)` over what the rays hit. So
+//! the point's sources differ from the facet's by (W m⁻²)
+//!
+//! ```text
+//! ΔS_k = (F_p − F_f)·∂S_k/∂F + ε(1 − F_p)σ(T_bg,p⁴ − T_air⁴)_k − ε(1 − F_f)σ(T_bg,f⁴ − T_air⁴)_k
+//! ```
+//!
+//! with the `Tᵢ⁴` histories the last pass used, entering through the
+//! image row of `G` as the sunlit difference does. The point's shape
+//! factor and its background temperature at the image time go to the
+//! radiance and the `shape_factor` truth layer ([`HitSky`]).
 //!
 //! The shadow rays are traced at every [`PerHitParams::stride`]-th record
 //! of each run of records with the sun in front (and the run's last), and
@@ -51,10 +75,11 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::scene_thermal::ImageResponse;
-use crate::exposure::{FacetSamples, SkyView, SolarHistory};
-use crate::thermal::linear::emission_curvature;
+use crate::exposure::{FacePatterns, FacetSamples, SkySampling, SkyView, SolarHistory};
+use crate::geometry::SceneGeometry;
+use crate::thermal::linear::{emission_curvature, latent_curvature};
 use crate::thermal::scene::PointResponse;
-use crate::trace::{Coherence, Ray, Tracer};
+use crate::trace::{Coherence, Hit, Ray, Tracer};
 
 /// Settings of per-hit temperatures.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,6 +90,10 @@ pub struct PerHitParams {
     /// Shadow rays traced at every `stride`-th record, refined where the
     /// answer changes (default 4).
     pub stride: u32,
+    /// Whether the second order of an evaporating property set includes
+    /// the curvature of its latent loss in `T` (default true; false: the
+    /// emission's curvature alone, for comparison).
+    pub latent_curvature: bool,
 }
 
 impl Default for PerHitParams {
@@ -72,6 +101,7 @@ impl Default for PerHitParams {
         PerHitParams {
             size_px: 16.0,
             stride: 4,
+            latent_curvature: true,
         }
     }
 }
@@ -95,6 +125,82 @@ pub struct HitState {
     pub dt_k: f32,
     /// Its sunlit fraction at the image time (0 or 1).
     pub sun_fraction: f32,
+    /// Its own sky view, where it has one ([`PerHit::own_sky`]); `None`:
+    /// its facet's.
+    pub sky: Option<HitSky>,
+}
+
+/// A hit's own view of the sky and the scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HitSky {
+    /// Its shape factor `F_p` (view factor to the sky).
+    pub shape_factor: f32,
+    /// Its background temperature at the image time, K: the radiative mean
+    /// of what its blocked hemisphere rays hit, the ground beyond the scene
+    /// at the air temperature (as
+    /// [`crate::exposure::SkyView::background_temperature`] for a facet).
+    pub background_k: f32,
+}
+
+/// What hits' own sky views need of the scene (shared by the image times
+/// of a render; module docs, "Sky view").
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkyInputs {
+    /// The facets' sky views (shape factors and what their rays hit).
+    sky: Arc<SkyView>,
+    /// The hemisphere patterns of the facets' sky views.
+    patterns: FacePatterns,
+    /// Per facet: tangent and bitangent of its frame.
+    frame: Arc<Vec<(Vec3, Vec3)>>,
+    /// First facet of each instance.
+    instance_offsets: Arc<Vec<usize>>,
+    /// Per facet: whether its hits may take their own sky view
+    /// (single-sided, shape factor not set by hand, some of its hemisphere
+    /// rays hit the scene).
+    eligible: Arc<Vec<bool>>,
+}
+
+impl SkyInputs {
+    /// From the facets' frames and sky view, traced with `sampling` and
+    /// `seed`; `shape_factor_override` per facet (or empty) marks the
+    /// facets whose shape factor was set by hand.
+    pub fn new(
+        facets: &FacetSamples,
+        sky: Arc<SkyView>,
+        sampling: SkySampling,
+        seed: u64,
+        shape_factor_override: &[Option<f32>],
+    ) -> SkyInputs {
+        let eligible = (0..facets.len())
+            .map(|f| {
+                !facets.double_sided[f]
+                    && shape_factor_override.get(f).is_none_or(Option::is_none)
+                    && !sky.background(f).is_empty()
+            })
+            .collect();
+        SkyInputs {
+            patterns: FacePatterns::new(sampling, seed),
+            frame: Arc::new(
+                facets
+                    .tangent
+                    .iter()
+                    .zip(&facets.bitangent)
+                    .map(|(&t, &b)| (t, b))
+                    .collect(),
+            ),
+            instance_offsets: Arc::new(facets.instance_offsets.clone()),
+            eligible: Arc::new(eligible),
+            sky,
+        }
+    }
+}
+
+/// [`SkyInputs`] with one image time's temperatures.
+#[derive(Debug, Clone, PartialEq)]
+struct PointSky {
+    inputs: SkyInputs,
+    /// Every facet's temperature at the image time, K.
+    temperature_k: Vec<f32>,
 }
 
 /// What per-hit temperatures need for one image time (module docs).
@@ -125,6 +231,8 @@ pub struct PerHit {
     /// Lift of ray origins off the surface, m.
     offset_m: f32,
     params: PerHitParams,
+    /// Hits' own sky views (`None`: every hit takes its facet's).
+    sky: Option<PointSky>,
 }
 
 impl PerHit {
@@ -184,7 +292,31 @@ impl PerHit {
             offset_m: facets.offset_m,
             solar,
             params,
+            sky: None,
         }
+    }
+
+    /// This with hits' own sky views (module docs, "Sky view"):
+    /// `temperature_k` every facet's temperature at the image time, K.
+    pub fn with_sky(mut self, inputs: SkyInputs, temperature_k: &[f32]) -> PerHit {
+        self.sky = Some(PointSky {
+            inputs,
+            temperature_k: temperature_k.to_vec(),
+        });
+        self
+    }
+
+    /// Whether hits on `facet` that get their own temperature also get their
+    /// own sky view: per-hit sky views are on, the facet has a response, is
+    /// single-sided, its shape factor was not set by hand, and some of its
+    /// hemisphere rays hit the scene (otherwise every point of its plane
+    /// sees the same sky and ground).
+    #[inline]
+    pub fn own_sky(&self, facet: usize) -> bool {
+        self.sky
+            .as_ref()
+            .is_some_and(|s| s.inputs.eligible.get(facet).copied().unwrap_or(false))
+            && self.block_of.get(facet).is_some_and(|&b| b != u32::MAX)
     }
 
     /// Whether a hit on `facet` at range `range_m` seen with pixel angle
@@ -226,9 +358,12 @@ impl PerHit {
             && self.spacing[facet] > self.params.size_px * range_m * pixel_angle_rad
     }
 
-    /// The range of temperatures the hits on a facet can take, K: each
-    /// facet's `temperature_k` plus and minus the largest change its
-    /// response allows (every record fully lit or shaded).
+    /// The range of temperatures the hits on a facet can take through
+    /// their sunlit histories, K: each facet's `temperature_k` plus and
+    /// minus the largest change its response allows (every record fully
+    /// lit or shaded). An own sky view's change (a few kelvins) is not
+    /// bounded here: its rare hits beyond a table built on this range take
+    /// the exact path.
     pub fn temperature_bounds(&self, temperature_k: &[f32]) -> (f32, f32) {
         use rayon::prelude::*;
         let r = self.records.len();
@@ -260,41 +395,170 @@ impl PerHit {
             )
     }
 
-    /// The second-order term of a point whose `s cos θ` differs from its
-    /// facet's by `diff` `(record, Δ)`, K: the curvature of the emission
-    /// about the reference, `r(δ) = −εσδ²(6T² + 4Tδ + δ²)` with `δ = G·ΔS`
-    /// the first-order change history, through the image row of `G` (as
-    /// the scene solve's second order,
-    /// [`crate::thermal::Linearization::predict`]).
-    /// `delta` is scratch space (its contents on entry do not matter).
-    fn second_order(&self, block: usize, diff: &[(usize, f32)], delta: &mut Vec<f32>) -> f32 {
+    /// The second-order term of a point whose sources differ from its
+    /// facet's by `src` (W m⁻² per record, zeros where they agree), K: the
+    /// curvature of the emission about the reference,
+    /// `r(δ) = −εσδ²(6T² + 4Tδ + δ²)`, and of an evaporating surface's
+    /// latent loss, `−g_v[e°(T+δ) − e°(T) − e°′(T)δ]`
+    /// ([`PerHitParams::latent_curvature`]), with `δ = G·ΔS` the
+    /// first-order change history, through the image row of `G` (as the
+    /// scene solve's second order, [`crate::thermal::Linearization::predict`],
+    /// whose curvature functions these are). `delta` is scratch space.
+    fn second_order(&self, block: usize, src: &[f32], delta: &mut Vec<f32>) -> f32 {
         let p = &*self.response;
         let r = p.records;
         let g = &p.green[block * r * r..(block + 1) * r * r];
-        let sun = &p.sun[block * r..(block + 1) * r];
         delta.clear();
         delta.resize(r, 0.0);
-        for &(k, d) in diff {
-            let x = d * sun[k];
+        for (k, &x) in src.iter().enumerate() {
+            if x == 0.0 {
+                continue;
+            }
             for (o, gk) in delta.iter_mut().zip(&g[k * r..(k + 1) * r]) {
                 *o += x * gk;
             }
         }
         let t_ref = &p.reference_k[block * r..(block + 1) * r];
         let rad = p.radiative[block] as f64;
+        let latent = if self.params.latent_curvature {
+            p.latent.get(block * r..(block + 1) * r).unwrap_or(&[])
+        } else {
+            &[]
+        };
         let row = &self.green_rows[block * r..(block + 1) * r];
         let mut x = 0.0f64;
         for t in 0..r {
             if delta[t] != 0.0 {
-                x += row[t] as f64 * emission_curvature(rad, t_ref[t] as f64, delta[t] as f64);
+                let (tr, d) = (t_ref[t] as f64, delta[t] as f64);
+                let mut c = emission_curvature(rad, tr, d);
+                if let Some(&gv) = latent.get(t) {
+                    c += latent_curvature(gv, tr, d);
+                }
+                x += row[t] as f64 * c;
             }
         }
         x as f32
     }
 
+    /// The own sky view of a point of `facet` (single-sided front face)
+    /// from its hemisphere rays `rays`, `hits`, `weights` (the facet's
+    /// pattern, from the point): its shape factor, ground weight and the
+    /// facets hit with their weights (into `seen`, merged by facet).
+    fn point_view(
+        inputs: &SkyInputs,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        weights: &[f32],
+        seen: &mut Vec<(u32, f32)>,
+    ) -> (f32, f32) {
+        let (mut sky, mut ground) = (0.0f64, 0.0f64);
+        seen.clear();
+        for ((ray, h), &w) in rays.iter().zip(hits).zip(weights) {
+            match h {
+                Some(h) => seen.push((
+                    SceneGeometry::facet_id(&inputs.instance_offsets, h.instance, h.prim) as u32,
+                    w,
+                )),
+                None if ray.dir.z > 0.0 => sky += w as f64,
+                None => ground += w as f64,
+            }
+        }
+        seen.sort_by_key(|e| e.0);
+        seen.dedup_by(|b, a| {
+            let same = a.0 == b.0;
+            if same {
+                a.1 += b.1;
+            }
+            same
+        });
+        (sky as f32, ground as f32)
+    }
+
+    /// The background source of a face of `block` with shape factor `f`,
+    /// ground weight `g` and the facets `seen` (with weights), added to
+    /// `out` times `sign` (W m⁻² per record): `ε(1 − F)·σ(T_bg⁴ − T_air⁴)`
+    /// with `T_bg⁴ = (g·T_air⁴ + Σ wᵢTᵢ⁴)/(g + Σ wᵢ)`, the term the scene
+    /// solve's last pass adds to a facet's sources
+    /// ([`crate::thermal::background_coefficients`]); `Tᵢ⁴` the `T⁴`
+    /// history that pass used, or (a facet no other facet sees) its
+    /// temperature at the image time. Nothing with one pass (the air is
+    /// every background).
+    #[allow(clippy::too_many_arguments)]
+    fn add_background(
+        &self,
+        sky: &PointSky,
+        block: usize,
+        f: f32,
+        g: f32,
+        seen: &mut dyn Iterator<Item = (u32, f32)>,
+        sign: f32,
+        out: &mut [f32],
+        acc: &mut Vec<f32>,
+    ) {
+        let p = &*self.response;
+        if p.slot_of.is_empty() {
+            return;
+        }
+        let r = p.records;
+        acc.clear();
+        acc.extend(p.air4.iter().map(|a| g * a));
+        let mut den = g;
+        for (j, w) in seen {
+            den += w;
+            match p.slot_of.get(j as usize) {
+                Some(&s) if s != u32::MAX => {
+                    let h = &p.background4[s as usize * r..(s as usize + 1) * r];
+                    acc.iter_mut().zip(h).for_each(|(o, t4)| *o += w * t4);
+                }
+                _ => {
+                    let t4 = w * sky.temperature_k[j as usize].powi(4);
+                    acc.iter_mut().for_each(|o| *o += t4);
+                }
+            }
+        }
+        if den <= 0.0 {
+            return;
+        }
+        let c = sign * p.radiative[block] * (1.0 - f);
+        for ((o, a), air) in out.iter_mut().zip(acc.iter()).zip(&p.air4) {
+            *o += c * (a / den - air);
+        }
+    }
+
+    /// Background temperature at the image time of a face with ground
+    /// weight `g` and the facets `seen`, K (air temperature `air_k` for the
+    /// ground beyond the scene and for a face that sees only sky).
+    fn background_now(sky: &PointSky, g: f32, seen: &[(u32, f32)], air_k: f32) -> f32 {
+        let mut num = g * air_k.powi(4);
+        let mut den = g;
+        for &(j, w) in seen {
+            num += w * sky.temperature_k[j as usize].powi(4);
+            den += w;
+        }
+        if den > 0.0 {
+            (num / den).powf(0.25)
+        } else {
+            air_k
+        }
+    }
+
     /// The states of hits `(facet, point)` (points on the facets' planes)
-    /// into `out`, one per hit, tracing their shadow rays with `tracer`.
+    /// into `out`, one per hit, tracing their shadow rays with `tracer`
+    /// (and their own sky views where [`PerHit::own_sky`]).
     pub fn states(&self, tracer: &dyn Tracer, hits: &[(u32, Vec3)], out: &mut Vec<HitState>) {
+        self.states_of(tracer, hits, true, out);
+    }
+
+    /// [`PerHit::states`], with own sky views only when `own_sky` (false:
+    /// every hit keeps its facet's view; a render's hits seen through a
+    /// reflection or transmission, module docs).
+    pub fn states_of(
+        &self,
+        tracer: &dyn Tracer,
+        hits: &[(u32, Vec3)],
+        own_sky: bool,
+        out: &mut Vec<HitState>,
+    ) {
         out.clear();
         let r = self.records.len();
         if hits.is_empty() || r == 0 {
@@ -381,10 +645,43 @@ impl PerHit {
             }
         }
         trace(&|i| need[i], &mut state);
+        // The own hemisphere rays of the hits that take their own sky view:
+        // their facet's pattern (the directions of its own sky view), all
+        // from the hit point lifted off the plane; hit `j`'s rays are
+        // `sky_rays[sky_at[j]..sky_at[j + 1]]` (an empty range: none).
+        let mut sky_rays = Vec::new();
+        let mut sky_w = Vec::new();
+        let mut sky_at = Vec::with_capacity(hits.len() + 1);
+        let mut pat = Vec::new();
+        for &(f, p) in hits {
+            sky_at.push(sky_rays.len());
+            let f = f as usize;
+            if let Some(ps) = self.sky.as_ref().filter(|_| own_sky && self.own_sky(f)) {
+                let n = self.normal[f];
+                let (t, b) = ps.inputs.frame[f];
+                let o = p + n * self.offset_m;
+                for h in ps.inputs.patterns.front(f, &mut pat) {
+                    let d = t * h.dir.x + b * h.dir.y + n * h.dir.z;
+                    sky_rays.push(Ray::new(o, d));
+                    sky_w.push(h.weight);
+                }
+            }
+        }
+        sky_at.push(sky_rays.len());
+        let mut sky_hits = vec![None; sky_rays.len()];
+        if !sky_rays.is_empty() {
+            tracer.intersect(&sky_rays, Coherence::Incoherent, &mut sky_hits);
+        }
         // Scratch of the per-hit loop: (record, Δ(s cos θ)) where the
-        // point's history differs, and the second order's change history.
+        // point's history differs, the sky view's source change, the point's
+        // source change, the second order's change history, what the point
+        // sees, a background sum.
         let mut diff: Vec<(usize, f32)> = Vec::new();
+        let mut ds_sky: Vec<f32> = Vec::new();
+        let mut src: Vec<f32> = Vec::new();
         let mut delta: Vec<f32> = Vec::new();
+        let mut seen: Vec<(u32, f32)> = Vec::new();
+        let mut acc: Vec<f32> = Vec::new();
         for (j, &(f, _)) in hits.iter().enumerate() {
             let f = f as usize;
             let s = |k: usize| self.solar.sun_fraction_at(f, k);
@@ -415,8 +712,64 @@ impl PerHit {
                     diff.push((k, d));
                 }
             }
-            if !diff.is_empty() {
-                dt += self.second_order(b, &diff, &mut delta);
+            // The own sky view's source change (module docs, "Sky view").
+            let (r0, r1) = (sky_at[j], sky_at[j + 1]);
+            let mut own_sky = None;
+            if let Some(ps) = self.sky.as_ref().filter(|_| r1 > r0) {
+                let (fp, gp) = Self::point_view(
+                    &ps.inputs,
+                    &sky_rays[r0..r1],
+                    &sky_hits[r0..r1],
+                    &sky_w[r0..r1],
+                    &mut seen,
+                );
+                let sky = &ps.inputs.sky;
+                let ff = sky.shape_factor[f];
+                let p = &*self.response;
+                ds_sky.clear();
+                match p.shape.get(b * r..(b + 1) * r) {
+                    Some(shape) => ds_sky.extend(shape.iter().map(|x| (fp - ff) * x)),
+                    None => ds_sky.resize(r, 0.0),
+                }
+                self.add_background(
+                    ps,
+                    b,
+                    fp,
+                    gp,
+                    &mut seen.iter().copied(),
+                    1.0,
+                    &mut ds_sky,
+                    &mut acc,
+                );
+                self.add_background(
+                    ps,
+                    b,
+                    ff,
+                    sky.ground_weight[f],
+                    &mut sky.background(f).iter().map(|e| (e.facet, e.weight)),
+                    -1.0,
+                    &mut ds_sky,
+                    &mut acc,
+                );
+                let green = &self.green_rows[b * r..(b + 1) * r];
+                dt += green.iter().zip(&ds_sky).map(|(g, x)| g * x).sum::<f32>();
+                let air = p.air4.last().map_or(0.0, |a| a.powf(0.25));
+                own_sky = Some(HitSky {
+                    shape_factor: fp,
+                    background_k: Self::background_now(ps, gp, &seen, air),
+                });
+            }
+            if !diff.is_empty() || own_sky.is_some() {
+                src.clear();
+                src.resize(r, 0.0);
+                let sun = &self.response.sun[b * r..(b + 1) * r];
+                for &(k, d) in &diff {
+                    src[k] = d * sun[k];
+                }
+                if own_sky.is_some() {
+                    src.iter_mut().zip(&ds_sky).for_each(|(o, x)| *o += x);
+                }
+                dt += self.second_order(b, &src, &mut delta);
             }
             out.push(HitState {
                 dt_k: dt,
@@ -425,6 +778,7 @@ impl PerHit {
                     SHADED => 0.0,
                     _ => s(self.records[r - 1]),
                 },
+                sky: own_sky,
             });
         }
     }

@@ -1083,19 +1083,34 @@ fn scene_thermal(
     // functions); a state folder holds per-facet values only.
     if session.config.per_hit {
         let solar = std::sync::Arc::new(std::mem::take(&mut solved.exposure.solar));
-        for (c, image) in out.conditions.iter_mut().zip(&solved.point_response) {
+        let sky_view = std::sync::Arc::new(std::mem::take(&mut solved.exposure.sky));
+        let sky = super::per_hit::SkyInputs::new(
+            &solved.exposure.facets,
+            sky_view.clone(),
+            params.exposure.sky,
+            params.exposure.seed,
+            &solved.setup.shape_factor_override,
+        );
+        for (i, (c, image)) in out
+            .conditions
+            .iter_mut()
+            .zip(&solved.point_response)
+            .enumerate()
+        {
             if let Some(image) = image {
-                c.per_hit = Some(std::sync::Arc::new(super::per_hit::PerHit::new(
+                let ph = super::per_hit::PerHit::new(
                     solar.clone(),
                     &solved.exposure.facets,
-                    &solved.exposure.sky,
+                    &sky_view,
                     image,
                     &solved.sun_directions,
                     super::per_hit::PerHitParams {
                         size_px: session.config.per_hit_size_px,
                         ..super::per_hit::PerHitParams::default()
                     },
-                )));
+                )
+                .with_sky(sky.clone(), solved.surface_temperature_k(i));
+                c.per_hit = Some(std::sync::Arc::new(ph));
             }
         }
     }

@@ -5,7 +5,7 @@
 
 use super::fast::{FastMiss, FastScratch};
 use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
-use super::surface::{GreyFacet, PlanckTable, hit_temperature};
+use super::surface::{GreyFacet, PlanckTable, hit_sky, hit_temperature};
 use super::{BandTables, Shader};
 use crate::material::Material;
 use crate::render::per_hit::HitState;
@@ -744,14 +744,15 @@ impl Shader<'_> {
         let s = &self.conditions.surface;
         let (t_hit, sun_fraction) = hit_temperature(s, f, state);
         let sun_fraction = vis.unwrap_or(sun_fraction);
+        let (shape_factor, background_k) = hit_sky(s, f, state);
         let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
         let (kg, fg) = self
-            .table_position(s.background_k[f] as f64)
+            .table_position(background_k as f64)
             .ok_or(FastMiss::OffTable)?;
         let m = &self.optics.materials[mi];
         let (_, nrm, d) = self.hit_frame(ray, h);
         let (a0, ta) = angle_row(-d.dot(nrm));
-        let big_f = (s.shape_factor[f] as f64).clamp(0.0, 1.0);
+        let big_f = (shape_factor as f64).clamp(0.0, 1.0);
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)

@@ -162,6 +162,7 @@ impl Shader<'_> {
             rays,
             hits,
             sc.special.iter().map(|&i| i as usize),
+            true,
             &mut sc.states,
         );
         {

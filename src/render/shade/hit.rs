@@ -156,12 +156,14 @@ impl Shader<'_> {
     /// The per-hit states of the hits of a batch whose facets want one,
     /// among the rays `which`, into `sc` (`state_of`, per ray of the
     /// batch: index into `states`, `u32::MAX` for none), all traced in one
-    /// call of [`crate::render::per_hit::PerHit::states`].
+    /// call of [`crate::render::per_hit::PerHit::states_of`], with their
+    /// own sky views when `own_sky`.
     pub(super) fn per_hit_states_of(
         &self,
         rays: &[Ray],
         hits: &[Option<Hit>],
         which: impl IntoIterator<Item = usize>,
+        own_sky: bool,
         sc: &mut HitStates,
     ) {
         sc.state_of.clear();
@@ -181,7 +183,7 @@ impl Shader<'_> {
                 sc.points.push((f as u32, ray.origin + ray.dir * h.t));
             }
         }
-        ph.states(self.tracer, &sc.points, &mut sc.states);
+        ph.states_of(self.tracer, &sc.points, own_sky, &mut sc.states);
     }
 
     /// The per-hit state of one hit, if its facet wants one.

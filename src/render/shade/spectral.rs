@@ -5,7 +5,7 @@
 use super::Shader;
 use super::hit::{ANGLE_ROWS, HitStates};
 use super::sources::SunRays;
-use super::surface::hit_temperature;
+use super::surface::{hit_sky, hit_temperature};
 use crate::radiometry::{SurfaceInputs, leaving_radiance};
 use crate::render::per_hit::HitState;
 use crate::trace::{Coherence, Hit, Ray};
@@ -76,10 +76,10 @@ impl Shader<'_> {
                 refl[i] = k;
             }
         }
-        // The hits' per-hit states, all traced in one call, then their
-        // shadow rays.
+        // The hits' per-hit states, all traced in one call (own sky views
+        // for the hits seen directly), then their shadow rays.
         let mut states = HitStates::default();
-        self.per_hit_states_of(rays, hits, 0..rays.len(), &mut states);
+        self.per_hit_states_of(rays, hits, 0..rays.len(), depth == 0, &mut states);
         let mut sun = SunRays::default();
         self.sun_visibility(rays, hits, |i| states.has(i), &mut sun);
         let mut scratch = LeavingScratch::new(n);
@@ -137,7 +137,8 @@ impl Shader<'_> {
             _ => 0.0,
         };
         self.planck_into(t_hit, &mut sc.b_t);
-        self.planck_into(s.background_k[f] as f64, &mut sc.b_bg);
+        let (shape_factor, background_k) = hit_sky(s, f, state);
+        self.planck_into(background_k as f64, &mut sc.b_bg);
         // The sun only lights the face it falls on: for a single-sided facet
         // seen from behind, cos σ of the front face does not apply.
         let front = h.ng.dot(d) < 0.0;
@@ -160,7 +161,7 @@ impl Shader<'_> {
                 emissivity: eps,
                 specular_fraction: m.specular_fraction,
                 transmissivity: m.transmissivity,
-                shape_factor: s.shape_factor[f] as f64,
+                shape_factor: shape_factor as f64,
                 sky_radiance: &t.sky,
                 background_radiance: &sc.b_bg[k..k + nl],
                 solar_irradiance: Some(&t.sun),

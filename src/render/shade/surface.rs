@@ -177,6 +177,16 @@ pub(super) fn hit_temperature(s: &SurfaceState, f: usize, state: Option<HitState
     }
 }
 
+/// The shape factor and background temperature (K) of a hit on facet
+/// `f`: its own (per-hit `state` with its own sky view) or its facet's.
+#[inline]
+pub(super) fn hit_sky(s: &SurfaceState, f: usize, state: Option<HitState>) -> (f32, f32) {
+    match state.and_then(|st| st.sky) {
+        Some(k) => (k.shape_factor, k.background_k),
+        None => (s.shape_factor[f], s.background_k[f]),
+    }
+}
+
 impl Shader<'_> {
     /// Whether a hit on facet `f` spawns secondary rays (specular or
     /// transmissive material, bounce budget left).

@@ -113,6 +113,9 @@ impl Shader<'_> {
         if let Some(st) = state {
             v[0] = self.conditions.surface.temperature_k[f] + st.dt_k;
             v[4] = st.sun_fraction;
+            if let Some(k) = st.sky {
+                v[3] = k.shape_factor;
+            }
         }
         v
     }

@@ -207,6 +207,22 @@ pub struct PointResponse {
     pub sun: Vec<f32>,
     /// `[block]`: `εσ` of the front, W m⁻² K⁻⁴.
     pub radiative: Vec<f32>,
+    /// `[block][t]`: the reference's vapour conductance of the front's
+    /// latent loss, W m⁻² Pa⁻¹ (0 for a dry block; empty when no block
+    /// evaporates): the second order's latent curvature
+    /// ([`crate::thermal::linear::latent_curvature`]).
+    pub latent: Vec<f64>,
+    /// `[block][k]`: `∂S_k/∂F` of the property set, W m⁻² (for a point's
+    /// own shape factor).
+    pub shape: Vec<f32>,
+    /// `[k]`: `T_air⁴`, K⁴.
+    pub air4: Vec<f32>,
+    /// The `T⁴` histories (K⁴, `[slot][k]`) of the facets others see, as
+    /// the last pass's backgrounds used them (empty with one pass: the
+    /// air is every background); shared, not copied, by clones.
+    pub background4: std::sync::Arc<Vec<f32>>,
+    /// Per facet: its slot in `background4` (`u32::MAX`: none).
+    pub slot_of: std::sync::Arc<Vec<u32>>,
 }
 
 impl PointResponse {

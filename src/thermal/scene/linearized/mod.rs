@@ -242,6 +242,8 @@ pub(super) fn solve(
     let mut base: Option<Vec<f32>> = None;
     let mut prev_image: Option<Vec<Vec<f32>>> = None;
     let mut image = Vec::new();
+    // The histories the last pass's backgrounds used (per-hit sky views).
+    let mut last4: Option<Vec<f32>> = None;
     for p in 0..passes {
         let t0 = Instant::now();
         let last = p + 1 == passes;
@@ -249,7 +251,11 @@ pub(super) fn solve(
         // background: the second pass may reuse them (`PassPlan::run`).
         let (img, next4) = plan.run(last, prev4.as_deref(), base.as_deref(), p == 1);
         image = plan.image_temperatures(&img);
-        prev4 = (!last).then_some(next4);
+        if last {
+            last4 = prev4.take();
+        } else {
+            prev4 = Some(next4);
+        }
         if p == 0 {
             base = Some(img);
         }
@@ -270,7 +276,17 @@ pub(super) fn solve(
         });
         prev_image = Some(image.clone());
     }
-    let point_response = point_response(&groups, &refs, &bins, image_records.len(), facets.len());
+    let mut point_response =
+        point_response(&groups, &refs, &bins, image_records.len(), facets.len());
+    add_point_sky(
+        &mut point_response,
+        &groups,
+        &refs,
+        &bins,
+        &facets,
+        &plan,
+        last4,
+    );
     Ok(SceneTemperatures {
         image_records: image_records.to_vec(),
         surface_temperature_k: image,
@@ -314,6 +330,47 @@ fn point_response(
         reference_k,
         sun: suns,
         radiative: refs.iter().map(|x| x.front.radiative).collect(),
+        latent: Vec::new(),
+        shape: Vec::new(),
+        air4: Vec::new(),
+        background4: Default::default(),
+        slot_of: Default::default(),
+    }
+}
+
+/// What a point's own sky view needs ([`super::PointResponse`]): each
+/// reference's latent conductance and `∂S/∂F`, `T_air⁴`, and the `T⁴`
+/// histories the last pass's backgrounds used (`last4`).
+fn add_point_sky(
+    pr: &mut super::PointResponse,
+    groups: &Groups,
+    refs: &[Reference],
+    bins: &Bins,
+    facets: &Facets,
+    plan: &PassPlan,
+    last4: Option<Vec<f32>>,
+) {
+    let r = pr.records;
+    if refs.iter().any(|x| !x.front.latent.is_empty()) {
+        pr.latent = refs
+            .iter()
+            .flat_map(|x| {
+                let l = &x.front.latent;
+                (0..r).map(move |t| l.get(t).copied().unwrap_or(0.0))
+            })
+            .collect();
+    }
+    pr.shape = (0..refs.len())
+        .flat_map(|b| {
+            groups.shape32[groups.of_solved(bins.reference[b])]
+                .iter()
+                .copied()
+        })
+        .collect();
+    pr.air4 = facets.air4.clone();
+    if let Some(h) = last4 {
+        pr.background4 = std::sync::Arc::new(h);
+        pr.slot_of = std::sync::Arc::new(plan.slots.of_facet().to_vec());
     }
 }
 

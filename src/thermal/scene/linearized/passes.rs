@@ -29,6 +29,11 @@ pub(super) struct Slots {
 }
 
 impl Slots {
+    /// Slot of each facet (`u32::MAX`: none).
+    pub(super) fn of_facet(&self) -> &[u32] {
+        &self.of_facet
+    }
+
     pub(super) fn new(inputs: &SceneInputs, kinds: &[FacetThermal], passes: u32) -> Slots {
         let n = kinds.len();
         let mut slot = vec![u32::MAX; n];
