@@ -302,9 +302,6 @@ pub fn reflected_shortwave_strided(
             .iter()
             .map(|&k| solar.day.binary_search(&k).ok())
             .collect(),
-        fraction: (0..=solar.points)
-            .map(|k| k as f32 / solar.points as f32)
-            .collect(),
         reflects: reflecting(sky, albedo),
     };
     // The first bounce at every day record, written straight into the
@@ -410,8 +407,6 @@ struct Surfaces<'a> {
     /// day records (`None`: the history has the sun down there, so no
     /// facet is lit).
     solar_day: Vec<Option<usize>>,
-    /// The sunlit fraction `k / points` for `k = 0..=points` lit points.
-    fraction: Vec<f32>,
     /// Per facet, whether it reflects anything to a facet: albedo > 0 and
     /// named in some facet's background. The others' leaving irradiance
     /// is never read, so it is not computed.
@@ -419,36 +414,65 @@ struct Surfaces<'a> {
 }
 
 impl Surfaces<'_> {
-    /// `E⁰` per unit `E_dn` of facet `j` at the records of `block` (its
-    /// first `e.len()`): `s max(cos θ, 0)`, the sunlit fraction from the lit
+    /// `E⁰` per unit `E_dn` of facet `j` at the records of `block`:
+    /// `s max(cos θ, 0)`, the sunlit fraction `lit/points` from the lit
     /// count and the cosine from the normal and the sun, as
     /// [`SolarHistory::sun_fraction_into`] and
-    /// [`SolarHistory::cos_incidence_into`] decode them (the fraction
-    /// `lit/points` read from [`Surfaces::fraction`], the same quotient).
+    /// [`SolarHistory::cos_incidence_into`] decode them — the same
+    /// operations, lane by lane and without branches, so that they
+    /// vectorise (the cosine is [`crate::geometry::sun_cosine`]'s).
     #[inline(always)]
-    fn e0_block(&self, j: usize, block: &BlockSun, e: &mut [f32]) {
+    fn e0_block(&self, j: usize, block: &BlockSun, e: &mut [f32; BLOCK]) {
         let h = self.solar;
-        let (normal, double_sided) = (h.normal[j], h.double_sided[j]);
-        let top = self.fraction.len() - 1;
-        for ((e, &x), &sun) in e.iter_mut().zip(&block.solar_day).zip(&block.sun) {
-            let s = match x {
-                NIGHT => 0.0,
-                x => self.fraction[(h.lit_points(j, x as usize) as usize).min(top)],
+        let (n, double_sided) = (h.normal[j], h.double_sided[j]);
+        let p = h.points as f32;
+        let mut s = [0.0f32; BLOCK];
+        match block.run {
+            // One byte per count, the block's records consecutive in the
+            // history: its counts are one run of bytes.
+            Some(x0) if h.width() == 1 => {
+                let row = &h.lit[j * h.day.len() + x0..][..BLOCK];
+                for (s, &k) in s.iter_mut().zip(row) {
+                    *s = k as f32 / p;
+                }
+            }
+            _ => {
+                for (s, &x) in s.iter_mut().zip(&block.solar_day) {
+                    if x != NIGHT {
+                        *s = h.lit_points(j, x as usize) as f32 / p;
+                    }
+                }
+            }
+        }
+        for (i, e) in e.iter_mut().enumerate() {
+            let (x, y, z) = (block.x[i], block.y[i], block.z[i]);
+            let c = (n.x * x) + (n.y * y) + (n.z * z);
+            let c = if z <= 0.0 {
+                0.0
+            } else if double_sided || c > 0.0 {
+                c.abs().min(1.0)
+            } else {
+                0.0
             };
-            let c = crate::geometry::sun_cosine(normal, double_sided, sun);
-            *e = s.clamp(0.0, 1.0) * c.max(0.0);
+            *e = s[i].clamp(0.0, 1.0) * c.max(0.0);
         }
     }
 }
 
-/// The sun over a block of day records, for [`Surfaces::e0_block`].
+/// The sun over a block of day records, for [`Surfaces::e0_block`];
+/// lanes past the block's records have the sun down (`E⁰ = 0`).
 struct BlockSun {
-    /// Unit vector toward the sun per record of the block (the solar
-    /// history's).
-    sun: [Vec3; BLOCK],
+    /// The unit vector toward the sun per record of the block (the solar
+    /// history's), by component.
+    x: [f32; BLOCK],
+    y: [f32; BLOCK],
+    z: [f32; BLOCK],
     /// The record's index among the solar history's day records, or
     /// [`NIGHT`] where the history has the sun down (no facet lit).
     solar_day: [u32; BLOCK],
+    /// `Some(x0)` when the block's [`BLOCK`] records are the history's
+    /// day records `x0..x0 + BLOCK`.
+    run: Option<usize>,
 }
 
 /// The facets that reflect ([`Surfaces::reflects`]).
@@ -512,19 +536,33 @@ fn direct_bounce(
     leaving.resize(n + 1, [0.0; BLOCK]);
     lit.clear();
     lit.resize(n, false);
-    for c0 in (0..m).step_by(BLOCK) {
+    // Blocks of BLOCK records; when there are more, the last one ends at
+    // the last record (overlapping the one before, whose values it
+    // recomputes bit for bit), so that every block is full.
+    for c0 in (0..m)
+        .step_by(BLOCK)
+        .map(|c| c.min(m.saturating_sub(BLOCK)))
+    {
         let block = &at[c0..(c0 + BLOCK).min(m)];
         let b = block.len();
         let mut z = [0.0f32; BLOCK];
         let mut sun = BlockSun {
-            sun: [Vec3::ZERO; BLOCK],
+            x: [0.0; BLOCK],
+            y: [0.0; BLOCK],
+            z: [0.0; BLOCK],
             solar_day: [NIGHT; BLOCK],
+            run: None,
         };
         for (i, &d) in block.iter().enumerate() {
             let k = day[d] as usize;
             z[i] = surfaces.sun_dirs[k].z;
-            sun.sun[i] = surfaces.solar.sun[k];
+            let v = surfaces.solar.sun[k];
+            (sun.x[i], sun.y[i], sun.z[i]) = (v.x, v.y, v.z);
             sun.solar_day[i] = surfaces.solar_day[d].map_or(NIGHT, |x| x as u32);
+        }
+        let x0 = sun.solar_day[0] as usize;
+        if b == BLOCK && (0..BLOCK).all(|i| sun.solar_day[i] as usize == x0 + i) {
+            sun.run = Some(x0);
         }
         let sun = &sun;
         leaving[..n]
@@ -538,7 +576,7 @@ fn direct_bounce(
                 }
                 let a = albedo[j];
                 let mut e0 = [0.0f32; BLOCK];
-                surfaces.e0_block(j, sun, &mut e0[..b]);
+                surfaces.e0_block(j, sun, &mut e0);
                 for (i, ((l, &d), &e)) in l.iter_mut().zip(block).zip(&e0).enumerate() {
                     *l = match prev {
                         Previous::None => a * e,
