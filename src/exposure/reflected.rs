@@ -532,9 +532,10 @@ fn direct_bounce(
     let (sky, albedo) = (surfaces.sky, surfaces.albedo);
     let (n, m, nd) = (albedo.len(), at.len(), day.len());
     let Scratch { leaving, lit } = scratch;
-    leaving.clear();
+    // Allocated (zeroed) at the first bounce, then kept: a row is read only
+    // where its `lit` is set, which its block's computation sets, and the
+    // dark row is never written.
     leaving.resize(n + 1, [0.0; BLOCK]);
-    lit.clear();
     lit.resize(n, false);
     // Blocks of BLOCK records; when there are more, the last one ends at
     // the last record (overlapping the one before, whose values it
