@@ -302,6 +302,7 @@ pub fn reflected_shortwave_strided(
             .iter()
             .map(|&k| solar.day.binary_search(&k).ok())
             .collect(),
+        reflects: reflecting(sky, albedo),
     };
     // The first bounce at every day record, written straight into the
     // output: ρ_j E⁰_j per unit E_dn leaves each facet.
@@ -356,10 +357,20 @@ pub fn reflected_shortwave_strided(
         }
     }
     drop(scratch);
-    // R⁽ᴺ⁾ = R⁽¹⁾ + the later bounces' addition, linear between nodes.
+    // R⁽ᴺ⁾ = R⁽¹⁾ + the later bounces' addition, linear between nodes:
+    // at day record `d` between nodes `a` and `b` the weight
+    // `t = (d − a)/(b − a)` of the next node (the same for every facet).
+    let mut weight = vec![0.0f32; nd];
+    for w in nodes.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        for (d, t) in weight.iter_mut().enumerate().take(b).skip(a + 1) {
+            *t = (d - a) as f32 / (b - a) as f32;
+        }
+    }
     out.direct
         .par_chunks_mut(nd)
         .zip(cur.par_chunks(nc))
+        .with_min_len(64)
         .for_each_init(Vec::new, |add, (o, last)| {
             add.clear();
             add.extend(nodes.iter().zip(last).map(|(&d, l)| l - o[d]));
@@ -367,9 +378,9 @@ pub fn reflected_shortwave_strided(
                 o[nodes[c]] = last[c];
                 if c + 1 < nc {
                     let (a, b) = (nodes[c], nodes[c + 1]);
-                    for (d, v) in o.iter_mut().enumerate().take(b).skip(a + 1) {
-                        let t = (d - a) as f32 / (b - a) as f32;
-                        *v += add[c] + t * (add[c + 1] - add[c]);
+                    let (lo, hi) = (add[c], add[c + 1]);
+                    for (v, t) in o[a + 1..b].iter_mut().zip(&weight[a + 1..b]) {
+                        *v += lo + t * (hi - lo);
                     }
                 }
             }
@@ -396,24 +407,88 @@ struct Surfaces<'a> {
     /// day records (`None`: the history has the sun down there, so no
     /// facet is lit).
     solar_day: Vec<Option<usize>>,
+    /// Per facet, whether it reflects anything to a facet: albedo > 0 and
+    /// named in some facet's background. The others' leaving irradiance
+    /// is never read, so it is not computed.
+    reflects: Vec<bool>,
 }
 
 impl Surfaces<'_> {
-    /// `E⁰` of facet `j` per unit `E_dn` at the output's day record `d`
-    /// (record `k`): `s max(cos θ, 0)`, the sunlit fraction from the lit
+    /// `E⁰` per unit `E_dn` of facet `j` at the records of `block`:
+    /// `s max(cos θ, 0)`, the sunlit fraction `lit/points` from the lit
     /// count and the cosine from the normal and the sun, as
     /// [`SolarHistory::sun_fraction_into`] and
-    /// [`SolarHistory::cos_incidence_into`] decode them.
-    #[inline]
-    fn e0(&self, j: usize, d: usize, k: usize) -> f32 {
+    /// [`SolarHistory::cos_incidence_into`] decode them — the same
+    /// operations, lane by lane and without branches, so that they
+    /// vectorise (the cosine is [`crate::geometry::sun_cosine`]'s).
+    #[inline(always)]
+    fn e0_block(&self, j: usize, block: &BlockSun, e: &mut [f32; BLOCK]) {
         let h = self.solar;
-        let s = match self.solar_day[d] {
-            Some(x) => h.lit_points(j, x) as f32 / h.points as f32,
-            None => 0.0,
-        };
-        let c = crate::geometry::sun_cosine(h.normal[j], h.double_sided[j], h.sun[k]);
-        s.clamp(0.0, 1.0) * c.max(0.0)
+        let (n, double_sided) = (h.normal[j], h.double_sided[j]);
+        let p = h.points as f32;
+        let mut s = [0.0f32; BLOCK];
+        match block.run {
+            // One byte per count, the block's records consecutive in the
+            // history: its counts are one run of bytes.
+            Some(x0) if h.width() == 1 => {
+                let row = &h.lit[j * h.day.len() + x0..][..BLOCK];
+                for (s, &k) in s.iter_mut().zip(row) {
+                    *s = k as f32 / p;
+                }
+            }
+            _ => {
+                for (s, &x) in s.iter_mut().zip(&block.solar_day) {
+                    if x != NIGHT {
+                        *s = h.lit_points(j, x as usize) as f32 / p;
+                    }
+                }
+            }
+        }
+        for (i, e) in e.iter_mut().enumerate() {
+            let (x, y, z) = (block.x[i], block.y[i], block.z[i]);
+            let c = (n.x * x) + (n.y * y) + (n.z * z);
+            let c = if z <= 0.0 {
+                0.0
+            } else if double_sided || c > 0.0 {
+                c.abs().min(1.0)
+            } else {
+                0.0
+            };
+            *e = s[i].clamp(0.0, 1.0) * c.max(0.0);
+        }
     }
+}
+
+/// The sun over a block of day records, for [`Surfaces::e0_block`];
+/// lanes past the block's records have the sun down (`E⁰ = 0`).
+struct BlockSun {
+    /// The unit vector toward the sun per record of the block (the solar
+    /// history's), by component.
+    x: [f32; BLOCK],
+    y: [f32; BLOCK],
+    z: [f32; BLOCK],
+    /// The record's index among the solar history's day records, or
+    /// [`NIGHT`] where the history has the sun down (no facet lit).
+    solar_day: [u32; BLOCK],
+    /// `Some(x0)` when the block's [`BLOCK`] records are the history's
+    /// day records `x0..x0 + BLOCK`.
+    run: Option<usize>,
+}
+
+/// The facets that reflect ([`Surfaces::reflects`]).
+fn reflecting(sky: &SkyView, albedo: &[f32]) -> Vec<bool> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let named: Vec<AtomicBool> = albedo.iter().map(|_| AtomicBool::new(false)).collect();
+    sky.entries.par_chunks(4096).for_each(|c| {
+        for e in c {
+            named[e.facet as usize].store(true, Ordering::Relaxed);
+        }
+    });
+    named
+        .into_iter()
+        .zip(albedo)
+        .map(|(n, &a)| n.into_inner() && a > 0.0)
+        .collect()
 }
 
 /// The previous bounce's direct coefficient `R` that a bounce adds to
@@ -432,12 +507,11 @@ enum Previous<'a> {
 /// A bounce's buffers, reused from block to block and bounce to bounce.
 #[derive(Default)]
 struct Scratch {
-    /// `ρ_j (E⁰_j + R_j)` of every facet over one block of records.
-    leaving: Vec<f32>,
+    /// `ρ_j (E⁰_j + R_j)` of every facet over one block of records, then
+    /// one row of zeros (the "dark" row, [`gather_bounce`]).
+    leaving: Vec<[f32; BLOCK]>,
     /// Whether any of it is not zero, per facet.
     lit: Vec<bool>,
-    /// The sine of the sun's elevation over the block.
-    ground: Vec<f32>,
 }
 
 /// One bounce of the direct coefficient at the day records `at` (indices
@@ -445,8 +519,8 @@ struct Scratch {
 /// `out_i = g_i ρ_g z + Σ_j F_ij ρ_j (E⁰_j + R_j)` with `R` the previous
 /// bounce's and `z` the sine of the sun's elevation. It goes [`BLOCK`]
 /// records at a time, so the leaving irradiances are held for one block;
-/// sources that send nothing over the block (no albedo, not lit) are
-/// skipped: adding their zeros changes nothing.
+/// sources that send nothing over the block (no albedo, not lit) add
+/// zeros, which change nothing.
 fn direct_bounce(
     surfaces: &Surfaces,
     day: &[u32],
@@ -457,80 +531,120 @@ fn direct_bounce(
 ) {
     let (sky, albedo) = (surfaces.sky, surfaces.albedo);
     let (n, m, nd) = (albedo.len(), at.len(), day.len());
-    let Scratch {
-        leaving,
-        lit,
-        ground,
-    } = scratch;
-    for c0 in (0..m).step_by(BLOCK) {
+    let Scratch { leaving, lit } = scratch;
+    // Allocated (zeroed) at the first bounce, then kept: a row is read only
+    // where its `lit` is set, which its block's computation sets, and the
+    // dark row is never written.
+    leaving.resize(n + 1, [0.0; BLOCK]);
+    lit.resize(n, false);
+    // Blocks of BLOCK records; when there are more, the last one ends at
+    // the last record (overlapping the one before, whose values it
+    // recomputes bit for bit), so that every block is full.
+    for c0 in (0..m)
+        .step_by(BLOCK)
+        .map(|c| c.min(m.saturating_sub(BLOCK)))
+    {
         let block = &at[c0..(c0 + BLOCK).min(m)];
         let b = block.len();
-        leaving.resize(n * b, 0.0);
-        lit.resize(n, false);
-        ground.clear();
-        ground.extend(block.iter().map(|&d| surfaces.sun_dirs[day[d] as usize].z));
-        leaving
-            .par_chunks_mut(b)
+        let mut z = [0.0f32; BLOCK];
+        let mut sun = BlockSun {
+            x: [0.0; BLOCK],
+            y: [0.0; BLOCK],
+            z: [0.0; BLOCK],
+            solar_day: [NIGHT; BLOCK],
+            run: None,
+        };
+        for (i, &d) in block.iter().enumerate() {
+            let k = day[d] as usize;
+            z[i] = surfaces.sun_dirs[k].z;
+            let v = surfaces.solar.sun[k];
+            (sun.x[i], sun.y[i], sun.z[i]) = (v.x, v.y, v.z);
+            sun.solar_day[i] = surfaces.solar_day[d].map_or(NIGHT, |x| x as u32);
+        }
+        let x0 = sun.solar_day[0] as usize;
+        if b == BLOCK && (0..BLOCK).all(|i| sun.solar_day[i] as usize == x0 + i) {
+            sun.run = Some(x0);
+        }
+        let sun = &sun;
+        leaving[..n]
+            .par_iter_mut()
             .zip(lit.par_iter_mut())
             .enumerate()
+            .with_min_len(256)
             .for_each(|(j, (l, lit))| {
+                if !surfaces.reflects[j] {
+                    return;
+                }
                 let a = albedo[j];
-                for (i, (l, &d)) in l.iter_mut().zip(block).enumerate() {
-                    let e = surfaces.e0(j, d, day[d] as usize);
+                let mut e0 = [0.0f32; BLOCK];
+                surfaces.e0_block(j, sun, &mut e0);
+                for (i, ((l, &d), &e)) in l.iter_mut().zip(block).zip(&e0).enumerate() {
                     *l = match prev {
                         Previous::None => a * e,
                         Previous::First(r) => a * (e + r[j * nd + d]),
                         Previous::AtNodes(r) => a * (e + r[j * m + c0 + i]),
                     };
                 }
-                *lit = l.iter().any(|&x| x != 0.0);
+                l[b..].fill(0.0);
+                *lit = l[..b].iter().any(|&x| x != 0.0);
             });
-        let (leaving, lit, ground) = (&*leaving, &*lit, &*ground);
-        out.par_chunks_mut(m).enumerate().for_each(|(i, out)| {
-            let g = sky.ground_weight[i] * surfaces.ground_albedo;
-            crate::simd::vectorized(GatherBounce {
-                out: &mut out[c0..c0 + b],
-                g,
-                z: ground,
-                entries: sky.background(i),
-                leaving,
-                lit,
-            })
-        });
+        let (leaving, lit, z) = (&*leaving, &*lit, &z);
+        out.par_chunks_mut(m)
+            .enumerate()
+            .with_min_len(64)
+            .for_each(|(i, out)| {
+                crate::simd::vectorized(GatherBounce {
+                    out: &mut out[c0..c0 + b],
+                    g: sky.ground_weight[i] * surfaces.ground_albedo,
+                    z,
+                    entries: sky.background(i),
+                    leaving,
+                    lit,
+                })
+            });
     }
 }
 
 crate::simd::simd_kernel!(GatherBounce<'a> {
     out: &'a mut [f32],
     g: f32,
-    z: &'a [f32],
+    z: &'a [f32; BLOCK],
     entries: &'a [super::BackgroundEntry],
-    leaving: &'a [f32],
+    leaving: &'a [[f32; BLOCK]],
     lit: &'a [bool],
 } -> () => gather_bounce);
 
 /// `out = g·z + Σ_e w_e l_{j_e}` over the background entries whose source
-/// is lit, `l_j` the `j`-th row (`out.len()` long) of `leaving`.
+/// is lit, `l_j` the `j`-th row of `leaving` (the first `out.len()` lanes
+/// written). An entry whose source is not lit reads the last row, all
+/// zeros, instead of branching: `w·0 = +0` added to the sum (never −0: it
+/// starts at `g·z ≥ +0` and adds non-negative terms) leaves it bit for
+/// bit, so each lane is the plain iteration's sum in the entries' order.
 #[inline(always)]
 fn gather_bounce(
     out: &mut [f32],
     g: f32,
-    z: &[f32],
+    z: &[f32; BLOCK],
     entries: &[super::BackgroundEntry],
-    leaving: &[f32],
+    leaving: &[[f32; BLOCK]],
     lit: &[bool],
 ) {
-    let m = out.len();
-    out.iter_mut().zip(z).for_each(|(o, z)| *o = g * z);
+    let dark = leaving.len() - 1;
+    let mut acc: [f32; BLOCK] = std::array::from_fn(|k| g * z[k]);
     for e in entries {
         let j = e.facet as usize;
-        if !lit[j] {
-            continue;
+        let src = &leaving[if lit[j] { j } else { dark }];
+        let w = e.weight;
+        for (a, l) in acc.iter_mut().zip(src) {
+            *a += w * l;
         }
-        let src = &leaving[j * m..(j + 1) * m];
-        out.iter_mut()
-            .zip(src)
-            .for_each(|(o, l)| *o += e.weight * l);
+    }
+    match <&mut [f32; BLOCK]>::try_from(&mut *out) {
+        Ok(full) => *full = acc,
+        Err(_) => {
+            let k = out.len();
+            out.copy_from_slice(&acc[..k]);
+        }
     }
 }
 
