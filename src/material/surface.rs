@@ -361,6 +361,14 @@ pub struct SurfaceEnergySpec {
     /// 0.451, loam, Clapp & Hornberger 1978).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub saturation_m3_m3: Option<f64>,
+    /// Depth of the root zone whose water content rain wets and
+    /// evaporation dries, m (> 0; default none: `soil_moisture_m3_m3` stays
+    /// constant through the run). [`crate::thermal::latent::RootZone`]:
+    /// ISBA's root-zone bucket, starting at `soil_moisture_m3_m3`, draining
+    /// above `field_capacity_m3_m3`, full at `saturation_m3_m3`. Canopy
+    /// (big leaf) and bare soil.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub root_zone_depth_m: Option<f64>,
 }
 
 fn is_fao56(h: &HeatRoughness) -> bool {
@@ -651,6 +659,29 @@ impl SurfaceEnergySpec {
                 c,
                 c > 0.0 && c <= 1.0,
                 "a clumping index in (0, 1]",
+            );
+        }
+        if let Some(d) = self.root_zone_depth_m {
+            check(&mut p, "root_zone_depth_m", d, d > 0.0, "a depth > 0 m");
+            if self.kind == SurfaceKind::Water {
+                p.push((
+                    "root_zone_depth_m",
+                    "water has no soil (kind \"canopy\" or \"bare_soil\")".to_string(),
+                ));
+            }
+            if self.canopy == CanopyModel::TwoSource {
+                p.push((
+                    "root_zone_depth_m",
+                    "not coupled to a two_source canopy yet (big_leaf or bare_soil)".to_string(),
+                ));
+            }
+            let sat = self.saturation();
+            check(
+                &mut p,
+                "soil_moisture_m3_m3",
+                self.soil_moisture_m3_m3,
+                self.soil_moisture_m3_m3 <= sat && self.field_capacity_m3_m3 <= sat,
+                "a root zone's water content and field capacity at or below saturation_m3_m3",
             );
         }
         if let Some(t) = self.saturation_m3_m3 {
