@@ -1914,8 +1914,9 @@ fn root_zone_water_is_conserved_with_showers() {
         (change - net).abs() <= 1e-9 * gross,
         "storage change {change} vs net {net}"
     );
-    // Every shower but what the leaves hold (0.2 LAI = 0.58 mm) enters.
-    assert!(inf <= 89.0 && inf > 89.0 - 3.0 * 0.2 * 2.88, "{inf}");
+    // Every shower but what the leaves hold (0.2 LAI = 0.576 mm; they
+    // dry between the showers) enters.
+    assert!(inf <= 89.0 && inf >= 89.0 - 3.0 * 0.2 * 2.88 - 1e-9, "{inf}");
     assert!(e > 0.0 && d > 0.0, "ET {e}, drainage {d}");
     assert!(theta[201] > zone.field_capacity_m3_m3, "{}", theta[201]);
     assert!(theta[202] < theta[201], "drains above field capacity");
@@ -1931,27 +1932,28 @@ fn root_zone_water_is_conserved_with_showers() {
     }
 }
 
-/// With the stomata shut (no leaves: r_s → ∞) nothing evaporates from the
-/// root zone: without rain θ keeps its starting value exactly; with rain
-/// it rises, but the exchange — and so the solution — is bit for bit that
-/// of the constant-θ model (`root_zone_depth_m` absent), the wet store
-/// included.
+/// With the stomata shut (the root zone below the wilting point: f_soil =
+/// 0, r_s → ∞) nothing evaporates from the root zone: without rain θ keeps
+/// its starting value exactly; with a shower that leaves it below the
+/// wilting point it rises, but the exchange — and so the solution — is bit
+/// for bit that of the constant-θ model (`root_zone_depth_m` absent), the
+/// wet store included.
 #[test]
 fn root_zone_without_evaporation_keeps_theta_and_the_exchange() {
     use irsig::thermal::Exchange;
     let (forcing, cos) = clear_days(2);
-    let shut = |s: &mut irsig::material::SurfaceEnergySpec| s.leaf_area_index = 0.0;
+    let shut = |s: &mut irsig::material::SurfaceEnergySpec| s.soil_moisture_m3_m3 = 0.10;
     let on = with_root_zone("grass", Some(0.5), shut);
     let off = with_root_zone("grass", None, shut);
     let ex = Exchange::new(&on, &forcing).unwrap();
-    assert!(ex.soil_moisture_m3_m3.iter().all(|&t| t == 0.28));
+    assert!(ex.soil_moisture_m3_m3.iter().all(|&t| t == 0.10));
     assert!(
         ex.soil_water
             .iter()
             .all(|s| s.evaporation_mm == 0.0 && s.drainage_mm == 0.0)
     );
     let mut wet = forcing.clone();
-    wet.precipitation_mm[124] = 10.0;
+    wet.precipitation_mm[124] = 5.0; // 0.5 m: θ to ≈ 0.109 < θ_wilt = 0.12
     let n = forcing.len();
     let sun = vec![1.0f32; n];
     let inputs = FacetInputs::new(&sun, &cos, 1.0);
@@ -1967,13 +1969,16 @@ fn root_zone_without_evaporation_keeps_theta_and_the_exchange() {
         assert_eq!(sa.surface_temperature_k, sb.surface_temperature_k);
     }
     let ex = Exchange::new(&on, &wet).unwrap();
-    assert!(ex.soil_moisture_m3_m3[n - 1] > 0.28 + 9.0 / 500.0);
+    let end = ex.soil_moisture_m3_m3[n - 1];
+    assert!(end > 0.10 + 4.0 / 500.0 && end < 0.12, "{end}");
 }
 
 /// A dry-down after rain: bare soil (van de Griend & Owe's resistance,
 /// 10 s/m above 15 % water, rising steeply below) with a 5 cm root zone
 /// starting at θ = 0.10, a 6 mm shower on the morning of the second of six
-/// clear days. After the shower θ falls (never rises by more than the
+/// clear days (θ at noon 0.126, 0.060, 0.025, 0.007, 0.000 from the second
+/// day; the noon surface temperature 298.9, 303.9, 307.2, 308.4, 308.8 K,
+/// with θ constant 300.3 K each day). After the shower θ falls (never rises by more than the
 /// night's dew), the bare-soil resistance rises, and the noon surface
 /// temperature climbs day after day; with θ held constant (no root zone)
 /// the noon temperatures of the same days repeat.
@@ -2014,7 +2019,13 @@ fn a_dry_down_after_rain_dries_the_soil_and_warms_the_surface() {
         noon_t,
         noon_still
     );
-    assert!(theta[shower + 1] > 0.18, "{}", theta[shower + 1]);
+    // 5 mm of the 6 (the store holds 1 mm) over 50 mm of root zone.
+    assert!(
+        theta[shower + 1] > theta[shower] + 0.09,
+        "{} after {}",
+        theta[shower + 1],
+        theta[shower]
+    );
     // Falls after the shower except by dew at night.
     for (k, s) in ex.soil_water.iter().enumerate().skip(shower + 1) {
         assert!(
