@@ -859,6 +859,14 @@ fn stock_materials_on_measured_forcing() {
                     r.soil_moisture.iter().all(|t| (0.0..=0.5).contains(t)),
                     "θ within the bucket"
                 );
+                // Both sites' soils dry over their second halves; the
+                // bucket dries with them.
+                assert!(o[o.len() - 1] < o[0], "measured θ falls");
+                assert!(
+                    r.soil_moisture[d.len() - 1] < r.soil_moisture[first],
+                    "{:?}: modelled θ falls",
+                    d.site()
+                );
             }
             if let Some((rmse, bias)) = r.rmse_hemispherical {
                 println!(
