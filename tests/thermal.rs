@@ -1916,7 +1916,10 @@ fn root_zone_water_is_conserved_with_showers() {
     );
     // Every shower but what the leaves hold (0.2 LAI = 0.576 mm; they
     // dry between the showers) enters.
-    assert!(inf <= 89.0 && inf >= 89.0 - 3.0 * 0.2 * 2.88 - 1e-9, "{inf}");
+    assert!(
+        (89.0 - 3.0 * 0.2 * 2.88 - 1e-9..=89.0).contains(&inf),
+        "{inf}"
+    );
     assert!(e > 0.0 && d > 0.0, "ET {e}, drainage {d}");
     assert!(theta[201] > zone.field_capacity_m3_m3, "{}", theta[201]);
     assert!(theta[202] < theta[201], "drains above field capacity");
