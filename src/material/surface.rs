@@ -740,6 +740,35 @@ mod tests {
     }
 
     #[test]
+    fn bad_root_zones_name_their_field() {
+        let fields = |s: &str| -> Vec<&'static str> {
+            parse(s).problems().into_iter().map(|(f, _)| f).collect()
+        };
+        let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3"#;
+        assert!(fields(&format!("{{{base}, \"root_zone_depth_m\": 1}}")).is_empty());
+        assert!(fields(r#"{"kind": "bare_soil", "root_zone_depth_m": 0.1}"#).is_empty());
+        for (extra, field) in [
+            (r#""root_zone_depth_m": 0"#, "root_zone_depth_m"),
+            (r#""root_zone_depth_m": -1"#, "root_zone_depth_m"),
+            (
+                r#""root_zone_depth_m": 1, "canopy": "two_source""#,
+                "root_zone_depth_m",
+            ),
+            (
+                r#""root_zone_depth_m": 1, "saturation_m3_m3": 0.3"#,
+                "soil_moisture_m3_m3",
+            ),
+        ] {
+            let f = fields(&format!("{{{base}, {extra}}}"));
+            assert!(f.contains(&field), "{extra}: {f:?}");
+        }
+        assert!(
+            fields(r#"{"kind": "water", "root_zone_depth_m": 1}"#).contains(&"root_zone_depth_m"),
+            "water has no soil"
+        );
+    }
+
+    #[test]
     fn bad_values_name_their_field() {
         let fields = |s: &str| -> Vec<&'static str> {
             parse(s).problems().into_iter().map(|(f, _)| f).collect()
