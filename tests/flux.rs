@@ -469,6 +469,9 @@ struct StockResult {
     /// modelled and measured G and net radiation.
     day_closed: DayClosed,
     n: usize,
+    /// The root zone's water content at each record, m³ m⁻³ (empty: θ
+    /// constant).
+    soil_moisture: Vec<f64>,
 }
 
 /// Daytime means of [`StockResult::day_closed`], W/m².
@@ -496,6 +499,46 @@ fn stock_props_with(
     let mut m = db.get(name).unwrap().clone();
     edit(m.surface_energy.as_mut().unwrap());
     irsig::thermal::SlabProperties::from_material(&m).unwrap()
+}
+
+/// The site's measured soil water content at each record, m³ m⁻³: the
+/// mean of Bondville's 5, 20 and 60 cm probes (a 1 m root zone's), US-CRT's
+/// SWC (one probe; its README gives no depth). None where missing.
+fn measured_soil_water(d: &FluxDataset) -> Vec<Option<f64>> {
+    let (file, cols, scale): (&str, &[&str], f64) = match d.site() {
+        FluxSite::Bondville1998 => (
+            "bondville_1998/bondville_1998_aug01-sep11.csv",
+            &[
+                "soil_moisture_m3_m3_at_5cm",
+                "soil_moisture_m3_m3_at_20cm",
+                "soil_moisture_m3_m3_at_60cm",
+            ],
+            1.0,
+        ),
+        _ => (
+            "us-crt_2011/us-crt_2011_jul06-aug16.csv",
+            &["soil_water_content_pct"],
+            0.01,
+        ),
+    };
+    let mut r = csv::Reader::from_path(util::shared_data("flux").join(file)).unwrap();
+    let idx: Vec<usize> = cols
+        .iter()
+        .map(|c| r.headers().unwrap().iter().position(|h| h == *c).unwrap())
+        .collect();
+    let v: Vec<Option<f64>> = r
+        .records()
+        .map(|row| {
+            let row = row.unwrap();
+            let vals: Option<Vec<f64>> = idx
+                .iter()
+                .map(|&i| row.get(i)?.parse::<f64>().ok())
+                .collect();
+            vals.map(|v| scale * v.iter().sum::<f64>() / v.len() as f64)
+        })
+        .collect();
+    assert_eq!(v.len(), d.len(), "one row per record");
+    v
 }
 
 /// The material `props` (a horizontal facet open to the whole sky) driven
@@ -638,6 +681,7 @@ fn props_on_site(props: &irsig::thermal::SlabProperties, d: &FluxDataset) -> Sto
         by_hour: by_hour.map(|(s, n)| s / n.max(1) as f64),
         day_fluxes: (le_m / nd, le_o / nd, h_m / nd, h_o / nd),
         n: model.len(),
+        soil_moisture: ex.soil_moisture_m3_m3.clone(),
     }
 }
 
@@ -708,6 +752,9 @@ fn stock_materials_on_measured_forcing() {
             "crop growing two_source swc",
             "crop noah",
             "crop noah two_source",
+            "crop water",
+            "grass water",
+            "crop water measured",
         ] {
             if (name.contains("growing") || name.contains("swc")) && !us_crt {
                 continue;
@@ -759,6 +806,17 @@ fn stock_materials_on_measured_forcing() {
                     if name.contains("two_source") {
                         s.canopy = irsig::material::CanopyModel::TwoSource;
                     }
+                    // The root-zone water budget: 1 m, FAO-56 Table 22's
+                    // rooting depth of soybean (0.6–1.3 m) and grass
+                    // (0.5–1.5 m); "measured": starting from the site's
+                    // first measured soil water and its soil's porosity.
+                    if name.contains("water") {
+                        s.root_zone_depth_m = Some(1.0);
+                        if name.contains("measured") {
+                            s.soil_moisture_m3_m3 = measured_soil_water(&d)[0].unwrap();
+                            s.saturation_m3_m3 = Some(if us_crt { 0.492 } else { 0.451 });
+                        }
+                    }
                 }),
                 &d,
             );
@@ -776,6 +834,40 @@ fn stock_materials_on_measured_forcing() {
                 r.n,
                 hours.join(" ")
             );
+            if !r.soil_moisture.is_empty() {
+                let measured = measured_soil_water(&d);
+                let (mut m, mut o) = (Vec::new(), Vec::new());
+                for i in d.second_half() {
+                    if let Some(t) = measured[i] {
+                        m.push(r.soil_moisture[i]);
+                        o.push(t);
+                    }
+                }
+                let first = d.second_half().start;
+                println!(
+                    "{:?}: stock {name}: root-zone θ second half RMSE {:.3} m³/m³ vs measured \
+                     (n = {}); θ model {:.3} → {:.3}, measured {:.3} → {:.3}",
+                    d.site(),
+                    stats::rmse(&m, &o).unwrap(),
+                    m.len(),
+                    r.soil_moisture[first],
+                    r.soil_moisture[d.len() - 1],
+                    o[0],
+                    o[o.len() - 1]
+                );
+                assert!(
+                    r.soil_moisture.iter().all(|t| (0.0..=0.5).contains(t)),
+                    "θ within the bucket"
+                );
+                // Both sites' soils dry over their second halves; the
+                // bucket dries with them.
+                assert!(o[o.len() - 1] < o[0], "measured θ falls");
+                assert!(
+                    r.soil_moisture[d.len() - 1] < r.soil_moisture[first],
+                    "{:?}: modelled θ falls",
+                    d.site()
+                );
+            }
             if let Some((rmse, bias)) = r.rmse_hemispherical {
                 println!(
                     "{:?}: stock {name}: hemispherical composite RMSE {rmse:.2} K, bias {bias:+.2} K",

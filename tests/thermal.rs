@@ -1833,3 +1833,221 @@ fn leaves_grow_with_the_canopy_height() {
     assert_eq!(exchange(Some(1e3)), exchange(None));
     assert_ne!(exchange(Some(6.8)), exchange(None));
 }
+
+/// `days` copies of the synthetic clear day (15-minute records), with the
+/// global horizontal irradiance the stomata see, and the cosines of
+/// incidence of a horizontal facet.
+fn clear_days(days: usize) -> (Forcing, Vec<f32>) {
+    let (day, day_cos) = synthetic_days(true);
+    let per_day = 96;
+    let n = days * per_day + 1;
+    let times: Vec<f64> = (0..n).map(|i| i as f64 * 900.0).collect();
+    let mut forcing = Forcing::constant(&times, 288.0, 2.0, 0.0, 0.0, 0.0);
+    let mut cos = Vec::with_capacity(n);
+    for k in 0..n {
+        let j = k % per_day;
+        forcing.air_temperature_k[k] = day.air_temperature_k[j];
+        forcing.direct_normal_w_m2[k] = day.direct_normal_w_m2[j];
+        forcing.diffuse_horizontal_w_m2[k] = day.diffuse_horizontal_w_m2[j];
+        forcing.sky_longwave_w_m2[k] = day.sky_longwave_w_m2[j];
+        forcing.global_horizontal_w_m2[k] =
+            day.diffuse_horizontal_w_m2[j] + day.direct_normal_w_m2[j] * f64::from(day_cos[j]);
+        cos.push(day_cos[j]);
+    }
+    (forcing, cos)
+}
+
+/// Stock material `name` with a root-zone water budget of depth `depth_m`
+/// (`surface_energy.root_zone_depth_m`), its surface block changed by
+/// `tweak`.
+fn with_root_zone(
+    name: &str,
+    depth_m: Option<f64>,
+    tweak: impl Fn(&mut irsig::material::SurfaceEnergySpec),
+) -> SlabProperties {
+    let db = irsig::material::stock::stock().unwrap();
+    let mut m = db.get(name).unwrap().clone();
+    let s = m.surface_energy.as_mut().unwrap();
+    s.root_zone_depth_m = depth_m;
+    tweak(s);
+    SlabProperties::from_material(&m).unwrap()
+}
+
+/// The root zone's water over a run with showers (the stock grass, a 0.3 m
+/// root zone, three clear days, 4, 25 and 60 mm showers): storage change =
+/// infiltration − evapotranspiration − drainage − runoff summed over the
+/// steps, to 1e-9 of the gross flux; rain that the leaves' store does not
+/// hold infiltrates (none is lost below saturation); the showers wet the
+/// soil above field capacity and it drains; θ stays within [0, θ_sat].
+#[test]
+fn root_zone_water_is_conserved_with_showers() {
+    use irsig::thermal::Exchange;
+    let (mut forcing, _) = clear_days(3);
+    for (k, p) in [(124, 4.0), (150, 25.0), (200, 60.0)] {
+        forcing.precipitation_mm[k] = p;
+    }
+    let props = with_root_zone("grass", Some(0.3), |_| {});
+    let zone = props.surface.unwrap().root_zone.unwrap();
+    let ex = Exchange::new(&props, &forcing).unwrap();
+    let n = forcing.len();
+    assert_eq!(ex.soil_moisture_m3_m3.len(), n);
+    assert_eq!(ex.soil_water.len(), n - 1);
+    let (mut inf, mut e, mut d, mut r, mut gross) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for s in &ex.soil_water {
+        inf += s.infiltration_mm;
+        e += s.evaporation_mm;
+        d += s.drainage_mm;
+        r += s.runoff_mm;
+        gross += s.infiltration_mm + s.evaporation_mm.abs() + s.drainage_mm + s.runoff_mm;
+    }
+    let theta = &ex.soil_moisture_m3_m3;
+    let change = zone.storage_mm(theta[n - 1]) - zone.storage_mm(theta[0]);
+    let net = inf - e - d - r;
+    eprintln!(
+        "grass, 0.3 m root zone: rain 89 mm, infiltrated {inf:.3}, ET {e:.3}, drained {d:.3}, \
+         runoff {r:.3} mm; θ {:.4} → max {:.4} → {:.4}",
+        theta[0],
+        theta.iter().fold(0.0f64, |m, &t| m.max(t)),
+        theta[n - 1]
+    );
+    assert!(
+        (change - net).abs() <= 1e-9 * gross,
+        "storage change {change} vs net {net}"
+    );
+    // Every shower but what the leaves hold (0.2 LAI = 0.576 mm; they
+    // dry between the showers) enters.
+    assert!(
+        (89.0 - 3.0 * 0.2 * 2.88 - 1e-9..=89.0).contains(&inf),
+        "{inf}"
+    );
+    assert!(e > 0.0 && d > 0.0, "ET {e}, drainage {d}");
+    assert!(theta[201] > zone.field_capacity_m3_m3, "{}", theta[201]);
+    assert!(theta[202] < theta[201], "drains above field capacity");
+    assert!(
+        theta
+            .iter()
+            .all(|&t| (0.0..=zone.saturation_m3_m3 + 1e-15).contains(&t))
+    );
+    // Water held as θ × depth: each step's θ is the last one's plus the
+    // net flux over ρ_w d_root.
+    for (k, s) in ex.soil_water.iter().enumerate() {
+        assert_eq!(s.theta_m3_m3, theta[k + 1]);
+    }
+}
+
+/// With the stomata shut (the root zone below the wilting point: f_soil =
+/// 0, r_s → ∞) nothing evaporates from the root zone: without rain θ keeps
+/// its starting value exactly; with a shower that leaves it below the
+/// wilting point it rises, but the exchange — and so the solution — is bit
+/// for bit that of the constant-θ model (`root_zone_depth_m` absent), the
+/// wet store included.
+#[test]
+fn root_zone_without_evaporation_keeps_theta_and_the_exchange() {
+    use irsig::thermal::Exchange;
+    let (forcing, cos) = clear_days(2);
+    let shut = |s: &mut irsig::material::SurfaceEnergySpec| s.soil_moisture_m3_m3 = 0.10;
+    let on = with_root_zone("grass", Some(0.5), shut);
+    let off = with_root_zone("grass", None, shut);
+    let ex = Exchange::new(&on, &forcing).unwrap();
+    assert!(ex.soil_moisture_m3_m3.iter().all(|&t| t == 0.10));
+    assert!(
+        ex.soil_water
+            .iter()
+            .all(|s| s.evaporation_mm == 0.0 && s.drainage_mm == 0.0)
+    );
+    let mut wet = forcing.clone();
+    wet.precipitation_mm[124] = 5.0; // 0.5 m: θ to ≈ 0.109 < θ_wilt = 0.12
+    let n = forcing.len();
+    let sun = vec![1.0f32; n];
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let opts = SolveOptions::default();
+    for f in [&forcing, &wet] {
+        let a = Exchange::new(&on, f).unwrap();
+        let b = Exchange::new(&off, f).unwrap();
+        assert_eq!(a.sensible_w_m2_k, b.sensible_w_m2_k);
+        assert_eq!(a.vapour_conductance_w_m2_pa, b.vapour_conductance_w_m2_pa);
+        assert!(b.soil_moisture_m3_m3.is_empty());
+        let sa = thermal::solve(&on, f, &inputs, &opts).unwrap();
+        let sb = thermal::solve(&off, f, &inputs, &opts).unwrap();
+        assert_eq!(sa.surface_temperature_k, sb.surface_temperature_k);
+    }
+    let ex = Exchange::new(&on, &wet).unwrap();
+    let end = ex.soil_moisture_m3_m3[n - 1];
+    assert!(end > 0.10 + 4.0 / 500.0 && end < 0.12, "{end}");
+}
+
+/// A dry-down after rain: bare soil (van de Griend & Owe's resistance,
+/// 10 s/m above 15 % water, rising steeply below) with a 5 cm root zone
+/// starting at θ = 0.10, a 6 mm shower on the morning of the second of six
+/// clear days (θ at noon 0.126, 0.060, 0.025, 0.007, 0.000 from the second
+/// day; the noon surface temperature 298.9, 303.9, 307.2, 308.4, 308.8 K,
+/// with θ constant 300.3 K each day). After the shower θ falls (never rises by more than the
+/// night's dew), the bare-soil resistance rises, and the noon surface
+/// temperature climbs day after day; with θ held constant (no root zone)
+/// the noon temperatures of the same days repeat.
+#[test]
+fn a_dry_down_after_rain_dries_the_soil_and_warms_the_surface() {
+    use irsig::thermal::Exchange;
+    let (mut forcing, cos) = clear_days(6);
+    let shower = 96 + 28; // 07:00 of the second day
+    forcing.precipitation_mm[shower] = 6.0;
+    let dry_start = |s: &mut irsig::material::SurfaceEnergySpec| s.soil_moisture_m3_m3 = 0.10;
+    let on = with_root_zone("bare_soil", Some(0.05), dry_start);
+    let off = with_root_zone("bare_soil", None, dry_start);
+    let n = forcing.len();
+    let sun = vec![1.0f32; n];
+    let inputs = FacetInputs::new(&sun, &cos, 1.0);
+    let opts = SolveOptions::default();
+    let ex = Exchange::new(&on, &forcing).unwrap();
+    let theta = &ex.soil_moisture_m3_m3;
+    let sol = thermal::solve(&on, &forcing, &inputs, &opts).unwrap();
+    let still = thermal::solve(&off, &forcing, &inputs, &opts).unwrap();
+    let noons: Vec<usize> = (1..6).map(|d| d * 96 + 48).collect();
+    let noon_t: Vec<f64> = noons
+        .iter()
+        .map(|&k| sol.surface_temperature_k[k])
+        .collect();
+    let noon_still: Vec<f64> = noons
+        .iter()
+        .map(|&k| still.surface_temperature_k[k])
+        .collect();
+    let noon_theta: Vec<String> = noons.iter().map(|&k| format!("{:.3}", theta[k])).collect();
+    let dew: f64 = ex.soil_water[shower + 1..]
+        .iter()
+        .map(|s| (-s.evaporation_mm).max(0.0))
+        .sum();
+    eprintln!(
+        "bare soil dry-down: θ at noon {}; T_s at noon {:?} K (θ constant: {:?}); dew {dew:.3} mm",
+        noon_theta.join(" "),
+        noon_t,
+        noon_still
+    );
+    // 5 mm of the 6 (the store holds 1 mm) over 50 mm of root zone.
+    assert!(
+        theta[shower + 1] > theta[shower] + 0.09,
+        "{} after {}",
+        theta[shower + 1],
+        theta[shower]
+    );
+    // Falls after the shower except by dew at night.
+    for (k, s) in ex.soil_water.iter().enumerate().skip(shower + 1) {
+        assert!(
+            theta[k + 1] <= theta[k] || s.evaporation_mm < 0.0,
+            "record {k}: θ rose without dew"
+        );
+    }
+    for w in noons.windows(2) {
+        assert!(theta[w[1]] < theta[w[0]], "θ falls day by day");
+    }
+    let days_after = &noon_t[1..];
+    assert!(
+        days_after.windows(2).all(|w| w[1] > w[0] + 0.05),
+        "noon T rises as the soil dries: {noon_t:?}"
+    );
+    assert!(
+        noon_still[1..]
+            .windows(2)
+            .all(|w| (w[1] - w[0]).abs() < 0.05),
+        "θ constant: {noon_still:?}"
+    );
+}

@@ -285,6 +285,16 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         "Noilhan & Planton (1989), Table 2: air-dry soil ≈ 0.02 to saturation (porosity) ≈ 0.5"
     ),
     surface_param!(
+        "root_zone_depth_m",
+        "m",
+        0.1,
+        3.0,
+        POSITIVE,
+        |s| s.root_zone_depth_m.filter(|_| s.kind != SurfaceKind::Water),
+        |s, v| s.root_zone_depth_m = Some(v),
+        "FAO-56 (Allen et al. 1998) Table 22, maximum effective rooting depth: shallow vegetables ≈ 0.3 m, grass 0.5–1.5 m, field crops 0.6–1.7 m, orchards to 2 m; irsig widens to 0.1–3 m (only where a root zone is on)"
+    ),
+    surface_param!(
         "canopy_height_m",
         "m",
         0.02,

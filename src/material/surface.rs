@@ -361,6 +361,14 @@ pub struct SurfaceEnergySpec {
     /// 0.451, loam, Clapp & Hornberger 1978).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub saturation_m3_m3: Option<f64>,
+    /// Depth of the root zone whose water content rain wets and
+    /// evaporation dries, m (> 0; default none: `soil_moisture_m3_m3` stays
+    /// constant through the run). [`crate::thermal::latent::RootZone`]:
+    /// ISBA's root-zone bucket, starting at `soil_moisture_m3_m3`, draining
+    /// above `field_capacity_m3_m3`, full at `saturation_m3_m3`. Canopy
+    /// (big leaf) and bare soil.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub root_zone_depth_m: Option<f64>,
 }
 
 fn is_fao56(h: &HeatRoughness) -> bool {
@@ -653,6 +661,29 @@ impl SurfaceEnergySpec {
                 "a clumping index in (0, 1]",
             );
         }
+        if let Some(d) = self.root_zone_depth_m {
+            check(&mut p, "root_zone_depth_m", d, d > 0.0, "a depth > 0 m");
+            if self.kind == SurfaceKind::Water {
+                p.push((
+                    "root_zone_depth_m",
+                    "water has no soil (kind \"canopy\" or \"bare_soil\")".to_string(),
+                ));
+            }
+            if self.canopy == CanopyModel::TwoSource {
+                p.push((
+                    "root_zone_depth_m",
+                    "not coupled to a two_source canopy yet (big_leaf or bare_soil)".to_string(),
+                ));
+            }
+            let sat = self.saturation();
+            check(
+                &mut p,
+                "soil_moisture_m3_m3",
+                self.soil_moisture_m3_m3,
+                self.soil_moisture_m3_m3 <= sat && self.field_capacity_m3_m3 <= sat,
+                "a root zone's water content and field capacity at or below saturation_m3_m3",
+            );
+        }
         if let Some(t) = self.saturation_m3_m3 {
             check(
                 &mut p,
@@ -705,6 +736,35 @@ mod tests {
         assert!(
             fields(r#"{"kind": "bare_soil", "canopy": "two_source"}"#).contains(&"canopy"),
             "two sources need leaves"
+        );
+    }
+
+    #[test]
+    fn bad_root_zones_name_their_field() {
+        let fields = |s: &str| -> Vec<&'static str> {
+            parse(s).problems().into_iter().map(|(f, _)| f).collect()
+        };
+        let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3"#;
+        assert!(fields(&format!("{{{base}, \"root_zone_depth_m\": 1}}")).is_empty());
+        assert!(fields(r#"{"kind": "bare_soil", "root_zone_depth_m": 0.1}"#).is_empty());
+        for (extra, field) in [
+            (r#""root_zone_depth_m": 0"#, "root_zone_depth_m"),
+            (r#""root_zone_depth_m": -1"#, "root_zone_depth_m"),
+            (
+                r#""root_zone_depth_m": 1, "canopy": "two_source""#,
+                "root_zone_depth_m",
+            ),
+            (
+                r#""root_zone_depth_m": 1, "saturation_m3_m3": 0.3"#,
+                "soil_moisture_m3_m3",
+            ),
+        ] {
+            let f = fields(&format!("{{{base}, {extra}}}"));
+            assert!(f.contains(&field), "{extra}: {f:?}");
+        }
+        assert!(
+            fields(r#"{"kind": "water", "root_zone_depth_m": 1}"#).contains(&"root_zone_depth_m"),
+            "water has no soil"
         );
     }
 

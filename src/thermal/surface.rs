@@ -43,7 +43,8 @@
 
 use super::latent::aerodynamic::CanopyKb;
 use super::latent::{
-    Aerodynamic, AirState, InputError, JarvisStewart, SurfaceEnergy, SurfaceResistance,
+    Aerodynamic, AirState, InputError, JarvisStewart, RootZone, SurfaceEnergy, SurfaceResistance,
+    WaterStep,
 };
 use super::two_source::{TwoSourceParams, TwoSourceStep};
 use super::{FacetInputs, Forcing, SlabProperties, SolveOptions, convection, mcadams_h_w_m2_k};
@@ -111,6 +112,9 @@ pub struct LandSurface {
     /// Leaves and soil as two sources ([`super::two_source`]; None: one
     /// big leaf, with or without a skin).
     pub two_source: Option<TwoSourceParams>,
+    /// The root-zone water budget that `soil_moisture_m3_m3` starts
+    /// ([`RootZone`]; None: θ constant through the run).
+    pub root_zone: Option<RootZone>,
 }
 
 impl LandSurface {
@@ -161,7 +165,17 @@ impl LandSurface {
             canopy_height_m: spec.canopy_height_m.unwrap_or(0.0),
             leaf_width_m: spec.leaf_width(),
         });
+        let root_zone = match spec.root_zone_depth_m {
+            Some(d) => Some(RootZone::new(
+                d,
+                0.0,
+                spec.field_capacity_m3_m3,
+                spec.saturation(),
+            )?),
+            None => None,
+        };
         Ok(LandSurface {
+            root_zone,
             two_source,
             canopy_kb,
             phenology: spec.phenology,
@@ -349,40 +363,67 @@ impl WetStore {
     /// # Errors
     /// Pressure out of the psychrometric range at a record (naming it).
     pub fn wet(&self, forcing: &Forcing, surface_k: &[f64], ex: &mut Exchange) -> Result<Vec<f64>> {
+        let n = forcing.len();
+        let mut store = 0.0f64;
+        let mut wet = Vec::with_capacity(n);
+        for (k, &t_surface) in surface_k.iter().enumerate().take(n) {
+            let (delta, _overflow) = self.record(
+                &mut store,
+                forcing,
+                k,
+                t_surface,
+                ex.sensible_w_m2_k[k],
+                &mut ex.vapour_conductance_w_m2_pa[k],
+            )?;
+            wet.push(delta);
+        }
+        Ok(wet)
+    }
+
+    /// One record of [`WetStore::wet`]: fills `store` (mm) with record
+    /// `k`'s rain, wets the vapour conductance `g` of the record
+    /// (sensible coefficient `h`), and empties the store by the evaporation
+    /// of the interval after the record at the surface's `t_surface` (K).
+    /// Returns the wet fraction δ and the rain the full store did not hold
+    /// (mm), which reaches the soil.
+    fn record(
+        &self,
+        store: &mut f64,
+        forcing: &Forcing,
+        k: usize,
+        t_surface: f64,
+        h: f64,
+        g: &mut f64,
+    ) -> Result<(f64, f64)> {
         use super::latent::psychrometrics::{
             latent_heat_of_vaporisation_j_kg, psychrometric_constant_pa_k,
             saturation_vapour_pressure_pa,
         };
         let n = forcing.len();
-        let mut store = 0.0f64;
-        let mut wet = Vec::with_capacity(n);
-        for (k, &t_surface) in surface_k.iter().enumerate().take(n) {
-            store = (store + forcing.precipitation_mm[k].max(0.0)).min(self.capacity_mm);
-            let delta = (store / self.capacity_mm).powf(2.0 / 3.0);
-            let t_air = forcing.air_temperature_k[k];
-            let lambda = latent_heat_of_vaporisation_j_kg(t_air);
-            let p = forcing.pressure_pa[k];
-            if !(p.is_finite() && p > 0.0) {
-                return Err(Error::invalid(
-                    format!("records[{k}].pressure_pa"),
-                    format!("{p}: expected a positive pressure"),
-                ));
-            }
-            let gamma = psychrometric_constant_pa_k(p, lambda);
-            let g_open = ex.sensible_w_m2_k[k] / gamma;
-            let g = &mut ex.vapour_conductance_w_m2_pa[k];
-            *g = (1.0 - delta) * *g + delta * g_open;
-            wet.push(delta);
-            if k + 1 < n && store > 0.0 {
-                let dt = forcing.times_s[k + 1] - forcing.times_s[k];
-                let deficit = (saturation_vapour_pressure_pa(t_surface)
-                    - forcing.vapour_pressure_pa[k])
-                    .max(0.0);
-                let evaporation_mm = delta * g_open * deficit / lambda * dt;
-                store = (store - evaporation_mm).max(0.0);
-            }
+        let filled = *store + forcing.precipitation_mm[k].max(0.0);
+        *store = filled.min(self.capacity_mm);
+        let overflow = filled - *store;
+        let delta = (*store / self.capacity_mm).powf(2.0 / 3.0);
+        let t_air = forcing.air_temperature_k[k];
+        let lambda = latent_heat_of_vaporisation_j_kg(t_air);
+        let p = forcing.pressure_pa[k];
+        if !(p.is_finite() && p > 0.0) {
+            return Err(Error::invalid(
+                format!("records[{k}].pressure_pa"),
+                format!("{p}: expected a positive pressure"),
+            ));
         }
-        Ok(wet)
+        let gamma = psychrometric_constant_pa_k(p, lambda);
+        let g_open = h / gamma;
+        *g = (1.0 - delta) * *g + delta * g_open;
+        if k + 1 < n && *store > 0.0 {
+            let dt = forcing.times_s[k + 1] - forcing.times_s[k];
+            let deficit =
+                (saturation_vapour_pressure_pa(t_surface) - forcing.vapour_pressure_pa[k]).max(0.0);
+            let evaporation_mm = delta * g_open * deficit / lambda * dt;
+            *store = (*store - evaporation_mm).max(0.0);
+        }
+        Ok((delta, overflow))
     }
 }
 
@@ -399,6 +440,13 @@ pub struct Exchange {
     /// With it the two vectors above are 0: a facet's source is its
     /// absorbed incoming radiation, and the soil's law comes from here.
     pub two_source: Vec<TwoSourceStep>,
+    /// The root-zone water content at each record, m³ m⁻³, where the
+    /// surface has a [`RootZone`] (empty otherwise: θ constant).
+    pub soil_moisture_m3_m3: Vec<f64>,
+    /// The root zone's water over the interval after each record
+    /// ([`WaterStep`]; one fewer than the records; empty without a root
+    /// zone).
+    pub soil_water: Vec<WaterStep>,
 }
 
 impl Exchange {
@@ -414,6 +462,8 @@ impl Exchange {
                 .collect(),
             vapour_conductance_w_m2_pa: vec![0.0; forcing.len()],
             two_source: Vec::new(),
+            soil_moisture_m3_m3: Vec::new(),
+            soil_water: Vec::new(),
         }
     }
 
@@ -550,6 +600,8 @@ impl Exchange {
             sensible_w_m2_k: vec![0.0; n],
             vapour_conductance_w_m2_pa: vec![0.0; n],
             two_source: steps(&inputs, &t_c, &t_s),
+            soil_moisture_m3_m3: Vec::new(),
+            soil_water: Vec::new(),
         };
         // Passes that update the resistances (stability, the soil's free
         // convection) with the linearisation until the reference settles to
@@ -629,7 +681,12 @@ impl Exchange {
                     .collect(),
                 vapour_conductance_w_m2_pa: vec![0.0; n],
                 two_source: Vec::new(),
+                soil_moisture_m3_m3: Vec::new(),
+                soil_water: Vec::new(),
             },
+            Some(surface) if surface.root_zone.is_some() => {
+                return Exchange::with_root_zone(props, forcing, surface, surface_k);
+            }
             Some(surface) => {
                 let energy_of = |s: &LandSurface| {
                     s.energy(forcing.wind_height_m, forcing.air_height_m)
@@ -654,6 +711,8 @@ impl Exchange {
                     sensible_w_m2_k: sensible,
                     vapour_conductance_w_m2_pa: vapour,
                     two_source: Vec::new(),
+                    soil_moisture_m3_m3: Vec::new(),
+                    soil_water: Vec::new(),
                 }
             }
         };
@@ -661,6 +720,70 @@ impl Exchange {
             WetStore::of(props).wet(forcing, surface_k, &mut ex)?;
         }
         Ok(ex)
+    }
+
+    /// The exchange of a surface with a root-zone water budget
+    /// ([`RootZone`]) at the surface temperatures `surface_k`: record by
+    /// record, the exchange at the record's θ, wetted by the rain store
+    /// ([`WetStore`]), whose overflow infiltrates; then θ over the interval
+    /// after the record from that rain and the dry part's evaporation and
+    /// transpiration `E = (1 − δ)·g_v·(e°(T_s) − e_a)/λ` (kg m⁻² s⁻¹; λ of
+    /// [`super::latent::psychrometrics::latent_heat_of_vaporisation_j_kg`]
+    /// at the air temperature, as the store's), the same step's latent
+    /// flux the front law applies.
+    fn with_root_zone(
+        props: &SlabProperties,
+        forcing: &Forcing,
+        surface: &LandSurface,
+        surface_k: &[f64],
+    ) -> Result<Exchange> {
+        use super::latent::psychrometrics::{
+            latent_heat_of_vaporisation_j_kg, saturation_vapour_pressure_pa,
+        };
+        let Some(zone) = surface.root_zone else {
+            return Err(Error::invalid("surface_energy.root_zone_depth_m", "none"));
+        };
+        let n = forcing.len();
+        let store_model = WetStore::of(props);
+        let mut store = 0.0f64;
+        let mut theta = surface.soil_moisture_m3_m3;
+        let mut sensible = Vec::with_capacity(n);
+        let mut vapour = Vec::with_capacity(n);
+        let mut thetas = Vec::with_capacity(n);
+        let mut water = Vec::with_capacity(n.saturating_sub(1));
+        for (k, &t) in surface_k.iter().enumerate().take(n) {
+            let mut now = surface.on(forcing.start_unix_s + forcing.times_s[k]);
+            now.soil_moisture_m3_m3 = theta;
+            let energy = now
+                .energy(forcing.wind_height_m, forcing.air_height_m)
+                .map_err(|e| {
+                    Error::invalid(format!("surface_energy.{}", e.field()), e.to_string())
+                })?;
+            let (h, g_dry) = LandSurface::exchange_at(&energy, forcing, k, t)?;
+            let mut g = g_dry;
+            let (delta, infiltration_mm) =
+                store_model.record(&mut store, forcing, k, t, h, &mut g)?;
+            sensible.push(h);
+            vapour.push(g);
+            thetas.push(theta);
+            if k + 1 < n {
+                let dt = forcing.times_s[k + 1] - forcing.times_s[k];
+                let lambda = latent_heat_of_vaporisation_j_kg(forcing.air_temperature_k[k]);
+                let le_dry = (1.0 - delta)
+                    * g_dry
+                    * (saturation_vapour_pressure_pa(t) - forcing.vapour_pressure_pa[k]);
+                let step = zone.step(theta, infiltration_mm, le_dry / lambda * dt, dt);
+                theta = step.theta_m3_m3;
+                water.push(step);
+            }
+        }
+        Ok(Exchange {
+            sensible_w_m2_k: sensible,
+            vapour_conductance_w_m2_pa: vapour,
+            two_source: Vec::new(),
+            soil_moisture_m3_m3: thetas,
+            soil_water: water,
+        })
     }
 
     /// Error unless there is one entry per record.

@@ -21,7 +21,9 @@
 //!   temperature, with their derivatives, for a surface-energy-balance
 //!   solver;
 //! - [`surface_energy`]: [`SurfaceEnergy`], a surface's aerodynamic and
-//!   canopy parameters, giving the exchange at one weather record.
+//!   canopy parameters, giving the exchange at one weather record;
+//! - [`soil_water`]: [`RootZone`], the root-zone water bucket (ISBA's w₂,
+//!   Noilhan & Planton 1989) that rain wets and evaporation dries.
 //!
 //! **Takes** air temperature, humidity, pressure, wind and the surface's
 //! parameters, SI units in every name (Pa, K, s m⁻¹, W m⁻²); the FAO-56
@@ -50,6 +52,7 @@
 pub mod aerodynamic;
 pub mod penman_monteith;
 pub mod psychrometrics;
+pub mod soil_water;
 pub mod surface_energy;
 pub mod surface_resistance;
 
@@ -58,6 +61,7 @@ pub use penman_monteith::{
     AirState, ReferenceEtInputs, TurbulentExchange, penman_monteith_latent_w_m2,
     reference_et0_daily_mm, reference_et0_hourly_mm,
 };
+pub use soil_water::{RootZone, WaterStep};
 pub use surface_energy::{SurfaceEnergy, SurfaceResistance, bare_soil_resistance_s_m};
 pub use surface_resistance::{CanopyConditions, JarvisStewart, StressFactors};
 
