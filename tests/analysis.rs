@@ -1954,6 +1954,79 @@ fn scene_model_matches_a_full_render_of_the_perturbed_scene() {
     }
 }
 
+/// A brighter road sends more sunlight onto the block beside it: the model
+/// recomputes the reflected shortwave at the perturbed albedos, so the
+/// block's pixels follow a full render of the perturbed scene.
+#[test]
+fn scene_model_follows_the_sunlight_a_brighter_road_reflects() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = r#"[
+      {"kind": "material", "material": "asphalt", "property": "solar_absorptivity", "low": 0.3, "high": 0.98}
+    ]"#;
+    let points: Vec<PixelPoint> = [(12.5, 7.5), (10.5, 7.5), (12.5, 6.5), (14.5, 6.5)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, y))| px(&format!("p{i}"), x, y))
+        .collect();
+    let study = tiny_study(dir.path(), params, points.clone());
+    let x = [0.4];
+    let model = study.pixels(&x).unwrap();
+    let nominal = study.pixels(&study.params.nominal()).unwrap();
+    let mut db: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(crate::util::repo_path("scenes/materials.json")).unwrap(),
+    )
+    .unwrap();
+    for m in db["materials"].as_array_mut().unwrap() {
+        if m["name"] == "asphalt" {
+            m["solar_absorptivity"] = 0.4.into();
+        }
+    }
+    let mats = dir.path().join("materials_truth.json");
+    std::fs::write(&mats, db.to_string()).unwrap();
+    let mut scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
+            .unwrap();
+    scene["materials"] = serde_json::json!([mats]);
+    let truth_path = dir.path().join("truth.json");
+    std::fs::write(&truth_path, scene.to_string()).unwrap();
+    let mut truth = Session::open(&truth_path, irsig::trace::Backend::Embree).unwrap();
+    let t = truth.scene.time;
+    let states = truth.thermal(&[t]).unwrap();
+    let band = truth
+        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
+        .unwrap();
+    let bt = |l: f64| {
+        irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
+            .unwrap()
+            .brightness_temperature(l)
+            .unwrap()
+    };
+    let mut changes = Vec::new();
+    for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
+        let k = p.y as usize * 24 + p.x as usize;
+        let full = bt(band.radiance()[0][k] as f64);
+        let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
+        eprintln!(
+            "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
+            p.label
+        );
+        changes.push(full - nt);
+        // Within a tenth of the change: the facets farther away keep their
+        // rendered temperatures. With the reflected shortwave of the
+        // nominal albedos the block's face went the wrong way (−2.8 K
+        // against the full render's +1.7 K).
+        assert!(
+            (mt - full).abs() <= 0.1 * (full - nt).abs() + 0.01,
+            "{}: model {mt} vs full {full} (nominal {nt})",
+            p.label
+        );
+    }
+    // The block's sunlit south face (the first two points) warms with the
+    // road's albedo: what the road reflects onto it outweighs the cooler
+    // road in its background.
+    assert!(changes[0] > 1.0 && changes[1] > 1.0, "{changes:?}");
+}
+
 #[test]
 fn scene_model_of_humidity_and_cloud_matches_a_render_with_that_weather() {
     // With the built-in atmosphere (sky radiance and sensor path from the

@@ -33,11 +33,11 @@
 //! a part's own override of the same property (the part's other overrides
 //! stay). Facets farther away keep their rendered temperatures, so what a sampled
 //! facet reflects of them does not follow the parameters. The reflected
-//! shortwave every facet receives is the nominal albedos' (computed once in
-//! [`SceneStudy::new`]): a changed solar absorptivity changes what the
-//! material's own facets absorb, not what they reflect onto their
-//! neighbours (on the town, a road 0.90 → 0.80 leaves the cars' tyres up to
-//! 0.6 K colder than a full render). No parameter of
+//! shortwave follows the materials' albedos (1 − α − transmissivity): where
+//! a parameter changes one, the solve at those parameters takes the
+//! reflected shortwave recomputed over every facet's hemisphere hits
+//! ([`crate::exposure::reflected::reflected_shortwave`], as the render's),
+//! so a brighter road sends more sunlight onto its neighbours. No parameter of
 //! [`super::params`] changes the geometry, so none needs a full render;
 //! emissivity acts both on the slab model and on the optics of the shading
 //! (emission and every reflected term).
@@ -49,7 +49,8 @@ use rayon::prelude::*;
 
 use super::params::ParamSet;
 use crate::exposure::{
-    Exposure, ExposureParams, HistoryWindow, compute_exposure, history_times, sun_directions,
+    Exposure, ExposureParams, HistoryWindow, ReflectedShortwave, compute_exposure, history_times,
+    sun_directions,
 };
 use crate::render::path::PathTables;
 use crate::render::scene_thermal::{FacetThermalSetup, SceneThermalParams};
@@ -327,6 +328,14 @@ pub struct SceneStudy {
     /// deep-ground boundary, as in the scene-wide solve.
     ground: Vec<bool>,
     facet_part: Vec<u32>,
+    /// Each part's albedo at the nominal parameters (as the render's
+    /// [`FacetThermalSetup`]).
+    part_albedo: Vec<f32>,
+    /// The history's sun directions, the ground's albedo and the bounces
+    /// of the reflected shortwave (0: none).
+    sun_dirs: Vec<glam::Vec3>,
+    ground_albedo: f32,
+    reflected_bounces: u32,
     sampled: Vec<usize>,
     neighbours: Vec<usize>,
     nominal_pass1: Vec<f32>,
@@ -473,6 +482,9 @@ impl SceneStudy {
         options.spinup.tolerance_k = 0.0;
         options.newton_tolerance_k = options.newton_tolerance_k.min(1e-7);
         let facet_part = scene.facet_parts();
+        let part_albedo = (0..scene.parts.len())
+            .map(|p| albedo_of(&scene.part_material(p)))
+            .collect();
         let mut study = SceneStudy {
             session,
             sensor,
@@ -490,6 +502,10 @@ impl SceneStudy {
             kinds,
             ground,
             facet_part,
+            part_albedo,
+            sun_dirs: dirs,
+            ground_albedo: physics.ground_albedo,
+            reflected_bounces: physics.reflected_bounces,
             sampled,
             neighbours,
             nominal_pass1: Vec::new(),
@@ -555,9 +571,8 @@ impl SceneStudy {
     /// incidence per record, and its reflected direct coefficient per
     /// record (decoded from the day records; empty without reflected
     /// shortwave).
-    fn solar_of(&self, f: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+    fn solar_of(&self, f: usize, r: &ReflectedShortwave) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
         let s = &self.exposure.solar;
-        let r = &self.exposure.reflected;
         let refl = if r.facet_count() == 0 {
             Vec::new()
         } else {
@@ -566,11 +581,46 @@ impl SceneStudy {
         (s.sun_fraction(f), s.cos_incidence(f), refl)
     }
 
+    /// The reflected shortwave at `x`: recomputed where a parameter
+    /// changes a part's albedo, else `None` (the nominal one in
+    /// [`Exposure::reflected`]).
+    fn reflected_at(&self, x: &[f64]) -> Result<Option<ReflectedShortwave>> {
+        if self.reflected_bounces == 0 {
+            return Ok(None);
+        }
+        let scene = &self.session.scene;
+        let part_albedo = (0..scene.parts.len())
+            .map(|p| {
+                Ok(albedo_of(
+                    &self.params.apply_material(x, &scene.part_material(p))?,
+                ))
+            })
+            .collect::<Result<Vec<f32>>>()?;
+        if part_albedo == self.part_albedo {
+            return Ok(None);
+        }
+        let albedo: Vec<f32> = self
+            .facet_part
+            .iter()
+            .map(|&p| part_albedo[p as usize])
+            .collect();
+        crate::exposure::reflected::reflected_shortwave(
+            &self.exposure.sky,
+            &self.exposure.solar,
+            &albedo,
+            self.ground_albedo,
+            &self.sun_dirs,
+            self.reflected_bounces,
+        )
+        .map(Some)
+    }
+
     fn inputs<'a>(
         &'a self,
         f: usize,
         sun: &'a (Vec<f32>, Vec<f32>, Vec<f32>),
         background: Background<'a>,
+        reflected: &'a ReflectedShortwave,
     ) -> FacetInputs<'a> {
         let s = &self.exposure;
         FacetInputs {
@@ -579,12 +629,12 @@ impl SceneStudy {
             shape_factor: s.sky.shape_factor[f] as f64,
             back_shape_factor: s.sky.back_shape_factor(f).map(f64::from),
             background,
-            reflected: if s.reflected.facet_count() == 0 {
+            reflected: if reflected.facet_count() == 0 {
                 Reflected::NONE
             } else {
                 Reflected {
                     direct: &sun.2,
-                    diffuse: s.reflected.diffuse[f] as f64,
+                    diffuse: reflected.diffuse[f] as f64,
                 }
             },
         }
@@ -599,6 +649,8 @@ impl SceneStudy {
             .apply_weather_at(x, &self.history, Some(&site))?;
         let forcing = Forcing::from_records(&w)?;
         let props = self.part_props(x)?;
+        let reflected_x = self.reflected_at(x)?;
+        let reflected = reflected_x.as_ref().unwrap_or(&self.exposure.reflected);
         // The ground twin of each part's properties (deep-ground back
         // boundary where the back is insulated), as the scene solve's
         // `FacetThermalSetup::with_ground`.
@@ -683,7 +735,7 @@ impl SceneStudy {
                     p,
                     &forcing,
                     ex,
-                    &self.inputs(f, &self.solar_of(f), Background::Air),
+                    &self.inputs(f, &self.solar_of(f, reflected), Background::Air, reflected),
                     &self.options,
                 )?;
                 Ok(sol
@@ -740,7 +792,7 @@ impl SceneStudy {
                     p,
                     &forcing,
                     ex,
-                    &self.inputs(f, &self.solar_of(f), background),
+                    &self.inputs(f, &self.solar_of(f, reflected), background, reflected),
                     &self.options,
                 )?;
                 Ok(sol.surface_temperature_k[self.image_record] as f32)
@@ -853,4 +905,10 @@ pub fn pixel_series(
         .iter()
         .map(|c| shade(session, s, &session.optics, c, &refs))
         .collect()
+}
+
+/// A material's albedo for the reflected shortwave, as the render's
+/// [`FacetThermalSetup`]: 1 − α − transmissivity, in 0..1.
+fn albedo_of(m: &crate::material::Material) -> f32 {
+    (1.0 - m.solar_absorptivity - m.transmissivity).clamp(0.0, 1.0) as f32
 }
