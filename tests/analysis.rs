@@ -1887,6 +1887,52 @@ fn cli_compare_latlon_points_against_a_render() {
     assert_eq!(v["points"]["points"].as_array().unwrap().len(), 2);
 }
 
+/// Brightness temperatures (8–12 µm, K) at `points` of a full render (scene-wide
+/// solve, render) of the tiny scene in `dir` whose `asphalt` takes `edits`
+/// (material fields), through its own materials file.
+fn full_render_of_perturbed_asphalt(
+    dir: &std::path::Path,
+    edits: &[(&str, f64)],
+    points: &[PixelPoint],
+) -> Vec<f64> {
+    let mut db: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(crate::util::repo_path("scenes/materials.json")).unwrap(),
+    )
+    .unwrap();
+    for m in db["materials"].as_array_mut().unwrap() {
+        if m["name"] == "asphalt" {
+            for &(k, v) in edits {
+                m[k] = v.into();
+            }
+        }
+    }
+    let mats = dir.join("materials_truth.json");
+    std::fs::write(&mats, db.to_string()).unwrap();
+    let mut scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).unwrap()).unwrap();
+    scene["materials"] = serde_json::json!([mats]);
+    let truth_path = dir.join("truth.json");
+    std::fs::write(&truth_path, scene.to_string()).unwrap();
+    let mut truth = Session::open(&truth_path, irsig::trace::Backend::Embree).unwrap();
+    let t = truth.scene.time;
+    let states = truth.thermal(&[t]).unwrap();
+    let band = truth
+        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
+        .unwrap();
+    points
+        .iter()
+        .map(|p| band_bt(band.radiance()[0][p.y as usize * 24 + p.x as usize] as f64))
+        .collect()
+}
+
+/// 8–12 µm brightness temperature (K) of a band radiance (W m⁻² sr⁻¹).
+fn band_bt(l: f64) -> f64 {
+    irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
+        .unwrap()
+        .brightness_temperature(l)
+        .unwrap()
+}
+
 #[test]
 fn scene_model_matches_a_full_render_of_the_perturbed_scene() {
     // Fixed-geometry model at asphalt α = 0.78, k = 1.2 vs the whole chain
@@ -1906,40 +1952,16 @@ fn scene_model_matches_a_full_render_of_the_perturbed_scene() {
     let model = study.pixels(&x).unwrap();
     let nominal = study.pixels(&study.params.nominal()).unwrap();
     // The perturbed scene: its own materials file.
-    let mut db: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(crate::util::repo_path("scenes/materials.json")).unwrap(),
-    )
-    .unwrap();
-    for m in db["materials"].as_array_mut().unwrap() {
-        if m["name"] == "asphalt" {
-            m["solar_absorptivity"] = 0.78.into();
-            m["conductivity_w_m_k"] = 1.2.into();
-        }
-    }
-    let mats = dir.path().join("materials_truth.json");
-    std::fs::write(&mats, db.to_string()).unwrap();
-    let mut scene: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
-            .unwrap();
-    scene["materials"] = serde_json::json!([mats]);
-    let truth_path = dir.path().join("truth.json");
-    std::fs::write(&truth_path, scene.to_string()).unwrap();
-    let mut truth = Session::open(&truth_path, irsig::trace::Backend::Embree).unwrap();
-    let t = truth.scene.time;
-    let states = truth.thermal(&[t]).unwrap();
-    let band = truth
-        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
-        .unwrap();
-    let bt = |l: f64| {
-        irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
-            .unwrap()
-            .brightness_temperature(l)
-            .unwrap()
-    };
-    for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
-        let k = p.y as usize * 24 + p.x as usize;
-        let full = bt(band.radiance()[0][k] as f64);
-        let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
+    let fulls = full_render_of_perturbed_asphalt(
+        dir.path(),
+        &[("solar_absorptivity", 0.78), ("conductivity_w_m_k", 1.2)],
+        &points,
+    );
+    for (((p, m), n), &full) in points.iter().zip(&model).zip(&nominal).zip(&fulls) {
+        let (mt, nt) = (
+            band_bt(m.band_radiance_w_m2_sr),
+            band_bt(n.band_radiance_w_m2_sr),
+        );
         eprintln!(
             "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
             p.label
@@ -1972,40 +1994,14 @@ fn scene_model_follows_the_sunlight_a_brighter_road_reflects() {
     let x = [0.4];
     let model = study.pixels(&x).unwrap();
     let nominal = study.pixels(&study.params.nominal()).unwrap();
-    let mut db: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(crate::util::repo_path("scenes/materials.json")).unwrap(),
-    )
-    .unwrap();
-    for m in db["materials"].as_array_mut().unwrap() {
-        if m["name"] == "asphalt" {
-            m["solar_absorptivity"] = 0.4.into();
-        }
-    }
-    let mats = dir.path().join("materials_truth.json");
-    std::fs::write(&mats, db.to_string()).unwrap();
-    let mut scene: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
-            .unwrap();
-    scene["materials"] = serde_json::json!([mats]);
-    let truth_path = dir.path().join("truth.json");
-    std::fs::write(&truth_path, scene.to_string()).unwrap();
-    let mut truth = Session::open(&truth_path, irsig::trace::Backend::Embree).unwrap();
-    let t = truth.scene.time;
-    let states = truth.thermal(&[t]).unwrap();
-    let band = truth
-        .render_rows(0, &states.conditions[0], 0..16, &|_| {})
-        .unwrap();
-    let bt = |l: f64| {
-        irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
-            .unwrap()
-            .brightness_temperature(l)
-            .unwrap()
-    };
+    let fulls =
+        full_render_of_perturbed_asphalt(dir.path(), &[("solar_absorptivity", 0.4)], &points);
     let mut changes = Vec::new();
-    for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
-        let k = p.y as usize * 24 + p.x as usize;
-        let full = bt(band.radiance()[0][k] as f64);
-        let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
+    for (((p, m), n), &full) in points.iter().zip(&model).zip(&nominal).zip(&fulls) {
+        let (mt, nt) = (
+            band_bt(m.band_radiance_w_m2_sr),
+            band_bt(n.band_radiance_w_m2_sr),
+        );
         eprintln!(
             "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
             p.label
@@ -2073,16 +2069,12 @@ fn scene_model_of_humidity_and_cloud_matches_a_render_with_that_weather() {
     let band = truth
         .render_rows(0, &states.conditions[0], 0..16, &|_| {})
         .unwrap();
-    let bt = |l: f64| {
-        irsig::radiometry::Band::flat(8.0, 12.0, 0.01)
-            .unwrap()
-            .brightness_temperature(l)
-            .unwrap()
-    };
     for ((p, m), n) in points.iter().zip(&model).zip(&nominal) {
-        let k = p.y as usize * 24 + p.x as usize;
-        let full = bt(band.radiance()[0][k] as f64);
-        let (mt, nt) = (bt(m.band_radiance_w_m2_sr), bt(n.band_radiance_w_m2_sr));
+        let full = band_bt(band.radiance()[0][p.y as usize * 24 + p.x as usize] as f64);
+        let (mt, nt) = (
+            band_bt(m.band_radiance_w_m2_sr),
+            band_bt(n.band_radiance_w_m2_sr),
+        );
         eprintln!(
             "{}: nominal {nt:.3} K, model {mt:.3} K, full render {full:.3} K",
             p.label
