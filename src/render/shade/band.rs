@@ -869,6 +869,18 @@ mod tests {
         (i, ((r - x[i - 1]) / (x[i] - x[i - 1])).clamp(0.0, 1.0))
     }
 
+    /// `n + 1` increasing range nodes from 0 m with pseudo-random steps of
+    /// 1 to `1 + max_step` m (a linear congruential sequence from `seed`).
+    fn irregular_ranges(mut seed: u64, n: usize, max_step: f64) -> Vec<f64> {
+        let mut r = vec![0.0];
+        for _ in 0..n {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let step = 1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64 * max_step;
+            r.push(r.last().unwrap() + step);
+        }
+        r
+    }
+
     /// [`GreyTables::locate`] (first guess from √r, then a branch-free step
     /// each way, then the loops) finds the node of its definition for the
     /// quadratic spacing of the path tables and for irregular spacings,
@@ -878,13 +890,7 @@ mod tests {
         let quadratic: Vec<f64> = (0..48)
             .map(|i| 5000.0 * (i as f64 / 47.0).powi(2))
             .collect();
-        let mut irregular = vec![0.0];
-        let mut seed = 0x2545_f491_u64;
-        for _ in 0..12 {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            let step = 1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64 * 900.0;
-            irregular.push(irregular.last().unwrap() + step);
-        }
+        let irregular = irregular_ranges(0x2545_f491, 12, 900.0);
         for ranges in [quadratic, irregular, vec![0.0, 10.0]] {
             let t = GreyTables::new(&[], &[], &ranges, &[], &[]);
             let x = &t.ranges;
@@ -916,13 +922,7 @@ mod tests {
     fn locate_binned_equals_the_reference_for_every_range() {
         let quadratic =
             |max: f64| -> Vec<f64> { (0..48).map(|i| max * (i as f64 / 47.0).powi(2)).collect() };
-        let mut irregular = vec![0.0];
-        let mut seed = 0x9e37_79b9_u64;
-        for _ in 0..20 {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            let step = 1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64 * 700.0;
-            irregular.push(irregular.last().unwrap() + step);
-        }
+        let irregular = irregular_ranges(0x9e37_79b9, 20, 700.0);
         let cases: Vec<(Vec<f64>, bool)> = vec![
             (quadratic(1.0), true),
             (quadratic(2.0 * (300.0 + 400.0) + 1.0), true),
