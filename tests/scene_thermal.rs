@@ -1200,9 +1200,16 @@ fn second_order_at_curvature_nodes_matches_every_record() {
 /// (the fast path); it must equal, bit for bit, the product the
 /// `SolarSource` trait forms from the two decoded histories (the
 /// reference), for facets that face the sun, face away from it part of the
-/// day, are double-sided or face down, and at night.
+/// day, are double-sided or face down, and at night; with one byte per lit
+/// count (≤ 255 points) and two.
 #[test]
 fn compact_sunlit_cosine_matches_the_two_histories() {
+    for points in [4, 300] {
+        compact_sunlit_cosine_matches_with(points);
+    }
+}
+
+fn compact_sunlit_cosine_matches_with(points: u32) {
     use irsig::exposure::SolarHistory;
     use irsig::thermal::scene::{SolarArrays, SolarSource};
     let steps = 12;
@@ -1223,7 +1230,6 @@ fn compact_sunlit_cosine_matches_the_two_histories() {
     ];
     let double_sided = [false, false, false, true, false, false];
     let n = normal.len();
-    let points = 4;
     // Lit fractions in quarters, 0 with the sun down.
     let frac: Vec<f32> = (0..n * steps)
         .map(|i| {
@@ -1252,7 +1258,7 @@ fn compact_sunlit_cosine_matches_the_two_histories() {
             assert_eq!(
                 fast[r].to_bits(),
                 reference[r].to_bits(),
-                "facet {f}, record {r}: {} vs {}",
+                "{points} points, facet {f}, record {r}: {} vs {}",
                 fast[r],
                 reference[r]
             );
