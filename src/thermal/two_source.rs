@@ -318,9 +318,13 @@ pub struct SoilWater {
 /// over the interval after the record the bucket loses the dry parts'
 /// evaporation, the leaves' transpiration `(1 − δ_c) ρc_p/(γ (r_x + r_st))
 /// (e°(T_c) − e_ac)` and the soil's `(1 − δ_s) ρc_p/(γ (r_soil + r_ss))
-/// (e°(T_s) − e_ac)` (negative: dew), over λ at the air temperature, at
-/// the reference temperatures `t_c`, `t_s` ([`RootZone::step`]; the wet
-/// parts evaporate the stores). Without a root zone: exactly [`wet`]'s
+/// (e°(T_s) − e_ac)` (negative: dew), over λ at the air temperature, with
+/// the soil at the reference `t_s` and the leaves at their balance for the
+/// record's resistances about the reference `t_c`
+/// ([`TwoSourceStep::canopy_k`] of the open surface: shut stomata warm the
+/// leaves rather than only cut their transpiration, which would make the
+/// passes of [`super::Exchange::two_source`] oscillate) ([`RootZone::step`];
+/// the wet parts evaporate the stores at the reference temperatures). Without a root zone: exactly [`wet`]'s
 /// stores, the resistances untouched.
 pub fn water(
     inputs: &mut [TwoSourceInputs],
@@ -370,7 +374,12 @@ pub fn water(
                 soil = (soil - le_s.max(0.0) / lambda * dt).max(0.0);
             }
             if let (Some((zone, _)), Some(step)) = (root_zone, &step) {
-                let (le_c, le_s) = step.dry_latent_w_m2(t_c[k], t_s[k]);
+                // The leaves at this record's resistances (one Newton step
+                // of their balance from the reference, the soil held): the
+                // stomata that θ closes warm the leaves, and at the fixed
+                // point this is the reference.
+                let leaves_k = step.canopy_k(step.open_source_w_m2(), t_s[k]);
+                let (le_c, le_s) = step.dry_latent_w_m2(leaves_k, t_s[k]);
                 let w = zone.step(theta, infiltration, (le_c + le_s) / lambda * dt, dt);
                 theta = w.theta_m3_m3;
                 steps.push(w);
@@ -656,6 +665,12 @@ impl TwoSourceStep {
             (self.w_c - self.w_c_wet) * (es(t_c) - e_ac),
             (self.w_s - self.w_s_wet) * (es(t_s) - e_ac),
         )
+    }
+
+    /// The open reference surface's source Ŝ (its absorbed incoming
+    /// radiation), W m⁻².
+    pub fn open_source_w_m2(&self) -> f64 {
+        self.s
     }
 
     /// Whether leaves or soil hold rain at this record ([`wet`]).
