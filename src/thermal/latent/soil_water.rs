@@ -255,9 +255,16 @@ impl WaterTable {
         if h_r <= l * (1.0 + 1e-12) {
             return 0.0;
         }
-        // Bracket in y = ln q: at q_max the height is below L (it is L only
-        // as h_r → ∞); the height falls with q.
-        let mut hi = self.max_upward_flux_m_s().ln() + 1.0;
+        // Bracket in y = ln q (the height falls with q): the height is at
+        // most ψ_s/(1 + c) + ψ_s A c^(−1/n) < ψ_s/c + ψ_s A c^(−1/n) (the
+        // saturated part and Gardner's closed form above ψ_s, h_r → ∞;
+        // A = (π/n)/sin(π/n)), below L where each term is below L/2.
+        let s = &self.soil;
+        let n = s.conductivity_exponent();
+        let a = (std::f64::consts::PI / n) / (std::f64::consts::PI / n).sin();
+        let psi = s.air_entry_suction_m;
+        let c_hi = (2.0 * psi / l).max((2.0 * psi * a / l).powf(n));
+        let mut hi = (c_hi * s.saturated_conductivity_m_s).ln();
         let mut lo = hi - 60.0;
         let mut y = hi - 1.0;
         for _ in 0..100 {
