@@ -48,7 +48,8 @@
 //! h(θ) = ψ_s (θ/θ_s)^−b,   K = K_s for h ≤ ψ_s,   K(h) = K_s (ψ_s/h)^(2 + 3/b)
 //! ```
 //!
-//! `q` is the root of that integral (solved to 1e-10 relative,
+//! `q` is the root of that integral (Newton in ln q to 1e-10, the integral
+//! by Simpson's rule over ln h to ≈ 1e-5 relative,
 //! [`WaterTable::upward_flux_m_s`]); it is 0 where the bucket is as wet as
 //! hydrostatic equilibrium with the table or wetter (`h_r ≤ L`; the water
 //! then drains, below), and it grows, as the bucket dries, to what the soil
@@ -247,7 +248,8 @@ impl WaterTable {
     /// The steady upward flux (m s⁻¹, ≥ 0) from the table into a bucket at
     /// `theta` (module docs): 0 at or wetter than equilibrium, else the
     /// root of [`WaterTable::height_m`] = L by Newton's method in ln q,
-    /// bracketed, to 1e-10 relative.
+    /// bracketed, to 1e-10 in ln q (the quadrature's own accuracy is
+    /// ≈ 1e-5).
     pub fn upward_flux_m_s(&self, theta_m3_m3: f64) -> f64 {
         let h_r = self.soil.suction_m(theta_m3_m3).min(1e7);
         let l = self.distance_m;
