@@ -295,6 +295,18 @@ pub static MATERIAL_PARAMETERS: &[MaterialParameter] = &[
         "FAO-56 (Allen et al. 1998) Table 22, maximum effective rooting depth: shallow vegetables ≈ 0.3 m, grass 0.5–1.5 m, field crops 0.6–1.7 m, orchards to 2 m; irsig widens to 0.1–3 m (only where a root zone is on)"
     ),
     surface_param!(
+        "water_table_depth_m",
+        "m",
+        0.3,
+        10.0,
+        POSITIVE,
+        |s| s
+            .water_table_depth_m
+            .filter(|_| s.root_zone_depth_m.is_some()),
+        |s, v| s.water_table_depth_m = Some(v),
+        "depth of a water table under the root zone: tile-drained Midwest fields 1–2 m (drains at 0.5–1.5 m), shallow groundwater 0.3 m to none felt at the surface below ≈ 10 m (Gardner 1958's capillary rise falls as L^−n); must stay below root_zone_depth_m (only where a water table is set)"
+    ),
+    surface_param!(
         "canopy_height_m",
         "m",
         0.02,

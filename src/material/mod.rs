@@ -50,7 +50,7 @@ use crate::math::{bracket, interp1d, lerp};
 pub use construction::{BackSpec, InteriorSpec, LayerEntry, MaterialLayer};
 pub use surface::{
     CanopyModel, ConvectionModel, ConvectionSpec, HeatRoughness, Phenology, PhenologyPoint,
-    SurfaceEnergySpec, SurfaceKind, SurfaceRoughness,
+    SoilTexture, SurfaceEnergySpec, SurfaceKind, SurfaceRoughness,
 };
 
 /// A spectral emissivity curve, optionally angle-dependent.

@@ -26,6 +26,8 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+pub use crate::thermal::latent::soil_water::SoilTexture;
+
 /// How a dry surface (one without a `surface_energy` block) convects heat
 /// to the air: the material's `"convection"` entry,
 /// `{"model": "doe2", "roughness": "medium_rough"}` by default. The models
@@ -366,9 +368,22 @@ pub struct SurfaceEnergySpec {
     /// constant through the run). [`crate::thermal::latent::RootZone`]:
     /// ISBA's root-zone bucket, starting at `soil_moisture_m3_m3`, draining
     /// above `field_capacity_m3_m3`, full at `saturation_m3_m3`. Canopy
-    /// (big leaf) and bare soil.
+    /// (big leaf or two sources) and bare soil.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub root_zone_depth_m: Option<f64>,
+    /// Depth of a water table below the surface, m (> `root_zone_depth_m`;
+    /// needs a root zone; default none: no water rises from below). Water
+    /// rises into the root zone by Gardner's (1958) steady capillary flux
+    /// through the `soil_texture`, and the root zone drains only to its
+    /// equilibrium with the table ([`crate::thermal::latent::soil_water`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water_table_depth_m: Option<f64>,
+    /// The soil's texture class of Clapp & Hornberger (1978) Table 2
+    /// (default `loam`): its hydraulic conductivity and retention carry the
+    /// water table's capillary rise, and its porosity is the default
+    /// `saturation_m3_m3`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub soil_texture: Option<SoilTexture>,
 }
 
 fn is_fao56(h: &HeatRoughness) -> bool {
@@ -459,9 +474,16 @@ impl SurfaceEnergySpec {
         self.clumping_index.unwrap_or(1.0)
     }
 
-    /// The soil's water content at saturation, m³ m⁻³ (default 0.451).
+    /// The soil's water content at saturation, m³ m⁻³ (default: the
+    /// texture's porosity, 0.451 for the default loam).
     pub fn saturation(&self) -> f64 {
-        self.saturation_m3_m3.unwrap_or(0.451)
+        self.saturation_m3_m3
+            .unwrap_or(self.texture().hydraulics().saturation_m3_m3)
+    }
+
+    /// The soil's texture class (default loam).
+    pub fn texture(&self) -> SoilTexture {
+        self.soil_texture.unwrap_or_default()
     }
 
     /// Problems as `(field, message)`, the field relative to the block
@@ -669,12 +691,6 @@ impl SurfaceEnergySpec {
                     "water has no soil (kind \"canopy\" or \"bare_soil\")".to_string(),
                 ));
             }
-            if self.canopy == CanopyModel::TwoSource {
-                p.push((
-                    "root_zone_depth_m",
-                    "not coupled to a two_source canopy yet (big_leaf or bare_soil)".to_string(),
-                ));
-            }
             let sat = self.saturation();
             check(
                 &mut p,
@@ -683,6 +699,21 @@ impl SurfaceEnergySpec {
                 self.soil_moisture_m3_m3 <= sat && self.field_capacity_m3_m3 <= sat,
                 "a root zone's water content and field capacity at or below saturation_m3_m3",
             );
+        }
+        if let Some(z) = self.water_table_depth_m {
+            match self.root_zone_depth_m {
+                None => p.push((
+                    "water_table_depth_m",
+                    "a water table feeds a root zone: set root_zone_depth_m".to_string(),
+                )),
+                Some(d) => check(
+                    &mut p,
+                    "water_table_depth_m",
+                    z,
+                    z > d,
+                    &format!("a depth below the root zone (> root_zone_depth_m = {d} m)"),
+                ),
+            }
         }
         if let Some(t) = self.saturation_m3_m3 {
             check(
@@ -747,12 +778,25 @@ mod tests {
         let base = r#""kind": "canopy", "canopy_height_m": 1, "leaf_area_index": 3"#;
         assert!(fields(&format!("{{{base}, \"root_zone_depth_m\": 1}}")).is_empty());
         assert!(fields(r#"{"kind": "bare_soil", "root_zone_depth_m": 0.1}"#).is_empty());
+        let two = r#""canopy": "two_source", "root_zone_depth_m": 1, "water_table_depth_m": 1.5"#;
+        assert!(fields(&format!("{{{base}, {two}}}")).is_empty());
+        let silty = parse(&format!("{{{base}, \"soil_texture\": \"silty_clay\"}}"));
+        assert_eq!(silty.saturation(), 0.492);
         for (extra, field) in [
             (r#""root_zone_depth_m": 0"#, "root_zone_depth_m"),
             (r#""root_zone_depth_m": -1"#, "root_zone_depth_m"),
+            (r#""water_table_depth_m": 2"#, "water_table_depth_m"),
             (
-                r#""root_zone_depth_m": 1, "canopy": "two_source""#,
-                "root_zone_depth_m",
+                r#""root_zone_depth_m": 1, "water_table_depth_m": 1"#,
+                "water_table_depth_m",
+            ),
+            (
+                r#""root_zone_depth_m": 1, "water_table_depth_m": 0.5"#,
+                "water_table_depth_m",
+            ),
+            (
+                r#""root_zone_depth_m": 1, "water_table_depth_m": -2"#,
+                "water_table_depth_m",
             ),
             (
                 r#""root_zone_depth_m": 1, "saturation_m3_m3": 0.3"#,

@@ -166,12 +166,13 @@ impl LandSurface {
             leaf_width_m: spec.leaf_width(),
         });
         let root_zone = match spec.root_zone_depth_m {
-            Some(d) => Some(RootZone::new(
-                d,
-                0.0,
-                spec.field_capacity_m3_m3,
-                spec.saturation(),
-            )?),
+            Some(d) => {
+                let zone = RootZone::new(d, 0.0, spec.field_capacity_m3_m3, spec.saturation())?;
+                Some(match spec.water_table_depth_m {
+                    Some(z) => zone.with_water_table(z, spec.texture())?,
+                    None => zone,
+                })
+            }
             None => None,
         };
         Ok(LandSurface {
@@ -555,7 +556,12 @@ impl Exchange {
     /// 1e-7 K (at most [`TWO_SOURCE_PASSES`] passes in all). The weather's
     /// rain wets leaves and soil ([`super::two_source::wet`]), the stores
     /// evolving at each resistance-updating pass's reference temperatures
-    /// and held with the resistances.
+    /// and held with the resistances. With a root zone ([`RootZone`]) its θ
+    /// evolves with the stores ([`super::two_source::water`]): the leaves'
+    /// transpiration and the soil's evaporation at each such pass's
+    /// reference temperatures dry it, and θ sets the next pass's stomatal
+    /// and soil-surface resistances (it starts from the air temperature's
+    /// network).
     ///
     /// # Errors
     /// Humidity or pressure of a record out of range (naming it); the
@@ -596,6 +602,20 @@ impl Exchange {
         opts.spinup.tolerance_k = 0.0;
         let mut t_c = forcing.air_temperature_k.clone();
         let mut t_s = forcing.air_temperature_k.clone();
+        // The root zone's water (with its stores) at the reference
+        // temperatures, setting each record's r_st and r_ss from θ.
+        let zone = surface.root_zone;
+        let theta0 = surface.soil_moisture_m3_m3;
+        let water = |inputs: &mut [two_source::TwoSourceInputs], t_c: &[f64], t_s: &[f64]| {
+            two_source::water(
+                inputs,
+                forcing,
+                t_c,
+                t_s,
+                zone.as_ref().map(|z| (z, theta0)),
+            )
+        };
+        let first = zone.is_some().then(|| water(&mut inputs, &t_c, &t_s));
         let mut ex = Exchange {
             sensible_w_m2_k: vec![0.0; n],
             vapour_conductance_w_m2_pa: vec![0.0; n],
@@ -603,6 +623,10 @@ impl Exchange {
             soil_moisture_m3_m3: Vec::new(),
             soil_water: Vec::new(),
         };
+        if let Some(w) = first {
+            ex.soil_moisture_m3_m3 = w.soil_moisture_m3_m3;
+            ex.soil_water = w.steps;
+        }
         // Passes that update the resistances (stability, the soil's free
         // convection) with the linearisation until the reference settles to
         // CONVERGED_K; then Newton passes with the resistances held, which
@@ -632,7 +656,11 @@ impl Exchange {
                     .map(|(x, (&c, &s))| x.relinearised(c, s))
                     .collect()
             } else {
-                if rain {
+                if zone.is_some() {
+                    let w = water(&mut inputs, &t_c, &t_s);
+                    ex.soil_moisture_m3_m3 = w.soil_moisture_m3_m3;
+                    ex.soil_water = w.steps;
+                } else if rain {
                     two_source::wet(&mut inputs, forcing, &t_c, &t_s);
                 }
                 steps(&inputs, &t_c, &t_s)

@@ -97,7 +97,7 @@ use super::latent::psychrometrics::{
     AIR_SPECIFIC_HEAT_J_KG_K, saturation_vapour_pressure_pa as es,
     saturation_vapour_pressure_slope_pa_k as des,
 };
-use super::latent::{Aerodynamic, AirState, CanopyConditions, JarvisStewart};
+use super::latent::{Aerodynamic, AirState, CanopyConditions, JarvisStewart, RootZone, WaterStep};
 
 /// Extinction coefficient of the beam in NKA95 eq. 13 (their 0.3–0.6).
 pub const BEAM_EXTINCTION: f64 = 0.45;
@@ -160,6 +160,26 @@ pub struct TwoSourceInputs {
     pub leaf_wet_fraction: f64,
     /// Wet fraction δ_s of the soil surface (0: dry), [0, 1].
     pub soil_wet_fraction: f64,
+    /// The leaves' Jarvis–Stewart stomata (None: no leaves), which set
+    /// `stomatal_resistance_s_m` from the soil water
+    /// ([`TwoSourceInputs::set_soil_moisture`]).
+    pub stomata: Option<JarvisStewart>,
+    /// Global shortwave on a horizontal surface, W m⁻²: the stomata's light.
+    pub global_horizontal_w_m2: f64,
+}
+
+impl TwoSourceInputs {
+    /// The same record with the soil at water content `theta_m3_m3`: the
+    /// stomata's soil-water factor f_soil(θ) (the big leaf's,
+    /// [`JarvisStewart`]) in `r_st` and the soil surface's `r_ss(θ)`.
+    pub fn set_soil_moisture(&mut self, theta_m3_m3: f64) {
+        if let Some(js) = &self.stomata {
+            self.stomatal_resistance_s_m =
+                stomatal(js, &self.air, self.global_horizontal_w_m2, theta_m3_m3);
+        }
+        self.soil_surface_resistance_s_m =
+            soil_surface_resistance_s_m(theta_m3_m3, self.params.saturation_m3_m3);
+    }
 }
 
 /// The soil surface's resistance to evaporation of Sellers, Heiser & Hall
@@ -202,7 +222,7 @@ pub(crate) fn inputs_at(
         s.roughness_length_m,
     )
     .map_err(|e| Error::invalid(format!("surface_energy.{}", e.field()), e.to_string()))?;
-    let (lai, r_st) = match s.resistance {
+    let (lai, r_st, stomata) = match s.resistance {
         super::latent::SurfaceResistance::Canopy(js) => (
             js.leaf_area_index,
             stomatal(
@@ -211,8 +231,9 @@ pub(crate) fn inputs_at(
                 forcing.global_horizontal_w_m2[k],
                 s.soil_moisture_m3_m3,
             ),
+            Some(js),
         ),
-        _ => (0.0, f64::INFINITY),
+        _ => (0.0, f64::INFINITY, None),
     };
     let dni = forcing.direct_normal_w_m2[k];
     let diffuse = forcing.diffuse_horizontal_w_m2[k];
@@ -242,6 +263,8 @@ pub(crate) fn inputs_at(
         emissivity,
         leaf_wet_fraction: 0.0,
         soil_wet_fraction: 0.0,
+        stomata,
+        global_horizontal_w_m2: forcing.global_horizontal_w_m2[k],
     }))
 }
 
@@ -264,17 +287,59 @@ pub const SOIL_STORE_MM: f64 = 1.0;
 /// Sets the wet fractions of `inputs` (one per record of `forcing`, and
 /// of `t_c` and `t_s`; records beyond the shortest are left as they are);
 /// returns whether any record is wet. No rain: every fraction 0, exactly
-/// the dry network.
+/// the dry network. [`water`] without a root zone.
 pub fn wet(
     inputs: &mut [TwoSourceInputs],
     forcing: &super::Forcing,
     t_c: &[f64],
     t_s: &[f64],
 ) -> bool {
+    water(inputs, forcing, t_c, t_s, None).wet
+}
+
+/// What [`water`] gives: whether any record is wet, and the root zone's
+/// water content at each record and its water over the interval after each
+/// (both empty without a root zone).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SoilWater {
+    /// Whether leaves or soil hold rain at any record.
+    pub wet: bool,
+    /// θ of the root zone at each record, m³ m⁻³.
+    pub soil_moisture_m3_m3: Vec<f64>,
+    /// The root zone's water over the interval after each record.
+    pub steps: Vec<WaterStep>,
+}
+
+/// The rain stores of [`wet`] and, with `root_zone` (the bucket and its
+/// starting θ), the root zone's water under a two-source canopy, record by
+/// record: θ at the record sets the leaves' stomatal resistance (f_soil(θ),
+/// as the big leaf's) and the soil surface's resistance r_ss(θ) of
+/// `inputs`; the rain the soil surface's store does not hold infiltrates;
+/// over the interval after the record the bucket loses the dry parts'
+/// evaporation, the leaves' transpiration `(1 − δ_c) ρc_p/(γ (r_x + r_st))
+/// (e°(T_c) − e_ac)` and the soil's `(1 − δ_s) ρc_p/(γ (r_soil + r_ss))
+/// (e°(T_s) − e_ac)` (negative: dew), over λ at the air temperature, with
+/// the soil at the reference `t_s` and the leaves at their balance for the
+/// record's resistances about the reference `t_c`
+/// ([`TwoSourceStep::canopy_k`] of the open surface: shut stomata warm the
+/// leaves rather than only cut their transpiration, which would make the
+/// passes of [`super::Exchange::two_source`] oscillate) ([`RootZone::step`];
+/// the wet parts evaporate the stores at the reference temperatures). Without a root zone: exactly [`wet`]'s
+/// stores, the resistances untouched.
+pub fn water(
+    inputs: &mut [TwoSourceInputs],
+    forcing: &super::Forcing,
+    t_c: &[f64],
+    t_s: &[f64],
+    root_zone: Option<(&RootZone, f64)>,
+) -> SoilWater {
     use super::latent::psychrometrics::latent_heat_of_vaporisation_j_kg;
     let (mut leaves, mut soil) = (0.0f64, 0.0f64);
     let mut any = false;
     let n = forcing.len().min(t_c.len()).min(t_s.len());
+    let mut theta = root_zone.map_or(0.0, |(_, t)| t);
+    let mut thetas = Vec::new();
+    let mut steps = Vec::new();
     for (k, x) in inputs.iter_mut().enumerate().take(n) {
         let rain = forcing.precipitation_mm[k].max(0.0);
         let lai = x.leaf_area_index.max(0.0);
@@ -283,24 +348,49 @@ pub fn wet(
         leaves += cover * rain;
         let overflow = (leaves - capacity).max(0.0);
         leaves = leaves.min(capacity);
-        soil = (soil + (1.0 - cover) * rain + overflow).min(SOIL_STORE_MM);
+        let reaching = soil + (1.0 - cover) * rain + overflow;
+        let infiltration = (reaching - SOIL_STORE_MM).max(0.0);
+        soil = reaching.min(SOIL_STORE_MM);
         x.leaf_wet_fraction = if capacity > 0.0 {
             (leaves / capacity).powf(2.0 / 3.0)
         } else {
             0.0
         };
         x.soil_wet_fraction = (soil / SOIL_STORE_MM).powf(2.0 / 3.0);
+        if root_zone.is_some() {
+            x.set_soil_moisture(theta);
+            thetas.push(theta);
+        }
         any |= leaves > 0.0 || soil > 0.0;
-        if k + 1 < n && (leaves > 0.0 || soil > 0.0) {
+        if k + 1 < n {
             let dt = forcing.times_s[k + 1] - forcing.times_s[k];
             let lambda = latent_heat_of_vaporisation_j_kg(x.air.temperature_k());
-            let (le_c, le_s) =
-                TwoSourceStep::new(x, t_c[k], t_s[k]).wet_latent_w_m2(t_c[k], t_s[k]);
-            leaves = (leaves - le_c.max(0.0) / lambda * dt).max(0.0);
-            soil = (soil - le_s.max(0.0) / lambda * dt).max(0.0);
+            let wet_now = leaves > 0.0 || soil > 0.0;
+            let step =
+                (wet_now || root_zone.is_some()).then(|| TwoSourceStep::new(x, t_c[k], t_s[k]));
+            if let (true, Some(step)) = (wet_now, &step) {
+                let (le_c, le_s) = step.wet_latent_w_m2(t_c[k], t_s[k]);
+                leaves = (leaves - le_c.max(0.0) / lambda * dt).max(0.0);
+                soil = (soil - le_s.max(0.0) / lambda * dt).max(0.0);
+            }
+            if let (Some((zone, _)), Some(step)) = (root_zone, &step) {
+                // The leaves at this record's resistances (one Newton step
+                // of their balance from the reference, the soil held): the
+                // stomata that θ closes warm the leaves, and at the fixed
+                // point this is the reference.
+                let leaves_k = step.canopy_k(step.open_source_w_m2(), t_s[k]);
+                let (le_c, le_s) = step.dry_latent_w_m2(leaves_k, t_s[k]);
+                let w = zone.step(theta, infiltration, (le_c + le_s) / lambda * dt, dt);
+                theta = w.theta_m3_m3;
+                steps.push(w);
+            }
         }
     }
-    any
+    SoilWater {
+        wet: any,
+        soil_moisture_m3_m3: thetas,
+        steps,
+    }
 }
 
 /// Vapour conductance `ρc_p/γ · ((1 − δ)/(r_b + r_surf) + δ/r_b)`, W m⁻²
@@ -564,6 +654,25 @@ impl TwoSourceStep {
         )
     }
 
+    /// The latent heat of the dry parts of leaves and soil (the leaves'
+    /// transpiration through their stomata, the soil's evaporation through
+    /// r_ss: what the root zone loses, [`water`]) with leaves at `t_c` and
+    /// soil at `t_s`, W m⁻² each.
+    pub fn dry_latent_w_m2(&self, t_c: f64, t_s: f64) -> (f64, f64) {
+        let sw = self.w_a + self.w_c + self.w_s;
+        let e_ac = (self.w_a * self.air_vapour_pa + self.w_c * es(t_c) + self.w_s * es(t_s)) / sw;
+        (
+            (self.w_c - self.w_c_wet) * (es(t_c) - e_ac),
+            (self.w_s - self.w_s_wet) * (es(t_s) - e_ac),
+        )
+    }
+
+    /// The open reference surface's source Ŝ (its absorbed incoming
+    /// radiation), W m⁻².
+    pub fn open_source_w_m2(&self) -> f64 {
+        self.s
+    }
+
     /// Whether leaves or soil hold rain at this record ([`wet`]).
     pub fn is_wet(&self) -> bool {
         self.w_c_wet > 0.0 || self.w_s_wet > 0.0
@@ -757,6 +866,8 @@ mod tests {
             emissivity: 0.97,
             leaf_wet_fraction: 0.0,
             soil_wet_fraction: 0.0,
+            stomata: None,
+            global_horizontal_w_m2: 700.0,
         }
     }
 

@@ -23,7 +23,9 @@
 //! - [`surface_energy`]: [`SurfaceEnergy`], a surface's aerodynamic and
 //!   canopy parameters, giving the exchange at one weather record;
 //! - [`soil_water`]: [`RootZone`], the root-zone water bucket (ISBA's w₂,
-//!   Noilhan & Planton 1989) that rain wets and evaporation dries.
+//!   Noilhan & Planton 1989) that rain wets and evaporation dries, and the
+//!   capillary rise into it from a water table (Gardner 1958, through the
+//!   Clapp & Hornberger 1978 soils, [`SoilTexture`]).
 //!
 //! **Takes** air temperature, humidity, pressure, wind and the surface's
 //! parameters, SI units in every name (Pa, K, s m⁻¹, W m⁻²); the FAO-56
@@ -61,7 +63,7 @@ pub use penman_monteith::{
     AirState, ReferenceEtInputs, TurbulentExchange, penman_monteith_latent_w_m2,
     reference_et0_daily_mm, reference_et0_hourly_mm,
 };
-pub use soil_water::{RootZone, WaterStep};
+pub use soil_water::{RootZone, SoilTexture, WaterStep, WaterTable};
 pub use surface_energy::{SurfaceEnergy, SurfaceResistance, bare_soil_resistance_s_m};
 pub use surface_resistance::{CanopyConditions, JarvisStewart, StressFactors};
 
