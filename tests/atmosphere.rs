@@ -837,8 +837,10 @@ mod standard {
         // tropical profile, without the weather: within the goals,
         // 10 % in 8–12 µm and 15 % in 3.5–4.5 µm, in τ̄ and in the zenith
         // sky radiance (MODTRAN's includes scattered sunlight, 11 % of it in
-        // 3.5–4.5 µm; the built-in model has no scattering). Both with the
-        // rural 23 km aerosol (the built-in model's default, LOWTRAN's).
+        // 3.5–4.5 µm; the built-in `look_up` is thermal, its scattered
+        // sunlight is `scattered::single_scattering_compares_with_modtran`).
+        // Both with the rural 23 km aerosol (the built-in model's default,
+        // LOWTRAN's).
         let a = Atmosphere::standard(Profile::Tropical, 0.0).unwrap();
         let sky = SkyConditions {
             air_temperature_k: 299.7,

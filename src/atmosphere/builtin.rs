@@ -30,7 +30,8 @@
 //!    rural (default, 23 km visibility), urban or maritime in the boundary
 //!    layer over its tropospheric and stratospheric background, its
 //!    extinction added to the optical depth and emitting with it (LOWTRAN 7
-//!    without multiple scattering). Not modelled: scattered radiance. On the
+//!    without multiple scattering). Sunlight scattered once into the path
+//!    is [`BuiltinAtmosphere::path_sunlit`] ([`super::scatter`]). On the
 //!    six AFGL profiles the zenith path is within 4 % in τ̄ and 7 % in L of
 //!    LOWTRAN 7, with and without aerosol, in 8–12, 8–14, 3–5 and
 //!    3.5–4.5 µm, on the tropical one within 7 % of MODTRAN in τ̄, and the
