@@ -231,6 +231,8 @@ pub struct PreparedGrid {
     band_model: lowtran::BandModelGrid,
     h2o_cont: Vec<[f64; 3]>,
     aerosol: Option<AerosolGrid>,
+    /// Rayleigh cross-section per molecule on the grid, m².
+    rayleigh_m2: Vec<f64>,
 }
 
 /// A once-computed broadband sky integral, W m⁻² sr⁻¹. Not part of the
@@ -477,6 +479,10 @@ impl BuiltinAtmosphere {
             .params
             .aerosol
             .map(|a| AerosolGrid::new(a, self.aerosol_season(), &wl));
+        let rayleigh_m2 = wl
+            .iter()
+            .map(|&l| scatter::rayleigh_cross_section_m2(l))
+            .collect();
         PreparedGrid {
             wl,
             nu,
@@ -484,6 +490,7 @@ impl BuiltinAtmosphere {
             band_model,
             h2o_cont,
             aerosol,
+            rayleigh_m2,
         }
     }
 
@@ -601,6 +608,7 @@ impl BuiltinAtmosphere {
             band_model,
             h2o_cont,
             aerosol,
+            rayleigh_m2,
         } = prepared;
         let n = wl.len();
         let mut tau = vec![1.0; n];
@@ -696,8 +704,10 @@ impl BuiltinAtmosphere {
                 }
             }
             if scatter.is_some() {
-                for (r, &l) in ray.iter_mut().zip(wl) {
-                    *r = scatter::rayleigh_scattering_per_m(l, st.pressure_pa, t) * ds;
+                // σ_R(λ)·N·ds ([`scatter::rayleigh_scattering_per_m`]).
+                let n_ds = scatter::air_number_density_m3(st.pressure_pa, t) * ds;
+                for (r, &sigma) in ray.iter_mut().zip(rayleigh_m2) {
+                    *r = sigma * n_ds;
                 }
             }
             let sun_at = scatter.as_ref().map(|s| s.0.locate(z));

@@ -135,8 +135,15 @@ pub fn rayleigh_cross_section_m2(wl_um: f64) -> f64 {
 /// pressure `p_pa` and temperature `t_k` (σ times the number density
 /// p/(k_B·T)).
 pub fn rayleigh_scattering_per_m(wl_um: f64, p_pa: f64, t_k: f64) -> f64 {
+    rayleigh_cross_section_m2(wl_um) * air_number_density_m3(p_pa, t_k)
+}
+
+/// Number density of air molecules, m⁻³, at pressure `p_pa` and
+/// temperature `t_k` (ideal gas, p/(k_B·T)).
+#[inline]
+pub fn air_number_density_m3(p_pa: f64, t_k: f64) -> f64 {
     const K_B: f64 = 1.380_649e-23;
-    rayleigh_cross_section_m2(wl_um) * p_pa / (K_B * t_k)
+    p_pa / (K_B * t_k)
 }
 
 /// The logarithmic mean of the transmittances at a segment's two ends,
