@@ -1660,11 +1660,13 @@ mod scattered {
         let thermal = p.path(&geom).unwrap();
         let lit = p.path_sunlit(&geom, Some(&col)).unwrap();
         assert_eq!(lit.transmittance, thermal.transmittance);
-        for i in 0..grid.len() {
-            assert!(
-                (lit.path_radiance[i] - thermal.path_radiance[i] - ss[i]).abs()
-                    < 1e-12 * lit.path_radiance[i]
-            );
+        for ((l, t), s) in lit
+            .path_radiance
+            .iter()
+            .zip(&thermal.path_radiance)
+            .zip(&ss)
+        {
+            assert!((l - t - s).abs() < 1e-12 * l, "{l} vs {t} + {s}");
         }
         // Bad suns are errors naming the field.
         for (z, az, d, field) in [
