@@ -551,6 +551,18 @@ const CASES: &[Case] = &[
         expect: &["--visibility-km", "--aerosol none"],
     },
     Case {
+        name: "atmosphere: sun zenith out of range",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "3-5", "--sun-zenith", "200", "--sun-azimuth", "0"],
+        expect: &["--sun-zenith", "0–180°", "200"],
+    },
+    Case {
+        name: "atmosphere: sun azimuth out of range",
+        files: &[],
+        args: &["atmosphere", "--profile", "tropical", "--band", "3-5", "--sun-zenith", "30", "--sun-azimuth", "400"],
+        expect: &["--sun-azimuth", "0–360°", "400"],
+    },
+    Case {
         name: "atmosphere: band outside the model",
         files: &[],
         args: &["atmosphere", "--profile", "tropical", "--band", "1-2"],

@@ -1166,9 +1166,20 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
                      {"name": "MWIR", "response": [3.0, 5.0]}]}),
     );
     let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
-    let paths = PathTables::new(&cond.atmosphere, &s, &bands, 150.0, 400.0, (0.0, 30.0))
-        .unwrap()
-        .expect("a path atmosphere");
+    // As a render builds them: by day, with the scattered sunlight.
+    let sun =
+        irsig::render::path::PathSun::for_scene(cond.sun.as_ref().map(|s| s.direction), &s, &geom);
+    let paths = PathTables::new(
+        &cond.atmosphere,
+        &s,
+        &bands,
+        150.0,
+        400.0,
+        (0.0, 30.0),
+        sun.as_ref(),
+    )
+    .unwrap()
+    .expect("a path atmosphere");
     let tracer = trace::build(&geom, Backend::Embree).unwrap();
     let mut rays: Vec<Ray> = Vec::new();
     for row in 0..s.height() {
@@ -1764,6 +1775,7 @@ fn a_rooftop_gets_the_path_to_its_own_height_as_irsig_atmosphere_prints_it() {
             0.0,
             300.0,
             (0.0, 60.0),
+            None,
         )
         .unwrap()
         .expect("a path atmosphere");

@@ -12,7 +12,9 @@
 //! `tests/data/atmosphere/lowtran7/aerosol_tables.py`:
 //! `data/lowtran7_aerosol_spectra.csv` (BLOCK DATA EXTDTA: extinction and
 //! absorption coefficients at 47 wavelengths, 0.2–300 µm, normalised to 1
-//! at 0.55 µm, for relative humidities 0, 70, 80 and 99 %) and
+//! at 0.55 µm, for relative humidities 0, 70, 80 and 99 %, and the
+//! asymmetry parameters g of the same models — LOWTRAN 7's Henyey–Greenstein
+//! single-scattering data) and
 //! `data/lowtran7_aerosol_profiles.csv` (BLOCK DATA PRFDTA: the 0.55 µm
 //! extinction in km⁻¹ against altitude).
 //!
@@ -54,6 +56,13 @@
 //! transmittance `Σ B(T)·Δτ`, aerosol extinction included — scattering is
 //! counted as if it were absorption (the field scattered into the path
 //! taken as a blackbody at the air's temperature).
+//!
+//! **Scattering** ([`AerosolGrid::add_scattering`], the source of the
+//! single-scattered sunlight of [`super::scatter`]): scattering = extinction
+//! − absorption of the same tables, and the asymmetry parameter g of each
+//! region's model (boundary layer: interpolated in humidity linearly in
+//! `ln(100 − RH)` like the coefficients, but linearly in g itself;
+//! troposphere at 70 %; background stratospheric; meteoric dust).
 
 use std::sync::OnceLock;
 
@@ -185,9 +194,16 @@ struct Tables {
     ext: [[Vec<f64>; 4]; 4],
     /// The same for absorption.
     abs: [[Vec<f64>; 4]; 4],
-    /// Background stratospheric and meteoric-dust extinction.
+    /// The same models' asymmetry parameters g (not normalised).
+    asym: [[Vec<f64>; 4]; 4],
+    /// Background stratospheric and meteoric-dust extinction, absorption
+    /// and asymmetry parameter.
     bst_ext: Vec<f64>,
     dme_ext: Vec<f64>,
+    bst_abs: Vec<f64>,
+    dme_abs: Vec<f64>,
+    bst_g: Vec<f64>,
+    dme_g: Vec<f64>,
     /// Profile altitudes, km (ZHT).
     zht: Vec<f64>,
     /// HZ2K at the five visibilities, `[vis][node]`, km⁻¹.
@@ -249,8 +265,13 @@ fn tables() -> &'static Tables {
             wl: col("VX2"),
             ext: std::array::from_fn(|m| set(models[m], 'E')),
             abs: std::array::from_fn(|m| set(models[m], 'A')),
+            asym: std::array::from_fn(|m| set(models[m], 'G')),
             bst_ext: col("BSTEXT"),
             dme_ext: col("DMEEXT"),
+            bst_abs: col("BSTABS"),
+            dme_abs: col("DMEABS"),
+            bst_g: col("BSTSYM"),
+            dme_g: col("DMESYM"),
             zht: pcol("ZHT"),
             hz2k: std::array::from_fn(|v| pcol(&format!("HZ2K_{}", HZ2K_VIS[v] as u32))),
             trop: [
@@ -411,6 +432,18 @@ impl Aerosol {
         let a = at(&t.abs[m], n - 1) + (at(&t.abs[m], n) - at(&t.abs[m], n - 1)) * f;
         (e, a)
     }
+
+    /// Boundary-layer asymmetry parameter g at wavelength `wl_um` and
+    /// relative humidity `rh_pct` (%): humidity at the nodes (linear in g,
+    /// weighted as EXABIN), then linear in wavelength.
+    pub fn boundary_asymmetry(&self, wl_um: f64, rh_pct: f64) -> f64 {
+        let t = tables();
+        let g = &t.asym[self.model.column()];
+        let (ii, i, w) = rh_weight(rh_pct);
+        let (n, f) = node_of(&t.wl, wl_um);
+        let at = |k: usize| g[ii][k] + (g[i][k] - g[ii][k]) * w;
+        at(n - 1) + (at(n) - at(n - 1)) * f
+    }
 }
 
 /// The node `n` (≥ 1) with `wl[n−1] ≤ λ < wl[n]` (the last one beyond the
@@ -448,6 +481,10 @@ pub struct AerosolGrid {
     /// Relative extinction of the troposphere (70 %), stratosphere and
     /// upper atmosphere on the grid.
     fixed: [Vec<f64>; 3],
+    /// Their relative scattering (extinction − absorption) and asymmetry
+    /// parameters on the grid.
+    fixed_sca: [Vec<f64>; 3],
+    fixed_g: [Vec<f64>; 3],
 }
 
 impl AerosolGrid {
@@ -463,6 +500,19 @@ impl AerosolGrid {
         let trop: Vec<f64> = nodes.iter().map(|&n| lerp(&t.ext[3][1], n)).collect();
         let strat = nodes.iter().map(|&n| lerp(&t.bst_ext, n)).collect();
         let upper = nodes.iter().map(|&n| lerp(&t.dme_ext, n)).collect();
+        let sca = |e: &[f64], a: &[f64]| -> Vec<f64> {
+            nodes
+                .iter()
+                .map(|&n| (lerp(e, n) - lerp(a, n)).max(0.0))
+                .collect()
+        };
+        let g = |tab: &[f64]| -> Vec<f64> { nodes.iter().map(|&n| lerp(tab, n)).collect() };
+        let fixed_sca = [
+            sca(&t.ext[3][1], &t.abs[3][1]),
+            sca(&t.bst_ext, &t.bst_abs),
+            sca(&t.dme_ext, &t.dme_abs),
+        ];
+        let fixed_g = [g(&t.asym[3][1]), g(&t.bst_g), g(&t.dme_g)];
         AerosolGrid {
             aerosol,
             season,
@@ -470,6 +520,55 @@ impl AerosolGrid {
             lo,
             hi,
             fixed: [trop, strat, upper],
+            fixed_sca,
+            fixed_g,
+        }
+    }
+
+    /// Adds the aerosol scattering optical depth of a segment `ds_m` long
+    /// at profile altitude `z_km` and relative humidity `rh_pct` to `sca`,
+    /// and the same weighted by each region's asymmetry parameter g to
+    /// `g_sca` (so that `g_sca / sca` is the segment's scattering-weighted
+    /// g), one value per grid wavelength.
+    pub fn add_scattering(
+        &self,
+        z_km: f64,
+        rh_pct: f64,
+        ds_m: f64,
+        sca: &mut [f64],
+        g_sca: &mut [f64],
+    ) {
+        let beta = self.aerosol.extinction_055_km(self.season, z_km);
+        let ds_km = ds_m * 1e-3;
+        if beta[0] > 0.0 {
+            let t = tables();
+            let m = self.aerosol.model.column();
+            let (ii, i, w) = rh_weight(rh_pct);
+            let mut s = [0.0f64; 47];
+            let mut g = [0.0f64; 47];
+            for n in self.lo..=self.hi {
+                let e = ln_lerp(t.ext[m][ii][n], t.ext[m][i][n], w);
+                let a = ln_lerp(t.abs[m][ii][n], t.abs[m][i][n], w);
+                s[n] = (e - a).max(0.0);
+                g[n] = t.asym[m][ii][n] + (t.asym[m][i][n] - t.asym[m][ii][n]) * w;
+            }
+            let b = beta[0] * ds_km;
+            for ((sc, gs), &(n, f)) in sca.iter_mut().zip(g_sca.iter_mut()).zip(&self.nodes) {
+                let x = b * (s[n - 1] + (s[n] - s[n - 1]) * f);
+                *sc += x;
+                *gs += x * (g[n - 1] + (g[n] - g[n - 1]) * f);
+            }
+        }
+        for r in 0..3 {
+            let b = beta[r + 1] * ds_km;
+            if b > 0.0 {
+                let (fs, fg) = (&self.fixed_sca[r], &self.fixed_g[r]);
+                for j in 0..sca.len() {
+                    let x = b * fs[j];
+                    sca[j] += x;
+                    g_sca[j] += x * fg[j];
+                }
+            }
         }
     }
 

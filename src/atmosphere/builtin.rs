@@ -30,7 +30,8 @@
 //!    rural (default, 23 km visibility), urban or maritime in the boundary
 //!    layer over its tropospheric and stratospheric background, its
 //!    extinction added to the optical depth and emitting with it (LOWTRAN 7
-//!    without multiple scattering). Not modelled: scattered radiance. On the
+//!    without multiple scattering). Sunlight scattered once into the path
+//!    is [`BuiltinAtmosphere::path_sunlit`] ([`super::scatter`]). On the
 //!    six AFGL profiles the zenith path is within 4 % in τ̄ and 7 % in L of
 //!    LOWTRAN 7, with and without aerosol, in 8–12, 8–14, 3–5 and
 //!    3.5–4.5 µm, on the tropical one within 7 % of MODTRAN in τ̄, and the
@@ -57,6 +58,8 @@ use super::aerosol::{self, Aerosol, AerosolGrid, Season};
 use super::lines;
 use super::lowtran;
 use super::profile::Profile;
+use super::scatter::{self, Sun, SunColumn};
+use crate::radiometry::solar;
 use crate::radiometry::{Planck, SpectralGrid};
 use crate::weather::WeatherRecord;
 use crate::{Error, Result};
@@ -185,6 +188,11 @@ pub struct BuiltinParams {
     /// LOWTRAN 7's aerosol ([`super::aerosol`]); `None`: clear air
     /// (gases only). Default: rural, 23 km visibility.
     pub aerosol: Option<Aerosol>,
+    /// The aerosol's asymmetry parameter for the Henyey–Greenstein phase
+    /// function of the scattered sunlight ([`super::scatter`]): `None`,
+    /// LOWTRAN 7's tabulated g of each region (default); `Some(g)`, one g
+    /// everywhere (MODTRAN's IPH = 0 with its card 3A2 G).
+    pub aerosol_asymmetry: Option<f64>,
 }
 
 impl Default for BuiltinParams {
@@ -196,6 +204,7 @@ impl Default for BuiltinParams {
             max_segment_rise_m: 250.0,
             profile: None,
             aerosol: Some(Aerosol::default()),
+            aerosol_asymmetry: None,
         }
     }
 }
@@ -222,6 +231,8 @@ pub struct PreparedGrid {
     band_model: lowtran::BandModelGrid,
     h2o_cont: Vec<[f64; 3]>,
     aerosol: Option<AerosolGrid>,
+    /// Rayleigh cross-section per molecule on the grid, m².
+    rayleigh_m2: Vec<f64>,
 }
 
 /// A once-computed broadband sky integral, W m⁻² sr⁻¹. Not part of the
@@ -323,6 +334,13 @@ impl BuiltinAtmosphere {
         )?;
         if let Some(a) = params.aerosol {
             Aerosol::new(a.model, a.visibility_km)?;
+        }
+        if let Some(g) = params.aerosol_asymmetry {
+            check(
+                g.is_finite() && g > -1.0 && g < 1.0,
+                "aerosol_asymmetry",
+                format!("expected −1 < g < 1, got {g}"),
+            )?;
         }
         Ok(BuiltinAtmosphere {
             met,
@@ -461,6 +479,10 @@ impl BuiltinAtmosphere {
             .params
             .aerosol
             .map(|a| AerosolGrid::new(a, self.aerosol_season(), &wl));
+        let rayleigh_m2 = wl
+            .iter()
+            .map(|&l| scatter::rayleigh_cross_section_m2(l))
+            .collect();
         PreparedGrid {
             wl,
             nu,
@@ -468,6 +490,7 @@ impl BuiltinAtmosphere {
             band_model,
             h2o_cont,
             aerosol,
+            rayleigh_m2,
         }
     }
 
@@ -479,6 +502,88 @@ impl BuiltinAtmosphere {
         sensor_altitude_m: f64,
         target_altitude_m: f64,
         range_m: f64,
+    ) -> Result<PathSpectra> {
+        self.march(
+            prepared,
+            sensor_altitude_m,
+            target_altitude_m,
+            range_m,
+            None,
+            None,
+        )
+    }
+
+    /// [`BuiltinAtmosphere::path_prepared`] with the single-scattered
+    /// sunlight along the same path ([`super::scatter`]): the path spectra
+    /// (thermal) and L_ss(λ), W·m⁻²·sr⁻¹·µm⁻¹, for the sun of `column`
+    /// ([`BuiltinAtmosphere::sun_column`] on the same grid) at
+    /// `cos_theta`, the cosine of the scattering angle.
+    pub fn path_sunlit(
+        &self,
+        prepared: &PreparedGrid,
+        sensor_altitude_m: f64,
+        target_altitude_m: f64,
+        range_m: f64,
+        column: &SunColumn,
+        cos_theta: f64,
+    ) -> Result<(PathSpectra, Vec<f64>)> {
+        let mut out = vec![0.0; prepared.wl.len()];
+        let p = self.march(
+            prepared,
+            sensor_altitude_m,
+            target_altitude_m,
+            range_m,
+            Some((column, cos_theta, &mut out)),
+            None,
+        )?;
+        Ok((p, out))
+    }
+
+    /// The sun's beam on `prepared`'s grid: E₀/d² and τ_sun against
+    /// altitude, from one slant path from the top of the model atmosphere
+    /// down to the ground at the sun's zenith (clamped to 89°, as
+    /// [`super::Atmosphere::solar_transmittance`]); `None` for the sun at or
+    /// below the horizon.
+    pub fn sun_column(&self, prepared: &PreparedGrid, sun: &Sun) -> Result<Option<SunColumn>> {
+        if !sun.is_up() {
+            return Ok(None);
+        }
+        let z0 = self.met.ground_altitude_m;
+        let range = (TOP_OF_ATMOSPHERE_M - z0) / sun.zenith_deg.min(89.0).to_radians().cos();
+        let mut nodes = vec![(TOP_OF_ATMOSPHERE_M, vec![1.0; prepared.wl.len()])];
+        self.march(
+            prepared,
+            TOP_OF_ATMOSPHERE_M,
+            z0,
+            range,
+            None,
+            Some(&mut nodes),
+        )?;
+        nodes.reverse();
+        let e0: Vec<f64> = prepared
+            .wl
+            .iter()
+            .map(|&l| solar::solar_irradiance_toa_at(l) / (sun.distance_au * sun.distance_au))
+            .collect();
+        Ok(Some(SunColumn {
+            sun: *sun,
+            irradiance_toa: e0,
+            altitudes_m: nodes.iter().map(|n| n.0).collect(),
+            transmittance: nodes.into_iter().map(|n| n.1).collect(),
+        }))
+    }
+
+    /// The path march: τ and the thermal L_u, with the single-scattered
+    /// sunlight added to `scatter.2` when given, and the altitude and
+    /// cumulative τ at the end of every segment pushed to `record`.
+    fn march(
+        &self,
+        prepared: &PreparedGrid,
+        sensor_altitude_m: f64,
+        target_altitude_m: f64,
+        range_m: f64,
+        mut scatter: Option<(&SunColumn, f64, &mut Vec<f64>)>,
+        mut record: Option<&mut Vec<(f64, Vec<f64>)>>,
     ) -> Result<PathSpectra> {
         if !(range_m.is_finite() && range_m >= 0.0) {
             return Err(Error::invalid(
@@ -503,6 +608,7 @@ impl BuiltinAtmosphere {
             band_model,
             h2o_cont,
             aerosol,
+            rayleigh_m2,
         } = prepared;
         let n = wl.len();
         let mut tau = vec![1.0; n];
@@ -526,6 +632,15 @@ impl BuiltinAtmosphere {
         let mut w_bm = [0.0f64; lowtran::REGIONS.len()];
         let mut xl = vec![vec![0.0f64; line_bands.len()]; n];
         let mut xlb = vec![vec![0.0f64; line_bands.len()]; n];
+        // Per segment, for the scattered sunlight: aerosol scattering
+        // optical depth, the same weighted by g, Rayleigh optical depth.
+        let mut sca = vec![0.0; if scatter.is_some() { n } else { 0 }];
+        let mut g_sca = sca.clone();
+        let mut ray = sca.clone();
+        let p_ray = scatter
+            .as_ref()
+            .map_or(0.0, |s| scatter::rayleigh_phase(s.1));
+        let fixed_g = self.params.aerosol_asymmetry;
         // Fixed segment boundaries k·step from the sensor, so a longer path
         // shares all the segments of a shorter one (exact monotonicity).
         let mut s0 = 0.0;
@@ -582,7 +697,20 @@ impl BuiltinAtmosphere {
                     self.met.ground_altitude_m,
                 );
                 aer.add_optical_depth(z_aer, rh.clamp(0.0, 100.0), ds, &mut cont);
+                if scatter.is_some() {
+                    sca.iter_mut().for_each(|x| *x = 0.0);
+                    g_sca.iter_mut().for_each(|x| *x = 0.0);
+                    aer.add_scattering(z_aer, rh.clamp(0.0, 100.0), ds, &mut sca, &mut g_sca);
+                }
             }
+            if scatter.is_some() {
+                // σ_R(λ)·N·ds ([`scatter::rayleigh_scattering_per_m`]).
+                let n_ds = scatter::air_number_density_m3(st.pressure_pa, t) * ds;
+                for (r, &sigma) in ray.iter_mut().zip(rayleigh_m2) {
+                    *r = sigma * n_ds;
+                }
+            }
+            let sun_at = scatter.as_ref().map(|s| s.0.locate(z));
             for i in 0..n {
                 let [c296, c260, cf] = h2o_cont[i];
                 cont[i] += n2_cia(nu[i]) * n2_path + (c296 + w260 * c260) * self_w + cf * foreign_w;
@@ -598,7 +726,25 @@ impl BuiltinAtmosphere {
                 }
                 let new_tau = ((-cont[i]).exp() * t_lines).min(tau[i]);
                 lu[i] += self.planck.radiance(wl[i], t) * (tau[i] - new_tau);
+                if let (Some((col, cos_theta, out)), Some(at)) = (scatter.as_mut(), sun_at) {
+                    // Single scattering (module docs of `scatter`): the
+                    // segment's scattering optical depth, phase-weighted,
+                    // times the mean view transmittance over it.
+                    let p_aer = if sca[i] > 0.0 {
+                        let g = fixed_g.unwrap_or(g_sca[i] / sca[i]);
+                        sca[i] * scatter::henyey_greenstein(g, *cos_theta)
+                    } else {
+                        0.0
+                    };
+                    let source = col.irradiance_toa[i] * col.transmittance_at(at, i)
+                        / (4.0 * std::f64::consts::PI);
+                    out[i] +=
+                        source * (p_aer + ray[i] * p_ray) * scatter::log_mean(tau[i], new_tau);
+                }
                 tau[i] = new_tau;
+            }
+            if let Some(r) = record.as_mut() {
+                r.push((sensor_altitude_m + cos * s1, tau.clone()));
             }
             s0 = s1;
         }

@@ -18,6 +18,12 @@
 //!   sensor position — what a renderer should look up per hit (the built-in
 //!   model integrates tens of layers per call, ~0.5 ms for 600 wavelengths).
 //!
+//! - Scattered sunlight ([`scatter`]): the built-in model's single
+//!   scattering of the direct solar beam by aerosols and molecules into a
+//!   line of sight, for a [`Sun`]: [`Atmosphere::scattered_solar`],
+//!   [`Atmosphere::scattered_solar_up`], [`PreparedPaths::path_sunlit`]
+//!   (the thermal-only functions above are unchanged).
+//!
 //! Geometry is flat-earth: a straight path from the sensor to the target,
 //! view zenith at the target cos θ = (h_sensor − h_target)/range.
 //!
@@ -31,6 +37,7 @@ pub mod lines;
 pub mod lowtran;
 pub mod lut;
 pub mod profile;
+pub mod scatter;
 pub mod table;
 pub mod tape7;
 
@@ -38,6 +45,7 @@ pub use aerosol::{Aerosol, AerosolModel};
 pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 pub use lut::{Tape7Lut, Tape7Run};
 pub use profile::{Profile, ProfileLevel};
+pub use scatter::{Sun, SunColumn};
 pub use table::PathTable;
 pub use tape7::{Tape7, Tape7Column, Tape7Mode};
 
@@ -65,6 +73,13 @@ pub struct PathGeometry {
 }
 
 impl PathGeometry {
+    /// Zenith angle of the line of sight from the sensor toward the target,
+    /// degrees (0 = looking straight up, 180 = straight down):
+    /// 180° − [`PathGeometry::view_zenith_deg`].
+    pub fn line_of_sight_zenith_deg(&self) -> f64 {
+        180.0 - self.view_zenith_deg()
+    }
+
     /// View zenith angle at the target, degrees (0 = sensor straight above).
     pub fn view_zenith_deg(&self) -> f64 {
         if self.range_m <= 0.0 {
@@ -270,6 +285,54 @@ impl Atmosphere {
         Ok(Atmosphere::Tape7Lut(Tape7Lut::read_index(path)?))
     }
 
+    /// Single-scattered sunlight L_ss(λ) along `geom` toward the sensor,
+    /// W·m⁻²·sr⁻¹·µm⁻¹ ([`scatter`]; not part of [`Atmosphere::path`]'s
+    /// thermal path radiance): zero with no atmosphere or the sun at or
+    /// below the horizon.
+    ///
+    /// # Errors
+    /// A tape7 table: its runs' path radiance already holds their own
+    /// scattered sunlight (SOL_SCAT) and cannot be split by sun position.
+    pub fn scattered_solar(
+        &self,
+        geom: &PathGeometry,
+        sun: &Sun,
+        grid: &SpectralGrid,
+    ) -> Result<Vec<f64>> {
+        let p = self.prepare(grid);
+        let column = p.sun_column(sun)?;
+        p.scattered(geom, column.as_ref())
+    }
+
+    /// [`Atmosphere::scattered_solar`] looking up from the ground at
+    /// `zenith_deg` (0 ≤ zenith < 90°, clamped to [`MAX_SKY_ZENITH_DEG`])
+    /// to the top of the model atmosphere: the sky's scattered sunlight
+    /// from that direction.
+    pub fn scattered_solar_up(
+        &self,
+        zenith_deg: f64,
+        sun: &Sun,
+        grid: &SpectralGrid,
+    ) -> Result<Vec<f64>> {
+        if !(0.0..90.0).contains(&zenith_deg) {
+            return Err(Error::invalid(
+                "zenith_deg",
+                format!("looking up needs 0 ≤ zenith < 90°, got {zenith_deg}"),
+            ));
+        }
+        let z = zenith_deg.min(MAX_SKY_ZENITH_DEG);
+        let ground = match self {
+            Atmosphere::Builtin(b) => b.met().ground_altitude_m,
+            _ => 0.0,
+        };
+        let geom = PathGeometry {
+            sensor_altitude_m: ground,
+            target_altitude_m: builtin::TOP_OF_ATMOSPHERE_M,
+            range_m: (builtin::TOP_OF_ATMOSPHERE_M - ground) / z.to_radians().cos(),
+        };
+        self.scattered_solar(&geom, sun, grid)
+    }
+
     /// τ₂(λ) and L_u(λ) along `geom` on `grid`.
     pub fn path(&self, geom: &PathGeometry, grid: &SpectralGrid) -> Result<PathSpectra> {
         self.prepare(grid).path(geom)
@@ -298,6 +361,79 @@ pub struct PreparedPaths<'a> {
 }
 
 impl PreparedPaths<'_> {
+    /// The sun's beam on this grid for [`PreparedPaths::path_sunlit`]
+    /// ([`BuiltinAtmosphere::sun_column`]): `None` with no atmosphere, a
+    /// tape7 table, or the sun at or below the horizon.
+    pub fn sun_column(&self, sun: &Sun) -> Result<Option<SunColumn>> {
+        match (self.atmosphere, &self.builtin) {
+            (Atmosphere::Builtin(b), Some(p)) => b.sun_column(p, sun),
+            _ => Ok(None),
+        }
+    }
+
+    /// [`PreparedPaths::path`] with the single-scattered sunlight of
+    /// `column` (from [`PreparedPaths::sun_column`] of this grid) added to
+    /// the path radiance, at the scattering angle of `geom`'s line of sight
+    /// and `column`'s sun; `None`: the thermal path alone.
+    pub fn path_sunlit(
+        &self,
+        geom: &PathGeometry,
+        column: Option<&SunColumn>,
+    ) -> Result<PathSpectra> {
+        let (Some(col), Atmosphere::Builtin(b), Some(p)) = (column, self.atmosphere, &self.builtin)
+        else {
+            return self.path(geom);
+        };
+        if !(geom.range_m.is_finite() && geom.range_m >= 0.0) {
+            return self.path(geom);
+        }
+        // One march for both (the same values as `path` and `scattered`).
+        let cos_theta = col
+            .sun
+            .cos_scattering_angle(geom.line_of_sight_zenith_deg());
+        let (mut p, ss) = b.path_sunlit(
+            p,
+            geom.sensor_altitude_m,
+            geom.target_altitude_m,
+            geom.range_m,
+            col,
+            cos_theta,
+        )?;
+        p.path_radiance
+            .iter_mut()
+            .zip(ss)
+            .for_each(|(l, s)| *l += s);
+        Ok(p)
+    }
+
+    /// The single-scattered sunlight alone along `geom` (zeros without a
+    /// column). A tape7 table is an error ([`Atmosphere::scattered_solar`]).
+    pub fn scattered(&self, geom: &PathGeometry, column: Option<&SunColumn>) -> Result<Vec<f64>> {
+        if let Atmosphere::Tape7Lut(_) = self.atmosphere {
+            return Err(Error::invalid(
+                "atmosphere",
+                "a tape7 table's path radiance already holds its runs' scattered sunlight \
+                 (SOL_SCAT); the sun position cannot change it",
+            ));
+        }
+        let (Some(col), Atmosphere::Builtin(b), Some(p)) = (column, self.atmosphere, &self.builtin)
+        else {
+            return Ok(vec![0.0; self.grid.len()]);
+        };
+        let cos_theta = col
+            .sun
+            .cos_scattering_angle(geom.line_of_sight_zenith_deg());
+        Ok(b.path_sunlit(
+            p,
+            geom.sensor_altitude_m,
+            geom.target_altitude_m,
+            geom.range_m,
+            col,
+            cos_theta,
+        )?
+        .1)
+    }
+
     /// τ₂(λ) and L_u(λ) along `geom` ([`Atmosphere::path`]).
     pub fn path(&self, geom: &PathGeometry) -> Result<PathSpectra> {
         let grid = self.grid;

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use irsig::atmosphere::{
     Aerosol, AerosolModel, Atmosphere, BuiltinAtmosphere, BuiltinParams, PathGeometry, Profile,
-    SkyConditions, SurfaceMet,
+    SkyConditions, Sun, SurfaceMet,
 };
 
 use super::args::{parse_site, parse_time};
@@ -133,8 +133,41 @@ pub struct Args {
     /// altitudes and the zenith).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub range: Option<f64>,
+    /// The sun's zenith angle, degrees (0–180; 90 and beyond: night), for
+    /// the single-scattered sunlight of the built-in model (with
+    /// --sun-azimuth). Default with --weather: the sun at --time.
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "sun_azimuth",
+        conflicts_with = "tape7_index",
+        allow_negative_numbers = true
+    )]
+    pub sun_zenith: Option<f64>,
+    /// The sun's azimuth, degrees clockwise from north (0–360).
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "sun_zenith",
+        allow_negative_numbers = true
+    )]
+    pub sun_azimuth: Option<f64>,
+    /// Azimuth of the line of sight (from the sensor toward where it
+    /// looks), degrees clockwise from north (0–360): with the sun's, sets
+    /// the scattering angle.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub view_azimuth: f64,
     /// Print JSON: `{"transmittance": …, "path_radiance_w_m2_sr": …,
-    /// "aerosol": {"model": …, "visibility_km": …} | null}`.
+    /// "aerosol": {"model": …, "visibility_km": …} | null}`; with a sun
+    /// also `"scattered_radiance_w_m2_sr"` (single-scattered sunlight,
+    /// not part of the thermal `path_radiance_w_m2_sr`),
+    /// `"total_path_radiance_w_m2_sr"` and `"sun": {"zenith_deg",
+    /// "azimuth_deg", "scattering_angle_deg"}`.
     #[arg(long)]
     pub json: bool,
 }
@@ -148,6 +181,8 @@ struct Model {
     ground_m: f64,
     what: String,
     aerosol: Option<Aerosol>,
+    /// The weather's sun at --time: (zenith, azimuth, distance AU).
+    sun: Option<(f64, f64, f64)>,
 }
 
 /// The aerosol `--aerosol` and `--visibility-km` ask for, before any
@@ -187,6 +222,7 @@ fn model(args: &Args) -> anyhow::Result<Model> {
             ground_m: 0.0,
             what: format!("tape7 table {}", index.display()),
             aerosol: None,
+            sun: None,
         });
     }
     let aerosol = aerosol_arg(args)?;
@@ -203,6 +239,7 @@ fn model(args: &Args) -> anyhow::Result<Model> {
              is chosen by latitude, the ground altitude is the site's)",
         )?;
         let rec = history.at(time).context("--time")?;
+        let sp = history.sun_position(time).context("--time")?;
         let profile = profile.unwrap_or_else(|| {
             use chrono::Datelike;
             Profile::for_site(site.latitude_deg, rec.time.month())
@@ -243,6 +280,7 @@ fn model(args: &Args) -> anyhow::Result<Model> {
             ground_m: site.altitude_m,
             what: format!("{profile} under {}", file.display()),
             aerosol,
+            sun: Some((sp.zenith_deg, sp.azimuth_deg, sp.distance_au)),
         });
     }
     let profile = profile.context("give --profile, --weather or --tape7-index")?;
@@ -265,6 +303,7 @@ fn model(args: &Args) -> anyhow::Result<Model> {
         ground_m: 0.0,
         what: profile.to_string(),
         aerosol,
+        sun: None,
     })
 }
 
@@ -290,6 +329,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--range: expected a range ≥ 0 m, got {r}"
         );
     }
+    if let Some(z) = args.sun_zenith {
+        anyhow::ensure!(
+            z.is_finite() && (0.0..=180.0).contains(&z),
+            "--sun-zenith: expected 0–180°, got {z}"
+        );
+    }
+    for (flag, v) in [
+        ("--sun-azimuth", args.sun_azimuth),
+        ("--view-azimuth", Some(args.view_azimuth)),
+    ] {
+        if let Some(v) = v {
+            anyhow::ensure!(
+                v.is_finite() && (0.0..=360.0).contains(&v),
+                "{flag}: expected 0–360° clockwise from north, got {v}"
+            );
+        }
+    }
     let band = args.band.band()?;
     let Model {
         atmosphere: atmos,
@@ -297,7 +353,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ground_m,
         what,
         aerosol,
+        sun: weather_sun,
     } = model(&args)?;
+    // The sun: as given, else the weather's at --time (a render's).
+    let sun = match (args.sun_zenith, args.sun_azimuth) {
+        (Some(z), Some(a)) => Some((z, a, 1.0)),
+        _ => weather_sun,
+    };
+    let sun = sun
+        .map(|(z, a, d)| Sun::new(z, a - args.view_azimuth, d))
+        .transpose()?;
     let wl = band.wavelengths_um();
     let (lo, hi) = (wl[0], wl[wl.len() - 1]);
     if let Some((a, b)) = atmos.spectral_range_um() {
@@ -306,7 +371,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "--band: {lo}–{hi} µm is outside the built-in model's spectral range {a}–{b} µm"
         );
     }
-    let (p, geometry) = match args.look {
+    let (p, scattered, los_zenith, geometry) = match args.look {
         Look::Up => {
             anyhow::ensure!(
                 args.zenith < 90.0,
@@ -314,7 +379,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 args.zenith
             );
             let p = atmos.look_up(&sky, args.zenith, band.grid())?;
-            (p, format!("looking up at zenith {}°", args.zenith))
+            let ss = sun
+                .map(|s| atmos.scattered_solar_up(args.zenith, &s, band.grid()))
+                .transpose()?;
+            (
+                p,
+                ss,
+                args.zenith,
+                format!("looking up at zenith {}°", args.zenith),
+            )
         }
         Look::Down => {
             let (hs, ht) = (args.sensor_altitude, args.target_altitude);
@@ -342,27 +415,43 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 range_m: range,
             };
             let p = atmos.path(&g, band.grid())?;
+            let ss = sun
+                .map(|s| atmos.scattered_solar(&g, &s, band.grid()))
+                .transpose()?;
             (
                 p,
+                ss,
+                g.line_of_sight_zenith_deg(),
                 format!("sensor {hs} m, target {ht} m above the ground, range {range:.1} m"),
             )
         }
     };
     let tau = band.mean(&p.transmittance);
     let lu = band.integrate(&p.path_radiance);
+    let ss = scattered.map(|s| band.integrate(&s));
     let builtin = matches!(atmos, Atmosphere::Builtin(_));
+    let sun_json = sun.map(|s| {
+        serde_json::json!({
+            "zenith_deg": s.zenith_deg,
+            "azimuth_deg": (s.relative_azimuth_deg + args.view_azimuth).rem_euclid(360.0),
+            "scattering_angle_deg": s.cos_scattering_angle(los_zenith).acos().to_degrees(),
+        })
+    });
     if args.json {
         let aerosol_json = aerosol.map(
             |a| serde_json::json!({ "model": a.model.name(), "visibility_km": a.visibility_km }),
         );
-        outln!(
-            "{}",
-            serde_json::json!({
-                "transmittance": tau,
-                "path_radiance_w_m2_sr": lu,
-                "aerosol": aerosol_json
-            })
-        );
+        let mut j = serde_json::json!({
+            "transmittance": tau,
+            "path_radiance_w_m2_sr": lu,
+            "aerosol": aerosol_json
+        });
+        if let Some(ss) = ss {
+            j["scattered_radiance_w_m2_sr"] = ss.into();
+            j["total_path_radiance_w_m2_sr"] = (lu + ss).into();
+            j["sun"] = sun_json.unwrap_or_default();
+        }
+        outln!("{j}");
     } else {
         outln!("{what}, band {lo}–{hi} µm, {geometry}:");
         if builtin {
@@ -381,6 +470,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map(|t| format!(" (brightness temperature {t:.2} K)"))
             .unwrap_or_default();
         outln!("  path radiance {lu:.4} W/m²/sr{bt}");
+        if let (Some(ss), Some(s)) = (ss, sun) {
+            let theta = s.cos_scattering_angle(los_zenith).acos().to_degrees();
+            outln!(
+                "  scattered sunlight {ss:.4} W/m²/sr (sun at zenith {:.2}°, scattering angle \
+                 {theta:.1}°), total {:.4} W/m²/sr",
+                s.zenith_deg,
+                lu + ss
+            );
+        }
     }
     Ok(())
 }

@@ -2,8 +2,10 @@
 
 use rayon::prelude::*;
 
+use glam::DVec3;
+
 use crate::Result;
-use crate::atmosphere::{Atmosphere, PathGeometry, PreparedPaths};
+use crate::atmosphere::{Atmosphere, PathGeometry, PreparedPaths, Sun, SunColumn};
 use crate::radiometry::Band;
 use crate::sensor::{Geometry, Sensor};
 
@@ -14,6 +16,12 @@ use crate::sensor::{Geometry, Sensor};
 /// [`Atmosphere::path`] of its (sensor altitude, target altitude, range):
 /// the path `irsig atmosphere --sensor-altitude … --target-altitude …
 /// --range …` prints (flat-earth geometry, see [`crate::atmosphere`]).
+///
+/// By day the path radiance holds the single-scattered sunlight
+/// ([`crate::atmosphere::scatter`]) of each node's own line-of-sight zenith
+/// and one relative azimuth for the whole table, [`PathSun`]'s: the
+/// scattering angle of a pixel off the sensor's mean azimuth is
+/// approximated (see [`PathSun`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PathTables {
     /// Ranges of the nodes, m (increasing, from 0).
@@ -24,6 +32,65 @@ pub struct PathTables {
     /// Per band, per node (height `a`, range `i` at `a · ranges + i`):
     /// (τ₂(λ), L_u(λ)) on the band's grid.
     pub bands: Vec<Vec<(Vec<f64>, Vec<f64>)>>,
+}
+
+/// The sun for the path tables' scattered sunlight.
+///
+/// A node knows its line of sight's zenith (from its height and range) but
+/// not its azimuth: the table takes the azimuth from the sensor toward the
+/// scene's centre, or — for a sensor within 1 % of its height of straight
+/// above the centre, where pixels look every way — a relative azimuth of
+/// 90°, at which cos Θ = cos θ_sun·cos θ_los, the azimuthal mean.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathSun {
+    /// The sun (zenith, azimuth relative to the lines of sight, distance).
+    pub sun: Sun,
+}
+
+impl PathSun {
+    /// The sun toward unit east-north-up `direction` for a sensor at
+    /// `sensor` looking at a scene centred on `centre` (scene coordinates,
+    /// x east, y north, m); `None` for the sun at or below the horizon. The
+    /// sun–earth distance is taken as 1 AU (the render's conditions carry
+    /// no date; ±3.4 % in the irradiance over the year).
+    pub fn new(direction: DVec3, sensor: DVec3, centre: DVec3) -> Option<PathSun> {
+        let d = direction.normalize_or_zero();
+        if d.z <= 0.0 {
+            return None;
+        }
+        let sun_az = d.x.atan2(d.y).to_degrees();
+        let h = sensor - centre;
+        let horizontal = (h.x * h.x + h.y * h.y).sqrt();
+        let rel = if horizontal <= 0.01 * h.z.abs() {
+            90.0
+        } else {
+            sun_az - (-h.x).atan2(-h.y).to_degrees()
+        };
+        Sun::new(d.z.clamp(-1.0, 1.0).acos().to_degrees(), rel, 1.0)
+            .ok()
+            .map(|sun| PathSun { sun })
+    }
+
+    /// [`PathSun::new`] for the sun of a render's conditions
+    /// (`sun_direction`, `None` at night), `sensor` and the scene's
+    /// geometry (its bounds' centre).
+    pub fn for_scene(
+        sun_direction: Option<glam::Vec3>,
+        sensor: &Sensor,
+        geometry: &crate::geometry::SceneGeometry,
+    ) -> Option<PathSun> {
+        let centre = geometry
+            .bounds()
+            .map_or(DVec3::ZERO, |(lo, hi)| (0.5 * (lo + hi)).as_dvec3());
+        PathSun::new(sun_direction?.as_dvec3(), sensor_position(sensor), centre)
+    }
+}
+
+fn sensor_position(sensor: &Sensor) -> DVec3 {
+    match &sensor.geometry {
+        Geometry::Frame(c) => c.position(),
+        Geometry::LineScanner(s) => s.position(0.0),
+    }
 }
 
 impl PathTables {
@@ -40,7 +107,9 @@ impl PathTables {
     /// Tables for `sensor` (`None` for no atmosphere: τ₂ = 1, L_u = 0,
     /// nothing to apply). `scene_size_m` bounds the ranges beyond the
     /// sensor's height; `heights_m` (lowest, highest) the heights above
-    /// the ground datum of what the sensor can hit (the scene's z extent).
+    /// the ground datum of what the sensor can hit (the scene's z extent);
+    /// `sun` the sun by day ([`PathSun::for_scene`]; `None` at night or for
+    /// the thermal path alone).
     pub fn new(
         atmosphere: &Atmosphere,
         sensor: &Sensor,
@@ -48,14 +117,12 @@ impl PathTables {
         ground_altitude_m: f64,
         scene_size_m: f64,
         heights_m: (f64, f64),
+        sun: Option<&PathSun>,
     ) -> Result<Option<PathTables>> {
         if matches!(atmosphere, Atmosphere::None) {
             return Ok(None);
         }
-        let height = match &sensor.geometry {
-            Geometry::Frame(c) => c.position().z,
-            Geometry::LineScanner(s) => s.position(0.0).z,
-        };
+        let height = sensor_position(sensor).z;
         let max_range = 2.0 * (height.abs() + scene_size_m) + 1.0;
         let ranges_m: Vec<f64> = (0..Self::NODES)
             .map(|i| max_range * (i as f64 / (Self::NODES - 1) as f64).powi(2))
@@ -79,12 +146,19 @@ impl PathTables {
         let sensor_alt = ground_altitude_m + height;
         // What the model needs of a band's grid is the same for every node
         // of the band: prepared once per band.
-        let path = |b: &PreparedPaths, target: f64, r: f64| -> Result<(Vec<f64>, Vec<f64>)> {
-            let p = b.path(&PathGeometry {
-                sensor_altitude_m: sensor_alt,
-                target_altitude_m: target,
-                range_m: r,
-            })?;
+        let path = |b: &PreparedPaths,
+                    col: Option<&SunColumn>,
+                    target: f64,
+                    r: f64|
+         -> Result<(Vec<f64>, Vec<f64>)> {
+            let p = b.path_sunlit(
+                &PathGeometry {
+                    sensor_altitude_m: sensor_alt,
+                    target_altitude_m: target,
+                    range_m: r,
+                },
+                col,
+            )?;
             Ok((p.transmittance, p.path_radiance))
         };
         // Every node is independent: bands, heights and ranges in parallel
@@ -93,6 +167,9 @@ impl PathTables {
             .par_iter()
             .map(|b| -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
                 let b = &atmosphere.prepare(b.grid());
+                // The sun's beam once per band (one slant path).
+                let col = sun.map(|s| b.sun_column(&s.sun)).transpose()?.flatten();
+                let col = col.as_ref();
                 let per_height = heights
                     .par_iter()
                     .map(|&z| -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
@@ -110,10 +187,10 @@ impl PathTables {
                             || {
                                 ranges_m[first..]
                                     .par_iter()
-                                    .map(|&r| path(b, target, r.max(d)))
+                                    .map(|&r| path(b, col, target, r.max(d)))
                                     .collect::<Result<Vec<_>>>()
                             },
-                            || (first > 0).then(|| path(b, target, d)).transpose(),
+                            || (first > 0).then(|| path(b, col, target, d)).transpose(),
                         );
                         let (reach, vertical) = (reach?, vertical?);
                         let mut nodes = Vec::with_capacity(ranges_m.len());

@@ -7,7 +7,9 @@ Usage: python3 aerosol_tables.py PATH/TO/lowtran7.f OUT_DIR
 Spectra (BLOCK DATA EXTDTA): the 47 wavelengths VX2 (um) and, normalised to 1 at 0.55 um,
 the extinction (E) and absorption (A) coefficients of the rural (RUR), urban (URB),
 maritime (OCN) and tropospheric (TRO) models at relative humidity 0, 70, 80 and 99 %
-(suffix 1-4), of the background stratospheric (BST) and of the meteoric-dust (DME) models.
+(suffix 1-4), of the background stratospheric (BST) and of the meteoric-dust (DME) models;
+then the asymmetry parameters g (not normalised) of the same models (RURG1-4, ..., BSTSYM,
+DMESYM; "modified to include asymmetry data - Jan 1986 (A.E.R. Inc.)" in lowtran7.f).
 Profiles (BLOCK DATA PRFDTA): the altitudes ZHT (km) and the 0.55 um extinction (km-1) of
 the boundary layer at visibilities 50, 23, 10, 5 and 2 km (HZ2K), of the troposphere
 (fall-winter and spring-summer at 50 and 23 km), of the background stratosphere
@@ -72,10 +74,14 @@ def main():
     for m in ("RUR", "URB", "OCN", "TRO"):
         spec += [f"{m}E{i}" for i in range(1, 5)] + [f"{m}A{i}" for i in range(1, 5)]
     spec += ["BSTEXT", "BSTABS", "DMEEXT", "DMEABS"]
+    for m in ("RUR", "URB", "OCN", "TRO"):
+        spec += [f"{m}G{i}" for i in range(1, 5)]
+    spec += ["BSTSYM", "DMESYM"]
     a = arrays(src, spec)
     assert all(len(a[n]) == 47 for n in spec), {n: len(a[n]) for n in spec}
     with open(f"{out}/lowtran7_aerosol_spectra.csv", "w") as f:
-        f.write("# LOWTRAN 7 aerosol extinction and absorption coefficients normalised to 1 at 0.55 um, copied\n")
+        f.write("# LOWTRAN 7 aerosol extinction and absorption coefficients normalised to 1 at 0.55 um, and asymmetry\n")
+        f.write("# parameters g (columns *G*, *SYM; not normalised), copied\n")
         f.write("# unchanged from BLOCK DATA EXTDTA of lowtran7.f (rev. 4.2; tests/data/atmosphere/lowtran7/aerosol_tables.py)\n")
         f.write(",".join(spec) + "\n")
         for i in range(47):
