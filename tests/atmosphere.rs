@@ -1682,6 +1682,28 @@ mod scattered {
     }
 
     #[test]
+    fn a_dimmed_beam_scatters_in_proportion() {
+        // The weather's attenuation of the direct beam (clouds, haze) scales
+        // the scattered sunlight linearly: half the beam, half the light;
+        // none, none. Values outside 0–1 are errors naming the field.
+        let a = analytic_atmosphere();
+        let grid = SpectralGrid::uniform(3.5, 4.5, 0.05).unwrap();
+        let clear = Sun::new(35.0, 60.0, 1.0).unwrap();
+        let l = |s: &Sun| a.scattered_solar_up(20.0, s, &grid).unwrap();
+        let full = l(&clear);
+        for c in [0.5, 0.0] {
+            let dim = l(&clear.with_attenuation(c).unwrap());
+            for (d, f) in dim.iter().zip(&full) {
+                assert!(*f > 0.0 && (d - c * f).abs() <= 1e-12 * f, "{d} vs {c}·{f}");
+            }
+        }
+        for bad in [-0.1, 1.1, f64::NAN] {
+            let e = clear.with_attenuation(bad).unwrap_err().to_string();
+            assert!(e.contains("attenuation"), "{e}");
+        }
+    }
+
+    #[test]
     fn forward_scattering_is_brighter_than_back_scattering() {
         // Aerosol scattering peaks forward (g ≈ 0.7 at 4 µm): the sky
         // looking 30° from the sun outshines the sky 150° away.

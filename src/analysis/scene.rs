@@ -186,7 +186,7 @@ fn shade(
         size as f64,
         crate::render::path::scene_heights(&session.scene.geometry),
         crate::render::path::PathSun::for_scene(
-            cond.sun.as_ref().map(|s| s.direction),
+            cond.sun.as_ref(),
             sensor,
             &session.scene.geometry,
         )

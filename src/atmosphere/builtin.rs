@@ -563,7 +563,10 @@ impl BuiltinAtmosphere {
         let e0: Vec<f64> = prepared
             .wl
             .iter()
-            .map(|&l| solar::solar_irradiance_toa_at(l) / (sun.distance_au * sun.distance_au))
+            .map(|&l| {
+                solar::solar_irradiance_toa_at(l) * sun.attenuation
+                    / (sun.distance_au * sun.distance_au)
+            })
             .collect();
         Ok(Some(SunColumn {
             sun: *sun,

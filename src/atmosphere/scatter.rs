@@ -54,6 +54,11 @@ pub struct Sun {
     pub relative_azimuth_deg: f64,
     /// Sun–earth distance, AU (the irradiance scales as 1/d²).
     pub distance_au: f64,
+    /// The weather's attenuation of the direct beam beyond the clear sky
+    /// (clouds, haze), 0–1: the beam that is scattered is the clear-sky
+    /// beam times this factor (1 by [`Sun::new`]; see
+    /// [`Sun::with_attenuation`]).
+    pub attenuation: f64,
 }
 
 impl Sun {
@@ -82,6 +87,23 @@ impl Sun {
             zenith_deg,
             relative_azimuth_deg,
             distance_au,
+            attenuation: 1.0,
+        })
+    }
+
+    /// This sun with its beam attenuated beyond the clear sky by
+    /// `attenuation` (0–1; e.g. a weather record's measured over the
+    /// modelled clear-sky direct normal irradiance).
+    pub fn with_attenuation(self, attenuation: f64) -> Result<Self> {
+        if !(attenuation.is_finite() && (0.0..=1.0).contains(&attenuation)) {
+            return Err(Error::invalid(
+                "attenuation",
+                format!("expected a beam attenuation of 0–1, got {attenuation}"),
+            ));
+        }
+        Ok(Sun {
+            attenuation,
+            ..self
         })
     }
 

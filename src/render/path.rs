@@ -71,18 +71,32 @@ impl PathSun {
             .map(|sun| PathSun { sun })
     }
 
-    /// [`PathSun::new`] for the sun of a render's conditions
-    /// (`sun_direction`, `None` at night), `sensor` and the scene's
-    /// geometry (its bounds' centre).
+    /// [`PathSun::new`] for the sun of a render's conditions (`None` at
+    /// night), `sensor` and the scene's geometry (its bounds' centre). The
+    /// scattered beam is the clear-sky beam attenuated as the render's
+    /// direct sun is: by `c = min(1, DNI / DNI_clear)`, the weather's
+    /// measured direct normal irradiance over the modelled clear-sky one
+    /// ([`crate::render::shade::surface_solar_spectrum`]), so a cloud that
+    /// dims the direct sun dims the sunlight scattered into the path.
     pub fn for_scene(
-        sun_direction: Option<glam::Vec3>,
+        sun: Option<&crate::render::shade::SunInput>,
         sensor: &Sensor,
         geometry: &crate::geometry::SceneGeometry,
     ) -> Option<PathSun> {
+        let sun = sun?;
         let centre = geometry
             .bounds()
             .map_or(DVec3::ZERO, |(lo, hi)| (0.5 * (lo + hi)).as_dvec3());
-        PathSun::new(sun_direction?.as_dvec3(), sensor_position(sensor), centre)
+        let mut p = PathSun::new(sun.direction.as_dvec3(), sensor_position(sensor), centre)?;
+        let zenith = p.sun.zenith_deg;
+        let clear = crate::render::shade::clear_sky_dni_w_m2(zenith);
+        let c = if clear > 0.0 && sun.direct_normal_w_m2 > 0.0 {
+            (sun.direct_normal_w_m2 / clear).min(1.0)
+        } else {
+            0.0
+        };
+        p.sun = p.sun.with_attenuation(c).ok()?;
+        Some(p)
     }
 }
 

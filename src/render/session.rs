@@ -849,7 +849,7 @@ impl Session {
             size as f64,
             super::path::scene_heights(&self.scene.geometry),
             super::path::PathSun::for_scene(
-                cond.sun.as_ref().map(|s| s.direction),
+                cond.sun.as_ref(),
                 sensor,
                 &self.scene.geometry,
             )
