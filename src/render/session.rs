@@ -1090,7 +1090,8 @@ fn scene_thermal(
             params.exposure.sky,
             params.exposure.seed,
             &solved.setup.shape_factor_override,
-        );
+        )
+        .with_reflected(&solved, params.physics.ground_albedo);
         for (i, (c, image)) in out
             .conditions
             .iter_mut()
