@@ -31,7 +31,12 @@
 //! facet whose hemisphere rays hit the scene ([`PerHit::own_sky`]) also
 //! gets its own shape factor `F_p` and background: the facet's own
 //! hemisphere pattern (the same directions as its sky view) traced from
-//! the hit point. The front source of the slab model is affine in `F`
+//! the hit point. On a double-sided facet it traces both faces' patterns
+//! (each at half weight, from the point lifted to each side), so its view
+//! has the facet's form: the front face's `F` and the background over both
+//! faces (the slab is one, whichever face a ray sees). Hits seen through a
+//! reflection or a transmission take their own view as those seen directly
+//! ([`PerHitParams::secondary_sky`]). The front source of the slab model is affine in `F`
 //! ([`crate::thermal::SourceModel::front_per_shape_factor`], `∂S/∂F` =
 //! `ε(E_sky − σT_air⁴) + αE_d`), and the scene solve's last pass adds the
 //! background `ε(1 − F)·σ(T_bg⁴ − T_air⁴)` with
@@ -46,6 +51,26 @@
 //! image row of `G` as the sunlit difference does. The point's shape
 //! factor and its background temperature at the image time go to the
 //! radiance and the `shape_factor` truth layer ([`HitSky`]).
+//!
+//! # Reflected shortwave
+//! The reflected shortwave a facet receives ([`crate::exposure::reflected`])
+//! is `E_dn·a_f(t) + E_d·b_f` with `a_f = g_f ρ_g sin h + Σ_j w_j ρ_j (E⁰_j +
+//! a_j)` over what its hemisphere rays hit (`w_j`, ground weight `g_f`) and
+//! `b_f` likewise with the diffuse `E⁰_j = F̄_j`. A hit with its own sky view
+//! sees other weights: its reflected shortwave differs from its facet's by
+//! `Δa = Δg ρ_g sin h + Σ_j Δw_j ρ_j (E⁰_j + a_j)` and `Δb = Δg ρ_g + Σ_j Δw_j
+//! ρ_j (F̄_j + b_j)` over the facets whose weights differ (`a_j`, `b_j` the
+//! neighbours' own reflected shortwave after the stage's bounces). Its
+//! sources then differ by (W m⁻²)
+//!
+//! ```text
+//! ΔS_refl,k = αE_dn[k]·Δa_k + αE_d[k]·Δb
+//! ```
+//!
+//! (`αE_dn` the response's `∂S/∂(s cos θ)`: the reflected direct weighs
+//! like the facet's own sun), entering with `ΔS` above through the image row
+//! of `G` and the second order. Where the point sees what its facet's
+//! sample points saw, `Δw` and `Δg` are all zero and so is the change.
 //!
 //! The shadow rays are traced at every [`PerHitParams::stride`]-th record
 //! of each run of records with the sun in front (and the run's last), and
