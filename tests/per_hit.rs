@@ -920,7 +920,7 @@ fn per_hit_full(r: &SceneThermal, ground_albedo: f32) -> PerHit {
             e.seed,
             &r.setup.shape_factor_override,
         )
-        .with_reflected(r, ground_albedo),
+        .with_reflected(Arc::new(r.exposure.reflected.clone()), r, ground_albedo),
         r.surface_temperature_k(0),
     )
 }

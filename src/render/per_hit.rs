@@ -205,7 +205,7 @@ pub struct SkyInputs {
 #[derive(Debug, Clone, PartialEq)]
 struct ReflInputs {
     /// Every facet's reflected shortwave (per unit `E_dn` and `E_d`).
-    reflected: ReflectedShortwave,
+    reflected: Arc<ReflectedShortwave>,
     /// Per facet: the albedo its neighbours receive reflected sunlight from.
     albedo: Vec<f32>,
     /// Albedo of the ground beyond the scene.
@@ -253,14 +253,20 @@ impl SkyInputs {
         }
     }
 
-    /// These inputs with what a point's own reflected shortwave needs from
-    /// the scene solve `solved` (its reflected-shortwave stage, albedos,
-    /// absorptivities, weather and sun), `ground_albedo` the albedo of the
-    /// ground beyond the scene that stage used. Unchanged where the solve
-    /// has no reflected shortwave (`reflected_bounces` 0).
-    pub fn with_reflected(mut self, solved: &SceneThermal, ground_albedo: f32) -> SkyInputs {
+    /// These inputs with what a point's own reflected shortwave needs:
+    /// `reflected` the scene solve's reflected-shortwave stage (shared, not
+    /// copied), `solved` that solve (albedos, absorptivities, weather and
+    /// sun), `ground_albedo` the albedo of the ground beyond the scene that
+    /// stage used. Unchanged where the solve has no reflected shortwave
+    /// (`reflected_bounces` 0).
+    pub fn with_reflected(
+        mut self,
+        reflected: Arc<ReflectedShortwave>,
+        solved: &SceneThermal,
+        ground_albedo: f32,
+    ) -> SkyInputs {
         let n = self.eligible.len();
-        let rs = &solved.exposure.reflected;
+        let rs = &*reflected;
         if rs.facet_count() != n || rs.records != solved.records.len() {
             return self;
         }
@@ -274,7 +280,7 @@ impl SkyInputs {
             })
             .collect();
         self.refl = Some(Arc::new(ReflInputs {
-            reflected: rs.clone(),
+            reflected,
             albedo: setup.facet_albedo(),
             ground_albedo,
             absorptivity,
