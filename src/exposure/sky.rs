@@ -310,6 +310,12 @@ impl FacePatterns {
     pub fn front<'a>(&'a self, facet: usize, buf: &'a mut Vec<HemiSample>) -> &'a [HemiSample] {
         pattern(&self.0, facet, false, buf)
     }
+
+    /// The back face's pattern of a double-sided `facet` (local frame of
+    /// the back face: [`FacetSamples::to_world`] with side −1).
+    pub fn back<'a>(&'a self, facet: usize, buf: &'a mut Vec<HemiSample>) -> &'a [HemiSample] {
+        pattern(&self.0, facet, true, buf)
+    }
 }
 
 /// How [`sky_view`] hands its rays to the tracer: a facet's hemisphere rays

@@ -31,7 +31,12 @@
 //! facet whose hemisphere rays hit the scene ([`PerHit::own_sky`]) also
 //! gets its own shape factor `F_p` and background: the facet's own
 //! hemisphere pattern (the same directions as its sky view) traced from
-//! the hit point. The front source of the slab model is affine in `F`
+//! the hit point. On a double-sided facet it traces both faces' patterns
+//! (each at half weight, from the point lifted to each side), so its view
+//! has the facet's form: the front face's `F` and the background over both
+//! faces (the slab is one, whichever face a ray sees). Hits seen through a
+//! reflection or a transmission take their own view as those seen directly
+//! ([`PerHitParams::secondary_sky`]). The front source of the slab model is affine in `F`
 //! ([`crate::thermal::SourceModel::front_per_shape_factor`], `∂S/∂F` =
 //! `ε(E_sky − σT_air⁴) + αE_d`), and the scene solve's last pass adds the
 //! background `ε(1 − F)·σ(T_bg⁴ − T_air⁴)` with
@@ -46,6 +51,26 @@
 //! image row of `G` as the sunlit difference does. The point's shape
 //! factor and its background temperature at the image time go to the
 //! radiance and the `shape_factor` truth layer ([`HitSky`]).
+//!
+//! # Reflected shortwave
+//! The reflected shortwave a facet receives ([`crate::exposure::reflected`])
+//! is `E_dn·a_f(t) + E_d·b_f` with `a_f = g_f ρ_g sin h + Σ_j w_j ρ_j (E⁰_j +
+//! a_j)` over what its hemisphere rays hit (`w_j`, ground weight `g_f`) and
+//! `b_f` likewise with the diffuse `E⁰_j = F̄_j`. A hit with its own sky view
+//! sees other weights: its reflected shortwave differs from its facet's by
+//! `Δa = Δg ρ_g sin h + Σ_j Δw_j ρ_j (E⁰_j + a_j)` and `Δb = Δg ρ_g + Σ_j Δw_j
+//! ρ_j (F̄_j + b_j)` over the facets whose weights differ (`a_j`, `b_j` the
+//! neighbours' own reflected shortwave after the stage's bounces). Its
+//! sources then differ by (W m⁻²)
+//!
+//! ```text
+//! ΔS_refl,k = αE_dn[k]·Δa_k + αE_d[k]·Δb
+//! ```
+//!
+//! (`αE_dn` the response's `∂S/∂(s cos θ)`: the reflected direct weighs
+//! like the facet's own sun), entering with `ΔS` above through the image row
+//! of `G` and the second order. Where the point sees what its facet's
+//! sample points saw, `Δw` and `Δg` are all zero and so is the change.
 //!
 //! The shadow rays are traced at every [`PerHitParams::stride`]-th record
 //! of each run of records with the sun in front (and the run's last), and
@@ -74,8 +99,11 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::scene_thermal::ImageResponse;
-use crate::exposure::{FacePatterns, FacetSamples, SkySampling, SkyView, SolarHistory};
+use super::scene_thermal::{ImageResponse, SceneThermal};
+use crate::exposure::reflected::NIGHT;
+use crate::exposure::{
+    FacePatterns, FacetSamples, ReflectedShortwave, SkySampling, SkyView, SolarHistory,
+};
 use crate::geometry::SceneGeometry;
 use crate::thermal::linear::{emission_curvature, latent_curvature};
 use crate::thermal::scene::PointResponse;
@@ -94,6 +122,10 @@ pub struct PerHitParams {
     /// the curvature of its latent loss in `T` (default true; false: the
     /// emission's curvature alone, for comparison).
     pub latent_curvature: bool,
+    /// Whether hits seen through a reflection or a transmission take their
+    /// own sky view, as hits seen directly do (default true; false: their
+    /// facet's, for comparison).
+    pub secondary_sky: bool,
 }
 
 impl Default for PerHitParams {
@@ -102,6 +134,7 @@ impl Default for PerHitParams {
             size_px: 16.0,
             stride: 4,
             latent_curvature: true,
+            secondary_sky: true,
         }
     }
 }
@@ -140,6 +173,10 @@ pub struct HitSky {
     /// at the air temperature (as
     /// [`crate::exposure::SkyView::background_temperature`] for a facet).
     pub background_k: f32,
+    /// Its reflected shortwave irradiance at the image time, W m⁻² (module
+    /// docs, "Reflected shortwave"): its facet's where the reflected
+    /// shortwave is off.
+    pub reflected_w_m2: f32,
 }
 
 /// What hits' own sky views need of the scene (shared by the image times
@@ -154,10 +191,32 @@ pub struct SkyInputs {
     frame: Arc<Vec<(Vec3, Vec3)>>,
     /// First facet of each instance.
     instance_offsets: Arc<Vec<usize>>,
-    /// Per facet: whether its hits may take their own sky view
-    /// (single-sided, shape factor not set by hand, some of its hemisphere
-    /// rays hit the scene).
+    /// Per facet: whether its hits may take their own sky view (shape
+    /// factor not set by hand, some of its hemisphere rays hit the scene).
     eligible: Arc<Vec<bool>>,
+    /// What a point's own reflected shortwave needs (`None`: the reflected
+    /// shortwave is off, every hit keeps its facet's).
+    refl: Option<Arc<ReflInputs>>,
+}
+
+/// What a point's own reflected shortwave needs (module docs, "Reflected
+/// shortwave"): the facets' reflected-shortwave coefficients and albedos
+/// and the weather's irradiances.
+#[derive(Debug, Clone, PartialEq)]
+struct ReflInputs {
+    /// Every facet's reflected shortwave (per unit `E_dn` and `E_d`).
+    reflected: Arc<ReflectedShortwave>,
+    /// Per facet: the albedo its neighbours receive reflected sunlight from.
+    albedo: Vec<f32>,
+    /// Albedo of the ground beyond the scene.
+    ground_albedo: f32,
+    /// Per facet: its solar absorptivity α (0 for a fixed facet).
+    absorptivity: Vec<f32>,
+    /// Per history record: direct-normal and diffuse-horizontal
+    /// irradiance, W m⁻², and the sine of the sun's elevation.
+    direct_normal: Vec<f32>,
+    diffuse: Vec<f32>,
+    sun_z: Vec<f32>,
 }
 
 impl SkyInputs {
@@ -173,8 +232,7 @@ impl SkyInputs {
     ) -> SkyInputs {
         let eligible = (0..facets.len())
             .map(|f| {
-                !facets.double_sided[f]
-                    && shape_factor_override.get(f).is_none_or(Option::is_none)
+                shape_factor_override.get(f).is_none_or(Option::is_none)
                     && !sky.background(f).is_empty()
             })
             .collect();
@@ -191,7 +249,54 @@ impl SkyInputs {
             instance_offsets: Arc::new(facets.instance_offsets.clone()),
             eligible: Arc::new(eligible),
             sky,
+            refl: None,
         }
+    }
+
+    /// These inputs with what a point's own reflected shortwave needs:
+    /// `reflected` the scene solve's reflected-shortwave stage (shared, not
+    /// copied), `solved` that solve (albedos, absorptivities, weather and
+    /// sun), `ground_albedo` the albedo of the ground beyond the scene that
+    /// stage used. Unchanged where the solve has no reflected shortwave
+    /// (`reflected_bounces` 0).
+    pub fn with_reflected(
+        mut self,
+        reflected: Arc<ReflectedShortwave>,
+        solved: &SceneThermal,
+        ground_albedo: f32,
+    ) -> SkyInputs {
+        let n = self.eligible.len();
+        let rs = &*reflected;
+        if rs.facet_count() != n || rs.records != solved.records.len() {
+            return self;
+        }
+        let setup = &solved.setup;
+        let absorptivity = (0..n)
+            .map(|f| match setup.kinds.get(f) {
+                Some(crate::thermal::scene::FacetThermal::Solve(p)) => {
+                    setup.props[*p as usize].solar_absorptivity as f32
+                }
+                _ => 0.0,
+            })
+            .collect();
+        self.refl = Some(Arc::new(ReflInputs {
+            reflected,
+            albedo: setup.facet_albedo(),
+            ground_albedo,
+            absorptivity,
+            direct_normal: solved
+                .records
+                .iter()
+                .map(|w| w.direct_normal_w_m2 as f32)
+                .collect(),
+            diffuse: solved
+                .records
+                .iter()
+                .map(|w| w.diffuse_horizontal_w_m2 as f32)
+                .collect(),
+            sun_z: solved.sun_directions.iter().map(|d| d.z).collect(),
+        }));
+        self
     }
 }
 
@@ -307,10 +412,10 @@ impl PerHit {
     }
 
     /// Whether hits on `facet` that get their own temperature also get their
-    /// own sky view: per-hit sky views are on, the facet has a response, is
-    /// single-sided, its shape factor was not set by hand, and some of its
-    /// hemisphere rays hit the scene (otherwise every point of its plane
-    /// sees the same sky and ground).
+    /// own sky view: per-hit sky views are on, the facet has a response, its
+    /// shape factor was not set by hand, and some of its hemisphere rays hit
+    /// the scene (otherwise every point of its plane sees the same sky and
+    /// ground).
     #[inline]
     pub fn own_sky(&self, facet: usize) -> bool {
         self.sky
@@ -440,28 +545,45 @@ impl PerHit {
         x as f32
     }
 
-    /// The own sky view of a point of `facet` (single-sided front face)
-    /// from its hemisphere rays `rays`, `hits`, `weights` (the facet's
-    /// pattern, from the point): its shape factor, ground weight and the
-    /// facets hit with their weights (into `seen`, merged by facet).
+    /// The own sky view of a point of a facet from its hemisphere rays
+    /// `rays`, `hits`, `weights` (the facet's pattern, from the point; for
+    /// a double-sided facet its front face's rays then its back face's, each
+    /// at half weight, as [`crate::exposure::sky_view`] traces them): its
+    /// front face's shape factor, ground weight and the facets hit with
+    /// their weights (into `seen`, merged by facet), as the facet's
+    /// [`SkyView`] holds them.
     fn point_view(
         inputs: &SkyInputs,
         rays: &[Ray],
         hits: &[Option<Hit>],
         weights: &[f32],
+        double_sided: bool,
         seen: &mut Vec<(u32, f32)>,
     ) -> (f32, f32) {
         let (mut sky, mut ground) = (0.0f64, 0.0f64);
+        let front = if double_sided {
+            rays.len() / 2
+        } else {
+            rays.len()
+        };
         seen.clear();
-        for ((ray, h), &w) in rays.iter().zip(hits).zip(weights) {
+        for (i, ((ray, h), &w)) in rays.iter().zip(hits).zip(weights).enumerate() {
             match h {
                 Some(h) => seen.push((
                     SceneGeometry::facet_id(&inputs.instance_offsets, h.instance, h.prim) as u32,
                     w,
                 )),
-                None if ray.dir.z > 0.0 => sky += w as f64,
+                None if ray.dir.z > 0.0 => {
+                    if i < front {
+                        sky += w as f64
+                    }
+                }
                 None => ground += w as f64,
             }
+        }
+        if double_sided {
+            // Each face's rays carried half weight.
+            sky *= 2.0;
         }
         seen.sort_by_key(|e| e.0);
         seen.dedup_by(|b, a| {
@@ -525,6 +647,106 @@ impl PerHit {
         }
     }
 
+    /// The facets a point sees with weights other than its facet's: `seen`
+    /// (the point's, merged by facet and sorted by id) minus `entries` (the
+    /// facet's, sorted by id), the non-zero differences into `out` (sorted
+    /// by id). Empty where the point sees what its facet's sample points
+    /// saw.
+    fn view_difference(
+        seen: &[(u32, f32)],
+        entries: &[crate::geometry::BackgroundEntry],
+        out: &mut Vec<(u32, f32)>,
+    ) {
+        out.clear();
+        let (mut i, mut j) = (0, 0);
+        while i < seen.len() || j < entries.len() {
+            let a = seen.get(i).map_or(u32::MAX, |e| e.0);
+            let b = entries.get(j).map_or(u32::MAX, |e| e.facet);
+            let (id, w) = if a < b {
+                i += 1;
+                (a, seen[i - 1].1)
+            } else if b < a {
+                j += 1;
+                (b, -entries[j - 1].weight)
+            } else {
+                i += 1;
+                j += 1;
+                (a, seen[i - 1].1 - entries[j - 1].weight)
+            };
+            if w != 0.0 {
+                out.push((id, w));
+            }
+        }
+    }
+
+    /// The change of a point's sources through its own reflected shortwave
+    /// (module docs, "Reflected shortwave"), added to `out` (W m⁻² per
+    /// window record), for a point of `facet` (response block `block`)
+    /// whose view differs from its facet's by the ground weight `dg` and
+    /// the facet weights `dw` ([`PerHit::view_difference`]); `da` is
+    /// scratch. Returns the point's reflected irradiance at the image time,
+    /// W m⁻² (0 without the reflected shortwave).
+    #[allow(clippy::too_many_arguments)]
+    fn add_reflected(
+        &self,
+        sky: &PointSky,
+        facet: usize,
+        block: usize,
+        dg: f32,
+        dw: &[(u32, f32)],
+        out: &mut [f32],
+        da: &mut Vec<f32>,
+    ) -> f32 {
+        let Some(ri) = sky.inputs.refl.as_deref() else {
+            return 0.0;
+        };
+        let rs = &ri.reflected;
+        let r = self.records.len();
+        let last = self.records[r - 1];
+        let (edn, ed) = (ri.direct_normal[last], ri.diffuse[last]);
+        let facet_now = rs.irradiance_w_m2(facet, last, edn as f64, ed as f64) as f32;
+        if dw.is_empty() && dg == 0.0 {
+            return facet_now;
+        }
+        // Δa_k (per unit E_dn) and Δb (per unit E_d).
+        da.clear();
+        da.resize(r, 0.0);
+        let mut db = 0.0f32;
+        if dg != 0.0 {
+            let g = dg * ri.ground_albedo;
+            db += g;
+            for (o, &k) in da.iter_mut().zip(&self.records) {
+                if rs.slot[k] != NIGHT {
+                    *o += g * ri.sun_z[k].max(0.0);
+                }
+            }
+        }
+        let view = &sky.inputs.sky;
+        for &(j, w) in dw {
+            let j = j as usize;
+            let c = w * ri.albedo[j];
+            if c == 0.0 {
+                continue;
+            }
+            db += c * (view.mean_shape_factor(j) + rs.diffuse[j]);
+            for (o, &k) in da.iter_mut().zip(&self.records) {
+                if rs.slot[k] != NIGHT {
+                    let e0 = self.solar.sun_fraction_at(j, k).clamp(0.0, 1.0)
+                        * self.solar.cos_incidence_at(j, k).max(0.0);
+                    *o += c * (e0 + rs.direct_at(j, k));
+                }
+            }
+        }
+        // ΔS_k = αE_dn·Δa_k + αE_d·Δb: the response's `∂S/∂(s cos θ)` is
+        // αE_dn (the reflected direct weighs like the facet's own sun).
+        let sun = &self.response.sun[block * r..(block + 1) * r];
+        let ad = ri.absorptivity[facet] * db;
+        for (((o, &x), &s), &k) in out.iter_mut().zip(da.iter()).zip(sun).zip(&self.records) {
+            *o += s * x + ad * ri.diffuse[k];
+        }
+        facet_now + edn * da[r - 1] + ed * db
+    }
+
     /// Background temperature at the image time of a face with ground
     /// weight `g` and the facets `seen`, K (air temperature `air_k` for the
     /// ground beyond the scene and for a face that sees only sky).
@@ -549,16 +771,17 @@ impl PerHit {
         self.states_of(tracer, hits, true, out);
     }
 
-    /// [`PerHit::states`], with own sky views only when `own_sky` (false:
-    /// every hit keeps its facet's view; a render's hits seen through a
-    /// reflection or transmission, module docs).
+    /// [`PerHit::states`] of hits seen directly (`direct`) or through a
+    /// reflection or transmission (`!direct`: these take their own sky view
+    /// only with [`PerHitParams::secondary_sky`], else their facet's).
     pub fn states_of(
         &self,
         tracer: &dyn Tracer,
         hits: &[(u32, Vec3)],
-        own_sky: bool,
+        direct: bool,
         out: &mut Vec<HitState>,
     ) {
+        let own_sky = direct || self.params.secondary_sky;
         out.clear();
         let r = self.records.len();
         if hits.is_empty() || r == 0 {
@@ -646,9 +869,11 @@ impl PerHit {
         }
         trace(&|i| need[i], &mut state);
         // The own hemisphere rays of the hits that take their own sky view:
-        // their facet's pattern (the directions of its own sky view), all
-        // from the hit point lifted off the plane; hit `j`'s rays are
-        // `sky_rays[sky_at[j]..sky_at[j + 1]]` (an empty range: none).
+        // their facet's pattern (the directions of its own sky view; a
+        // double-sided facet's front then back face, each at half weight),
+        // all from the hit point lifted off the plane on the face's side;
+        // hit `j`'s rays are `sky_rays[sky_at[j]..sky_at[j + 1]]` (an empty
+        // range: none).
         let mut sky_rays = Vec::new();
         let mut sky_w = Vec::new();
         let mut sky_at = Vec::with_capacity(hits.len() + 1);
@@ -659,11 +884,23 @@ impl PerHit {
             if let Some(ps) = self.sky.as_ref().filter(|_| own_sky && self.own_sky(f)) {
                 let n = self.normal[f];
                 let (t, b) = ps.inputs.frame[f];
+                let two = ps.inputs.sky.back_shape_factor(f).is_some();
+                let scale = if two { 0.5 } else { 1.0 };
                 let o = p + n * self.offset_m;
                 for h in ps.inputs.patterns.front(f, &mut pat) {
                     let d = t * h.dir.x + b * h.dir.y + n * h.dir.z;
                     sky_rays.push(Ray::new(o, d));
-                    sky_w.push(h.weight);
+                    sky_w.push(h.weight * scale);
+                }
+                if two {
+                    // The back face's frame: `FacetSamples::to_world` with
+                    // side −1.
+                    let o = p - n * self.offset_m;
+                    for h in ps.inputs.patterns.back(f, &mut pat) {
+                        let d = t * h.dir.x + b * (-h.dir.y) + n * (-h.dir.z);
+                        sky_rays.push(Ray::new(o, d));
+                        sky_w.push(h.weight * scale);
+                    }
                 }
             }
         }
@@ -682,6 +919,8 @@ impl PerHit {
         let mut delta: Vec<f32> = Vec::new();
         let mut seen: Vec<(u32, f32)> = Vec::new();
         let mut acc: Vec<f32> = Vec::new();
+        let mut dw: Vec<(u32, f32)> = Vec::new();
+        let mut da: Vec<f32> = Vec::new();
         for (j, &(f, _)) in hits.iter().enumerate() {
             let f = f as usize;
             let s = |k: usize| self.solar.sun_fraction_at(f, k);
@@ -716,14 +955,15 @@ impl PerHit {
             let (r0, r1) = (sky_at[j], sky_at[j + 1]);
             let mut own_sky = None;
             if let Some(ps) = self.sky.as_ref().filter(|_| r1 > r0) {
+                let sky = &ps.inputs.sky;
                 let (fp, gp) = Self::point_view(
                     &ps.inputs,
                     &sky_rays[r0..r1],
                     &sky_hits[r0..r1],
                     &sky_w[r0..r1],
+                    sky.back_shape_factor(f).is_some(),
                     &mut seen,
                 );
-                let sky = &ps.inputs.sky;
                 let ff = sky.shape_factor[f];
                 let p = &*self.response;
                 ds_sky.clear();
@@ -751,12 +991,23 @@ impl PerHit {
                     &mut ds_sky,
                     &mut acc,
                 );
+                Self::view_difference(&seen, sky.background(f), &mut dw);
+                let reflected_w_m2 = self.add_reflected(
+                    ps,
+                    f,
+                    b,
+                    gp - sky.ground_weight[f],
+                    &dw,
+                    &mut ds_sky,
+                    &mut da,
+                );
                 let green = &self.green_rows[b * r..(b + 1) * r];
                 dt += green.iter().zip(&ds_sky).map(|(g, x)| g * x).sum::<f32>();
                 let air = p.air4.last().map_or(0.0, |a| a.powf(0.25));
                 own_sky = Some(HitSky {
                     shape_factor: fp,
                     background_k: Self::background_now(ps, gp, &seen, air),
+                    reflected_w_m2,
                 });
             }
             if !diff.is_empty() || own_sky.is_some() {

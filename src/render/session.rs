@@ -1090,13 +1090,15 @@ fn scene_thermal(
     if session.config.per_hit {
         let solar = std::sync::Arc::new(std::mem::take(&mut solved.exposure.solar));
         let sky_view = std::sync::Arc::new(std::mem::take(&mut solved.exposure.sky));
+        let reflected = std::sync::Arc::new(std::mem::take(&mut solved.exposure.reflected));
         let sky = super::per_hit::SkyInputs::new(
             &solved.exposure.facets,
             sky_view.clone(),
             params.exposure.sky,
             params.exposure.seed,
             &solved.setup.shape_factor_override,
-        );
+        )
+        .with_reflected(reflected, &solved, params.physics.ground_albedo);
         for (i, (c, image)) in out
             .conditions
             .iter_mut()

@@ -156,14 +156,16 @@ impl Shader<'_> {
     /// The per-hit states of the hits of a batch whose facets want one,
     /// among the rays `which`, into `sc` (`state_of`, per ray of the
     /// batch: index into `states`, `u32::MAX` for none), all traced in one
-    /// call of [`crate::render::per_hit::PerHit::states_of`], with their
-    /// own sky views when `own_sky`.
+    /// call of [`crate::render::per_hit::PerHit::states_of`]; `direct`:
+    /// the rays are primary (false: seen through a reflection or a
+    /// transmission, whose hits take their own sky view only with
+    /// [`crate::render::per_hit::PerHitParams::secondary_sky`]).
     pub(super) fn per_hit_states_of(
         &self,
         rays: &[Ray],
         hits: &[Option<Hit>],
         which: impl IntoIterator<Item = usize>,
-        own_sky: bool,
+        direct: bool,
         sc: &mut HitStates,
     ) {
         sc.state_of.clear();
@@ -183,7 +185,7 @@ impl Shader<'_> {
                 sc.points.push((f as u32, ray.origin + ray.dir * h.t));
             }
         }
-        ph.states_of(self.tracer, &sc.points, own_sky, &mut sc.states);
+        ph.states_of(self.tracer, &sc.points, direct, &mut sc.states);
     }
 
     /// The per-hit state of one hit, if its facet wants one.
