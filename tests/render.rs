@@ -36,6 +36,7 @@ fn material(name: &str, id: u32, emissivity: f64, specular: f64) -> Material {
         exposed_area: 1.0,
         self_power_w_m2: 0.0,
         specular_fraction: specular,
+        specular_roughness: None,
         transmissivity: 0.0,
         emissivity_curve: None,
         double_sided: false,
