@@ -361,6 +361,59 @@ fn shipped_materials_json() {
     assert_eq!(g("asphalt").exposed_fraction(), 0.0);
 }
 
+/// `specular_roughness` (the glint lobe's RMS facet slope): read from the
+/// materials JSON; negative, or given for water (whose roughness is
+/// Cox–Munk's from the wind), is an error naming the file, line and field.
+#[test]
+fn specular_roughness_is_read_and_bad_values_name_file_line_field() {
+    let d = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(repo_path("scenes/materials.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&good).unwrap();
+    let index = |v: &serde_json::Value, name: &str| {
+        v["materials"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|m| m["name"] == name)
+            .unwrap()
+    };
+    let (glass, water) = (index(&v, "glass"), index(&v, "water"));
+    v["materials"][glass]["specular_roughness"] = serde_json::json!(0.12);
+    let p = write(
+        d.path(),
+        "ok.json",
+        &serde_json::to_string_pretty(&v).unwrap(),
+    );
+    let db = MaterialDb::load(&p).unwrap();
+    assert_eq!(db.get("glass").unwrap().specular_roughness, Some(0.12));
+    assert_eq!(db.get("asphalt").unwrap().specular_roughness, None);
+    v["materials"][glass]["specular_roughness"] = serde_json::json!(-0.1);
+    v["materials"][water]["specular_roughness"] = serde_json::json!(0.1);
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    let p = write(d.path(), "rough.json", &text);
+    let errs = db::load_json_all(&p).unwrap_err();
+    assert_eq!(errs.len(), 2, "{errs:?}");
+    let line = |needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+    let e0 = errs[0].to_string();
+    assert!(
+        e0.contains(&format!(
+            "rough.json:line {}",
+            line("\"specular_roughness\": -0.1")
+        )) && e0.contains(&format!("materials[{glass}].specular_roughness"))
+            && e0.contains("≥ 0"),
+        "{e0}"
+    );
+    let e1 = errs[1].to_string();
+    assert!(
+        e1.contains(&format!("materials[{water}].specular_roughness")) && e1.contains("Cox"),
+        "{e1}"
+    );
+    // Not a number at all: the API's values are checked too.
+    let mut m = db.get("glass").unwrap().clone();
+    m.specular_roughness = Some(f64::NAN);
+    assert!(m.problems().iter().any(|(f, _)| f == "specular_roughness"));
+}
+
 #[test]
 fn json_db_errors_name_file_line_field() {
     let d = tempfile::tempdir().unwrap();

@@ -106,6 +106,7 @@ fn material() -> impl Strategy<Value = Material> {
             exposed_area: exposed,
             self_power_w_m2: p,
             specular_fraction: s,
+            specular_roughness: None,
             transmissivity: t,
             emissivity_curve: None,
             double_sided: false,

@@ -138,6 +138,9 @@ pub struct MaterialEntry {
     /// Specular fraction of reflection, 0–1.
     #[serde(default)]
     pub specular_fraction: f64,
+    /// RMS facet slope of the glint lobe, ≥ 0 (absent: 0.05; not for water).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular_roughness: Option<f64>,
     /// Transmissivity, 0–1.
     #[serde(default)]
     pub transmissivity: f64,
@@ -243,6 +246,7 @@ pub fn load_json_str_all(text: &str, path: &Path) -> std::result::Result<Materia
             exposed_area: e.exposed_area,
             self_power_w_m2: e.self_power_w_m2,
             specular_fraction: e.specular_fraction,
+            specular_roughness: e.specular_roughness,
             transmissivity: e.transmissivity,
             emissivity_curve: curve,
             double_sided: e.double_sided,

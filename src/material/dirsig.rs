@@ -554,6 +554,7 @@ pub fn read_mat_with(
             },
             self_power_w_m2: self_power,
             specular_fraction: specular,
+            specular_roughness: None,
             transmissivity: 0.0,
             emissivity_curve: curve,
             double_sided,

@@ -180,6 +180,13 @@ pub struct Material {
     pub self_power_w_m2: f64,
     /// Fraction of reflection that is specular, 0–1.
     pub specular_fraction: f64,
+    /// RMS facet slope `m` (dimensionless, ≥ 0) of the glint lobe through
+    /// which the specular part reflects the sun
+    /// ([`crate::render::glint::lobe_slope_variance`]: Beckmann `m²`);
+    /// `None`: [`crate::render::glint::GLOSSY_RMS_SLOPE`]. Not for water,
+    /// whose roughness is Cox & Munk's from the wind.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular_roughness: Option<f64>,
     /// Transmissivity, 0–1.
     pub transmissivity: f64,
     /// Spectral (and angular) emissivity; `None` = grey at `thermal_emissivity`.
@@ -235,6 +242,25 @@ impl Material {
         ] {
             if !(0.0..=1.0).contains(&v) {
                 p.push((field, format!("{v}: expected a fraction in 0..=1")));
+            }
+        }
+        if let Some(r) = self.specular_roughness {
+            if !(r.is_finite() && r >= 0.0) {
+                p.push((
+                    "specular_roughness",
+                    format!("{r}: expected a finite RMS facet slope ≥ 0"),
+                ));
+            } else if self
+                .surface_energy
+                .is_some_and(|s| s.kind == crate::material::surface::SurfaceKind::Water)
+            {
+                p.push((
+                    "specular_roughness",
+                    format!(
+                        "{r}: water's glint roughness comes from the wind (Cox & Munk); \
+                         remove `specular_roughness`"
+                    ),
+                ));
             }
         }
         if !(-1.0..=1.0).contains(&self.exposed_area) {

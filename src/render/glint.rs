@@ -28,8 +28,9 @@
 //! `σ² = 0.003 + 5.12·10⁻³·U` (U the wind speed in m/s at 12.5 m; here
 //! the weather's wind speed, whose measurement height is not corrected for)
 //! — the Cox–Munk slope distribution is the Beckmann `D` with `m² = σ²`.
-//! Other specular materials (glass, glossy paint, metal) take
-//! [`GLOSSY_SLOPE_VARIANCE`]. The solar disc's own extent widens every
+//! Other specular materials (glass, glossy paint, metal) take their
+//! `specular_roughness` (the RMS facet slope m, `m²` its square), else
+//! [`GLOSSY_RMS_SLOPE`]. The solar disc's own extent widens every
 //! lobe: a uniform disc of angular radius `α` moves the mirror normal over
 //! a disc of radius `α/2`, per-axis variance `α²/16`, i.e. a Beckmann
 //! `m²` of `α²/8`, added to the surface's ([`SUN_ANGULAR_RADIUS_RAD`]).
@@ -43,11 +44,14 @@ use crate::material::surface::SurfaceKind;
 /// radius 695 700 km at 1 AU).
 pub const SUN_ANGULAR_RADIUS_RAD: f64 = 4.652e-3;
 
-/// Beckmann slope variance `m²` of specular materials other than water:
-/// an RMS facet slope of 0.05 (2.9°), between float glass (< 1°) and
+/// RMS facet slope of specular materials other than water that give no
+/// `specular_roughness`: 0.05 (2.9°), between float glass (< 1°) and
 /// glossy paint (Walter et al. 2007 fit GGX widths of 0.05–0.2 to glossy
-/// measured surfaces). irsig choice; a material field could carry it.
-pub const GLOSSY_SLOPE_VARIANCE: f64 = 0.05 * 0.05;
+/// measured surfaces). irsig choice.
+pub const GLOSSY_RMS_SLOPE: f64 = 0.05;
+
+/// Beckmann slope variance `m²` of [`GLOSSY_RMS_SLOPE`].
+pub const GLOSSY_SLOPE_VARIANCE: f64 = GLOSSY_RMS_SLOPE * GLOSSY_RMS_SLOPE;
 
 /// Cox & Munk (1954) slope variance of a clean sea surface at wind speed
 /// `wind_m_s` (m/s; negative or non-finite taken as calm).
@@ -61,7 +65,8 @@ pub fn cox_munk_slope_variance(wind_m_s: f64) -> f64 {
 }
 
 /// The Beckmann `m²` of a material's glint lobe under wind `wind_m_s`
-/// (m/s), the sun's disc included: water after Cox & Munk, others
+/// (m/s), the sun's disc included: water after Cox & Munk, others the
+/// square of their `specular_roughness` (RMS slope), else
 /// [`GLOSSY_SLOPE_VARIANCE`].
 pub fn lobe_slope_variance(m: &Material, wind_m_s: f64) -> f64 {
     let water = m
@@ -70,7 +75,9 @@ pub fn lobe_slope_variance(m: &Material, wind_m_s: f64) -> f64 {
     let surface = if water {
         cox_munk_slope_variance(wind_m_s)
     } else {
-        GLOSSY_SLOPE_VARIANCE
+        m.specular_roughness
+            .filter(|r| r.is_finite() && *r >= 0.0)
+            .map_or(GLOSSY_SLOPE_VARIANCE, |r| r * r)
     };
     surface + SUN_ANGULAR_RADIUS_RAD * SUN_ANGULAR_RADIUS_RAD / 8.0
 }
@@ -154,6 +161,34 @@ mod tests {
         // Behind the surface: nothing.
         assert_eq!(glint_lobe_sr(m2, Vec3::Z, -mirror, s), 0.0);
         assert_eq!(glint_lobe_sr(m2, Vec3::Z, mirror, -s), 0.0);
+    }
+
+    /// A material's `specular_roughness` sets its lobe (`m²` = its square,
+    /// plus the sun's disc); without it the glossy default; water keeps
+    /// Cox–Munk from the wind whatever the field says.
+    #[test]
+    fn the_lobe_takes_the_materials_roughness_and_water_the_wind() {
+        let db = crate::material::stock::stock().expect("stock materials");
+        let disc = SUN_ANGULAR_RADIUS_RAD * SUN_ANGULAR_RADIUS_RAD / 8.0;
+        let mut glass = db.get("glass").expect("stock glass").clone();
+        glass.specular_roughness = None;
+        assert!((lobe_slope_variance(&glass, 3.0) - (GLOSSY_SLOPE_VARIANCE + disc)).abs() < 1e-15);
+        glass.specular_roughness = Some(0.2);
+        assert!((lobe_slope_variance(&glass, 3.0) - (0.04 + disc)).abs() < 1e-15);
+        // A rougher lobe is lower at its peak by the ratio of the m².
+        let s = Vec3::new(0.5, 0.0, 0.75f32.sqrt());
+        let mirror = Vec3::new(-0.5, 0.0, 0.75f32.sqrt());
+        let m_rough = lobe_slope_variance(&glass, 0.0);
+        glass.specular_roughness = Some(0.05);
+        let m_smooth = lobe_slope_variance(&glass, 0.0);
+        let ratio = glint_lobe_sr(m_smooth, Vec3::Z, mirror, s)
+            / glint_lobe_sr(m_rough, Vec3::Z, mirror, s);
+        assert!((ratio - m_rough / m_smooth).abs() < 1e-6 * ratio, "{ratio}");
+        let water = db.get("water").expect("stock water").clone();
+        assert!(
+            (lobe_slope_variance(&water, 7.0) - (cox_munk_slope_variance(7.0) + disc)).abs()
+                < 1e-15
+        );
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 use super::fast::{FastMiss, FastScratch};
 use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
+use super::reflected_sky::{TILT_NODES, tilt_at};
 use super::surface::{GreyFacet, PlanckTable, hit_sky, hit_temperature};
 use super::{BandTables, Shader};
 use crate::material::Material;
@@ -23,8 +24,9 @@ pub(super) struct FastBand {
     pub(super) planck: Vec<f32>,
     /// Quadrature weights × response, µm.
     pub(super) w: Vec<f32>,
-    /// Sky spectral radiance.
-    pub(super) sky: Vec<f32>,
+    /// The diffusely reflected sky `L_eq(λ)` per tilt node
+    /// ([`super::reflected_sky`]).
+    pub(super) sky: Vec<Vec<f32>>,
     /// Solar spectral irradiance normal to the sun.
     pub(super) sun: Vec<f32>,
     /// Per material: `ANGLE_ROWS × len` emissivities.
@@ -57,8 +59,8 @@ impl FastBand {
 pub(super) struct Integrals {
     /// Per node of the Planck table: `Σ q·B(λ, T_k)`.
     pub(super) planck: Vec<f64>,
-    /// `Σ q·L_sky`.
-    pub(super) sky: f64,
+    /// Per tilt node: `Σ q·L_eq`.
+    pub(super) sky: Vec<f64>,
     /// `Σ q·E_s`.
     pub(super) sun: f64,
 }
@@ -73,9 +75,16 @@ impl Integrals {
                 .chunks(total)
                 .map(|node| dot(&node[t.start..t.start + nl]))
                 .collect(),
-            sky: dot(&t.sky),
+            sky: t.sky_tilt.iter().map(|v| dot(v)).collect(),
             sun: dot(&t.sun),
         }
+    }
+
+    /// `Σ q·L_eq` at tilt node `k` + fraction `w`.
+    #[inline]
+    pub(super) fn sky_at(&self, k: usize, w: f64) -> f64 {
+        let s = &self.sky;
+        s[k] + w * (s[k + 1] - s[k])
     }
 
     /// `Σ q·B(T)` at table node `k` + fraction `f`.
@@ -132,8 +141,9 @@ pub(super) struct GreyTables {
     pub(super) temperatures: usize,
     /// `Σ q_i·B(T_k)` of band `b` at `[(i · temperatures + k) · bands + b]`.
     pub(super) planck: Vec<f32>,
-    /// Per range node `i`: `Σ q_i·L_sky`, `Σ q_i·E_s` and `Σ w·L_u` of band
-    /// `b` at `[(3·i + 0, 1, 2) · bands + b]`.
+    /// Per path node `i`: `Σ q_i·L_eq` of tilt node `j`, `Σ q_i·E_s` and
+    /// `Σ w·L_u` of band `b` at `[(NODE_TERMS·i + j, TILT_NODES,
+    /// TILT_NODES + 1) · bands + b]` ([`NODE_TERMS`]).
     pub(super) node: Vec<f32>,
     /// Grey emissivity at `[(material · ANGLE_ROWS + angle row) · bands + b]`
     /// (0 for materials not grey in every band: never read).
@@ -161,15 +171,18 @@ impl GreyTables {
             .and_then(|b| b.first())
             .map_or(0, |(i, _)| i.planck.len());
         let mut planck = vec![0f32; nt * r * nb];
-        let mut node = vec![0f32; 3 * r * nb];
+        let mut node = vec![0f32; NODE_TERMS * r * nb];
         for (b, band) in nodes.iter().enumerate() {
             for (i, (ig, lu)) in band.iter().enumerate() {
                 for (k, &x) in ig.planck.iter().enumerate() {
                     planck[(i * nt + k) * nb + b] = x as f32;
                 }
-                node[3 * i * nb + b] = ig.sky as f32;
-                node[(3 * i + 1) * nb + b] = ig.sun as f32;
-                node[(3 * i + 2) * nb + b] = *lu as f32;
+                let q = NODE_TERMS * i;
+                for (j, &x) in ig.sky.iter().enumerate() {
+                    node[(q + j) * nb + b] = x as f32;
+                }
+                node[(q + TILT_NODES) * nb + b] = ig.sun as f32;
+                node[(q + TILT_NODES + 1) * nb + b] = *lu as f32;
             }
         }
         let grey_everywhere = |mi: usize| fast.iter().all(|fb| fb.grey[mi].is_some());
@@ -384,47 +397,59 @@ fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32
     v
 }
 
-/// One height node's sky, sun and path terms `[Σq·L_sky, Σq·E_s, Σw·L_u]`
+/// Entries per path node of [`GreyTables::node`]: the reflected sky at
+/// every tilt node, the sun, the path radiance.
+pub(super) const NODE_TERMS: usize = TILT_NODES + 2;
+
+/// One height node's sky, sun and path terms `[Σq·L_eq, Σq·E_s, Σw·L_u]`
 /// of `NB` bands, linear in range (fraction `rx` from the entries at `q`
-/// to the next range node's, `3·NB` on).
+/// to the next range node's, `NODE_TERMS·NB` on), the sky linear in tilt
+/// (fraction `wb` from tilt node `kb` to the next).
 #[inline(always)]
-fn grey_node_terms<const NB: usize>(nd: &[f32], q: usize, rx: f32) -> [[f32; NB]; 3] {
-    let s = &nd[q..q + 6 * NB];
-    let mut v = [[0f32; NB]; 3];
-    for (j, v) in v.iter_mut().enumerate() {
-        for (b, v) in v.iter_mut().enumerate() {
-            *v = lerp(s[j * NB + b], s[(3 + j) * NB + b], rx);
-        }
+fn grey_node_terms<const NB: usize>(
+    nd: &[f32],
+    q: usize,
+    (kb, wb): (usize, f32),
+    rx: f32,
+) -> [[f32; NB]; 3] {
+    let s = &nd[q..q + 2 * NODE_TERMS * NB];
+    let at = |j: usize, b: usize| lerp(s[j * NB + b], s[(NODE_TERMS + j) * NB + b], rx);
+    let (mut sky, mut sun, mut lu) = ([0f32; NB], [0f32; NB], [0f32; NB]);
+    for (b, ((sky, sun), lu)) in sky.iter_mut().zip(&mut sun).zip(&mut lu).enumerate() {
+        *sky = lerp(at(kb, b), at(kb + 1, b), wb);
+        *sun = at(TILT_NODES, b);
+        *lu = at(TILT_NODES + 1, b);
     }
-    v
+    [sky, sun, lu]
 }
 
 /// One height node's grey-path terms of band `b` of `nb`
-/// ([`Shader::grey_pass_any`]): `[Σq·B(T), Σq·B(T_bg), Σq·L_sky, Σq·E_s,
+/// ([`Shader::grey_pass_any`]): `[Σq·B(T), Σq·B(T_bg), Σq·L_eq, Σq·E_s,
 /// Σw·L_u]`, the Planck integrals linear in temperature (fractions `ft`,
 /// `fg` from the entries at `t0`, `g0`; the next temperature node `nb` on)
 /// then in range (fraction `rx`; the next range node `rs` on), the node
-/// terms at `q` linear in range (the next range node `3·nb` on).
+/// terms at `q` linear in range (the next range node `NODE_TERMS·nb` on),
+/// the sky then in tilt (fraction `wb` from tilt node `kb`).
 #[inline(always)]
 pub(super) fn grey_node(
     pl: &[f32],
     nd: &[f32],
-    [nb, rs, b]: [usize; 3],
+    [nb, rs, b, kb]: [usize; 4],
     [t0, g0, q]: [usize; 3],
-    [ft, fg, rx]: [f32; 3],
+    [ft, fg, rx, wb]: [f32; 4],
 ) -> [f32; 5] {
     let bilerp = |o: usize, f: f32| {
         let v0 = lerp(pl[o + b], pl[o + nb + b], f);
         let v1 = lerp(pl[o + rs + b], pl[o + rs + nb + b], f);
         lerp(v0, v1, rx)
     };
-    let node = |o: usize| lerp(nd[q + o + b], nd[q + o + 3 * nb + b], rx);
+    let node = |j: usize| lerp(nd[q + j * nb + b], nd[q + (NODE_TERMS + j) * nb + b], rx);
     [
         bilerp(t0, ft),
         bilerp(g0, fg),
-        node(0),
-        node(nb),
-        node(2 * nb),
+        lerp(node(kb), node(kb + 1), wb),
+        node(TILT_NODES),
+        node(TILT_NODES + 1),
     ]
 }
 
@@ -440,12 +465,16 @@ struct GreyPlace<'s> {
     rx: f32,
     ax: f32,
     sd: f32,
+    /// Tilt node of the reflected sky and the fraction toward the next.
+    kb: usize,
+    wb: f32,
 }
 
 /// The spectral rows one band of [`Shader::fast_primary`] reads (all of
 /// the band's length): emissivity at the two angle rows, Planck at the two
 /// table nodes of the surface and of the background temperature, `w·τ₂` at
-/// the two range nodes, sky radiance and solar irradiance.
+/// the two range nodes, the reflected sky at the two tilt nodes and solar
+/// irradiance.
 pub(super) struct BandStreams<'s> {
     pub(super) e0: &'s [f32],
     pub(super) e1: &'s [f32],
@@ -455,7 +484,8 @@ pub(super) struct BandStreams<'s> {
     pub(super) g1: &'s [f32],
     pub(super) q0: &'s [f32],
     pub(super) q1: &'s [f32],
-    pub(super) sky: &'s [f32],
+    pub(super) sky0: &'s [f32],
+    pub(super) sky1: &'s [f32],
     pub(super) sun: &'s [f32],
 }
 
@@ -465,11 +495,11 @@ pub(super) const LANES: usize = 8;
 
 /// `Σ_λ w·τ₂ · [ε·B(T) + r·(env + sd·E_s) + tr·env]` over one band (see
 /// [`Shader::fast_primary`]); `frac` = the interpolation fractions of
-/// angle, temperature, background temperature and range. All rows are
-/// [`FastBand::len`] long, a multiple of [`LANES`].
+/// angle, temperature, background temperature, range and tilt. All rows
+/// are [`FastBand::len`] long, a multiple of [`LANES`].
 #[inline]
-pub(super) fn band_sum(s: &BandStreams, frac: [f32; 4], big_f: f32, sd: f32, tr: f32) -> f32 {
-    let [ta, ft, fg, fr] = frac;
+pub(super) fn band_sum(s: &BandStreams, frac: [f32; 5], big_f: f32, sd: f32, tr: f32) -> f32 {
+    let [ta, ft, fg, fr, fb] = frac;
     let one_f = 1.0 - big_f;
     let one_t = 1.0 - tr;
     let lane = |v: &[f32], c: usize| -> [f32; LANES] {
@@ -479,13 +509,14 @@ pub(super) fn band_sum(s: &BandStreams, frac: [f32; 4], big_f: f32, sd: f32, tr:
     for c in (0..s.e0.len()).step_by(LANES) {
         let (e0, e1, t0, t1) = (lane(s.e0, c), lane(s.e1, c), lane(s.t0, c), lane(s.t1, c));
         let (g0, g1, q0, q1) = (lane(s.g0, c), lane(s.g1, c), lane(s.q0, c), lane(s.q1, c));
-        let (sky, sun) = (lane(s.sky, c), lane(s.sun, c));
+        let (s0, s1, sun) = (lane(s.sky0, c), lane(s.sky1, c), lane(s.sun, c));
         for l in 0..LANES {
+            let sky = s0[l] + fb * (s1[l] - s0[l]);
             let eps = e0[l] + ta * (e1[l] - e0[l]);
             let bt = t0[l] + ft * (t1[l] - t0[l]);
             let bg = g0[l] + fg * (g1[l] - g0[l]);
             let wt = q0[l] + fr * (q1[l] - q0[l]);
-            let env = big_f * sky[l] + one_f * bg;
+            let env = big_f * sky + one_f * bg;
             let r = one_t - eps;
             let r = if r > 0.0 { r } else { 0.0 };
             acc[l] += wt * (eps * bt + r * (env + sd * sun[l]) + tr * env);
@@ -569,7 +600,7 @@ impl Shader<'_> {
     /// The grey path's last pass over every hit gathered in `sc` (see
     /// [`Shader::shade_fast`]): per band
     /// `ε(θ)·ΣqB(T) + r·(env + sd·Σq·E_s) + t·env + Σw·L_u`, with
-    /// `env = F·Σq·L_sky + (1 − F)·ΣqB(T_bg)`, `r = max(1 − ε − t, 0)`, the
+    /// `env = F·Σq·L_eq(β) + (1 − F)·ΣqB(T_bg)`, `r = max(1 − ε − t, 0)`, the
     /// integrals bilinear in temperature then range, then linear in height,
     /// as in the reference. The bands of one entry are adjacent in
     /// [`GreyTables`]: the offsets are computed once per hit, then each
@@ -616,6 +647,7 @@ impl Shader<'_> {
         } else {
             0.0
         };
+        let (kb, wb) = tilt_at(g.tilt);
         GreyPlace {
             g,
             mi,
@@ -625,6 +657,8 @@ impl Shader<'_> {
             rx: hit.rx,
             ax: hit.ax,
             sd,
+            kb,
+            wb,
         }
     }
 
@@ -640,7 +674,7 @@ impl Shader<'_> {
         // the next height node.
         let rs = nt * NB;
         let two = gt.heights.len() >= 2;
-        let (hp, hq) = (gt.range_nodes * nt * NB, 3 * gt.range_nodes * NB);
+        let (hp, hq) = (gt.range_nodes * nt * NB, NODE_TERMS * gt.range_nodes * NB);
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
@@ -649,15 +683,16 @@ impl Shader<'_> {
             let one_f = 1.0 - g.big_f;
             let t0 = (p.n0 * nt + g.kt as usize) * NB;
             let g0 = (p.n0 * nt + g.kg as usize) * NB;
-            let q = 3 * p.n0 * NB;
+            let q = NODE_TERMS * p.n0 * NB;
+            let tb = (p.kb, p.wb);
             // Temperature first, then range, then height, as the reference.
             let mut bt = grey_planck::<NB>(pl, t0, rs, g.ft, p.rx);
             let mut bg = grey_planck::<NB>(pl, g0, rs, g.fg, p.rx);
-            let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, p.rx);
+            let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, tb, p.rx);
             if two {
                 let bt1 = grey_planck::<NB>(pl, t0 + hp, rs, g.ft, p.rx);
                 let bg1 = grey_planck::<NB>(pl, g0 + hp, rs, g.fg, p.rx);
-                let [sky1, sun1, lu1] = grey_node_terms::<NB>(nd, q + hq, p.rx);
+                let [sky1, sun1, lu1] = grey_node_terms::<NB>(nd, q + hq, tb, p.rx);
                 for b in 0..NB {
                     bt[b] = lerp(bt[b], bt1[b], p.ax);
                     bg[b] = lerp(bg[b], bg1[b], p.ax);
@@ -684,7 +719,7 @@ impl Shader<'_> {
         let nt = gt.temperatures;
         let rs = nt * nb;
         let two = gt.heights.len() >= 2;
-        let (hp, hq) = (gt.range_nodes * nt * nb, 3 * gt.range_nodes * nb);
+        let (hp, hq) = (gt.range_nodes * nt * nb, NODE_TERMS * gt.range_nodes * nb);
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
@@ -694,20 +729,25 @@ impl Shader<'_> {
             let e = (p.mi * ANGLE_ROWS + p.a0) * nb;
             let t0 = (p.n0 * nt + g.kt as usize) * nb;
             let g0 = (p.n0 * nt + g.kg as usize) * nb;
-            let q = 3 * p.n0 * nb;
+            let q = NODE_TERMS * p.n0 * nb;
             for b in 0..nb {
                 let eps = lerp(ep[e + b], ep[e + nb + b], p.ta);
                 // Temperature first, then range, then height, as the
                 // reference.
-                let [mut bt, mut bg, mut sky, mut sun, mut lu] =
-                    grey_node(pl, nd, [nb, rs, b], [t0, g0, q], [g.ft, g.fg, p.rx]);
+                let [mut bt, mut bg, mut sky, mut sun, mut lu] = grey_node(
+                    pl,
+                    nd,
+                    [nb, rs, b, p.kb],
+                    [t0, g0, q],
+                    [g.ft, g.fg, p.rx, p.wb],
+                );
                 if two {
                     let [bt1, bg1, sky1, sun1, lu1] = grey_node(
                         pl,
                         nd,
-                        [nb, rs, b],
+                        [nb, rs, b, p.kb],
                         [t0 + hp, g0 + hp, q + hq],
-                        [g.ft, g.fg, p.rx],
+                        [g.ft, g.fg, p.rx, p.wb],
                     );
                     bt = lerp(bt, bt1, p.ax);
                     bg = lerp(bg, bg1, p.ax);
@@ -753,6 +793,7 @@ impl Shader<'_> {
         let (_, nrm, d) = self.hit_frame(ray, h);
         let (a0, ta) = angle_row(-d.dot(nrm));
         let big_f = (shape_factor as f64).clamp(0.0, 1.0);
+        let (kb, wb) = tilt_at(self.tilt[f]);
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
@@ -788,7 +829,7 @@ impl Shader<'_> {
                             [
                                 lerp(p.planck_at(kt, ft), q.planck_at(kt, ft), x),
                                 lerp(p.planck_at(kg, fg), q.planck_at(kg, fg), x),
-                                lerp(p.sky, q.sky, x),
+                                lerp(p.sky_at(kb, wb as f64), q.sky_at(kb, wb as f64), x),
                                 lerp(p.sun, q.sun, x),
                                 lerp(w[n0], w[n0 + 1], x),
                             ]
@@ -804,7 +845,8 @@ impl Shader<'_> {
                     }
                     _ => {
                         let p = &fb.plain;
-                        (p.planck_at(kt, ft), p.planck_at(kg, fg), p.sky, p.sun, 0.0)
+                        let sky = p.sky_at(kb, wb as f64);
+                        (p.planck_at(kt, ft), p.planck_at(kg, fg), sky, p.sun, 0.0)
                     }
                 };
                 let env = big_f * sky + (1.0 - big_f) * bg;
@@ -828,10 +870,11 @@ impl Shader<'_> {
                         g1: row(kg + 1),
                         q0,
                         q1,
-                        sky: &fb.sky,
+                        sky0: &fb.sky[kb],
+                        sky1: &fb.sky[kb + 1],
                         sun: &fb.sun,
                     },
-                    [ta as f32, ft as f32, fg as f32, fr],
+                    [ta as f32, ft as f32, fg as f32, fr, wb],
                     big_f as f32,
                     sd as f32,
                     tr as f32,

@@ -44,7 +44,7 @@ impl Shader<'_> {
     /// ```text
     /// Σ_λ w·τ₂(λ, R) · [ε·B(T) + r·(env + (1 − s)·E_s·cos σ·f_sun/π) + t·env]
     ///   + Σ_λ w·L_u(λ, R),      r = max(1 − ε − t, 0),
-    ///   env = F·L_sky + (1 − F)·B(T_bg)
+    ///   env = F·L_eq(β) + (1 − F)·B(T_bg)
     /// ```
     ///
     /// (the big equation of the module docs with `L_spec = L_behind = env`,

@@ -21,7 +21,7 @@
 //! ```text
 //! L(λ) = ε·B(λ, T)                                 self-emission
 //!      + r_d·E_s(λ)·cos σ·f_sun / π                direct sun (diffuse part)
-//!      + r_d·[F·L_sky(λ) + (1 − F)·B(λ, T_bg)]     sky and background
+//!      + r_d·[F·L_eq(λ, β) + (1 − F)·B(λ, T_bg)]   sky and background
 //!      + r_s·L_spec(λ)                             radiance along the mirror ray
 //!      + r_s·E_s(λ)·v·D(h)/(4 cos θ)               the sun through the glint lobe
 //!      + t·L_behind(λ)                             radiance along the continuing ray
@@ -33,7 +33,7 @@
 //! `cos σ` the cosine of the solar incidence, `T_bg` the radiative mean
 //! temperature of what it sees below the sky. `L_spec` and `L_behind` are
 //! traced (the same equation at the next hit) while the bounce budget lasts;
-//! past it, both take the diffuse environment `F·L_sky + (1 − F)·B(T_bg)`.
+//! past it, both take the diffuse environment `F·L_eq + (1 − F)·B(T_bg)`.
 //! Misses see the sky only, so the mirror ray and the glint lobe do not
 //! count the sun twice.
 //!
@@ -42,8 +42,10 @@
 //! [`crate::atmosphere::Atmosphere::sky_radiance_toward`] on [`SKY_NODES`]
 //! values of cos θ, linear between them) and the ground beyond the scene (a
 //! blackbody at [`Conditions::ground_temperature_k`]) when they point below
-//! it. `L_sky` in the diffuse term above is the isotropic-equivalent sky
-//! ([`crate::atmosphere::Atmosphere::sky_radiance`]).
+//! it. `L_eq` in the diffuse term above is that directional sky integrated
+//! over the sky a facet of tilt β faces ([`reflected_sky`]; its front face's
+//! tilt, for either face, as `F` and `T_bg`), tabulated on [`TILT_NODES`]
+//! tilts and linear between them.
 //!
 //! Units: wavelength µm, spectral radiance W·m⁻²·sr⁻¹·µm⁻¹, spectral
 //! irradiance W·m⁻²·µm⁻¹, band radiance ∫ R L dλ in W·m⁻²·sr⁻¹.
@@ -60,8 +62,8 @@
 //! times τ₂ per range node of the path table) folded in; for a material
 //! whose emissivity is flat within a band (grey, at each angle row) ε and
 //! r leave the sums and the band radiance is a handful of lookups in
-//! per-band integrals over the Planck table (`Σ w·τ₂·B(T_k)`, `Σ w·τ₂·L_sky`,
-//! `Σ w·τ₂·E_s`). Both use the same interpolations as the spectral
+//! per-band integrals over the Planck table (`Σ w·τ₂·B(T_k)`, `Σ w·τ₂·L_eq`
+//! per tilt node, `Σ w·τ₂·E_s`). Both use the same interpolations as the spectral
 //! reference ([`Shader::shade`] + [`Shader::band_radiance`]), so they agree
 //! with it to rounding; `tests/render.rs` checks ≤ 10⁻⁵ relative against
 //! the reference equation with exact Planck radiances on random inputs
@@ -72,6 +74,7 @@ mod conditions;
 mod fast;
 mod hit;
 mod path;
+mod reflected_sky;
 mod sources;
 mod spectral;
 mod surface;
@@ -79,6 +82,10 @@ mod truth;
 
 pub use conditions::{Conditions, SceneOptics, ShadeOptions, Sky, SunInput, SurfaceState};
 pub use fast::{FastMiss, FastScratch};
+pub use reflected_sky::{
+    TILT_NODES, reflected_sky, ring_weight, sky_node_zeniths_deg, sky_tilt_weights, tilt_at,
+    tilt_position,
+};
 pub use sources::{SUN_RAY_THRESHOLD, clear_sky_dni_w_m2, solar_spectrum, surface_solar_spectrum};
 pub use surface::PLANCK_TABLE_STEP_K;
 pub use truth::TruthOut;
@@ -94,7 +101,7 @@ use crate::trace::Tracer;
 use band::{FastBand, GreyTables, Integrals, LANES};
 use hit::ANGLE_ROWS;
 use path::FastPath;
-use sources::{SKY_NODES, sky_node_cos, sun_ray_facets};
+use sources::{SKY_NODES, sun_ray_facets};
 use surface::{GreyFacet, PLANCK_TABLE_MAX_NODES, PlanckTable, grey_facets};
 
 /// One band's precomputed tables.
@@ -103,9 +110,9 @@ struct BandTables {
     band: Band,
     /// Offset of this band's wavelengths in the concatenated spectrum.
     start: usize,
-    /// Sky spectral radiance of the isotropic-equivalent sky (the reflected
-    /// sky of a diffuse surface).
-    sky: Vec<f64>,
+    /// The diffusely reflected sky: `L_eq(λ)` per tilt node
+    /// ([`reflected_sky`], [`TILT_NODES`]).
+    sky_tilt: Vec<Vec<f64>>,
     /// Sky spectral radiance arriving from each of the [`SKY_NODES`]
     /// directions ([`sky_node_cos`]): what a ray leaving the scene sees.
     sky_dir: Vec<Vec<f64>>,
@@ -135,6 +142,9 @@ pub struct Shader<'a> {
     fast_path: Option<FastPath>,
     /// Per facet: its record for the grey path of [`Shader::shade_fast`].
     grey: Vec<GreyFacet>,
+    /// Per facet: the position of its front face's tilt on the tilt table
+    /// of the reflected sky ([`tilt_position`]).
+    tilt: Vec<f32>,
     /// The grey path's band integrals (of the path once one is set).
     grey_tables: GreyTables,
     /// Without a sensor path: per grey facet, per band, the
@@ -166,6 +176,23 @@ pub(super) const RULE_PER_HIT: u8 = 4;
 /// Its hits take a per-hit state at ranges where it is large against the
 /// pixel footprint ([`crate::render::per_hit::PerHitRule::ByRange`]).
 pub(super) const RULE_PER_HIT_BY_RANGE: u8 = 8;
+
+/// Per facet (global order): the position of its front face's tilt on the
+/// tilt table of the reflected sky, from the vertical component of its
+/// world-space front normal ([`crate::geometry::triangle_normal_area`]).
+fn facet_tilts(geometry: &SceneGeometry) -> Vec<f32> {
+    geometry
+        .instances
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, inst)| {
+            (0..geometry.meshes[inst.mesh].triangle_count()).map(move |p| {
+                let (n, _) = crate::geometry::triangle_normal_area(&geometry.world_triangle(i, p));
+                tilt_position(n.z as f64)
+            })
+        })
+        .collect()
+}
 
 impl std::fmt::Debug for Shader<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -221,30 +248,24 @@ impl<'a> Shader<'a> {
             .par_iter()
             .map(|band| -> crate::Result<_> {
                 let wl = band.wavelengths_um();
-                let (sky, sun) = rayon::join(
-                    || -> crate::Result<(Vec<f64>, Vec<Vec<f64>>)> {
+                let (sky_dir, sun) = rayon::join(
+                    || -> crate::Result<Vec<Vec<f64>>> {
                         match &conditions.sky {
                             Sky::Blackbody { temperature_k } => {
                                 let sky: Vec<f64> = wl
                                     .iter()
                                     .map(|&l| planck.radiance(l, *temperature_k))
                                     .collect();
-                                Ok((sky.clone(), vec![sky; SKY_NODES]))
+                                Ok(vec![sky; SKY_NODES])
                             }
-                            Sky::Atmosphere(c) => {
-                                let zeniths: Vec<f64> = (0..SKY_NODES)
-                                    .map(|k| sky_node_cos(k).clamp(-1.0, 1.0).acos().to_degrees())
-                                    .collect();
-                                let atm = &conditions.atmosphere;
-                                // (One call for all directions: each call
-                                // computes the broadband scale, which costs
-                                // more than several directions.)
-                                let (iso, dir) = rayon::join(
-                                    || atm.sky_radiance(c, band.grid()),
-                                    || atm.sky_radiances_toward(c, &zeniths, band.grid()),
-                                );
-                                Ok((iso?, dir?))
-                            }
+                            // (One call for all directions: each call
+                            // computes the broadband scale, which costs
+                            // more than several directions.)
+                            Sky::Atmosphere(c) => conditions.atmosphere.sky_radiances_toward(
+                                c,
+                                &sky_node_zeniths_deg(),
+                                band.grid(),
+                            ),
                         }
                     },
                     || match conditions.sun {
@@ -254,7 +275,8 @@ impl<'a> Shader<'a> {
                         _ => Ok(vec![0.0; wl.len()]),
                     },
                 );
-                let (sky, sky_dir) = sky?;
+                let sky_dir = sky_dir?;
+                let sky_tilt = reflected_sky::tilt_table(&sky_dir);
                 let ground = wl
                     .iter()
                     .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
@@ -269,16 +291,16 @@ impl<'a> Shader<'a> {
                         rows
                     })
                     .collect();
-                Ok((sky, sky_dir, ground, sun?, eps))
+                Ok((sky_tilt, sky_dir, ground, sun?, eps))
             })
             .collect::<crate::Result<Vec<_>>>()?;
         let mut tables = Vec::with_capacity(bands.len());
         let mut wavelengths = Vec::new();
-        for (band, (sky, sky_dir, ground, sun, eps)) in bands.iter().zip(sources) {
+        for (band, (sky_tilt, sky_dir, ground, sun, eps)) in bands.iter().zip(sources) {
             tables.push(BandTables {
                 band: band.clone(),
                 start: wavelengths.len(),
-                sky,
+                sky_tilt,
                 sky_dir,
                 ground,
                 sun,
@@ -363,7 +385,7 @@ impl<'a> Shader<'a> {
                     plain: Integrals::new(t.band.weights_um(), t, &table, total),
                     planck: pad(&planck),
                     w: pad(t.band.weights_um()),
-                    sky: pad(&t.sky),
+                    sky: t.sky_tilt.iter().map(|v| pad(v)).collect(),
                     sun: pad(&t.sun),
                     eps: t.eps.iter().map(|e| pad(e)).collect(),
                     miss_sky: t.sky_dir.iter().map(|v| t.band.integrate(v)).collect(),
@@ -387,8 +409,9 @@ impl<'a> Shader<'a> {
             })
             .collect();
         let sun_ray = sun_ray_facets(optics, conditions, &tables, &fast, &table, &glint_m2);
+        let tilt = facet_tilts(geometry);
         let (grey, grey_terms) = grey_facets(
-            optics, conditions, &options, &fast, &table, &sun_ray, &glint_m2,
+            optics, conditions, &options, &fast, &table, &sun_ray, &glint_m2, &tilt,
         );
         let plain: Vec<Vec<(&Integrals, f64)>> = fast
             .iter()
@@ -397,6 +420,7 @@ impl<'a> Shader<'a> {
         let grey_tables = GreyTables::new(&fast, &plain, &[], &[], &optics.materials);
         Ok(Shader {
             grey,
+            tilt,
             grey_tables,
             grey_terms,
             tracer,
@@ -461,6 +485,12 @@ impl<'a> Shader<'a> {
                 r
             })
             .collect()
+    }
+
+    /// The position of facet `f`'s front face on the tilt table of the
+    /// reflected sky ([`tilt_position`]).
+    pub fn facet_tilt(&self, f: usize) -> f32 {
+        self.tilt[f]
     }
 
     /// Number of spectral values per ray (all bands).

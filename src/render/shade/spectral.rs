@@ -139,6 +139,8 @@ impl Shader<'_> {
         self.planck_into(t_hit, &mut sc.b_t);
         let (shape_factor, background_k) = hit_sky(s, f, state);
         self.planck_into(background_k as f64, &mut sc.b_bg);
+        let (kb, wb) = super::tilt_at(self.tilt[f]);
+        let wb = wb as f64;
         // The sun only lights the face it falls on: for a single-sided facet
         // seen from behind, cos σ of the front face does not apply.
         let front = h.ng.dot(d) < 0.0;
@@ -156,13 +158,18 @@ impl Shader<'_> {
             for ((x, &a), &b) in eps.iter_mut().zip(e0).zip(e1) {
                 *x = a + ta * (b - a);
             }
+            // L_eq(λ, β): linear between the tilt nodes.
+            let sky = &mut sc.sky[..nl];
+            for ((x, &a), &b) in sky.iter_mut().zip(&t.sky_tilt[kb]).zip(&t.sky_tilt[kb + 1]) {
+                *x = a + wb * (b - a);
+            }
             let inputs = SurfaceInputs {
                 blackbody: &sc.b_t[k..k + nl],
                 emissivity: eps,
                 specular_fraction: m.specular_fraction,
                 transmissivity: m.transmissivity,
                 shape_factor: shape_factor as f64,
-                sky_radiance: &t.sky,
+                sky_radiance: &sc.sky[..nl],
                 background_radiance: &sc.b_bg[k..k + nl],
                 solar_irradiance: Some(&t.sun),
                 cos_sun,
@@ -183,6 +190,8 @@ pub(super) struct LeavingScratch {
     b_bg: Vec<f64>,
     /// ε(λ, θ) of one band.
     eps: Vec<f64>,
+    /// The reflected sky L_eq(λ, β) of one band.
+    sky: Vec<f64>,
 }
 
 impl LeavingScratch {
@@ -192,6 +201,7 @@ impl LeavingScratch {
             b_t: vec![0.0; n],
             b_bg: vec![0.0; n],
             eps: vec![0.0; n],
+            sky: vec![0.0; n],
         }
     }
 }

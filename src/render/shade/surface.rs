@@ -61,8 +61,9 @@ pub(super) struct GreyFacet {
     /// Diffuse-reflected sun on the lit face: `(1 − s)·cos σ·f_sun/π`
     /// (`f_sun = 1` for a facet whose hits trace a shadow ray).
     pub(super) sd: f32,
-    /// Sunlit fraction f_sun.
-    pub(super) sun_fraction: f32,
+    /// Position of the front face's tilt on the reflected sky's tilt table
+    /// ([`super::tilt_position`]).
+    pub(super) tilt: f32,
 }
 
 impl GreyFacet {
@@ -75,15 +76,17 @@ impl GreyFacet {
         fg: 0.0,
         big_f: 0.0,
         sd: 0.0,
-        sun_fraction: 0.0,
+        tilt: 0.0,
     };
 }
 
 /// The per-facet records of the grey path and, for renders without a
 /// sensor path, each grey facet's view-independent terms per band (built
 /// once per image, in parallel): `[Σw·B(T), env, sd·Σw·E_s, t·env]` with
-/// `env = F·Σw·L_sky + (1 − F)·Σw·B(T_bg)`, so that a hit needs only
+/// `env = F·Σw·L_eq(β) + (1 − F)·Σw·B(T_bg)` (`L_eq` at the facet's tilt
+/// `tilt[f]`, [`super::reflected_sky`]), so that a hit needs only
 /// `ε(θ)·x + r·(env + lit·w) + z`.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn grey_facets(
     optics: &SceneOptics,
     conditions: &Conditions,
@@ -92,6 +95,7 @@ pub(super) fn grey_facets(
     table: &PlanckTable,
     sun_ray: &[bool],
     glint_m2: &[f64],
+    tilt: &[f32],
 ) -> (Vec<GreyFacet>, Vec<[f32; 4]>) {
     use rayon::prelude::*;
     let s = &conditions.surface;
@@ -142,9 +146,10 @@ pub(super) fn grey_facets(
             let sd = (1.0 - m.specular_fraction.clamp(0.0, 1.0)) * sun_front;
             let big_f = s.shape_factor[f] as f64;
             let tr = m.transmissivity.clamp(0.0, 1.0);
+            let (kb, wb) = super::tilt_at(tilt[f]);
             for (t, fb) in terms.iter_mut().zip(fast) {
                 let p = &fb.plain;
-                let env = big_f * p.sky + (1.0 - big_f) * p.planck_at(kg, fg);
+                let env = big_f * p.sky_at(kb, wb as f64) + (1.0 - big_f) * p.planck_at(kg, fg);
                 *t = [
                     p.planck_at(kt, ft) as f32,
                     env as f32,
@@ -161,7 +166,7 @@ pub(super) fn grey_facets(
                 fg: fg as f32,
                 big_f: s.shape_factor[f],
                 sd: sd as f32,
-                sun_fraction: s.sun_fraction[f],
+                tilt: tilt[f],
             };
         });
     (grey, terms)

@@ -132,7 +132,7 @@ impl Shader<'_> {
                 self.optics.materials[g.mi as usize].id as f32,
                 g.object as f32,
                 g.big_f,
-                g.sun_fraction,
+                self.conditions.surface.sun_fraction[f],
                 depth,
             ];
         }
