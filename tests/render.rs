@@ -1168,8 +1168,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
     );
     let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
     // As a render builds them: by day, with the scattered sunlight.
-    let sun =
-        irsig::render::path::PathSun::for_scene(cond.sun.as_ref(), &s, &geom);
+    let sun = irsig::render::path::PathSun::for_scene(cond.sun.as_ref(), &s, &geom);
     let paths = PathTables::new(
         &cond.atmosphere,
         &s,

@@ -163,6 +163,7 @@ impl Shader<'_> {
             hits,
             sc.special.iter().map(|&i| i as usize),
             true,
+            &[],
             &mut sc.states,
         );
         {

@@ -159,13 +159,17 @@ impl Shader<'_> {
     /// call of [`crate::render::per_hit::PerHit::states_of`]; `direct`:
     /// the rays are primary (false: seen through a reflection or a
     /// transmission, whose hits take their own sky view only with
-    /// [`crate::render::per_hit::PerHitParams::secondary_sky`]).
+    /// [`crate::render::per_hit::PerHitParams::secondary_sky`]);
+    /// `travelled[i]`: the metres ray `i` travelled from the sensor to its
+    /// origin (empty: none), so that a hit's footprint is that of its whole
+    /// path from the sensor.
     pub(super) fn per_hit_states_of(
         &self,
         rays: &[Ray],
         hits: &[Option<Hit>],
         which: impl IntoIterator<Item = usize>,
         direct: bool,
+        travelled: &[f32],
         sc: &mut HitStates,
     ) {
         sc.state_of.clear();
@@ -180,7 +184,8 @@ impl Shader<'_> {
                 continue;
             };
             let f = self.facet_of(h);
-            if ph.wants(f, h.t * ray.dir.length(), self.pixel_angle_rad) {
+            let range = travelled.get(i).copied().unwrap_or(0.0) + h.t * ray.dir.length();
+            if ph.wants(f, range, self.pixel_angle_rad) {
                 sc.state_of[i] = sc.points.len() as u32;
                 sc.points.push((f as u32, ray.origin + ray.dir * h.t));
             }

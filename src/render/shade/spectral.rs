@@ -33,6 +33,22 @@ impl Shader<'_> {
     /// ground beyond), written to `out` (`rays.len() × spectrum_len()`).
     /// `depth` is the number of bounces already taken.
     pub fn shade(&self, rays: &[Ray], hits: &[Option<Hit>], depth: u32, out: &mut [f64]) {
+        self.shade_after(rays, hits, depth, &[], out);
+    }
+
+    /// [`Shader::shade`] for rays that have already travelled
+    /// `travelled[i]` metres from the sensor to their origin (empty: none,
+    /// primary rays): a hit seen through a reflection or a transmission
+    /// measures its pixel footprint over the whole path from the sensor,
+    /// for the per-hit rule ([`crate::render::per_hit::PerHit::wants`]).
+    fn shade_after(
+        &self,
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        depth: u32,
+        travelled: &[f32],
+        out: &mut [f64],
+    ) {
         let n = self.total;
         debug_assert_eq!(out.len(), rays.len() * n);
         // Secondary rays: (parent, is_transmission).
@@ -63,8 +79,22 @@ impl Shader<'_> {
             let mut sec_hits = vec![None; sec_rays.len()];
             self.tracer
                 .intersect(&sec_rays, Coherence::Incoherent, &mut sec_hits);
+            // The path from the sensor to each secondary ray's origin.
+            let sec_travelled: Vec<f32> = sec_parent
+                .iter()
+                .map(|&(i, _)| {
+                    let before = travelled.get(i).copied().unwrap_or(0.0);
+                    before + hits[i].as_ref().map_or(0.0, |h| h.t * rays[i].dir.length())
+                })
+                .collect();
             sec_spec = vec![0.0; sec_rays.len() * n];
-            self.shade(&sec_rays, &sec_hits, depth + 1, &mut sec_spec);
+            self.shade_after(
+                &sec_rays,
+                &sec_hits,
+                depth + 1,
+                &sec_travelled,
+                &mut sec_spec,
+            );
         }
         // Index of each ray's reflected / transmitted spectrum.
         let mut refl = vec![usize::MAX; rays.len()];
@@ -79,7 +109,14 @@ impl Shader<'_> {
         // The hits' per-hit states, all traced in one call (own sky views
         // for the hits seen directly), then their shadow rays.
         let mut states = HitStates::default();
-        self.per_hit_states_of(rays, hits, 0..rays.len(), depth == 0, &mut states);
+        self.per_hit_states_of(
+            rays,
+            hits,
+            0..rays.len(),
+            depth == 0,
+            travelled,
+            &mut states,
+        );
         let mut sun = SunRays::default();
         self.sun_visibility(rays, hits, |i| states.has(i), &mut sun);
         let mut scratch = LeavingScratch::new(n);
