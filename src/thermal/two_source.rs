@@ -1069,6 +1069,43 @@ mod tests {
         assert!(f.canopy_k > wet.canopy_k(open_source(&x), t_w) + 1.0);
     }
 
+    /// The leaves in balance ([`balanced_canopy_k`]): with every
+    /// resistance taken at the returned temperature their nonlinear
+    /// balance closes to 1e-6 W/m², dry and fully wet, from guesses 40 K
+    /// either side; wet leaves are cooler than dry ones.
+    #[test]
+    fn balanced_leaves_close_their_balance() {
+        let mut found = Vec::new();
+        for wet in [0.0, 1.0] {
+            let mut x = inputs(3.0, 60.0, 260.0);
+            x.leaf_wet_fraction = wet;
+            let t_s = 305.0;
+            let mut roots = Vec::new();
+            for guess in [260.0, 300.0, 340.0] {
+                let t_c = balanced_canopy_k(&x, guess, t_s);
+                let step = TwoSourceStep::new(&x, t_c, t_s);
+                let f = step.fluxes(open_source(&x), t_s);
+                assert!((f.canopy_k - t_c).abs() < 1e-6, "{wet} {guess}: {f:?}");
+                assert!(
+                    f.canopy_residual_w_m2().abs() < 1e-6,
+                    "{wet} {guess}: {f:?}"
+                );
+                roots.push(t_c);
+            }
+            assert!(
+                roots.iter().all(|r| (r - roots[0]).abs() < 1e-6),
+                "{roots:?}"
+            );
+            found.push(roots[0]);
+        }
+        assert!(
+            found[1] < found[0] - 1.0,
+            "wet {} dry {}",
+            found[1],
+            found[0]
+        );
+    }
+
     /// A two-source crop solved through a diurnal cycle, dry and with a
     /// 3 mm shower at 08:00 held by leaves and soil ([`wet`]): on the open
     /// reference surface both sources close at every record (the leaves to
