@@ -57,7 +57,7 @@ use crate::material::{CanopyModel, HeatRoughness, Phenology, SurfaceEnergySpec, 
 pub const EXCHANGE_PASSES: usize = 3;
 
 /// Most reference passes of a two-source canopy ([`Exchange::two_source`]).
-pub const TWO_SOURCE_PASSES: usize = 16;
+pub const TWO_SOURCE_PASSES: usize = 32;
 
 /// Wind speed floor of the turbulent exchange, m s⁻¹ (module docs).
 pub const MIN_WIND_M_S: f64 = 0.5;
@@ -428,6 +428,52 @@ impl WetStore {
     }
 }
 
+/// Bounded Wegstein iteration, record by record, of a two-source open
+/// reference surface's passes `x ← f(x)` (Wegstein 1958, "Accelerating convergence of
+/// iterative processes", Commun. ACM 1(6):9–13): with `s` the secant slope
+/// of `f` at a record from its last two passes, the record's reference
+/// moves by `ω (f(x) − x)`, `ω = 1/(1 − s)` (the secant root of
+/// `f(x) − x`), bounded to [1/64, 1] (damping only; ω = 1 where `s ≥ 1` or
+/// on the first pass). A record whose pass-to-pass map has a local gain
+/// `s < −1` (it turns back every pass: the soil's free convection, the rain
+/// stores) then contracts, where the plain iteration `ω = 1` would cycle;
+/// for a scalar linear map one step lands on its fixed point.
+#[derive(Debug, Default)]
+struct Wegstein {
+    /// The last pass's reference and its image, per record.
+    last: Vec<(f64, f64)>,
+}
+
+impl Wegstein {
+    /// Moves `x` towards its image `f` (one per record); returns the
+    /// largest `|f − x|`, K.
+    fn step(&mut self, x: &mut [f64], f: &[f64]) -> f64 {
+        let mut change = 0.0f64;
+        let first = self.last.len() != x.len();
+        if first {
+            self.last = vec![(f64::NAN, f64::NAN); x.len()];
+        }
+        for ((x, &f), last) in x.iter_mut().zip(f).zip(&mut self.last) {
+            let residual = f - *x;
+            change = change.max(residual.abs());
+            let dx = *x - last.0;
+            let omega = if dx.abs() > 1e-12 {
+                let s = (f - last.1) / dx;
+                if s < 1.0 {
+                    (1.0 / (1.0 - s)).clamp(1.0 / 64.0, 1.0)
+                } else {
+                    1.0
+                }
+            } else {
+                1.0
+            };
+            *last = (*x, f);
+            *x += omega * residual;
+        }
+        change
+    }
+}
+
 /// The per-record exchange coefficients of one material under one forcing
 /// (module docs), shared by every facet of the material.
 #[derive(Debug, Clone, PartialEq)]
@@ -448,6 +494,13 @@ pub struct Exchange {
     /// ([`WaterStep`]; one fewer than the records; empty without a root
     /// zone).
     pub soil_water: Vec<WaterStep>,
+    /// The largest change of the open reference surface's temperatures
+    /// (every record; a two-source canopy's leaves and soil) in the last
+    /// pass that updated the exchange and the rain stores, K: below
+    /// [`super::two_source::CONVERGED_K`] when the passes settled, above
+    /// it when they stopped on their count. Set for a two-source canopy
+    /// (None otherwise: a fixed [`EXCHANGE_PASSES`]).
+    pub settled_k: Option<f64>,
 }
 
 impl Exchange {
@@ -465,6 +518,7 @@ impl Exchange {
             two_source: Vec::new(),
             soil_moisture_m3_m3: Vec::new(),
             soil_water: Vec::new(),
+            settled_k: None,
         }
     }
 
@@ -553,7 +607,11 @@ impl Exchange {
     /// the reference solved again about its own leaf and soil temperatures
     /// until they change by less than [`super::two_source::CONVERGED_K`],
     /// then with the resistances held until they change by less than
-    /// 1e-7 K (at most [`TWO_SOURCE_PASSES`] passes in all). The weather's
+    /// 1e-7 K (at most [`TWO_SOURCE_PASSES`] passes in all;
+    /// [`Exchange::settled_k`]). In each resistance-updating pass the
+    /// leaves are put in balance with the record's wet fractions and
+    /// resistances ([`super::two_source::balanced_canopy_k`]) and the soil's
+    /// reference moves by a bounded Wegstein step. The weather's
     /// rain wets leaves and soil ([`super::two_source::wet`]), the stores
     /// evolving at each resistance-updating pass's reference temperatures
     /// and held with the resistances. With a root zone ([`RootZone`]) its θ
@@ -622,6 +680,7 @@ impl Exchange {
             two_source: steps(&inputs, &t_c, &t_s),
             soil_moisture_m3_m3: Vec::new(),
             soil_water: Vec::new(),
+            settled_k: None,
         };
         if let Some(w) = first {
             ex.soil_moisture_m3_m3 = w.soil_moisture_m3_m3;
@@ -633,6 +692,7 @@ impl Exchange {
         // converge quadratically, so the reference closes the leaves'
         // balance.
         let mut hold = false;
+        let mut wegstein = Wegstein::default();
         for pass in 0..TWO_SOURCE_PASSES {
             let p = super::prepare(props, forcing, &facet, &ex);
             let sol = super::solve_prepared(props, forcing, &p, &opts, None);
@@ -643,12 +703,21 @@ impl Exchange {
                 .chain(sol.canopy_temperature_k.iter().zip(&t_c))
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            t_s = sol.soil_temperature_k;
-            t_c = sol.canopy_temperature_k;
             if hold && change < 1e-7 {
                 break;
             }
+            if !hold {
+                ex.settled_k = Some(change);
+            }
             hold = hold || change < two_source::CONVERGED_K || pass + 4 >= TWO_SOURCE_PASSES;
+            if hold {
+                t_s = sol.soil_temperature_k;
+            } else {
+                // Each record's soil reference by a bounded Wegstein step
+                // ([`Wegstein`]).
+                wegstein.step(&mut t_s, &sol.soil_temperature_k);
+            }
+            t_c = sol.canopy_temperature_k;
             ex.two_source = if hold {
                 ex.two_source
                     .iter()
@@ -662,6 +731,12 @@ impl Exchange {
                     ex.soil_water = w.steps;
                 } else if rain {
                     two_source::wet(&mut inputs, forcing, &t_c, &t_s);
+                }
+                // The leaves in balance with the new wet fractions and
+                // resistances, the soil at the reference: the point of the
+                // next linearisation.
+                for (k, x) in inputs.iter().enumerate() {
+                    t_c[k] = two_source::balanced_canopy_k(x, t_c[k], t_s[k]);
                 }
                 steps(&inputs, &t_c, &t_s)
             };
@@ -711,6 +786,7 @@ impl Exchange {
                 two_source: Vec::new(),
                 soil_moisture_m3_m3: Vec::new(),
                 soil_water: Vec::new(),
+                settled_k: None,
             },
             Some(surface) if surface.root_zone.is_some() => {
                 return Exchange::with_root_zone(props, forcing, surface, surface_k);
@@ -741,6 +817,7 @@ impl Exchange {
                     two_source: Vec::new(),
                     soil_moisture_m3_m3: Vec::new(),
                     soil_water: Vec::new(),
+                    settled_k: None,
                 }
             }
         };
@@ -811,6 +888,7 @@ impl Exchange {
             two_source: Vec::new(),
             soil_moisture_m3_m3: thetas,
             soil_water: water,
+            settled_k: None,
         })
     }
 

@@ -74,8 +74,14 @@
 //! one Newton step of the leaves' balance per reference pass. `S` is the
 //! facet's absorbed incoming radiation (what a dry facet's balance calls
 //! its source) and `φ` the leaves' share of it at the open surface; every
-//! facet's radiation is shared in that proportion. The passes repeat
-//! until the reference changes by less than [`CONVERGED_K`], then with the
+//! facet's radiation is shared in that proportion. Each pass that updates
+//! the resistances and the rain stores puts the leaves in balance at every
+//! record with its wet fractions and resistances, the soil at the
+//! reference ([`balanced_canopy_k`]; the leaves hold no heat), and moves
+//! each record's soil reference by a bounded Wegstein step (damping where
+//! the pass-to-pass map turns back, e.g. the soil's free convection
+//! `(T_s − T_ac)^⅓`, whose slope is unbounded at `T_s = T_ac`). The passes
+//! repeat until the reference changes by less than [`CONVERGED_K`], then with the
 //! resistances held (Newton, quadratic) until it changes by < 1e-7 K: the
 //! open surface then solves the nonlinear two-source balance (both
 //! balances close to < 1e-6 W m⁻², `tests`), and any other facet of the material is
@@ -310,6 +316,65 @@ pub struct SoilWater {
     pub steps: Vec<WaterStep>,
 }
 
+/// The leaves' temperature that closes their balance `F(T_c) = Rn_c − H_c
+/// − LE_c = 0` on the open reference surface of record `x` with the soil
+/// at `t_s`, every resistance (stability of `r_a`, the soil's free
+/// convection) taken at that `T_c` itself, K; `guess` starts the search.
+///
+/// The leaves hold no heat (NKA95), so their temperature is a function of
+/// the record's wet fraction, resistances and soil temperature alone, not
+/// of the previous reference pass. Solving it within the record (instead of
+/// one Newton step from the previous pass's leaves) is what makes the
+/// passes of [`super::Exchange::two_source`] settle: a wet store's
+/// evaporation set by the previous pass's leaves, and leaves set by the
+/// previous pass's resistances, fed back with a gain above 1 (the leaves of
+/// a drying store flipped between ≈ 292 K wet and ≈ 301 K dry from pass to
+/// pass). Newton steps of the linearisation ([`TwoSourceStep::canopy_k`],
+/// whose sign is that of F since `D > 0`) kept inside a bracket that
+/// bisection shrinks (a safeguarded Newton method, Press et al. 2007,
+/// Numerical Recipes 3rd ed. §9.4 `rtsafe`), to 1e-9 K.
+pub fn balanced_canopy_k(x: &TwoSourceInputs, guess: f64, t_s: f64) -> f64 {
+    let toward = |t: f64| {
+        let step = TwoSourceStep::new(x, t, t_s);
+        step.canopy_k(step.open_source_w_m2(), t_s)
+    };
+    let step = TwoSourceStep::new(x, guess, t_s);
+    if !step.has_canopy() || !guess.is_finite() {
+        return guess;
+    }
+    // Bracket: F > 0 (Newton moves up) at `lo`, F < 0 at `hi`.
+    let (mut lo, mut hi) = (f64::NAN, f64::NAN);
+    let mut t = guess;
+    for _ in 0..200 {
+        let next = toward(t);
+        if !next.is_finite() {
+            break;
+        }
+        if (next - t).abs() < 1e-9 {
+            return next;
+        }
+        if next > t {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        t = if lo.is_nan() {
+            // Widen down until F changes sign.
+            next.max(hi - 20.0)
+        } else if hi.is_nan() {
+            next.min(lo + 20.0)
+        } else if next > lo && next < hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+        if !(lo.is_nan() || hi.is_nan()) && hi - lo < 1e-9 {
+            return 0.5 * (lo + hi);
+        }
+    }
+    t
+}
+
 /// The rain stores of [`wet`] and, with `root_zone` (the bucket and its
 /// starting θ), the root zone's water under a two-source canopy, record by
 /// record: θ at the record sets the leaves' stomatal resistance (f_soil(θ),
@@ -340,6 +405,7 @@ pub fn water(
     let mut theta = root_zone.map_or(0.0, |(_, t)| t);
     let mut thetas = Vec::new();
     let mut steps = Vec::new();
+    let mut leaves_k = t_c.to_vec();
     for (k, x) in inputs.iter_mut().enumerate().take(n) {
         let rain = forcing.precipitation_mm[k].max(0.0);
         let lai = x.leaf_area_index.max(0.0);
@@ -366,20 +432,21 @@ pub fn water(
             let dt = forcing.times_s[k + 1] - forcing.times_s[k];
             let lambda = latent_heat_of_vaporisation_j_kg(x.air.temperature_k());
             let wet_now = leaves > 0.0 || soil > 0.0;
-            let step =
-                (wet_now || root_zone.is_some()).then(|| TwoSourceStep::new(x, t_c[k], t_s[k]));
+            // The leaves in balance with this record's wet fraction and
+            // resistances, the soil at the reference: the stomata that θ
+            // closes warm the leaves, a wet store cools them, within the
+            // record; at the fixed point this is the reference.
+            let step = (wet_now || root_zone.is_some()).then(|| {
+                leaves_k[k] = balanced_canopy_k(x, t_c[k], t_s[k]);
+                TwoSourceStep::new(x, leaves_k[k], t_s[k])
+            });
             if let (true, Some(step)) = (wet_now, &step) {
-                let (le_c, le_s) = step.wet_latent_w_m2(t_c[k], t_s[k]);
+                let (le_c, le_s) = step.wet_latent_w_m2(leaves_k[k], t_s[k]);
                 leaves = (leaves - le_c.max(0.0) / lambda * dt).max(0.0);
                 soil = (soil - le_s.max(0.0) / lambda * dt).max(0.0);
             }
             if let (Some((zone, _)), Some(step)) = (root_zone, &step) {
-                // The leaves at this record's resistances (one Newton step
-                // of their balance from the reference, the soil held): the
-                // stomata that θ closes warm the leaves, and at the fixed
-                // point this is the reference.
-                let leaves_k = step.canopy_k(step.open_source_w_m2(), t_s[k]);
-                let (le_c, le_s) = step.dry_latent_w_m2(leaves_k, t_s[k]);
+                let (le_c, le_s) = step.dry_latent_w_m2(leaves_k[k], t_s[k]);
                 let w = zone.step(theta, infiltration, (le_c + le_s) / lambda * dt, dt);
                 theta = w.theta_m3_m3;
                 steps.push(w);
@@ -1000,6 +1067,43 @@ mod tests {
         // Dry leaves run warmer than transpiring ones.
         let (wet, t_w) = steady(&inputs(3.0, 60.0, 260.0));
         assert!(f.canopy_k > wet.canopy_k(open_source(&x), t_w) + 1.0);
+    }
+
+    /// The leaves in balance ([`balanced_canopy_k`]): with every
+    /// resistance taken at the returned temperature their nonlinear
+    /// balance closes to 1e-6 W/m², dry and fully wet, from guesses 40 K
+    /// either side; wet leaves are cooler than dry ones.
+    #[test]
+    fn balanced_leaves_close_their_balance() {
+        let mut found = Vec::new();
+        for wet in [0.0, 1.0] {
+            let mut x = inputs(3.0, 60.0, 260.0);
+            x.leaf_wet_fraction = wet;
+            let t_s = 305.0;
+            let mut roots = Vec::new();
+            for guess in [260.0, 300.0, 340.0] {
+                let t_c = balanced_canopy_k(&x, guess, t_s);
+                let step = TwoSourceStep::new(&x, t_c, t_s);
+                let f = step.fluxes(open_source(&x), t_s);
+                assert!((f.canopy_k - t_c).abs() < 1e-6, "{wet} {guess}: {f:?}");
+                assert!(
+                    f.canopy_residual_w_m2().abs() < 1e-6,
+                    "{wet} {guess}: {f:?}"
+                );
+                roots.push(t_c);
+            }
+            assert!(
+                roots.iter().all(|r| (r - roots[0]).abs() < 1e-6),
+                "{roots:?}"
+            );
+            found.push(roots[0]);
+        }
+        assert!(
+            found[1] < found[0] - 1.0,
+            "wet {} dry {}",
+            found[1],
+            found[0]
+        );
     }
 
     /// A two-source crop solved through a diurnal cycle, dry and with a
