@@ -88,14 +88,10 @@ impl PathSun {
             .bounds()
             .map_or(DVec3::ZERO, |(lo, hi)| (0.5 * (lo + hi)).as_dvec3());
         let mut p = PathSun::new(sun.direction.as_dvec3(), sensor_position(sensor), centre)?;
-        let zenith = p.sun.zenith_deg;
-        let clear = crate::render::shade::clear_sky_dni_w_m2(zenith);
-        let c = if clear > 0.0 && sun.direct_normal_w_m2 > 0.0 {
-            (sun.direct_normal_w_m2 / clear).min(1.0)
-        } else {
-            0.0
-        };
-        p.sun = p.sun.with_attenuation(c).ok()?;
+        p.sun = p
+            .sun
+            .with_attenuation(crate::render::shade::beam_attenuation(sun))
+            .ok()?;
         Some(p)
     }
 }

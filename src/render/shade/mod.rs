@@ -86,7 +86,9 @@ pub use reflected_sky::{
     TILT_NODES, reflected_sky, ring_weight, sky_node_zeniths_deg, sky_tilt_weights, tilt_at,
     tilt_position,
 };
-pub use sources::{SUN_RAY_THRESHOLD, clear_sky_dni_w_m2, solar_spectrum, surface_solar_spectrum};
+pub use sources::{
+    SUN_RAY_THRESHOLD, beam_attenuation, clear_sky_dni_w_m2, solar_spectrum, surface_solar_spectrum,
+};
 pub use surface::PLANCK_TABLE_STEP_K;
 pub use truth::TruthOut;
 

@@ -86,19 +86,35 @@ pub fn surface_solar_spectrum(
     if matches!(atmosphere, Atmosphere::None) {
         return Ok(solar_spectrum(planck, wl, sun.direct_normal_w_m2));
     }
-    let d = sun.direction.normalize_or_zero();
-    let zenith = (d.z as f64).clamp(-1.0, 1.0).acos().to_degrees();
-    let clear = clear_sky_dni_w_m2(zenith);
-    if clear <= 0.0 || sun.direct_normal_w_m2 <= 0.0 {
+    let c = beam_attenuation(sun);
+    if c <= 0.0 {
         return Ok(vec![0.0; wl.len()]);
     }
-    let c = (sun.direct_normal_w_m2 / clear).min(1.0);
-    let tau = atmosphere.solar_transmittance(zenith, grid)?;
+    let tau = atmosphere.solar_transmittance(sun_zenith_deg(sun), grid)?;
     Ok(crate::radiometry::solar_irradiance_toa(grid, 1.0)
         .into_iter()
         .zip(tau)
         .map(|(e, t)| e * t * c)
         .collect())
+}
+
+/// Solar zenith angle of `sun`, degrees.
+fn sun_zenith_deg(sun: &SunInput) -> f64 {
+    let d = sun.direction.normalize_or_zero();
+    (d.z as f64).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+/// The weather's attenuation of the direct beam beyond the clear sky,
+/// `c = min(1, DNI / DNI_clear)` (0 with the sun down or no measured beam):
+/// the factor by which the clear-sky solar spectrum is dimmed
+/// ([`surface_solar_spectrum`]), and with it the sunlight the atmosphere
+/// scatters into a path ([`crate::render::path::PathSun::for_scene`]).
+pub fn beam_attenuation(sun: &SunInput) -> f64 {
+    let clear = clear_sky_dni_w_m2(sun_zenith_deg(sun));
+    if clear <= 0.0 || sun.direct_normal_w_m2 <= 0.0 {
+        return 0.0;
+    }
+    (sun.direct_normal_w_m2 / clear).min(1.0)
 }
 
 /// Relative size below which a hit's reflected sun is left to its facet's
