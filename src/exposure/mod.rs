@@ -71,8 +71,8 @@ pub use facets::FacetSamples;
 pub use history::{HistoryWindow, history_step, history_times, image_window, sun_directions};
 pub use reflected::{ReflectedShortwave, reflected_shortwave};
 pub use sky::{
-    FacePatterns, RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView, sky_rays, sky_view,
-    sky_view_of,
+    FacePatterns, RAY_COHERENCE as SKY_RAY_COHERENCE, SkySampling, SkyView,
+    exposed_back_shape_factors, sky_rays, sky_view, sky_view_of,
 };
 pub use solar::{
     RAY_COHERENCE as SOLAR_RAY_COHERENCE, SolarHistory, solar_history, solar_history_of, solar_rays,

@@ -524,3 +524,95 @@ pub fn sky_view_of<T: Tracer + ?Sized>(
     }
     (out, total)
 }
+
+/// The back faces' own shape factors of the single-sided facets flagged in
+/// `exposed_back` (one flag per facet of `facets`): facets whose slab has
+/// an exposed back ([`crate::thermal::BackBoundary::Exposed`]: a wall with
+/// a ventilated cavity, a vehicle panel) but whose material is not
+/// double-sided, so that [`sky_view`] traces their front face only.
+///
+/// Without it the thermal model takes `F_b = 1 − F`
+/// ([`crate::thermal::FacetInputs::back_shape_factor`] `None`), exact only
+/// for an unobstructed plane: a wall in a street canyon of `H/W = 1` has
+/// `F = 0.29` (Masson 2000) and so `1 − F = 0.71`, while its back, open to
+/// the outside, sees `(1 − cos 90°)/2 = 0.5` of the sky; a panel facing a
+/// closed space sees none. Each flagged facet's back face traces its
+/// [`SkySampling`] pattern (the same back-face pattern a double-sided facet
+/// traces, [`FacePatterns::back`]) from its sample points lifted to the
+/// back (ray `k` from point `k mod n²`), as occlusion queries: `F_b` is the
+/// weight of the rays that are not blocked and leave upward. The facets
+/// seen from the back are not added to the background: the background
+/// list stays the front face's (the exposed back exchanges with the
+/// front's background temperature in the slab model).
+///
+/// Returns, per facet, `Some(F_b)` for a flagged single-sided facet and
+/// `None` otherwise (a double-sided facet's back face is in
+/// [`SkyView::back_shape_factor`]), and the number of rays traced. The
+/// result is the same for any number of threads.
+pub fn exposed_back_shape_factors<T: Tracer + ?Sized>(
+    tracer: &T,
+    facets: &FacetSamples,
+    exposed_back: &[bool],
+    sampling: SkySampling,
+    seed: u64,
+    batch_facets: usize,
+) -> (Vec<Option<f32>>, u64) {
+    let n = facets.len();
+    let wanted =
+        |f: usize| exposed_back.get(f).copied().unwrap_or(false) && !facets.double_sided[f];
+    let batch = batch_facets.max(1);
+    let base = sampling.base(seed);
+    let chunks: Vec<(Vec<Option<f32>>, u64)> = (0..n.div_ceil(batch))
+        .into_par_iter()
+        .map_init(
+            || (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()),
+            |(rays, weights, ranges, occ, pat), c| {
+                let (f0, f1) = (c * batch, ((c + 1) * batch).min(n));
+                rays.clear();
+                weights.clear();
+                ranges.clear();
+                for f in f0..f1 {
+                    ranges.push(rays.len());
+                    if !wanted(f) {
+                        continue;
+                    }
+                    let pts = facets.facet_points(f);
+                    let lift = facets.normal[f] * -facets.offset_m;
+                    for (k, h) in pattern(&base, f, true, pat).iter().enumerate() {
+                        rays.push(Ray::new(
+                            pts[k % pts.len()] + lift,
+                            facets.to_world(f, h.dir, -1.0),
+                        ));
+                        weights.push(h.weight);
+                    }
+                }
+                ranges.push(rays.len());
+                occ.clear();
+                occ.resize(rays.len(), false);
+                if !rays.is_empty() {
+                    tracer.occluded(rays, RAY_COHERENCE, occ);
+                }
+                let out = (f0..f1)
+                    .zip(ranges.windows(2))
+                    .map(|(f, w)| {
+                        wanted(f).then(|| {
+                            let sky: f64 = (w[0]..w[1])
+                                .filter(|&i| !occ[i] && rays[i].dir.z > 0.0)
+                                .map(|i| weights[i] as f64)
+                                .sum();
+                            sky as f32
+                        })
+                    })
+                    .collect();
+                (out, rays.len() as u64)
+            },
+        )
+        .collect();
+    let mut out = Vec::with_capacity(n);
+    let mut total = 0;
+    for (c, r) in chunks {
+        out.extend(c);
+        total += r;
+    }
+    (out, total)
+}

@@ -166,8 +166,15 @@ pub struct HitState {
 /// A hit's own view of the sky and the scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HitSky {
-    /// Its shape factor `F_p` (view factor to the sky).
+    /// Its shape factor `F_p` (view factor to the sky) of the facet's front
+    /// face.
     pub shape_factor: f32,
+    /// On a double-sided facet, the shape factor of its back face at the
+    /// point (from the back face's own rays; `None` on a single-sided
+    /// facet). A ray that sees the back face sees the sky this face sees:
+    /// the reflected sky of a back-face hit takes this one, not
+    /// [`HitSky::shape_factor`].
+    pub back_shape_factor: Option<f32>,
     /// Its background temperature at the image time, K: the radiative mean
     /// of what its blocked hemisphere rays hit, the ground beyond the scene
     /// at the air temperature (as
@@ -551,7 +558,8 @@ impl PerHit {
     /// at half weight, as [`crate::exposure::sky_view`] traces them): its
     /// front face's shape factor, ground weight and the facets hit with
     /// their weights (into `seen`, merged by facet), as the facet's
-    /// [`SkyView`] holds them.
+    /// [`SkyView`] holds them; and, on a double-sided facet, its back
+    /// face's shape factor.
     fn point_view(
         inputs: &SkyInputs,
         rays: &[Ray],
@@ -559,8 +567,8 @@ impl PerHit {
         weights: &[f32],
         double_sided: bool,
         seen: &mut Vec<(u32, f32)>,
-    ) -> (f32, f32) {
-        let (mut sky, mut ground) = (0.0f64, 0.0f64);
+    ) -> (f32, f32, Option<f32>) {
+        let (mut sky, mut back, mut ground) = (0.0f64, 0.0f64, 0.0f64);
         let front = if double_sided {
             rays.len() / 2
         } else {
@@ -576,6 +584,8 @@ impl PerHit {
                 None if ray.dir.z > 0.0 => {
                     if i < front {
                         sky += w as f64
+                    } else {
+                        back += w as f64
                     }
                 }
                 None => ground += w as f64,
@@ -584,6 +594,7 @@ impl PerHit {
         if double_sided {
             // Each face's rays carried half weight.
             sky *= 2.0;
+            back *= 2.0;
         }
         seen.sort_by_key(|e| e.0);
         seen.dedup_by(|b, a| {
@@ -593,7 +604,11 @@ impl PerHit {
             }
             same
         });
-        (sky as f32, ground as f32)
+        (
+            sky as f32,
+            ground as f32,
+            double_sided.then_some(back as f32),
+        )
     }
 
     /// The background source of a face of `block` with shape factor `f`,
@@ -956,7 +971,7 @@ impl PerHit {
             let mut own_sky = None;
             if let Some(ps) = self.sky.as_ref().filter(|_| r1 > r0) {
                 let sky = &ps.inputs.sky;
-                let (fp, gp) = Self::point_view(
+                let (fp, gp, fp_back) = Self::point_view(
                     &ps.inputs,
                     &sky_rays[r0..r1],
                     &sky_hits[r0..r1],
@@ -1006,6 +1021,7 @@ impl PerHit {
                 let air = p.air4.last().map_or(0.0, |a| a.powf(0.25));
                 own_sky = Some(HitSky {
                     shape_factor: fp,
+                    back_shape_factor: fp_back,
                     background_k: Self::background_now(ps, gp, &seen, air),
                     reflected_w_m2,
                 });
