@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use irsig::exposure::sampling::{dirsig_grid, triangle_strata};
-use irsig::exposure::{ExposureParams, SkySampling, compute_exposure};
+use irsig::exposure::{ExposureParams, SkySampling, compute_exposure, exposed_back_shape_factors};
 use irsig::geometry::{SceneGeometry, TriangleMesh};
 use irsig::trace::{self, Backend, Coherence, Hit, Ray, Tracer};
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
@@ -1381,4 +1381,79 @@ fn exposure_on_the_non_watertight_scene_matches_the_watertight_one() {
     assert!(sun_max <= 1.0 / samples + 1e-6, "{sun_max}");
     // One of the grid's directions carries at most a few per cent of F.
     assert!(sky_max <= 0.05, "{sky_max}");
+}
+
+/// Issue 18: the back face of a single-sided facet with an exposed back
+/// (a wall with a ventilated cavity, a panel) gets its own shape factor
+/// `F_b` (`exposed_back_shape_factors`) instead of the thermal model's
+/// default `1 − F`, exact only for an unobstructed plane. The walls of
+/// Masson's street canyon (H/W = 1 and 2) have their fronts in the canyon
+/// (F = 0.293, 0.191) and their backs open to the outside, where a vertical
+/// face sees `(1 − cos 90°)/2 = 0.5` of the sky: traced within 1 %, against
+/// 1 − F = 0.707 and 0.809. An unobstructed plane tilted β sees
+/// `(1 − cos β)/2` from its back, which there equals `1 − F`. Unflagged and
+/// double-sided facets get none (a double-sided facet's back face is in its
+/// sky view).
+#[test]
+fn exposed_back_takes_its_own_shape_factor() {
+    for (hw, wall_ref) in [(1.0f64, 0.292893), (2.0, 0.190983)] {
+        let w = 10.0f32;
+        let (geo, _, wall) = canyon(hw as f32 * w, w);
+        let brute = Checked::new(&geo);
+        let p = stratified(1024);
+        let exp = compute_exposure(&brute, &geo, &[], &[], &p).unwrap();
+        let n = geo.facet_count();
+        let flags: Vec<bool> = (0..n).map(|f| wall.contains(&f)).collect();
+        let (fb, rays) = exposed_back_shape_factors(&brute, &exp.facets, &flags, p.sky, p.seed, 7);
+        assert_eq!(rays, 1024 * wall.len() as u64);
+        let back: Vec<f32> = fb.iter().map(|v| v.unwrap_or(f32::NAN)).collect();
+        let mean_back = area_mean(&exp, wall.clone(), &back);
+        let one_minus = 1.0 - area_mean(&exp, wall.clone(), &exp.sky.shape_factor);
+        eprintln!("H/W={hw}: wall F_b {mean_back:.4} (exact 0.5), 1 − F {one_minus:.4}");
+        assert!((mean_back - 0.5).abs() <= 0.005, "{mean_back}");
+        assert!((one_minus - (1.0 - wall_ref)).abs() <= 0.02);
+        assert!(one_minus - mean_back > 0.19);
+        for f in 0..n {
+            assert_eq!(fb[f].is_some(), wall.contains(&f), "facet {f}");
+        }
+        // Batches do not change the answer.
+        let (again, _) =
+            exposed_back_shape_factors(&brute, &exp.facets, &flags, p.sky, p.seed, 512);
+        assert_eq!(again, fb);
+    }
+    for beta_deg in [30.0f32, 60.0, 90.0, 120.0] {
+        let b = beta_deg.to_radians();
+        let mut m = TriangleMesh::default();
+        let eu = Vec3::new(2.0, 0.0, 0.0);
+        let ev = Vec3::new(0.0, 2.0 * b.cos(), -2.0 * b.sin());
+        let ids = quad(&mut m, Vec3::new(-1.0, -1.0, 1.0), eu, ev, 2, 2);
+        let geo = SceneGeometry::single(m);
+        let brute = Checked::new(&geo);
+        let p = stratified(1024);
+        let exp = compute_exposure(&brute, &geo, &[], &[], &p).unwrap();
+        let all = vec![true; geo.facet_count()];
+        let (fb, _) = exposed_back_shape_factors(&brute, &exp.facets, &all, p.sky, p.seed, 512);
+        let back: Vec<f32> = fb.iter().map(|v| v.unwrap()).collect();
+        let exact = (1.0 - b.cos() as f64) / 2.0;
+        let got = area_mean(&exp, ids.clone(), &back);
+        assert!(
+            (got - exact).abs() <= 0.01,
+            "β={beta_deg}: F_b {got:.4} vs {exact:.4}"
+        );
+        // Double-sided: none here (the sky view traces its back face).
+        let ds = compute_exposure(&brute, &geo, &all, &[], &p).unwrap();
+        let (none, rays) = exposed_back_shape_factors(&brute, &ds.facets, &all, p.sky, p.seed, 512);
+        assert!(none.iter().all(Option::is_none));
+        assert_eq!(rays, 0);
+        let traced = area_mean(
+            &ds,
+            ids.clone(),
+            &ds.sky
+                .back_shape_factor
+                .iter()
+                .map(|v| v.unwrap())
+                .collect::<Vec<_>>(),
+        );
+        assert!((traced - exact).abs() <= 0.01);
+    }
 }

@@ -1054,7 +1054,7 @@ fn double_sided_fence_takes_its_own_sky_view() {
     // Brute force, both faces (each half the weight of the background).
     let off = r.exposure.facets.offset_m;
     let (f_front, seen_front) = brute_force_face(&*tracer, p, Vec3::X, off);
-    let (_, seen_back) = brute_force_face(&*tracer, p, -Vec3::X, off);
+    let (f_back, seen_back) = brute_force_face(&*tracer, p, -Vec3::X, off);
     // The rays that hit nothing below the horizon would see the ground
     // beyond at the air temperature; with a 1 km ground they are a few per
     // mille.
@@ -1075,6 +1075,14 @@ fn double_sided_fence_takes_its_own_sky_view() {
     );
     assert!((sky.shape_factor - f_front).abs() <= 0.05);
     assert!((sky.background_k - t_bg).abs() <= 0.3);
+    // The back face's own shape factor at the point (what a ray that sees
+    // the back face sees reflected): its own rays against brute force, far
+    // from the front face's (the front faces the 8 m wall 2 m away, the
+    // back open ground).
+    let fb = sky.back_shape_factor.expect("double-sided: a back face");
+    eprintln!("fence point: back F_p {fb:.3} (brute force {f_back:.3})");
+    assert!((fb - f_back).abs() <= 0.05, "{fb} vs {f_back}");
+    assert!(fb - sky.shape_factor > 0.3, "{fb} vs {}", sky.shape_factor);
     // The back face matters: its front face alone sees mostly the 300 K
     // wall, the back face mostly the 290 K ground.
     let front_only = (seen_front
@@ -1152,6 +1160,7 @@ fn double_sided_fence_takes_its_own_sky_view() {
     let at = out[0];
     let k = at.sky.expect("its own sky view");
     assert_eq!(k.shape_factor, ff);
+    assert_eq!(k.back_shape_factor, r.exposure.sky.back_shape_factor(f));
     assert_eq!(k.background_k, t_bg_f);
     assert_eq!(at.dt_k, 0.0);
 }
@@ -1401,4 +1410,121 @@ fn ground_before_a_sunlit_wall_takes_its_own_reflected_shortwave() {
         }
         assert_eq!(out[0].dt_k, 0.0);
     }
+}
+
+/// Issue 18 item 1, the footprint rule of hits seen through a reflection:
+/// a hit seen in a mirror takes its own temperature only where its facet
+/// is large against the footprint of its **whole path** from the sensor
+/// (the range to the mirror plus the mirror's range to the hit), as a
+/// primary hit at that range would. The tower on a two-triangle ground
+/// (spacing √7200 = 84.9 m), seen in a vertical mirror 15 m east of it
+/// (ε = 0.05, wholly specular) by a camera of 0.0109 rad pixels: the
+/// mirrored ground lies 56–60 m along the path, 16–18 m of it after the
+/// mirror. With `per_hit_size_px` 100 the facets are large against
+/// 100 footprints of the whole path (≤ 65 m < 84.9 m): the mirror shows the
+/// tower's shadow. With 350 they are not (≥ 214 m), though they would be
+/// against the part after the mirror alone (≤ 69 m): the mirrored ground
+/// takes its facets' one lit temperature and shows no shadow.
+#[test]
+fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let repo = crate::util::repo_path("scenes");
+    let mats = dir.path().join("mirror.json");
+    std::fs::write(
+        &mats,
+        r#"{"materials": [{"id": 90, "name": "mirror", "specific_heat_j_kg_k": 900,
+            "conductivity_w_m_k": 200, "density_kg_m3": 2700, "thickness_m": 0.005,
+            "solar_absorptivity": 0.1, "thermal_emissivity": 0.05, "exposed_area": 1,
+            "specular_fraction": 1.0}]}"#,
+    )
+    .unwrap();
+    let (cam, mirror_x) = (Vec3::new(-20.0, 6.0, 30.0), 14.9f32);
+    let scene_for = |size_px: f32| {
+        serde_json::json!({
+            "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4},
+            "time": "2025-06-21T14:00:00-04:00",
+            "weather": {"file": repo.join("town/weather.csv")},
+            "materials": [repo.join("materials.json"), mats.clone()],
+            "render": {"per_hit_size_px": size_px},
+            "objects": [
+                {"name": "ground", "material": "asphalt", "shapes": [{"plane": {"size": [120, 120]}}]},
+                {"name": "tower", "material": "concrete", "shapes": [{"box": {"size": [4, 4, 20], "bottom": false}}]},
+                {"name": "mirror", "material": "mirror", "shapes": [{"box": {"size": [0.2, 40, 10]},
+                  "transform": {"translate": [mirror_x + 0.1, 6, 0]}}]}
+            ],
+            "sensors": [{"type": "frame", "name": "cam", "width": 64, "height": 64, "fov_deg": 40,
+                         "position": [cam.x, cam.y, cam.z], "look_at": [mirror_x, 6, 9], "up": [0, 0, 1],
+                         "bands": [{"name": "lwir", "response": [8.0, 12.0]}],
+                         "truth_layers": ["x", "y", "z"]}]
+        })
+    };
+    // Mean apparent temperature of the mirror's pixels whose mirrored ray
+    // reaches the ground in [x0, x1] × [y0, y1], and the longest and
+    // shortest whole path to those points and its part after the mirror.
+    let render = |size_px: f32| {
+        let path = dir.path().join(format!("scene-{size_px}.json"));
+        std::fs::write(&path, serde_json::to_string(&scene_for(size_px)).unwrap()).unwrap();
+        let out = dir.path().join(format!("out-{size_px}"));
+        let o = std::process::Command::new(crate::util::irsig_bin())
+            .args(["render", "--quiet", "-o"])
+            .arg(&out)
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s = irsig::output::read_exr(out.join("cam.exr")).unwrap();
+        let l = |n: &str| s.layer(n).unwrap().data.clone();
+        (l("x"), l("y"), l("z"), l("apparent_temperature"))
+    };
+    type Image = (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>);
+    let mirrored = |(x, y, z, t): &Image, bx: (f32, f32, f32, f32)| {
+        let (mut v, mut whole, mut after) = (Vec::new(), (f32::MAX, 0.0f32), (f32::MAX, 0.0f32));
+        for k in 0..t.len() {
+            let m = Vec3::new(x[k], y[k], z[k]);
+            if (m.x - mirror_x).abs() > 1e-2 || m.z < 0.5 {
+                continue;
+            }
+            let d = m - cam;
+            let r = Vec3::new(-d.x, d.y, d.z).normalize();
+            if r.z >= 0.0 {
+                continue;
+            }
+            let g = m + r * (-m.z / r.z);
+            if (bx.0..=bx.1).contains(&g.x) && (bx.2..=bx.3).contains(&g.y) {
+                v.push(t[k]);
+                let (w, a) = (d.length() + (g - m).length(), (g - m).length());
+                whole = (whole.0.min(w), whole.1.max(w));
+                after = (after.0.min(a), after.1.max(a));
+            }
+        }
+        assert!(v.len() >= 4, "{} mirrored pixels in {bx:?}", v.len());
+        (v.iter().sum::<f32>() / v.len() as f32, whole, after)
+    };
+    let (shade, lit) = ((-1.0, 1.0, 3.0, 6.0), (-1.0, 1.0, -12.0, -6.0));
+    // The rule's numbers: the facets' spacing against size × path × β.
+    let spacing = 7200.0f32.sqrt();
+    let beta = 40f32.to_radians() / 64.0;
+    let small = render(100.0);
+    let (small_shade, whole_s, after_s) = mirrored(&small, shade);
+    let (small_lit, whole_l, after_l) = mirrored(&small, lit);
+    let (lo, hi) = (whole_s.0.min(whole_l.0), whole_s.1.max(whole_l.1));
+    let after_hi = after_s.1.max(after_l.1);
+    eprintln!(
+        "whole path {lo:.1}–{hi:.1} m, after the mirror ≤ {after_hi:.1} m; \
+         size 100: mirrored shadow {small_shade:.2} K, lit {small_lit:.2} K"
+    );
+    assert!(spacing > 100.0 * hi * beta);
+    assert!(spacing < 350.0 * lo * beta && spacing > 350.0 * after_hi * beta);
+    assert!(
+        small_lit - small_shade > 3.0,
+        "size 100: the mirror should show the shadow: {small_shade:.2} K vs {small_lit:.2} K"
+    );
+    let big = render(350.0);
+    let (big_shade, _, _) = mirrored(&big, shade);
+    let (big_lit, _, _) = mirrored(&big, lit);
+    eprintln!("size 350: mirrored shadow {big_shade:.2} K, lit {big_lit:.2} K");
+    assert!(
+        (big_lit - big_shade).abs() < 0.5,
+        "size 350: the facets' own (lit) values: {big_shade:.2} K vs {big_lit:.2} K"
+    );
 }
