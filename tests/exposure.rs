@@ -1413,8 +1413,8 @@ fn exposed_back_takes_its_own_shape_factor() {
         assert!((mean_back - 0.5).abs() <= 0.005, "{mean_back}");
         assert!((one_minus - (1.0 - wall_ref)).abs() <= 0.02);
         assert!(one_minus - mean_back > 0.19);
-        for f in 0..n {
-            assert_eq!(fb[f].is_some(), wall.contains(&f), "facet {f}");
+        for (f, v) in fb.iter().enumerate() {
+            assert_eq!(v.is_some(), wall.contains(&f), "facet {f}");
         }
         // Batches do not change the answer.
         let (again, _) =

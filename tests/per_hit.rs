@@ -1417,14 +1417,14 @@ fn ground_before_a_sunlit_wall_takes_its_own_reflected_shortwave() {
 /// is large against the footprint of its **whole path** from the sensor
 /// (the range to the mirror plus the mirror's range to the hit), as a
 /// primary hit at that range would. The tower on a two-triangle ground
-/// (spacing √7200 = 84.9 m), seen in a vertical mirror 15 m east of it
-/// (ε = 0.05, wholly specular) by a camera of 0.0109 rad pixels: the
-/// mirrored ground lies 56–60 m along the path, 16–18 m of it after the
-/// mirror. With `per_hit_size_px` 100 the facets are large against
-/// 100 footprints of the whole path (≤ 65 m < 84.9 m): the mirror shows the
-/// tower's shadow. With 350 they are not (≥ 214 m), though they would be
-/// against the part after the mirror alone (≤ 69 m): the mirrored ground
-/// takes its facets' one lit temperature and shows no shadow.
+/// (spacing √7200 = 84.9 m), seen in a 20 m vertical mirror 15 m east of
+/// it (ε = 0.05, wholly specular) by a camera of 0.0055 rad pixels; a
+/// shaded and a sunlit patch of one ground triangle, seen in the mirror
+/// only. With `per_hit_size_px` 160 the triangle is large against the
+/// whole path's footprint: the mirror shows the tower's shadow. With 400 it
+/// is not, though it would be against the part after the mirror alone
+/// (the test checks both against the measured paths): the mirrored ground
+/// takes its facet's one temperature and shows no shadow.
 #[test]
 fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
     let dir = tempfile::tempdir().unwrap();
@@ -1438,7 +1438,7 @@ fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
             "specular_fraction": 1.0}]}"#,
     )
     .unwrap();
-    let (cam, mirror_x) = (Vec3::new(-20.0, 6.0, 30.0), 14.9f32);
+    let (cam, mirror_x) = (Vec3::new(-20.0, 6.0, 45.0), 14.9f32);
     let scene_for = |size_px: f32| {
         serde_json::json!({
             "site": {"latitude_deg": 43.16, "longitude_deg": -77.61, "altitude_m": 160, "utc_offset_hours": -4},
@@ -1449,11 +1449,11 @@ fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
             "objects": [
                 {"name": "ground", "material": "asphalt", "shapes": [{"plane": {"size": [120, 120]}}]},
                 {"name": "tower", "material": "concrete", "shapes": [{"box": {"size": [4, 4, 20], "bottom": false}}]},
-                {"name": "mirror", "material": "mirror", "shapes": [{"box": {"size": [0.2, 40, 10]},
+                {"name": "mirror", "material": "mirror", "shapes": [{"box": {"size": [0.2, 40, 20]},
                   "transform": {"translate": [mirror_x + 0.1, 6, 0]}}]}
             ],
-            "sensors": [{"type": "frame", "name": "cam", "width": 64, "height": 64, "fov_deg": 40,
-                         "position": [cam.x, cam.y, cam.z], "look_at": [mirror_x, 6, 9], "up": [0, 0, 1],
+            "sensors": [{"type": "frame", "name": "cam", "width": 128, "height": 128, "fov_deg": 40,
+                         "position": [cam.x, cam.y, cam.z], "look_at": [mirror_x, 5, 15], "up": [0, 0, 1],
                          "bands": [{"name": "lwir", "response": [8.0, 12.0]}],
                          "truth_layers": ["x", "y", "z"]}]
         })
@@ -1500,31 +1500,31 @@ fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
         assert!(v.len() >= 4, "{} mirrored pixels in {bx:?}", v.len());
         (v.iter().sum::<f32>() / v.len() as f32, whole, after)
     };
-    let (shade, lit) = ((-1.0, 1.0, 3.0, 6.0), (-1.0, 1.0, -12.0, -6.0));
+    let (shade, lit) = ((-1.0, 1.0, 3.0, 6.0), (-9.0, -6.0, 3.0, 6.0));
     // The rule's numbers: the facets' spacing against size × path × β.
     let spacing = 7200.0f32.sqrt();
-    let beta = 40f32.to_radians() / 64.0;
-    let small = render(100.0);
+    let beta = 40f32.to_radians() / 128.0;
+    let small = render(160.0);
     let (small_shade, whole_s, after_s) = mirrored(&small, shade);
     let (small_lit, whole_l, after_l) = mirrored(&small, lit);
     let (lo, hi) = (whole_s.0.min(whole_l.0), whole_s.1.max(whole_l.1));
     let after_hi = after_s.1.max(after_l.1);
     eprintln!(
         "whole path {lo:.1}–{hi:.1} m, after the mirror ≤ {after_hi:.1} m; \
-         size 100: mirrored shadow {small_shade:.2} K, lit {small_lit:.2} K"
+         size 160: mirrored shadow {small_shade:.2} K, lit {small_lit:.2} K"
     );
-    assert!(spacing > 100.0 * hi * beta);
-    assert!(spacing < 350.0 * lo * beta && spacing > 350.0 * after_hi * beta);
+    assert!(spacing > 160.0 * hi * beta);
+    assert!(spacing < 400.0 * lo * beta && spacing > 400.0 * after_hi * beta);
     assert!(
         small_lit - small_shade > 3.0,
-        "size 100: the mirror should show the shadow: {small_shade:.2} K vs {small_lit:.2} K"
+        "size 160: the mirror should show the shadow: {small_shade:.2} K vs {small_lit:.2} K"
     );
-    let big = render(350.0);
+    let big = render(400.0);
     let (big_shade, _, _) = mirrored(&big, shade);
     let (big_lit, _, _) = mirrored(&big, lit);
-    eprintln!("size 350: mirrored shadow {big_shade:.2} K, lit {big_lit:.2} K");
+    eprintln!("size 400: mirrored shadow {big_shade:.2} K, lit {big_lit:.2} K");
     assert!(
         (big_lit - big_shade).abs() < 0.5,
-        "size 350: the facets' own (lit) values: {big_shade:.2} K vs {big_lit:.2} K"
+        "size 400: the facets' own (lit) values: {big_shade:.2} K vs {big_lit:.2} K"
     );
 }
