@@ -547,7 +547,7 @@ pub fn sky_view_of<T: Tracer + ?Sized>(
 ///
 /// Returns, per facet, `Some(F_b)` for a flagged single-sided facet and
 /// `None` otherwise (a double-sided facet's back face is in
-/// [`SkyView::back_shape_factor`]), and the number of rays traced. The
+/// [`SkyView::back_shape_factor()`]), and the number of rays traced. The
 /// result is the same for any number of threads.
 pub fn exposed_back_shape_factors<T: Tracer + ?Sized>(
     tracer: &T,
