@@ -44,7 +44,7 @@
 //! into it; each facet's `E⁰` is recomputed from the compact solar history
 //! where a bounce needs it (never held per record); the leaving
 //! irradiances `ρ_j (E⁰_j + R_j)` are held for one block of [`BLOCK`]
-//! records at a time, so a bounce's transient is 64 bytes per facet; the
+//! records at a time, so a bounce's transient is 128 bytes per facet; the
 //! later bounces hold one value per facet and node (two from the third
 //! bounce on). The values are those of the plain per-record iteration bit
 //! for bit (`tests/exposure.rs`).
@@ -389,9 +389,14 @@ pub fn reflected_shortwave_strided(
 }
 
 /// Day records per block of the bounces' gathers: the leaving irradiances
-/// of every facet are held for one block of records at a time (16 `f32`,
-/// one 64-byte cache line per facet), not for every day record.
-const BLOCK: usize = 16;
+/// of every facet are held for one block of records at a time (32 `f32`,
+/// two adjacent 64-byte cache lines per facet), not for every day record.
+/// The gather is bound by one random read per background entry and block,
+/// not by the lines it reads: 32 records per block take the town's first
+/// bounce (62 day records) in two passes over the entries instead of four,
+/// and its later bounce (17 nodes) in one instead of two
+/// (`docs/performance.md`).
+const BLOCK: usize = 32;
 
 /// What reflects: the sky view's background lists, the ground's albedo
 /// beyond the scene and each facet's, and the solar history from which each
