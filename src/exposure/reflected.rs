@@ -396,7 +396,10 @@ pub fn reflected_shortwave_strided(
 /// bounce (62 day records) in two passes over the entries instead of four,
 /// and its later bounce (17 nodes) in one instead of two
 /// (`docs/performance.md`).
-const BLOCK: usize = 32;
+const BLOCK: usize = 2 * HALF;
+
+/// Lanes of one accumulator of the gather ([`gather_bounce`]).
+const HALF: usize = 16;
 
 /// What reflects: the sky view's background lists, the ground's albedo
 /// beyond the scene and each facet's, and the solar history from which each
@@ -635,15 +638,27 @@ fn gather_bounce(
     lit: &[bool],
 ) {
     let dark = leaving.len() - 1;
-    let mut acc: [f32; BLOCK] = std::array::from_fn(|k| g * z[k]);
+    // Two accumulators of `HALF` lanes (vector registers; one array of
+    // `BLOCK` lanes is not kept in registers, and the loop runs scalar).
+    let mut lo: [f32; HALF] = std::array::from_fn(|k| g * z[k]);
+    let mut hi: [f32; HALF] = std::array::from_fn(|k| g * z[HALF + k]);
     for e in entries {
         let j = e.facet as usize;
         let src = &leaving[if lit[j] { j } else { dark }];
+        let (Some(s0), Some(s1)) = (src.first_chunk::<HALF>(), src.last_chunk::<HALF>()) else {
+            unreachable!("a row is two halves")
+        };
         let w = e.weight;
-        for (a, l) in acc.iter_mut().zip(src) {
+        for (a, l) in lo.iter_mut().zip(s0) {
+            *a += w * l;
+        }
+        for (a, l) in hi.iter_mut().zip(s1) {
             *a += w * l;
         }
     }
+    let mut acc = [0.0f32; BLOCK];
+    acc[..HALF].copy_from_slice(&lo);
+    acc[HALF..].copy_from_slice(&hi);
     match <&mut [f32; BLOCK]>::try_from(&mut *out) {
         Ok(full) => *full = acc,
         Err(_) => {
