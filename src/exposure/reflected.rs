@@ -44,7 +44,7 @@
 //! into it; each facet's `E⁰` is recomputed from the compact solar history
 //! where a bounce needs it (never held per record); the leaving
 //! irradiances `ρ_j (E⁰_j + R_j)` are held for one block of [`BLOCK`]
-//! records at a time, so a bounce's transient is 64 bytes per facet; the
+//! records at a time, so a bounce's transient is 128 bytes per facet; the
 //! later bounces hold one value per facet and node (two from the third
 //! bounce on). The values are those of the plain per-record iteration bit
 //! for bit (`tests/exposure.rs`).
@@ -389,9 +389,17 @@ pub fn reflected_shortwave_strided(
 }
 
 /// Day records per block of the bounces' gathers: the leaving irradiances
-/// of every facet are held for one block of records at a time (16 `f32`,
-/// one 64-byte cache line per facet), not for every day record.
-const BLOCK: usize = 16;
+/// of every facet are held for one block of records at a time (32 `f32`,
+/// two adjacent 64-byte cache lines per facet), not for every day record.
+/// The gather is bound by one random read per background entry and block,
+/// not by the lines it reads: 32 records per block take the town's first
+/// bounce (62 day records) in two passes over the entries instead of four,
+/// and its later bounce (17 nodes) in one instead of two
+/// (`docs/performance.md`).
+const BLOCK: usize = 2 * HALF;
+
+/// Lanes of one accumulator of the gather ([`gather_bounce`]).
+const HALF: usize = 16;
 
 /// What reflects: the sky view's background lists, the ground's albedo
 /// beyond the scene and each facet's, and the solar history from which each
@@ -630,15 +638,27 @@ fn gather_bounce(
     lit: &[bool],
 ) {
     let dark = leaving.len() - 1;
-    let mut acc: [f32; BLOCK] = std::array::from_fn(|k| g * z[k]);
+    // Two accumulators of `HALF` lanes (vector registers; one array of
+    // `BLOCK` lanes is not kept in registers, and the loop runs scalar).
+    let mut lo: [f32; HALF] = std::array::from_fn(|k| g * z[k]);
+    let mut hi: [f32; HALF] = std::array::from_fn(|k| g * z[HALF + k]);
     for e in entries {
         let j = e.facet as usize;
         let src = &leaving[if lit[j] { j } else { dark }];
+        let (Some(s0), Some(s1)) = (src.first_chunk::<HALF>(), src.last_chunk::<HALF>()) else {
+            unreachable!("a row is two halves")
+        };
         let w = e.weight;
-        for (a, l) in acc.iter_mut().zip(src) {
+        for (a, l) in lo.iter_mut().zip(s0) {
+            *a += w * l;
+        }
+        for (a, l) in hi.iter_mut().zip(s1) {
             *a += w * l;
         }
     }
+    let mut acc = [0.0f32; BLOCK];
+    acc[..HALF].copy_from_slice(&lo);
+    acc[HALF..].copy_from_slice(&hi);
     match <&mut [f32; BLOCK]>::try_from(&mut *out) {
         Ok(full) => *full = acc,
         Err(_) => {

@@ -81,10 +81,39 @@ impl SolarSource for SolarHistory {
     }
     /// Only the day records with lit sample points: elsewhere the product
     /// is zero (the sunlit fraction is), so the cosine is not needed.
+    ///
+    /// When the day records are one run and a count is one byte (fewer
+    /// than 256 sample points: every render), the run is decoded without
+    /// branches (a zero count gives `+0`, as the fill), so that it
+    /// vectorises: the same operations as [`crate::geometry::sun_cosine`]
+    /// and the general loop below, bit for bit.
     fn sunlit_cos_into(&self, facet: usize, out: &mut [f32]) {
         out.fill(0.0);
         let (normal, double_sided) = (self.normal[facet], self.double_sided[facet]);
         let m = self.points as f32;
+        let nd = self.day.len();
+        if let (Some(&first), Some(&last)) = (self.day.first(), self.day.last())
+            && self.width() == 1
+            && last as usize + 1 == first as usize + nd
+        {
+            // `day` ascends, so its records are `first..=last`.
+            let r0 = first as usize;
+            let lit = &self.lit[facet * nd..(facet + 1) * nd];
+            let sun = &self.sun[r0..r0 + nd];
+            for ((o, &k), v) in out[r0..r0 + nd].iter_mut().zip(lit).zip(sun) {
+                let s = (k as f32 / m).clamp(0.0, 1.0);
+                let c = (normal.x * v.x) + (normal.y * v.y) + (normal.z * v.z);
+                let c = if v.z <= 0.0 {
+                    0.0
+                } else if double_sided || c > 0.0 {
+                    c.abs().min(1.0)
+                } else {
+                    0.0
+                };
+                *o = s * c.max(0.0);
+            }
+            return;
+        }
         for (d, &r) in self.day.iter().enumerate() {
             let lit = self.lit_points(facet, d);
             if lit != 0 {
