@@ -907,6 +907,7 @@ impl Exchange {
                 steps(&inputs, &t_c, &t_s)
             };
         }
+        ex.passes = Some(passes.report());
         Ok(ex)
     }
 
