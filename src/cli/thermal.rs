@@ -108,6 +108,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let options = f.options();
     let (sol, shape_factor) =
         facet::solve_free_facet(&props, &records, &site, &f.spec(), &options).for_flags(FLAGS)?;
+    if let Some(w) = sol.exchange_passes.and_then(|p| p.warning(&material.name)) {
+        eprintln!("warning: {w}");
+    }
 
     let mut out = std::io::stdout().lock();
     let times = records.iter().map(|r| r.time);

@@ -83,7 +83,7 @@ pub use linear::{
     Linearization, SourceHistory, SourceModel, background_coefficients, linearize, linearize_with,
     source_history, source_history_into, source_history_with,
 };
-pub use surface::{Exchange, LandSurface, Skin, WetStore};
+pub use surface::{Exchange, LandSurface, PassLimits, Passes, ReferencePasses, Skin, WetStore};
 pub use two_source::{TwoSourceFluxes, TwoSourceStep};
 
 /// Angular frequency of the diurnal cycle, rad/s.
@@ -1177,6 +1177,10 @@ pub struct ThermalSolution {
     pub energy: EnergyBudget,
     /// Work counters of the final run and spin-up.
     pub stats: StepStats,
+    /// How the reference passes of the exchange this solve made ended
+    /// ([`solve_facing`]; None where it was given one, [`solve_with`], or
+    /// none was solved: [`Exchange::passes`]).
+    pub exchange_passes: Option<Passes>,
 }
 
 /// The flux laws at each record for one facet, and the column to solve.
@@ -1491,7 +1495,9 @@ pub fn solve_facing(
     props.validate()?;
     forcing.validate()?;
     let exchange = Exchange::facing(props, forcing, normal_z)?;
-    solve_with(props, forcing, &exchange, inputs, opts)
+    let mut sol = solve_with(props, forcing, &exchange, inputs, opts)?;
+    sol.exchange_passes = exchange.passes;
+    Ok(sol)
 }
 
 /// [`solve`] with the material's [`Exchange`] under `forcing` already made
@@ -1677,5 +1683,6 @@ fn solve_prepared(
             stored_change_j_m2: stored_change,
         },
         stats: slab.stats(),
+        exchange_passes: None,
     }
 }

@@ -23,8 +23,10 @@
 //! the site, not of each facet. irsig takes it from the material's **open
 //! reference surface**: a horizontal, unshaded facet of the material under
 //! the same weather ([`Exchange::new`] solves it, evaluating the stability of
-//! each record at its own surface temperature, to a fixed point in
-//! [`EXCHANGE_PASSES`] passes). Every facet of the material then shares the
+//! each record at its own surface temperature, to a fixed point by the
+//! bounded Wegstein passes of [`ReferencePasses`], to
+//! [`REFERENCE_TOLERANCE_K`]; where they stop on their cap instead,
+//! [`Exchange::passes`] says so and [`Exchange::warning`] words it). Every facet of the material then shares the
 //! per-record coefficients `h_k = ρc_p/r_a,k` and `g_v,k = ρc_p/(γ(r_a,k +
 //! r_s,k))`; what differs between facets (sun, shape factor, background) is
 //! an additive source, which keeps the linearised scene solve exact to first
@@ -50,14 +52,6 @@ use super::two_source::{TwoSourceParams, TwoSourceStep};
 use super::{FacetInputs, Forcing, SlabProperties, SolveOptions, convection, mcadams_h_w_m2_k};
 use crate::error::{Error, Result};
 use crate::material::{CanopyModel, HeatRoughness, Phenology, SurfaceEnergySpec, SurfaceKind};
-
-/// Passes of the stability fixed point of [`Exchange::new`]. Each pass is
-/// one solve of the open reference surface; the third changes the surface
-/// temperature by less than 0.01 K on the flux-tower tests.
-pub const EXCHANGE_PASSES: usize = 3;
-
-/// Most reference passes of a two-source canopy ([`Exchange::two_source`]).
-pub const TWO_SOURCE_PASSES: usize = 32;
 
 /// Wind speed floor of the turbulent exchange, m s⁻¹ (module docs).
 pub const MIN_WIND_M_S: f64 = 0.5;
@@ -167,7 +161,8 @@ impl LandSurface {
         });
         let root_zone = match spec.root_zone_depth_m {
             Some(d) => {
-                let zone = RootZone::new(d, 0.0, spec.field_capacity_m3_m3, spec.saturation())?;
+                let zone = RootZone::new(d, 0.0, spec.field_capacity_m3_m3, spec.saturation())?
+                    .with_texture(spec.texture());
                 Some(match spec.water_table_depth_m {
                     Some(z) => zone.with_water_table(z, spec.texture())?,
                     None => zone,
@@ -428,16 +423,17 @@ impl WetStore {
     }
 }
 
-/// Bounded Wegstein iteration, record by record, of a two-source open
-/// reference surface's passes `x ← f(x)` (Wegstein 1958, "Accelerating convergence of
+/// Bounded Wegstein iteration, record by record, of an open reference
+/// surface's passes `x ← f(x)` (Wegstein 1958, "Accelerating convergence of
 /// iterative processes", Commun. ACM 1(6):9–13): with `s` the secant slope
 /// of `f` at a record from its last two passes, the record's reference
 /// moves by `ω (f(x) − x)`, `ω = 1/(1 − s)` (the secant root of
 /// `f(x) − x`), bounded to [1/64, 1] (damping only; ω = 1 where `s ≥ 1` or
 /// on the first pass). A record whose pass-to-pass map has a local gain
 /// `s < −1` (it turns back every pass: the soil's free convection, the rain
-/// stores) then contracts, where the plain iteration `ω = 1` would cycle;
-/// for a scalar linear map one step lands on its fixed point.
+/// stores, stability flipping at dusk) then contracts, where the plain
+/// iteration `ω = 1` would cycle; for a scalar linear map one step lands on
+/// its fixed point.
 #[derive(Debug, Default)]
 struct Wegstein {
     /// The last pass's reference and its image, per record.
@@ -474,6 +470,130 @@ impl Wegstein {
     }
 }
 
+/// Tolerance of the open reference surface's passes, K: they stop when no
+/// record's reference temperature changes by more in a pass that updates
+/// the exchange ([`ReferencePasses`]).
+pub const REFERENCE_TOLERANCE_K: f64 = 1e-4;
+
+/// Most passes of the open reference surface ([`ReferencePasses`]).
+pub const REFERENCE_PASSES: usize = 32;
+
+/// When the open reference surface's passes stop ([`ReferencePasses`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassLimits {
+    /// Settled when a pass changes no record's reference by more, K (> 0).
+    pub tolerance_k: f64,
+    /// Most passes (solves of the reference surface), ≥ 1.
+    pub cap: usize,
+}
+
+impl Default for PassLimits {
+    /// [`REFERENCE_TOLERANCE_K`] and [`REFERENCE_PASSES`].
+    fn default() -> Self {
+        PassLimits {
+            tolerance_k: REFERENCE_TOLERANCE_K,
+            cap: REFERENCE_PASSES,
+        }
+    }
+}
+
+/// How the open reference surface's passes of an [`Exchange`] ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Passes {
+    /// Solves of the reference surface run.
+    pub count: usize,
+    /// Largest change of a record's reference temperature (a two-source
+    /// canopy: its leaves' or soil's) in the last pass that updated the
+    /// exchange and the rain stores, K.
+    pub residual_k: f64,
+    /// Whether `residual_k` fell below the tolerance; false: the passes
+    /// stopped on their cap, and the exchange is that of a reference not
+    /// yet at its fixed point ([`Exchange::warning`]).
+    pub settled: bool,
+    /// The tolerance they ran to, K.
+    pub tolerance_k: f64,
+}
+
+/// The one driver of the open reference surface's passes, single source
+/// ([`Exchange::facing`]) and two sources ([`Exchange::two_source`]): each
+/// pass solves the reference surface under the current exchange (image
+/// `f(x)` of the reference temperatures `x`, one per record), then moves
+/// each record's reference by a bounded Wegstein step ([`Wegstein`]) and
+/// remakes the exchange there. The passes stop when a pass changes no
+/// record by more than [`PassLimits::tolerance_k`] (settled) or on
+/// [`PassLimits::cap`] (unsettled), and say which ([`Passes`]): never
+/// silently.
+#[derive(Debug)]
+pub struct ReferencePasses {
+    limits: PassLimits,
+    wegstein: Wegstein,
+    count: usize,
+    residual_k: f64,
+}
+
+impl ReferencePasses {
+    /// A driver with `limits`.
+    pub fn new(limits: PassLimits) -> ReferencePasses {
+        ReferencePasses {
+            limits,
+            wegstein: Wegstein::default(),
+            count: 0,
+            residual_k: f64::INFINITY,
+        }
+    }
+
+    /// One pass: `x` (the references, K) towards its image `f`; returns
+    /// whether to stop (settled, or the cap reached). `x` moves in either
+    /// case (by at most the tolerance when settled).
+    pub fn step(&mut self, x: &mut [f64], f: &[f64]) -> bool {
+        let residual = self.wegstein.step(x, f);
+        self.record(residual)
+    }
+
+    /// Moves `x` towards its image `f` by the bounded Wegstein step
+    /// without counting a pass (a two-source canopy counts its passes'
+    /// change of leaves and soil together, [`ReferencePasses::record`]).
+    pub fn advance(&mut self, x: &mut [f64], f: &[f64]) {
+        self.wegstein.step(x, f);
+    }
+
+    /// Counts a pass whose largest change was `residual_k` (K) without
+    /// moving a reference (a two-source canopy's held passes move it
+    /// themselves); returns whether to stop, as [`ReferencePasses::step`].
+    pub fn record(&mut self, residual_k: f64) -> bool {
+        self.count += 1;
+        self.residual_k = residual_k;
+        self.settled() || self.count >= self.limits.cap
+    }
+
+    /// Counts a pass that does not update the exchange (the residual
+    /// stays the last updating pass's).
+    pub fn count_held(&mut self) {
+        self.count += 1;
+    }
+
+    /// Whether the last recorded pass changed no record by more than the
+    /// tolerance.
+    pub fn settled(&self) -> bool {
+        self.residual_k < self.limits.tolerance_k
+    }
+
+    /// Passes run so far.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// How the passes ended.
+    pub fn report(&self) -> Passes {
+        Passes {
+            count: self.count,
+            residual_k: self.residual_k,
+            settled: self.settled(),
+            tolerance_k: self.limits.tolerance_k,
+        }
+    }
+}
+
 /// The per-record exchange coefficients of one material under one forcing
 /// (module docs), shared by every facet of the material.
 #[derive(Debug, Clone, PartialEq)]
@@ -494,13 +614,11 @@ pub struct Exchange {
     /// ([`WaterStep`]; one fewer than the records; empty without a root
     /// zone).
     pub soil_water: Vec<WaterStep>,
-    /// The largest change of the open reference surface's temperatures
-    /// (every record; a two-source canopy's leaves and soil) in the last
-    /// pass that updated the exchange and the rain stores, K: below
-    /// [`super::two_source::CONVERGED_K`] when the passes settled, above
-    /// it when they stopped on their count. Set for a two-source canopy
-    /// (None otherwise: a fixed [`EXCHANGE_PASSES`]).
-    pub settled_k: Option<f64>,
+    /// How the open reference surface's passes ended ([`ReferencePasses`];
+    /// None where no reference was solved: a dry McAdams material, whose
+    /// coefficient is closed-form, or an exchange made at given
+    /// temperatures).
+    pub passes: Option<Passes>,
 }
 
 impl Exchange {
@@ -518,7 +636,7 @@ impl Exchange {
             two_source: Vec::new(),
             soil_moisture_m3_m3: Vec::new(),
             soil_water: Vec::new(),
-            settled_k: None,
+            passes: None,
         }
     }
 
@@ -540,15 +658,42 @@ impl Exchange {
     /// `cos Σ`, unshaded, seeing `(1 + cos Σ)/2` of the sky, the sun at
     /// the mean incidence over all azimuths, no reflected shortwave); for
     /// a [`LandSurface`] (whatever `normal_z`), the fixed point of the
-    /// horizontal open reference surface's stability. Deterministic: a
-    /// fixed number of passes with fixed solver options.
+    /// horizontal open reference surface's stability and rain store. The
+    /// passes run to [`REFERENCE_TOLERANCE_K`], at most
+    /// [`REFERENCE_PASSES`] ([`ReferencePasses`]; how they ended in
+    /// [`Exchange::passes`]). Deterministic: the spin-up days of the first
+    /// pass for every later one, fixed solver options.
     ///
     /// # Errors
     /// Humidity or pressure of a record outside the physical range the
     /// psychrometrics accept (naming `records[k].field`).
     pub fn facing(props: &SlabProperties, forcing: &Forcing, normal_z: f64) -> Result<Exchange> {
+        Exchange::facing_limited(props, forcing, normal_z, PassLimits::default())
+    }
+
+    /// [`Exchange::facing`] with the reference passes stopping at `limits`
+    /// instead of the default ([`PassLimits::default`]).
+    ///
+    /// # Errors
+    /// As [`Exchange::facing`]; `limits` not a positive tolerance and a
+    /// cap ≥ 1 (naming the field).
+    pub fn facing_limited(
+        props: &SlabProperties,
+        forcing: &Forcing,
+        normal_z: f64,
+        limits: PassLimits,
+    ) -> Result<Exchange> {
+        if !(limits.tolerance_k.is_finite() && limits.tolerance_k > 0.0) {
+            return Err(Error::invalid(
+                "passes.tolerance_k",
+                format!("{}: expected > 0", limits.tolerance_k),
+            ));
+        }
+        if limits.cap == 0 {
+            return Err(Error::invalid("passes.cap", "0: expected at least 1"));
+        }
         if props.surface.is_some_and(|s| s.two_source.is_some()) {
-            return Exchange::two_source(props, forcing);
+            return Exchange::two_source(props, forcing, limits);
         }
         let rain = forcing.precipitation_mm.iter().any(|&p| p > 0.0);
         let mcadams = props.convection.model == crate::material::ConvectionModel::Mcadams;
@@ -589,15 +734,28 @@ impl Exchange {
             })
             .collect();
         let inputs = FacetInputs::new(&sun, &cos, 0.5 * (1.0 + cos_tilt));
-        let opts = SolveOptions::default();
+        let mut opts = SolveOptions::default();
         let mut surface_k = forcing.air_temperature_k.clone();
         let mut ex = Exchange::at_temperatures_facing(props, forcing, &surface_k, cos_tilt)?;
-        for _ in 0..EXCHANGE_PASSES {
+        let mut passes = ReferencePasses::new(limits);
+        loop {
             let p = super::prepare(props, forcing, &inputs, &ex);
-            surface_k =
-                super::solve_prepared(props, forcing, &p, &opts, None).surface_temperature_k;
+            let sol = super::solve_prepared(props, forcing, &p, &opts, None);
+            if passes.count() == 0 {
+                // The spin-up days of the first pass for every later one:
+                // a spin-up that stops on its tolerance may stop a day
+                // earlier in one pass than in the next, and the passes
+                // would not settle below that tolerance.
+                opts.spinup.max_cycles = sol.spinup_cycles;
+                opts.spinup.tolerance_k = 0.0;
+            }
+            let stop = passes.step(&mut surface_k, &sol.surface_temperature_k);
             ex = Exchange::at_temperatures_facing(props, forcing, &surface_k, cos_tilt)?;
+            if stop {
+                break;
+            }
         }
+        ex.passes = Some(passes.report());
         Ok(ex)
     }
 
@@ -605,10 +763,11 @@ impl Exchange {
     /// model of each record linearised about the open reference surface
     /// (horizontal, unshaded, the whole sky, a fixed three spin-up days),
     /// the reference solved again about its own leaf and soil temperatures
-    /// until they change by less than [`super::two_source::CONVERGED_K`],
-    /// then with the resistances held until they change by less than
-    /// 1e-7 K (at most [`TWO_SOURCE_PASSES`] passes in all;
-    /// [`Exchange::settled_k`]). In each resistance-updating pass the
+    /// until they change by less than the tolerance of `limits`
+    /// ([`ReferencePasses`]), then with the resistances held until they
+    /// change by less than 1e-7 K (at most the cap of `limits` passes in
+    /// all, the last four held; [`Exchange::passes`]). In each
+    /// resistance-updating pass the
     /// leaves are put in balance with the record's wet fractions and
     /// resistances ([`super::two_source::balanced_canopy_k`]) and the soil's
     /// reference moves by a bounded Wegstein step. The weather's
@@ -624,7 +783,11 @@ impl Exchange {
     /// # Errors
     /// Humidity or pressure of a record out of range (naming it); the
     /// canopy's heights (naming the field).
-    pub fn two_source(props: &SlabProperties, forcing: &Forcing) -> Result<Exchange> {
+    pub fn two_source(
+        props: &SlabProperties,
+        forcing: &Forcing,
+        limits: PassLimits,
+    ) -> Result<Exchange> {
         use super::two_source;
         let surface = props
             .surface
@@ -680,7 +843,7 @@ impl Exchange {
             two_source: steps(&inputs, &t_c, &t_s),
             soil_moisture_m3_m3: Vec::new(),
             soil_water: Vec::new(),
-            settled_k: None,
+            passes: None,
         };
         if let Some(w) = first {
             ex.soil_moisture_m3_m3 = w.soil_moisture_m3_m3;
@@ -688,12 +851,12 @@ impl Exchange {
         }
         // Passes that update the resistances (stability, the soil's free
         // convection) with the linearisation until the reference settles to
-        // CONVERGED_K; then Newton passes with the resistances held, which
+        // the tolerance; then Newton passes with the resistances held, which
         // converge quadratically, so the reference closes the leaves'
         // balance.
         let mut hold = false;
-        let mut wegstein = Wegstein::default();
-        for pass in 0..TWO_SOURCE_PASSES {
+        let mut passes = ReferencePasses::new(limits);
+        while passes.count() < limits.cap {
             let p = super::prepare(props, forcing, &facet, &ex);
             let sol = super::solve_prepared(props, forcing, &p, &opts, None);
             let change = sol
@@ -703,19 +866,22 @@ impl Exchange {
                 .chain(sol.canopy_temperature_k.iter().zip(&t_c))
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            if hold && change < 1e-7 {
-                break;
-            }
-            if !hold {
-                ex.settled_k = Some(change);
-            }
-            hold = hold || change < two_source::CONVERGED_K || pass + 4 >= TWO_SOURCE_PASSES;
             if hold {
+                passes.count_held();
+                if change < 1e-7 {
+                    break;
+                }
                 t_s = sol.soil_temperature_k;
             } else {
-                // Each record's soil reference by a bounded Wegstein step
-                // ([`Wegstein`]).
-                wegstein.step(&mut t_s, &sol.soil_temperature_k);
+                passes.record(change);
+                hold = passes.settled() || passes.count() + 3 >= limits.cap;
+                if hold {
+                    t_s = sol.soil_temperature_k;
+                } else {
+                    // Each record's soil reference by a bounded Wegstein
+                    // step.
+                    passes.advance(&mut t_s, &sol.soil_temperature_k);
+                }
             }
             t_c = sol.canopy_temperature_k;
             ex.two_source = if hold {
@@ -741,6 +907,7 @@ impl Exchange {
                 steps(&inputs, &t_c, &t_s)
             };
         }
+        ex.passes = Some(passes.report());
         Ok(ex)
     }
 
@@ -786,7 +953,7 @@ impl Exchange {
                 two_source: Vec::new(),
                 soil_moisture_m3_m3: Vec::new(),
                 soil_water: Vec::new(),
-                settled_k: None,
+                passes: None,
             },
             Some(surface) if surface.root_zone.is_some() => {
                 return Exchange::with_root_zone(props, forcing, surface, surface_k);
@@ -817,7 +984,7 @@ impl Exchange {
                     two_source: Vec::new(),
                     soil_moisture_m3_m3: Vec::new(),
                     soil_water: Vec::new(),
-                    settled_k: None,
+                    passes: None,
                 }
             }
         };
@@ -888,7 +1055,7 @@ impl Exchange {
             two_source: Vec::new(),
             soil_moisture_m3_m3: thetas,
             soil_water: water,
-            settled_k: None,
+            passes: None,
         })
     }
 
@@ -912,5 +1079,30 @@ impl Exchange {
     /// Whether any record evaporates.
     pub fn has_latent(&self) -> bool {
         self.vapour_conductance_w_m2_pa.iter().any(|&g| g > 0.0)
+    }
+
+    /// Where the open reference surface's passes stopped on their cap
+    /// ([`Exchange::passes`]): a message naming `material`, the residual
+    /// and the passes, for a `warning:` line (None where they settled or
+    /// no reference was solved).
+    pub fn warning(&self, material: &str) -> Option<String> {
+        self.passes.and_then(|p| p.warning(material))
+    }
+}
+
+impl Passes {
+    /// Where the passes stopped on their cap: a message naming `material`,
+    /// the residual and the passes, for a `warning:` line (None where they
+    /// settled).
+    pub fn warning(&self, material: &str) -> Option<String> {
+        if self.settled {
+            return None;
+        }
+        Some(format!(
+            "material {material}: the exchange's reference passes did not settle: the last \
+             of {} passes changed the reference surface by {:.2e} K (tolerance {:.0e} K); \
+             its exchange with the air is that of an unsettled reference",
+            self.count, self.residual_k, self.tolerance_k
+        ))
     }
 }

@@ -81,7 +81,9 @@
 //! each record's soil reference by a bounded Wegstein step (damping where
 //! the pass-to-pass map turns back, e.g. the soil's free convection
 //! `(T_s − T_ac)^⅓`, whose slope is unbounded at `T_s = T_ac`). The passes
-//! repeat until the reference changes by less than [`CONVERGED_K`], then with the
+//! repeat until the reference changes by less than
+//! [`super::surface::REFERENCE_TOLERANCE_K`] (the one driver of every material's
+//! reference passes, [`super::surface::ReferencePasses`]), then with the
 //! resistances held (Newton, quadratic) until it changes by < 1e-7 K: the
 //! open surface then solves the nonlinear two-source balance (both
 //! balances close to < 1e-6 W m⁻², `tests`), and any other facet of the material is
@@ -117,8 +119,6 @@ pub const SOIL_RESISTANCE_B: f64 = 0.012;
 pub const SOIL_RESISTANCE_C: f64 = 0.0025;
 /// Height of the wind that sets the soil resistance, m (NKA95).
 pub const SOIL_WIND_HEIGHT_M: f64 = 0.05;
-/// The reference passes stop when no temperature changes more, K.
-pub const CONVERGED_K: f64 = 1e-4;
 
 /// The canopy's two-source parameters (from `surface_energy`).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -17,13 +17,18 @@
 //! evaporation and transpiration of the step (negative: dew), τ = 1 day and
 //! C₃ the drainage coefficient (Noilhan & Mahfouf 1996, "The ISBA land
 //! surface parameterisation scheme", Global Planet. Change 13:145–159,
-//! C₃ = 5.327·X_clay^−1.043, X_clay in %; loam, 18 % clay: C₃ = 0.261).
+//! C₃ = 5.327·X_clay^−1.043, X_clay in %: the clay content of the soil's
+//! texture class ([`SoilTexture::clay_pct`], the class means of Cosby et
+//! al. 1984; loam, 18 % clay: C₃ = 0.261; sand, 3 %: 1.69; clay, 58 %:
+//! 0.077).
 //!
 //! Each step is split: infiltration and evaporation first (evaporation
 //! limited to the water above the residual content), then the drainage
 //! integrated exactly over the step (the excess above field capacity decays
 //! as exp(−C₃ Δt/τ)), then any water above saturation runs off. Every term
-//! is returned, so storage change = P_inf − E − D − R holds to rounding.
+//! is returned, so storage change = P_inf − E − D − R holds to rounding;
+//! θ never falls below the residual content θ_r (not by rounding either:
+//! a step that evaporates to θ_r ends at θ_r exactly).
 //!
 //! # Capillary rise from a water table
 //! With a water table at depth `z_wt` below the surface (below the root
@@ -75,8 +80,8 @@ pub const WATER_DENSITY_KG_M3: f64 = 1000.0;
 /// ISBA's drainage time scale τ, s (one day; Mahfouf & Noilhan 1996).
 pub const DRAINAGE_TAU_S: f64 = 86_400.0;
 
-/// ISBA's drainage coefficient C₃ of a loam (18 % clay; Noilhan & Mahfouf
-/// 1996: C₃ = 5.327·X_clay^−1.043), dimensionless.
+/// ISBA's drainage coefficient C₃ of a soil with `clay_pct` % clay
+/// (Noilhan & Mahfouf 1996: C₃ = 5.327·X_clay^−1.043), dimensionless.
 pub fn drainage_coefficient_c3(clay_pct: f64) -> f64 {
     5.327 * clay_pct.powf(-1.043)
 }
@@ -130,6 +135,29 @@ pub struct SoilHydraulics {
 }
 
 impl SoilTexture {
+    /// Mean clay content of the texture class, % (Cosby, Hornberger, Clapp
+    /// & Ginn 1984, "A statistical exploration of the relationships of soil
+    /// moisture characteristics to the physical properties of soils", Water
+    /// Resour. Res. 20(6):682–690, doi:10.1029/WR020i006p00682, Table 2:
+    /// the class means of 1448 US soils; 100 − sand − silt). Sets ISBA's
+    /// drainage coefficient C₃ ([`drainage_coefficient_c3`]).
+    pub fn clay_pct(self) -> f64 {
+        use SoilTexture::*;
+        match self {
+            Sand => 3.0,
+            LoamySand => 6.0,
+            SandyLoam => 10.0,
+            SiltLoam => 13.0,
+            Loam => 18.0,
+            SandyClayLoam => 27.0,
+            SiltyClayLoam => 34.0,
+            ClayLoam => 34.0,
+            SandyClay => 42.0,
+            SiltyClay => 47.0,
+            Clay => 58.0,
+        }
+    }
+
     /// Clapp & Hornberger (1978) Table 2: b, ψ_s (cm → m), θ_s and K_s
     /// (cm min⁻¹ → m s⁻¹).
     pub fn hydraulics(self) -> SoilHydraulics {
@@ -403,6 +431,14 @@ impl RootZone {
         })
     }
 
+    /// The bucket in a soil of `texture`: ISBA's drainage coefficient C₃
+    /// from its clay content ([`SoilTexture::clay_pct`],
+    /// [`drainage_coefficient_c3`]; [`RootZone::new`] is a loam's).
+    pub fn with_texture(mut self, texture: SoilTexture) -> RootZone {
+        self.drainage_c3 = drainage_coefficient_c3(texture.clay_pct());
+        self
+    }
+
     /// The bucket over a water table `depth_m` below the surface in a soil
     /// of `texture` whose porosity is the bucket's θ_sat (module docs).
     ///
@@ -474,10 +510,13 @@ impl RootZone {
             * -(-self.drainage_c3 * dt_s.max(0.0) / DRAINAGE_TAU_S).exp_m1();
         let w2 = w1 - drainage;
         let runoff = (w2 - w_sat).max(0.0);
-        // θ moves by the net flux (exactly unchanged when nothing flows).
+        // θ moves by the net flux (exactly unchanged when nothing flows),
+        // never below θ_r (or where it started, if below): evaporation to
+        // the residual content ends there, not a rounding below it.
         let net = inf - e + rise - drainage - runoff;
+        let floor = self.residual_m3_m3.min(theta_m3_m3);
         WaterStep {
-            theta_m3_m3: theta_m3_m3 + net / (WATER_DENSITY_KG_M3 * self.depth_m),
+            theta_m3_m3: (theta_m3_m3 + net / (WATER_DENSITY_KG_M3 * self.depth_m)).max(floor),
             infiltration_mm: inf,
             evaporation_mm: e,
             drainage_mm: drainage,
@@ -536,6 +575,78 @@ mod tests {
         let s = b.step(0.44, 100.0, 0.0, 1.0);
         assert!((s.theta_m3_m3 - 0.451).abs() < 1e-12, "{}", s.theta_m3_m3);
         assert!(s.runoff_mm > 80.0);
+    }
+
+    /// A long drought (a year of hourly steps, each asking for more
+    /// evaporation than the bucket holds over θ_r, then a dry spell with
+    /// dew and none): θ reaches θ_r and never falls below it, not even by
+    /// rounding, in any of several depths, residuals and starting
+    /// contents; the water taken is exactly the storage lost.
+    #[test]
+    fn drought_never_takes_theta_below_residual() {
+        for depth in [0.1, 0.3, 0.7, 1.3] {
+            for residual in [0.03, 0.05, 0.07, 0.1] {
+                let b = RootZone::new(depth, residual, 0.32, 0.451).unwrap();
+                for theta0 in [0.15, 0.23, 0.29, 0.4] {
+                    let mut theta = theta0;
+                    let (mut taken, mut drained) = (0.0, 0.0);
+                    for k in 0..8760 {
+                        // 0.5 mm/h, some hours of dew (−0.05 mm).
+                        let e = if k % 24 < 6 { -0.05 } else { 0.5 };
+                        let s = b.step(theta, 0.0, e, 3600.0);
+                        assert!(
+                            s.theta_m3_m3 >= residual,
+                            "d {depth}, θ_r {residual}, θ₀ {theta0}: step {k} θ {:e}",
+                            s.theta_m3_m3
+                        );
+                        taken += s.evaporation_mm;
+                        drained += s.drainage_mm;
+                        theta = s.theta_m3_m3;
+                    }
+                    let lost = b.storage_mm(theta0) - b.storage_mm(theta);
+                    assert!(
+                        (taken + drained - lost).abs() < 1e-9 * lost,
+                        "{taken} + {drained} vs {lost}"
+                    );
+                    assert!((theta - residual).abs() < 0.01, "dried to {theta}");
+                }
+            }
+        }
+    }
+
+    /// C₃ follows the texture's clay (Cosby et al. 1984 class means): the
+    /// loam keeps ISBA's 0.261; sandier soils drain faster, clayier slower,
+    /// in the order of their clay; a bucket of a texture drains with its
+    /// C₃ (the excess above field capacity after a day is `exp(−C₃)`).
+    #[test]
+    fn drainage_follows_the_texture() {
+        use SoilTexture::*;
+        let order = [
+            Sand,
+            LoamySand,
+            SandyLoam,
+            SiltLoam,
+            Loam,
+            SandyClayLoam,
+            SiltyClayLoam,
+            SandyClay,
+            SiltyClay,
+            Clay,
+        ];
+        let c3: Vec<f64> = order
+            .iter()
+            .map(|t| drainage_coefficient_c3(t.clay_pct()))
+            .collect();
+        assert!(c3.windows(2).all(|w| w[1] < w[0]), "{c3:?}");
+        assert_eq!(loam().drainage_c3, loam().with_texture(Loam).drainage_c3);
+        assert!((drainage_coefficient_c3(Clay.clay_pct()) - 0.0772).abs() < 5e-4);
+        assert!((drainage_coefficient_c3(Sand.clay_pct()) - 1.694).abs() < 5e-4);
+        for t in [Sand, Loam, Clay] {
+            let b = loam().with_texture(t);
+            let s = b.step(0.40, 0.0, 0.0, 86_400.0);
+            let expect = 0.32 + 0.08 * (-drainage_coefficient_c3(t.clay_pct())).exp();
+            assert!((s.theta_m3_m3 - expect).abs() < 1e-12, "{t:?}");
+        }
     }
 
     /// A soil of the pure power law `K = a/hⁿ` (ψ_s → 0, a = K_s ψ_s^n),
