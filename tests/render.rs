@@ -1168,7 +1168,7 @@ fn fast_radiometry_matches_the_spectral_reference_on_every_hit() {
     );
     let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
     // As a render builds them: by day, with the scattered sunlight.
-    let sun = irsig::render::path::PathSun::for_scene(cond.sun.as_ref(), &s, &geom);
+    let sun = irsig::render::path::PathSun::for_scene(cond.sun.as_ref());
     let paths = PathTables::new(
         &cond.atmosphere,
         &s,
@@ -1721,6 +1721,98 @@ fn glint_on_a_water_plane_lies_in_the_mirror_direction_of_the_computed_sun() {
     assert!(rel < 1e-3, "glint {got} vs {expected} W/m²/sr");
 }
 
+/// Issue 17: each pixel adds the sunlight scattered into its own path at
+/// its own scattering angle. An oblique camera 1500 m up over a 100°-wide
+/// field of view, 3.5–4.5 µm, rural aerosol, the sun 40° from the zenith:
+/// rays toward and away from the sun's azimuth at the same zenith see very
+/// different scattered sunlight, and the table's value at each ray's
+/// (range, height, Θ) is the exact single-scattering integral of that
+/// path (`Atmosphere::scattered_solar` with the ray's own relative
+/// azimuth) within the tabulation's error.
+#[test]
+fn each_pixel_adds_the_scattered_sunlight_of_its_own_scattering_angle() {
+    use irsig::atmosphere::{PathGeometry, Profile, Sun};
+    use irsig::render::path::{PathSun, PathTables};
+    let atmosphere = Atmosphere::standard(Profile::MidLatitudeSummer, 0.0).unwrap();
+    let s = sensor(
+        json!({"type": "frame", "name": "cam", "width": 16, "height": 16,
+        "fov_deg": 100.0, "position": [0.0, -1500.0, 1500.0], "look_at": [0.0, 0.0, 0.0],
+        "up": [0.0, 0.0, 1.0], "bands": [{"name": "MWIR", "response": [3.5, 4.5]}]}),
+    );
+    let bands = sensor_bands(&s, std::path::Path::new("."), 0.1, &Location::file("t")).unwrap();
+    let band = &bands[0];
+    // The sun 40° from the zenith toward the south-east (azimuth 135°).
+    let (sz, saz) = (40f64.to_radians(), 135f64.to_radians());
+    let dir = glam::DVec3::new(sz.sin() * saz.sin(), sz.sin() * saz.cos(), sz.cos());
+    let path_sun = PathSun::new(dir).unwrap();
+    let t = PathTables::new(
+        &atmosphere,
+        &s,
+        &bands,
+        0.0,
+        2000.0,
+        (0.0, 40.0),
+        Some(&path_sun),
+    )
+    .unwrap()
+    .expect("a path atmosphere");
+    let sc = t.scatter.as_ref().expect("scattered sunlight by day");
+    let sensor_at = glam::DVec3::new(0.0, -1500.0, 1500.0);
+    // Targets over the frame, on the ground and on roofs.
+    let mut worst = 0.0f64;
+    let mut by_target = Vec::new();
+    for (x, y, z) in [
+        (-1500.0, 0.0, 0.0),
+        (1500.0, 0.0, 0.0),
+        (-700.0, -900.0, 20.0),
+        (700.0, -900.0, 20.0),
+        (0.0, 300.0, 33.0),
+        (1200.0, 900.0, 7.0),
+        (-1200.0, 900.0, 7.0),
+        (0.0, -1200.0, 0.0),
+    ] {
+        let target = glam::DVec3::new(x, y, z);
+        let d = target - sensor_at;
+        let range = d.length();
+        let cos = sc.cos_theta(d.to_array());
+        let (_, total) = t.at(0, range, z, cos);
+        let (_, thermal) = {
+            let night = PathTables {
+                scatter: None,
+                ..t.clone()
+            };
+            night.at(0, range, z, cos)
+        };
+        let table = band.integrate(&total) - band.integrate(&thermal);
+        // The exact integral along this ray, its relative azimuth its own.
+        let rel_az = saz.to_degrees() - d.x.atan2(d.y).to_degrees();
+        let sun = Sun::new(40.0, rel_az, 1.0).unwrap();
+        let geom = PathGeometry {
+            sensor_altitude_m: 1500.0,
+            target_altitude_m: z,
+            range_m: range,
+        };
+        let exact = band.integrate(
+            &atmosphere
+                .scattered_solar(&geom, &sun, band.grid())
+                .unwrap(),
+        );
+        let r = (table - exact).abs() / exact;
+        worst = worst.max(r);
+        eprintln!(
+            "target ({x}, {y}, {z}): Θ {:.1}°, table {table:.5e}, exact {exact:.5e} ({:+.2} %)",
+            cos.acos().to_degrees(),
+            100.0 * (table / exact - 1.0)
+        );
+        by_target.push(exact);
+        assert!(r < 0.02, "({x}, {y}, {z}): {table} vs {exact}");
+    }
+    eprintln!("worst relative difference {worst:.2e}");
+    // East (toward the sun's side) and west at the same range and zenith:
+    // the forward-scattering side is much brighter.
+    assert!(by_target[1] > 1.3 * by_target[0], "{by_target:?}");
+}
+
 #[test]
 fn a_rooftop_gets_the_path_to_its_own_height_as_irsig_atmosphere_prints_it() {
     use irsig::atmosphere::Profile;
@@ -1780,13 +1872,13 @@ fn a_rooftop_gets_the_path_to_its_own_height_as_irsig_atmosphere_prints_it() {
         .unwrap()
         .expect("a path atmosphere");
         assert!(t.heights_m.len() >= 3, "{:?}", t.heights_m);
-        let (tau, lu) = t.at(0, 950.0, 50.0);
+        let (tau, lu) = t.at(0, 950.0, 50.0, 1.0);
         let (tau, lu) = (band.mean(&tau), band.integrate(&lu));
         let rel = |a: f64, b: f64| (a - b).abs() / b;
         assert!(rel(tau, roof_tau) < 1e-3, "{kind}: τ {tau} vs {roof_tau}");
         assert!(rel(lu, roof_lu) < 1e-3, "{kind}: L_u {lu} vs {roof_lu}");
         // The ground below keeps its own (longer, more opaque) path.
-        let (g, _) = t.at(0, 1000.0, 0.0);
+        let (g, _) = t.at(0, 1000.0, 0.0, 1.0);
         assert!(rel(band.mean(&g), ground_tau) < 1e-3);
     }
 }
@@ -2063,10 +2155,33 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
                         .collect()
                 })
                 .collect();
+            // By day (half the cases), random scattered sunlight per node
+            // and scattering-angle node, toward a random sun.
+            let scatter = (rng.u(2) == 0).then(|| {
+                let z = rng.f(0.1, 1.0);
+                let (s, c) = rng.f(0.0, std::f64::consts::TAU).sin_cos();
+                let h = (1.0 - z * z).sqrt();
+                irsig::render::path::PathScatter {
+                    sun_direction: [h * c, h * s, z],
+                    bands: bands
+                        .iter()
+                        .map(|b| {
+                            (0..nodes)
+                                .map(|_| {
+                                    (0..irsig::atmosphere::ANGLE_NODES)
+                                        .map(|_| (0..b.len()).map(|_| rng.f(0.0, 2.0)).collect())
+                                        .collect()
+                                })
+                                .collect()
+                        })
+                        .collect(),
+                }
+            });
             PathTables {
                 ranges_m,
                 heights_m,
                 bands,
+                scatter,
             }
         });
         // Rays at the square from all around (both faces), unit directions.
@@ -2135,6 +2250,22 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
                         .atmosphere
                         .sky_radiances_toward(c, &sky_node_zeniths_deg(), grid)
                         .unwrap(),
+                };
+                // By day, with the azimuthal mean of its scattered sunlight.
+                let sky_dir = match irsig::render::shade::scattered_sky_nodes(&cond, grid).unwrap()
+                {
+                    Some(t) => {
+                        let z = sun.map_or(0.0, |s| {
+                            (s.direction.normalize().z as f64).acos().to_degrees()
+                        });
+                        let mean = irsig::render::shade::scattered_sky_azimuth_mean(&t, z);
+                        sky_dir
+                            .iter()
+                            .zip(&mean)
+                            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x + y).collect())
+                            .collect()
+                    }
+                    None => sky_dir,
                 };
                 let sky_l = reflected_sky(&sky_dir, n.z as f64);
                 let e_s = match sun {
@@ -2213,7 +2344,8 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
                 leaving_radiance(&inputs, &mut leaving);
                 let want = match &path {
                     Some(p) => {
-                        let (tau, lu) = p.at(b, range, z);
+                        let (tau, lu) =
+                            p.at(b, range, z, p.cos_theta(ray.dir.as_dvec3().to_array()));
                         at_sensor(&leaving, &tau, &lu, band)
                     }
                     None => band.integrate(&leaving),

@@ -185,8 +185,7 @@ fn shade(
         session.scene.site.altitude_m,
         size as f64,
         crate::render::path::scene_heights(&session.scene.geometry),
-        crate::render::path::PathSun::for_scene(cond.sun.as_ref(), sensor, &session.scene.geometry)
-            .as_ref(),
+        crate::render::path::PathSun::for_scene(cond.sun.as_ref()).as_ref(),
     )?;
     let shader = Shader::new(
         session.tracer.as_ref(),

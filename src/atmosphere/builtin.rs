@@ -527,15 +527,45 @@ impl BuiltinAtmosphere {
         column: &SunColumn,
         cos_theta: f64,
     ) -> Result<(PathSpectra, Vec<f64>)> {
-        let mut out = vec![0.0; prepared.wl.len()];
+        let (p, mut out) = self.path_sunlit_angles(
+            prepared,
+            sensor_altitude_m,
+            target_altitude_m,
+            range_m,
+            column,
+            &[cos_theta],
+        )?;
+        Ok((p, out.pop().unwrap_or_default()))
+    }
+
+    /// [`BuiltinAtmosphere::path_sunlit`] at several scattering angles in
+    /// one march (the same values as one call per angle): L_ss(λ) for each
+    /// of `cos_thetas`, the cosines of the scattering angles.
+    pub fn path_sunlit_angles(
+        &self,
+        prepared: &PreparedGrid,
+        sensor_altitude_m: f64,
+        target_altitude_m: f64,
+        range_m: f64,
+        column: &SunColumn,
+        cos_thetas: &[f64],
+    ) -> Result<(PathSpectra, Vec<Vec<f64>>)> {
+        let n = prepared.wl.len();
+        let k = cos_thetas.len();
+        // Wavelength-major while marching (the angles of one wavelength
+        // adjacent), angle-major out.
+        let mut flat = vec![0.0; n * k];
         let p = self.march(
             prepared,
             sensor_altitude_m,
             target_altitude_m,
             range_m,
-            Some((column, cos_theta, &mut out)),
+            Some((column, cos_thetas, &mut flat)),
             None,
         )?;
+        let out = (0..k)
+            .map(|j| (0..n).map(|i| flat[i * k + j]).collect())
+            .collect();
         Ok((p, out))
     }
 
@@ -577,7 +607,9 @@ impl BuiltinAtmosphere {
     }
 
     /// The path march: τ and the thermal L_u, with the single-scattered
-    /// sunlight added to `scatter.2` when given, and the altitude and
+    /// sunlight at each scattering angle of `scatter.1` (cosines) added to
+    /// `scatter.2` (wavelength-major: `[i · angles + k]`) when given, and
+    /// the altitude and
     /// cumulative τ at the end of every segment pushed to `record`.
     fn march(
         &self,
@@ -585,7 +617,7 @@ impl BuiltinAtmosphere {
         sensor_altitude_m: f64,
         target_altitude_m: f64,
         range_m: f64,
-        mut scatter: Option<(&SunColumn, f64, &mut Vec<f64>)>,
+        mut scatter: Option<(&SunColumn, &[f64], &mut Vec<f64>)>,
         mut record: Option<&mut Vec<(f64, Vec<f64>)>>,
     ) -> Result<PathSpectra> {
         if !(range_m.is_finite() && range_m >= 0.0) {
@@ -640,9 +672,11 @@ impl BuiltinAtmosphere {
         let mut sca = vec![0.0; if scatter.is_some() { n } else { 0 }];
         let mut g_sca = sca.clone();
         let mut ray = sca.clone();
-        let p_ray = scatter
-            .as_ref()
-            .map_or(0.0, |s| scatter::rayleigh_phase(s.1));
+        // The Rayleigh phase function of each angle, and the
+        // Henyey–Greenstein one's cos Θ.
+        let p_ray: Vec<f64> = scatter.as_ref().map_or(Vec::new(), |s| {
+            s.1.iter().map(|&c| scatter::rayleigh_phase(c)).collect()
+        });
         let fixed_g = self.params.aerosol_asymmetry;
         // Fixed segment boundaries k·step from the sensor, so a longer path
         // shares all the segments of a shorter one (exact monotonicity).
@@ -729,20 +763,27 @@ impl BuiltinAtmosphere {
                 }
                 let new_tau = ((-cont[i]).exp() * t_lines).min(tau[i]);
                 lu[i] += self.planck.radiance(wl[i], t) * (tau[i] - new_tau);
-                if let (Some((col, cos_theta, out)), Some(at)) = (scatter.as_mut(), sun_at) {
+                if let (Some((col, cos_thetas, out)), Some(at)) = (scatter.as_mut(), sun_at) {
                     // Single scattering (module docs of `scatter`): the
                     // segment's scattering optical depth, phase-weighted,
                     // times the mean view transmittance over it.
-                    let p_aer = if sca[i] > 0.0 {
-                        let g = fixed_g.unwrap_or(g_sca[i] / sca[i]);
-                        sca[i] * scatter::henyey_greenstein(g, *cos_theta)
-                    } else {
-                        0.0
-                    };
                     let source = col.irradiance_toa[i] * col.transmittance_at(at, i)
-                        / (4.0 * std::f64::consts::PI);
-                    out[i] +=
-                        source * (p_aer + ray[i] * p_ray) * scatter::log_mean(tau[i], new_tau);
+                        / (4.0 * std::f64::consts::PI)
+                        * scatter::log_mean(tau[i], new_tau);
+                    let k = cos_thetas.len();
+                    let out = &mut out[i * k..(i + 1) * k];
+                    let r = source * ray[i];
+                    if sca[i] > 0.0 {
+                        let g = fixed_g.unwrap_or(g_sca[i] / sca[i]);
+                        let a = source * sca[i];
+                        for ((o, &c), &pr) in out.iter_mut().zip(*cos_thetas).zip(&p_ray) {
+                            *o += a * scatter::henyey_greenstein(g, c) + r * pr;
+                        }
+                    } else {
+                        for (o, &pr) in out.iter_mut().zip(&p_ray) {
+                            *o += r * pr;
+                        }
+                    }
                 }
                 tau[i] = new_tau;
             }

@@ -45,7 +45,7 @@ pub use aerosol::{Aerosol, AerosolModel};
 pub use builtin::{BuiltinAtmosphere, BuiltinParams, SurfaceMet};
 pub use lut::{Tape7Lut, Tape7Run};
 pub use profile::{Profile, ProfileLevel};
-pub use scatter::{Sun, SunColumn};
+pub use scatter::{ANGLE_NODES, Sun, SunColumn, angle_node, angle_node_cos};
 pub use table::PathTable;
 pub use tape7::{Tape7, Tape7Column, Tape7Mode};
 
@@ -333,6 +333,56 @@ impl Atmosphere {
         self.scattered_solar(&geom, sun, grid)
     }
 
+    /// The sky's single-scattered sunlight ([`scatter`]) arriving at the
+    /// ground from each of `zeniths_deg` (0 ≤ zenith < 90°, clamped to
+    /// [`MAX_SKY_ZENITH_DEG`]), at each scattering angle of `cos_thetas`
+    /// (cosines): `[zenith][angle]` spectra L_ss(λ), W·m⁻²·sr⁻¹·µm⁻¹, along
+    /// the path from the ground to the top of the model atmosphere
+    /// ([`Atmosphere::scattered_solar_up`]'s, one march per zenith for all
+    /// angles). `None` where there is none: no atmosphere, a tape7 table
+    /// (its sky runs hold their own), the sun at or below the horizon.
+    pub fn scattered_sky(
+        &self,
+        zeniths_deg: &[f64],
+        sun: &Sun,
+        cos_thetas: &[f64],
+        grid: &SpectralGrid,
+    ) -> Result<Option<Vec<Vec<Vec<f64>>>>> {
+        let Atmosphere::Builtin(b) = self else {
+            return Ok(None);
+        };
+        if let Some(z) = zeniths_deg
+            .iter()
+            .find(|z| !(z.is_finite() && (0.0..90.0).contains(*z)))
+        {
+            return Err(Error::invalid(
+                "zenith_deg",
+                format!("looking up needs 0 ≤ zenith < 90°, got {z}"),
+            ));
+        }
+        let p = self.prepare(grid);
+        let Some(column) = p.sun_column(sun)? else {
+            return Ok(None);
+        };
+        let ground = b.met().ground_altitude_m;
+        // The zeniths in parallel (the same values as in turn).
+        use rayon::prelude::*;
+        zeniths_deg
+            .par_iter()
+            .map(|&z| {
+                let z = z.min(MAX_SKY_ZENITH_DEG);
+                let geom = PathGeometry {
+                    sensor_altitude_m: ground,
+                    target_altitude_m: builtin::TOP_OF_ATMOSPHERE_M,
+                    range_m: (builtin::TOP_OF_ATMOSPHERE_M - ground) / z.to_radians().cos(),
+                };
+                let (_, ss) = p.path_sunlit_angles(&geom, Some(&column), cos_thetas)?;
+                Ok(ss.unwrap_or_else(|| vec![vec![0.0; grid.len()]; cos_thetas.len()]))
+            })
+            .collect::<Result<Vec<_>>>()
+            .map(Some)
+    }
+
     /// τ₂(λ) and L_u(λ) along `geom` on `grid`.
     pub fn path(&self, geom: &PathGeometry, grid: &SpectralGrid) -> Result<PathSpectra> {
         self.prepare(grid).path(geom)
@@ -404,6 +454,34 @@ impl PreparedPaths<'_> {
             .zip(ss)
             .for_each(|(l, s)| *l += s);
         Ok(p)
+    }
+
+    /// The thermal path along `geom` ([`PreparedPaths::path`]) and, apart,
+    /// the single-scattered sunlight of `column` at each scattering angle
+    /// of `cos_thetas` (cosines; one march for all): `None` without a
+    /// column, or with no atmosphere or a tape7 table.
+    pub fn path_sunlit_angles(
+        &self,
+        geom: &PathGeometry,
+        column: Option<&SunColumn>,
+        cos_thetas: &[f64],
+    ) -> Result<(PathSpectra, Option<Vec<Vec<f64>>>)> {
+        let (Some(col), Atmosphere::Builtin(b), Some(p)) = (column, self.atmosphere, &self.builtin)
+        else {
+            return Ok((self.path(geom)?, None));
+        };
+        if !(geom.range_m.is_finite() && geom.range_m >= 0.0) {
+            return Ok((self.path(geom)?, None));
+        }
+        let (p, ss) = b.path_sunlit_angles(
+            p,
+            geom.sensor_altitude_m,
+            geom.target_altitude_m,
+            geom.range_m,
+            col,
+            cos_thetas,
+        )?;
+        Ok((p, Some(ss)))
     }
 
     /// The single-scattered sunlight alone along `geom` (zeros without a

@@ -848,8 +848,7 @@ impl Session {
             self.scene.site.altitude_m,
             size as f64,
             super::path::scene_heights(&self.scene.geometry),
-            super::path::PathSun::for_scene(cond.sun.as_ref(), sensor, &self.scene.geometry)
-                .as_ref(),
+            super::path::PathSun::for_scene(cond.sun.as_ref()).as_ref(),
         )?;
         let shader = Shader::new(
             self.tracer.as_ref(),

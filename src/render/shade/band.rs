@@ -8,9 +8,11 @@ use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
 use super::reflected_sky::{TILT_NODES, tilt_at};
 use super::surface::{GreyFacet, PlanckTable, hit_sky, hit_temperature};
 use super::{BandTables, Shader};
+use crate::atmosphere::{ANGLE_NODES, scatter::angle_node_f32};
 use crate::material::Material;
 use crate::render::per_hit::HitState;
 use crate::trace::{Hit, Ray};
+use glam::Vec3;
 
 /// One band's tables for [`Shader::fast_primary`], single precision, the
 /// quadrature weights (response × trapezoid) folded in where they multiply.
@@ -35,6 +37,10 @@ pub(super) struct FastBand {
     /// ([`sky_node_cos`]), and downward (ground beyond), W·m⁻²·sr⁻¹.
     pub(super) miss_sky: Vec<f64>,
     pub(super) miss_ground: f64,
+    /// By day: the band radiance of the sky's scattered sunlight per sky
+    /// node `k` and scattering-angle node `a` at `[k · ANGLE_NODES + a]`,
+    /// W·m⁻²·sr⁻¹ (empty: none).
+    pub(super) miss_scatter: Vec<f64>,
     /// Per material: when its emissivity is the same at every wavelength
     /// of the band (at each angle row), the `ANGLE_ROWS` values.
     pub(super) grey: Vec<Option<Vec<f64>>>,
@@ -44,11 +50,23 @@ pub(super) struct FastBand {
 
 impl FastBand {
     /// The band radiance of the sky at fraction `f` from node `k` to node
-    /// `k + 1` (see [`sky_node`]).
+    /// `k + 1` (see [`super::sources::sky_node`]), the thermal sky
+    /// and the scattered sunlight at scattering-angle node and fraction
+    /// `(ka, fa)` ([`Shader::sky_angle`]).
     #[inline]
-    pub(super) fn miss_sky_at(&self, k: usize, f: f64) -> f64 {
+    pub(super) fn miss_sky_at(&self, k: usize, f: f64, (ka, fa): (usize, f64)) -> f64 {
         let (a, b) = (self.miss_sky[k], self.miss_sky[k + 1]);
-        a + f * (b - a)
+        let mut v = a + f * (b - a);
+        if !self.miss_scatter.is_empty() {
+            let s = &self.miss_scatter;
+            let at = |k: usize| {
+                let o = k * ANGLE_NODES + ka;
+                s[o] + fa * (s[o + 1] - s[o])
+            };
+            let (x, y) = (at(k), at(k + 1));
+            v += x + f * (y - x);
+        }
+        v
     }
 }
 
@@ -152,6 +170,10 @@ pub(super) struct GreyTables {
     pub(super) double_sided: Vec<bool>,
     /// Per material: transmissivity t.
     pub(super) tr: Vec<f32>,
+    /// By day: `Σ w·L_ss` of band `b` at path node `i`, scattering-angle
+    /// node `k` at `[(i · ANGLE_NODES + k) · bands + b]` (empty at night
+    /// or without a path: nothing to add).
+    pub(super) scatter: Vec<f32>,
 }
 
 impl GreyTables {
@@ -231,7 +253,29 @@ impl GreyTables {
                 .iter()
                 .map(|m| m.transmissivity.clamp(0.0, 1.0) as f32)
                 .collect(),
+            scatter: Vec::new(),
         }
+    }
+
+    /// These tables with the path's scattered sunlight `Σ w·L_ss`
+    /// (`scatter[b][i][k]`: band, path node, scattering-angle node; empty:
+    /// none) and the sun it needs (`None`: none).
+    pub(super) fn with_scatter(mut self, scatter: &[Vec<Vec<f64>>], sun: Option<Vec3>) -> Self {
+        let nb = self.bands;
+        if sun.is_none() || scatter.len() != nb || nb == 0 {
+            return self;
+        }
+        let nodes = scatter[0].len();
+        let mut v = vec![0f32; nodes * ANGLE_NODES * nb];
+        for (b, band) in scatter.iter().enumerate() {
+            for (i, angles) in band.iter().enumerate() {
+                for (k, &x) in angles.iter().enumerate() {
+                    v[(i * ANGLE_NODES + k) * nb + b] = x as f32;
+                }
+            }
+        }
+        self.scatter = v;
+        self
     }
 
     /// The range nodes bracketing range `r` (m): `(i, x)` with `r` at
@@ -395,6 +439,19 @@ fn grey_planck<const NB: usize>(pl: &[f32], o: usize, rs: usize, f: f32, rx: f32
         *v = lerp(lerp(a[b], a[NB + b], f), lerp(c[b], c[NB + b], f), rx);
     }
     v
+}
+
+/// One height node's scattered sunlight `Σw·L_ss` of band `b` of `nb`
+/// ([`GreyTables::scatter`]): linear in the scattering angle (fraction
+/// `fs` from the entries at `o`, angle node `ks`, to the next angle node's,
+/// `nb` on), then in range (fraction `rx`; the next range node
+/// `ANGLE_NODES·nb` on).
+#[inline(always)]
+fn grey_scatter(sc: &[f32], o: usize, nb: usize, b: usize, fs: f32, rx: f32) -> f32 {
+    let rs = ANGLE_NODES * nb;
+    let v0 = lerp(sc[o + b], sc[o + nb + b], fs);
+    let v1 = lerp(sc[o + rs + b], sc[o + rs + nb + b], fs);
+    lerp(v0, v1, rx)
 }
 
 /// Entries per path node of [`GreyTables::node`]: the reflected sky at
@@ -620,12 +677,18 @@ impl Shader<'_> {
     pub(super) fn grey_locate(&self, grey: &mut [GreyHit]) {
         let gt = &self.grey_tables;
         let rn = gt.range_nodes;
+        let lit = !gt.scatter.is_empty();
         for hit in grey {
             let (ri, rx) = gt.locate_binned(hit.range);
             let (ai, ax) = gt.locate_height(hit.z);
             hit.node = (ai * rn + ri - 1) as u32;
             hit.rx = rx;
             hit.ax = ax;
+            if lit {
+                let (k, f) = angle_node_f32(hit.fs);
+                hit.ks = k as u32;
+                hit.fs = f;
+            }
         }
     }
 
@@ -675,6 +738,8 @@ impl Shader<'_> {
         let rs = nt * NB;
         let two = gt.heights.len() >= 2;
         let (hp, hq) = (gt.range_nodes * nt * NB, NODE_TERMS * gt.range_nodes * NB);
+        let sct = &gt.scatter[..];
+        let hs = ANGLE_NODES * gt.range_nodes * NB;
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
@@ -701,6 +766,18 @@ impl Shader<'_> {
                     lu[b] = lerp(lu[b], lu1[b], p.ax);
                 }
             }
+            if !sct.is_empty() {
+                // The scattered sunlight of the ray's own angle.
+                let o = (p.n0 * ANGLE_NODES + hit.ks as usize) * NB;
+                for (b, lu) in lu.iter_mut().enumerate() {
+                    let mut v = grey_scatter(sct, o, NB, b, hit.fs, p.rx);
+                    if two {
+                        let v1 = grey_scatter(sct, o + hs, NB, b, hit.fs, p.rx);
+                        v = lerp(v, v1, p.ax);
+                    }
+                    *lu += v;
+                }
+            }
             let e = &ep[(p.mi * ANGLE_ROWS + p.a0) * NB..][..2 * NB];
             for b in 0..NB {
                 let eps = lerp(e[b], e[NB + b], p.ta);
@@ -720,6 +797,8 @@ impl Shader<'_> {
         let rs = nt * nb;
         let two = gt.heights.len() >= 2;
         let (hp, hq) = (gt.range_nodes * nt * nb, NODE_TERMS * gt.range_nodes * nb);
+        let sct = &gt.scatter[..];
+        let hs = ANGLE_NODES * gt.range_nodes * nb;
         for hit in &sc.grey {
             let i = hit.ray as usize;
             let p = self.grey_place(hit);
@@ -754,6 +833,14 @@ impl Shader<'_> {
                     sky = lerp(sky, sky1, p.ax);
                     sun = lerp(sun, sun1, p.ax);
                     lu = lerp(lu, lu1, p.ax);
+                }
+                if !sct.is_empty() {
+                    let o = (p.n0 * ANGLE_NODES + hit.ks as usize) * nb;
+                    let mut v = grey_scatter(sct, o, nb, b, hit.fs, p.rx);
+                    if two {
+                        v = lerp(v, grey_scatter(sct, o + hs, nb, b, hit.fs, p.rx), p.ax);
+                    }
+                    lu += v;
                 }
                 let r = (1.0 - eps - tr).max(0.0);
                 let env = g.big_f * sky + one_f * bg;
@@ -814,6 +901,30 @@ impl Shader<'_> {
             }
             _ => None,
         };
+        // The scattered sunlight of the ray's own angle, by day: per band
+        // `Σw·L_ss` linear in the angle, then range, then height.
+        let (ks, fs) = match self.fast_path.as_ref().and_then(|p| p.sun) {
+            Some(sun) => {
+                let (k, f) = angle_node_f32(ray.dir.dot(sun) / ray.dir.length());
+                (k, f as f64)
+            }
+            None => (0, 0.0),
+        };
+        let scattered = |b: usize| -> f64 {
+            let (Some((n0, x, next, u)), Some(fp)) = (node, &self.fast_path) else {
+                return 0.0;
+            };
+            let Some(s) = fp.scatter.get(b) else {
+                return 0.0;
+            };
+            let lerp = |a: f64, b: f64, x: f64| a + x * (b - a);
+            let at = |n: usize| lerp(s[n][ks], s[n][ks + 1], fs);
+            let v = lerp(at(n0), at(n0 + 1), x);
+            match next {
+                Some(n1) => lerp(v, lerp(at(n1), at(n1 + 1), x), u),
+                None => v,
+            }
+        };
         for (b, fb) in self.fast.iter().enumerate() {
             if let Some(g) = &fb.grey[mi] {
                 // ε and r leave the sums: Σ q·ε·B(T) = ε·Σ q·B(T), …
@@ -851,7 +962,7 @@ impl Shader<'_> {
                 };
                 let env = big_f * sky + (1.0 - big_f) * bg;
                 let v = eps * bt + r * (env + sd * sun) + tr * env;
-                out[b] = (v + lu) as f32;
+                out[b] = (v + lu + scattered(b)) as f32;
                 continue;
             }
             let nl = fb.len;
@@ -880,7 +991,7 @@ impl Shader<'_> {
                     tr as f32,
                 ) as f64
             };
-            out[b] = match (node, &self.fast_path) {
+            out[b] = (match (node, &self.fast_path) {
                 (Some((n0, x, next, u)), Some(fp)) => {
                     let at = |n0: usize| {
                         let (q, w) = (&fp.weighted_tau[b], &fp.path_radiance[b]);
@@ -893,7 +1004,7 @@ impl Shader<'_> {
                     }
                 }
                 _ => sum_with(&fb.w, &fb.w, 0.0),
-            } as f32;
+            } + scattered(b)) as f32;
         }
         Ok(())
     }

@@ -126,13 +126,20 @@ impl Shader<'_> {
         // path; the others to `special`.
         let ph = self.conditions.per_hit.as_deref();
         let beta = self.pixel_angle_rad;
+        // cos Θ of a ray's scattering angle, by day with a path.
+        let sun_sc = self.fast_path.as_ref().and_then(|p| p.sun);
+        let cos_sc = |ray: &Ray| match sun_sc {
+            Some(s) => ray.dir.dot(s) / ray.dir.length(),
+            None => 1.0,
+        };
         for (i, (ray, hit)) in rays.iter().zip(hits).enumerate() {
             let Some(h) = hit else {
                 let up = ray.dir.z >= 0.0;
                 let (k, f) = sky_node(ray.dir.z as f64, ray.dir.length() as f64);
+                let ka = self.sky_angle(ray.dir);
                 for (b, fb) in self.fast.iter().enumerate() {
                     out[b * n + i] = if up {
-                        fb.miss_sky_at(k, f)
+                        fb.miss_sky_at(k, f, ka)
                     } else {
                         fb.miss_ground
                     } as f32;
@@ -151,7 +158,8 @@ impl Shader<'_> {
                 {
                     let z = ray.origin.z + ray.dir.z * h.t;
                     let dn = ray.dir.dot(h.ng);
-                    sc.grey.push(GreyHit::new(i, f, [dn, n2, range, z], false));
+                    sc.grey
+                        .push(GreyHit::new(i, f, [dn, n2, range, z, cos_sc(ray)], false));
                     continue;
                 }
             }
@@ -201,8 +209,12 @@ impl Shader<'_> {
                 let range = h.t * ray.dir.length();
                 let z = ray.origin.z + ray.dir.z * h.t;
                 let dn = ray.dir.dot(h.ng);
-                sc.grey
-                    .push(GreyHit::new(i, f, [dn, n2, range, z], vis == Some(0.0)));
+                sc.grey.push(GreyHit::new(
+                    i,
+                    f,
+                    [dn, n2, range, z, cos_sc(ray)],
+                    vis == Some(0.0),
+                ));
                 continue;
             }
             if self.fast_general(ray, h, None, vis, &mut sc.bands).is_err() {

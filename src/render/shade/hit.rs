@@ -124,17 +124,23 @@ pub(super) struct GreyHit {
     pub(super) node: u32,
     pub(super) rx: f32,
     pub(super) ax: f32,
+    /// By day with a path: cos Θ of the ray's scattering angle, then
+    /// ([`Shader::grey_locate`]) the fraction toward scattering-angle node
+    /// `ks + 1` ([`crate::atmosphere::angle_node`]).
+    pub(super) fs: f32,
+    pub(super) ks: u32,
 }
 
 impl GreyHit {
     /// A hit of ray `ray` on facet `facet` before [`Shader::shade_fast`]'s
     /// later passes: `dn` = `d·n_g`, `n2` = `|d|²·|n_g|²`, slant range
-    /// (m), height `z` (m).
+    /// (m), height `z` (m), `cs` = cos Θ of the ray's scattering angle
+    /// (1 with no scattered sunlight).
     #[inline]
     pub(super) fn new(
         ray: usize,
         facet: usize,
-        [dn, n2, range, z]: [f32; 4],
+        [dn, n2, range, z, cs]: [f32; 5],
         shaded: bool,
     ) -> Self {
         GreyHit {
@@ -148,6 +154,8 @@ impl GreyHit {
             node: 0,
             rx: 0.0,
             ax: 0.0,
+            fs: cs,
+            ks: 0,
         }
     }
 }

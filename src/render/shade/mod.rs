@@ -87,7 +87,8 @@ pub use reflected_sky::{
     tilt_position,
 };
 pub use sources::{
-    SUN_RAY_THRESHOLD, beam_attenuation, clear_sky_dni_w_m2, solar_spectrum, surface_solar_spectrum,
+    SUN_RAY_THRESHOLD, beam_attenuation, clear_sky_dni_w_m2, scattered_sky_azimuth_mean,
+    scattered_sky_nodes, solar_spectrum, surface_solar_spectrum,
 };
 pub use surface::PLANCK_TABLE_STEP_K;
 pub use truth::TruthOut;
@@ -118,6 +119,12 @@ struct BandTables {
     /// Sky spectral radiance arriving from each of the [`SKY_NODES`]
     /// directions ([`sky_node_cos`]): what a ray leaving the scene sees.
     sky_dir: Vec<Vec<f64>>,
+    /// By day: the sky's scattered sunlight per sky node and
+    /// scattering-angle node, `sky_scatter[k][a]` spectra
+    /// ([`scattered_sky_nodes`]; empty: none). Rays leaving the scene add
+    /// it at their own angle; the reflected sky `sky_tilt` holds its
+    /// azimuthal mean ([`scattered_sky_azimuth_mean`]).
+    sky_scatter: Vec<Vec<Vec<f64>>>,
     /// Ground-beyond-the-scene spectral radiance.
     ground: Vec<f64>,
     /// Solar spectral irradiance at the surface, normal to the sun.
@@ -166,6 +173,9 @@ pub struct Shader<'a> {
     /// Per facet: what [`Shader::shade_fast`] does with a hit on it, one
     /// byte of `RULE_*` flags ([`Shader::facet_rules`]).
     rule: Vec<u8>,
+    /// Unit vector toward the sun while the sky holds scattered sunlight
+    /// ([`BandTables::sky_scatter`]).
+    sky_sun: Option<Vec3>,
 }
 
 /// [`Shader::rule`]: the facet is on the grey path ([`grey_facets`]).
@@ -194,6 +204,33 @@ fn facet_tilts(geometry: &SceneGeometry) -> Vec<f32> {
             })
         })
         .collect()
+}
+
+/// The thermal sky arriving from each of the [`SKY_NODES`] directions on
+/// `band`'s grid: a blackbody for [`Sky::Blackbody`], else the
+/// atmosphere's directional sky.
+fn sky_directions(
+    conditions: &Conditions,
+    planck: &Planck,
+    band: &Band,
+) -> crate::Result<Vec<Vec<f64>>> {
+    match &conditions.sky {
+        Sky::Blackbody { temperature_k } => {
+            let sky: Vec<f64> = band
+                .wavelengths_um()
+                .iter()
+                .map(|&l| planck.radiance(l, *temperature_k))
+                .collect();
+            Ok(vec![sky; SKY_NODES])
+        }
+        // (One call for all directions: each call computes the broadband
+        // scale, which costs more than several directions.)
+        Sky::Atmosphere(c) => {
+            conditions
+                .atmosphere
+                .sky_radiances_toward(c, &sky_node_zeniths_deg(), band.grid())
+        }
+    }
 }
 
 impl std::fmt::Debug for Shader<'_> {
@@ -250,25 +287,12 @@ impl<'a> Shader<'a> {
             .par_iter()
             .map(|band| -> crate::Result<_> {
                 let wl = band.wavelengths_um();
-                let (sky_dir, sun) = rayon::join(
-                    || -> crate::Result<Vec<Vec<f64>>> {
-                        match &conditions.sky {
-                            Sky::Blackbody { temperature_k } => {
-                                let sky: Vec<f64> = wl
-                                    .iter()
-                                    .map(|&l| planck.radiance(l, *temperature_k))
-                                    .collect();
-                                Ok(vec![sky; SKY_NODES])
-                            }
-                            // (One call for all directions: each call
-                            // computes the broadband scale, which costs
-                            // more than several directions.)
-                            Sky::Atmosphere(c) => conditions.atmosphere.sky_radiances_toward(
-                                c,
-                                &sky_node_zeniths_deg(),
-                                band.grid(),
-                            ),
-                        }
+                let ((sky_dir, sky_scatter), sun) = rayon::join(
+                    || {
+                        rayon::join(
+                            || sky_directions(conditions, &planck, band),
+                            || scattered_sky_nodes(conditions, band.grid()),
+                        )
                     },
                     || match conditions.sun {
                         Some(s) if s.direction.z > 0.0 => {
@@ -278,7 +302,26 @@ impl<'a> Shader<'a> {
                     },
                 );
                 let sky_dir = sky_dir?;
-                let sky_tilt = reflected_sky::tilt_table(&sky_dir);
+                let sky_scatter = sky_scatter?.unwrap_or_default();
+                // The reflected sky: the thermal sky with the azimuthal
+                // mean of the scattered sunlight.
+                let sky_tilt = if sky_scatter.is_empty() {
+                    reflected_sky::tilt_table(&sky_dir)
+                } else {
+                    let zenith = conditions.sun.map_or(90.0, |s| {
+                        (s.direction.normalize_or_zero().z as f64)
+                            .clamp(-1.0, 1.0)
+                            .acos()
+                            .to_degrees()
+                    });
+                    let mean = scattered_sky_azimuth_mean(&sky_scatter, zenith);
+                    let total: Vec<Vec<f64>> = sky_dir
+                        .iter()
+                        .zip(&mean)
+                        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x + y).collect())
+                        .collect();
+                    reflected_sky::tilt_table(&total)
+                };
                 let ground = wl
                     .iter()
                     .map(|&l| planck.radiance(l, conditions.ground_temperature_k))
@@ -293,17 +336,19 @@ impl<'a> Shader<'a> {
                         rows
                     })
                     .collect();
-                Ok((sky_tilt, sky_dir, ground, sun?, eps))
+                Ok((sky_tilt, sky_dir, sky_scatter, ground, sun?, eps))
             })
             .collect::<crate::Result<Vec<_>>>()?;
         let mut tables = Vec::with_capacity(bands.len());
         let mut wavelengths = Vec::new();
-        for (band, (sky_tilt, sky_dir, ground, sun, eps)) in bands.iter().zip(sources) {
+        for (band, (sky_tilt, sky_dir, sky_scatter, ground, sun, eps)) in bands.iter().zip(sources)
+        {
             tables.push(BandTables {
                 band: band.clone(),
                 start: wavelengths.len(),
                 sky_tilt,
                 sky_dir,
+                sky_scatter,
                 ground,
                 sun,
                 eps,
@@ -392,6 +437,11 @@ impl<'a> Shader<'a> {
                     eps: t.eps.iter().map(|e| pad(e)).collect(),
                     miss_sky: t.sky_dir.iter().map(|v| t.band.integrate(v)).collect(),
                     miss_ground: t.band.integrate(&t.ground),
+                    miss_scatter: t
+                        .sky_scatter
+                        .iter()
+                        .flat_map(|angles| angles.iter().map(|l| t.band.integrate(l)))
+                        .collect(),
                 }
             })
             .collect();
@@ -399,6 +449,10 @@ impl<'a> Shader<'a> {
             .sun
             .map(|s| s.direction.normalize_or_zero())
             .filter(|_| tables.iter().any(|t| t.sun.iter().any(|&e| e > 0.0)));
+        let sky_sun = conditions
+            .sun
+            .map(|s| s.direction.normalize_or_zero())
+            .filter(|_| tables.iter().any(|t| !t.sky_scatter.is_empty()));
         let glint_m2: Vec<f64> = optics
             .materials
             .iter()
@@ -443,6 +497,7 @@ impl<'a> Shader<'a> {
             sun_ray,
             glint_m2,
             rule: Vec::new(),
+            sky_sun,
         }
         .with_rules())
     }

@@ -19,6 +19,11 @@ pub(super) struct FastPath {
     pub(super) path_radiance: Vec<Vec<f64>>,
     /// Per band, per node: the band integrals weighted by `w·τ₂`.
     pub(super) integrals: Vec<Vec<Integrals>>,
+    /// By day: per band, per node, per scattering-angle node the band
+    /// scattered sunlight `Σ w·L_ss(Θ_k)`, W·m⁻²·sr⁻¹ (empty at night).
+    pub(super) scatter: Vec<Vec<Vec<f64>>>,
+    /// Unit vector toward the sun for the scattering angle (by day).
+    pub(super) sun: Option<glam::Vec3>,
 }
 
 impl Shader<'_> {
@@ -82,6 +87,22 @@ impl Shader<'_> {
                         .collect()
                 })
                 .collect(),
+            scatter: p.scatter.as_ref().map_or(Vec::new(), |sc| {
+                self.bands
+                    .iter()
+                    .zip(&sc.bands)
+                    .map(|(t, nodes)| {
+                        nodes
+                            .iter()
+                            .map(|angles| angles.iter().map(|l| t.band.integrate(l)).collect())
+                            .collect()
+                    })
+                    .collect()
+            }),
+            sun: p
+                .scatter
+                .as_ref()
+                .map(|sc| glam::DVec3::from_array(sc.sun_direction).as_vec3()),
         });
         if let (Some(p), Some(fp)) = (&path, &self.fast_path) {
             let nodes: Vec<Vec<(&Integrals, f64)>> = fp
@@ -96,7 +117,8 @@ impl Shader<'_> {
                 &p.ranges_m,
                 &p.heights_m,
                 &self.optics.materials,
-            );
+            )
+            .with_scatter(&fp.scatter, fp.sun);
             // The per-facet terms hold for the plain weights only.
             self.grey_terms = Vec::new();
         }

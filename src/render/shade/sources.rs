@@ -8,10 +8,11 @@
 use glam::Vec3;
 
 use super::band::FastBand;
-use super::conditions::{Conditions, SceneOptics, SunInput};
+use super::conditions::{Conditions, SceneOptics, Sky, SunInput};
 use super::surface::PlanckTable;
 use super::{BandTables, Shader};
 use crate::atmosphere::Atmosphere;
+use crate::atmosphere::{ANGLE_NODES, angle_node, angle_node_cos};
 use crate::radiometry::Planck;
 use crate::trace::{Coherence, Hit, Ray};
 
@@ -37,6 +38,70 @@ pub(super) fn sky_node(dz: f64, len: f64) -> (usize, f64) {
     let s = ((mu - mu0).max(0.0) / (1.0 - mu0)).min(1.0).sqrt() * (SKY_NODES - 1) as f64;
     let k = (s as usize).min(SKY_NODES - 2);
     (k, s - k as f64)
+}
+
+/// The sky's single-scattered sunlight on `grid` for the directional sky
+/// of a render: `[sky node][scattering-angle node]` spectra
+/// ([`crate::atmosphere::Atmosphere::scattered_sky`] at the [`SKY_NODES`]
+/// zeniths and the [`crate::atmosphere::ANGLE_NODES`] angles), the sun's
+/// beam dimmed by the weather as the direct sun is ([`beam_attenuation`]).
+/// `None` where the sky has none: a sky fixed by `sky_temperature_k`
+/// ([`Sky::Blackbody`]), no sun or no beam, no scattering model (no
+/// atmosphere, a tape7 table).
+pub fn scattered_sky_nodes(
+    conditions: &Conditions,
+    grid: &crate::radiometry::SpectralGrid,
+) -> crate::Result<Option<Vec<Vec<Vec<f64>>>>> {
+    let (Sky::Atmosphere(_), Some(sun)) = (&conditions.sky, &conditions.sun) else {
+        return Ok(None);
+    };
+    let zenith = sun_zenith_deg(sun);
+    let c = beam_attenuation(sun);
+    if !(zenith < 90.0 && c > 0.0) {
+        return Ok(None);
+    }
+    let s = crate::atmosphere::Sun::new(zenith, 0.0, 1.0)?.with_attenuation(c)?;
+    let cos: Vec<f64> = (0..ANGLE_NODES).map(angle_node_cos).collect();
+    conditions
+        .atmosphere
+        .scattered_sky(&super::sky_node_zeniths_deg(), &s, &cos, grid)
+}
+
+/// Azimuth steps of [`scattered_sky_azimuth_mean`] over 0–180°.
+const AZIMUTH_STEPS: usize = 90;
+
+/// The azimuthal mean of the sky's scattered sunlight at each sky node,
+/// from `table` (`[sky node][angle node]` spectra, [`scattered_sky_nodes`])
+/// and the sun at `sun_zenith_deg`: at zenith θ the direction of azimuth φ
+/// from the sun's has `cos Θ = cos θ_s·cos θ + sin θ_s·sin θ·cos φ`, and
+/// the mean over φ is the midpoint rule on [`AZIMUTH_STEPS`] steps of
+/// 0–180° (the sky is symmetric about the sun's vertical plane), each
+/// angle interpolated as the rays' ([`angle_node`]). What a diffuse
+/// surface reflects of it ([`super::reflected_sky`]) is taken from this
+/// mean: its projected-cosine weight over a zenith ring is then the
+/// ring's mean times the ring's weight, exact for a horizontal facet and
+/// an approximation for a tilted one (whose weight favours one azimuth).
+pub fn scattered_sky_azimuth_mean(table: &[Vec<Vec<f64>>], sun_zenith_deg: f64) -> Vec<Vec<f64>> {
+    let (ss, cs) = sun_zenith_deg.to_radians().sin_cos();
+    table
+        .iter()
+        .enumerate()
+        .map(|(zn, angles)| {
+            let n = angles.first().map_or(0, Vec::len);
+            let mu = sky_node_cos(zn);
+            let st = (1.0 - mu * mu).max(0.0).sqrt();
+            let mut mean = vec![0.0; n];
+            for j in 0..AZIMUTH_STEPS {
+                let phi = std::f64::consts::PI * (j as f64 + 0.5) / AZIMUTH_STEPS as f64;
+                let (k, f) = angle_node(cs * mu + ss * st * phi.cos());
+                for ((m, &a), &b) in mean.iter_mut().zip(&angles[k]).zip(&angles[k + 1]) {
+                    *m += a + f * (b - a);
+                }
+            }
+            mean.iter_mut().for_each(|m| *m /= AZIMUTH_STEPS as f64);
+            mean
+        })
+        .collect()
 }
 
 /// Solar spectral irradiance on a surface normal to the sun, W·m⁻²·µm⁻¹:
@@ -299,12 +364,24 @@ impl Shader<'_> {
     /// ground beyond below it (no path, as [`Shader::shade_primary`]).
     pub fn fast_miss(&self, ray: &Ray, out: &mut [f32]) {
         let (k, f) = sky_node(ray.dir.z as f64, ray.dir.length() as f64);
+        let ka = self.sky_angle(ray.dir);
         for (o, fb) in out.iter_mut().zip(&self.fast) {
             *o = if ray.dir.z >= 0.0 {
-                fb.miss_sky_at(k, f)
+                fb.miss_sky_at(k, f, ka)
             } else {
                 fb.miss_ground
             } as f32;
+        }
+    }
+
+    /// The scattering-angle node and fraction of a ray of direction `dir`
+    /// leaving the scene, for the sky's scattered sunlight (`(0, 0)` where
+    /// the sky has none).
+    #[inline]
+    pub(super) fn sky_angle(&self, dir: Vec3) -> (usize, f64) {
+        match self.sky_sun {
+            Some(s) => angle_node((dir.dot(s) / dir.length()) as f64),
+            None => (0, 0.0),
         }
     }
 
@@ -319,6 +396,17 @@ impl Shader<'_> {
                 let (a, b) = (&t.sky_dir[k], &t.sky_dir[k + 1]);
                 for ((o, &a), &b) in o.iter_mut().zip(a).zip(b) {
                     *o = a + f * (b - a);
+                }
+                if let (Some(s), false) = (self.sky_sun, t.sky_scatter.is_empty()) {
+                    // The scattered sunlight of the ray's own angle: linear
+                    // in the angle, then in cos θ.
+                    let (ka, fa) = angle_node((dir.dot(s) / dir.length()) as f64);
+                    let (a, b) = (&t.sky_scatter[k], &t.sky_scatter[k + 1]);
+                    for (j, o) in o.iter_mut().enumerate() {
+                        let at = |r: &[Vec<f64>]| r[ka][j] + fa * (r[ka + 1][j] - r[ka][j]);
+                        let (x, y) = (at(a), at(b));
+                        *o += x + f * (y - x);
+                    }
                 }
             } else {
                 o.copy_from_slice(&t.ground);

@@ -22,9 +22,10 @@ impl Shader<'_> {
             let Some(h) = hit else { continue };
             let range = (h.t * ray.dir.length()) as f64;
             let z = (ray.origin.z + ray.dir.z * h.t) as f64;
+            let cos_theta = p.cos_theta(ray.dir.as_dvec3().to_array());
             for (b, t) in self.bands.iter().enumerate() {
                 let s = &mut out[i * n + t.start..i * n + t.start + t.band.len()];
-                p.apply(b, range, z, s);
+                p.apply(b, range, z, cos_theta, s);
             }
         }
     }
