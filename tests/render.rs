@@ -2143,7 +2143,7 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
                 vec![-12.0, rng.f(-5.0, 5.0), 12.0]
             };
             let nodes = ranges_m.len() * heights_m.len();
-            let bands = bands
+            let path_bands: Vec<Vec<(Vec<f64>, Vec<f64>)>> = bands
                 .iter()
                 .map(|b| {
                     (0..nodes)
@@ -2180,7 +2180,7 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
             PathTables {
                 ranges_m,
                 heights_m,
-                bands,
+                bands: path_bands,
                 scatter,
             }
         });
