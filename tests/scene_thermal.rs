@@ -1013,6 +1013,37 @@ fn solve_scene_from_a_scene_file() {
     let sun_z = irsig::exposure::sun_directions(&scene.site, &[scene.time]).unwrap()[0].z;
     assert!((cos[up] - sun_z).abs() < 1e-5);
     assert!(bg.iter().all(|&b| b > air - 20.0 && b < 335.0));
+    // Every material's exchange settled (issue 16), so no warning; an
+    // unsettled property set is named by its material, object and part
+    // (the solved parts in order: the fixed `top` has none).
+    use irsig::render::scene_thermal::unsettled_exchange_warnings;
+    assert!(r.temperatures.unsettled_exchanges.is_empty());
+    assert!(unsettled_exchange_warnings(&scene, &r.temperatures).is_empty());
+    let solved: Vec<usize> = (0..scene.parts.len())
+        .filter(|&i| scene.parts[i].fixed_temperature_k.is_none())
+        .collect();
+    assert!(solved.iter().all(|&i| scene.parts[i].name != "top"));
+    let mut stuck = r.temperatures.clone();
+    let passes = irsig::thermal::Passes {
+        count: 32,
+        residual_k: 3.5e-3,
+        settled: false,
+        tolerance_k: 1e-4,
+    };
+    stuck.unsettled_exchanges = (0..solved.len()).map(|set| (set, passes)).collect();
+    let w = unsettled_exchange_warnings(&scene, &stuck);
+    assert_eq!(w.len(), solved.len());
+    for (text, &i) in w.iter().zip(&solved) {
+        let part = &scene.parts[i];
+        let material = &scene.part_material(i).name;
+        for name in [material, &scene.objects[part.object].name, &part.name] {
+            assert!(text.contains(&format!("`{name}`")), "{text}");
+        }
+        assert!(
+            text.contains("3.50e-3 K") && text.contains("32 passes"),
+            "{text}"
+        );
+    }
     // Without weather, the error names the scene file and the field.
     std::fs::write(&path, text("")).unwrap();
     let scene = Scene::load(&path).unwrap();

@@ -175,6 +175,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .run(&args.out, &options)
         .for_flags(&[("sensor", "--sensor"), ("state", "--state")])
         .with_context(|| format!("rendering {}", args.scene.display()))?;
+    for w in &session.warnings {
+        eprintln!("warning: {w}");
+    }
     if !args.quiet {
         let t = &session.timings;
         for s in &stems {

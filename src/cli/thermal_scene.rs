@@ -101,6 +101,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ("times", "--times"),
     ])
     .with_context(|| format!("thermal-scene {}", args.scene.display()))?;
+    for w in &session.warnings {
+        eprintln!("warning: {w}");
+    }
     if !args.quiet {
         match outcome {
             Outcome::Wrote(p) => eprintln!(

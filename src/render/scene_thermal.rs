@@ -1027,6 +1027,7 @@ fn solve_windows(
         surface_temperature_k: vec![Vec::new(); history.windows.len()],
         passes: Vec::new(),
         point_response: None,
+        unsettled_exchanges: Vec::new(),
     };
     let mut responses: Vec<Option<ImageResponse>> = vec![None; history.windows.len()];
     // The image time whose solve serves each image time (itself, or the
@@ -1097,6 +1098,13 @@ fn solve_windows(
             .next()
             .unwrap_or_default();
         add_passes(&mut out.passes, &r.passes);
+        for (set, passes) in r.unsettled_exchanges {
+            match out.unsettled_exchanges.iter_mut().find(|(s, _)| *s == set) {
+                Some((_, q)) if q.residual_k < passes.residual_k => *q = passes,
+                Some(_) => {}
+                None => out.unsettled_exchanges.push((set, passes)),
+            }
+        }
         out.surface_temperature_k[i] = t;
         responses[i] = pr;
     }
@@ -1106,7 +1114,39 @@ fn solve_windows(
             responses[i] = responses[j].clone();
         }
     }
+    out.unsettled_exchanges.sort_by_key(|(s, _)| *s);
     Ok((out, responses))
+}
+
+/// `warning:` texts for the property sets of `scene`'s thermal setup
+/// ([`FacetThermalSetup::from_scene`]: one per part without a fixed
+/// temperature, in part order) whose exchange's reference passes stopped on
+/// their cap without settling (`temperatures`'
+/// [`SceneTemperatures::unsettled_exchanges`]), each naming the material,
+/// object and part, the residual and the passes.
+pub fn unsettled_exchange_warnings(scene: &Scene, temperatures: &SceneTemperatures) -> Vec<String> {
+    let solved: Vec<usize> = (0..scene.parts.len())
+        .filter(|&i| scene.parts[i].fixed_temperature_k.is_none())
+        .collect();
+    temperatures
+        .unsettled_exchanges
+        .iter()
+        .filter_map(|(set, passes)| {
+            let name = match solved.get(*set) {
+                Some(&i) => {
+                    let part = &scene.parts[i];
+                    format!(
+                        "`{}` (object `{}`, part `{}`)",
+                        scene.part_material(i).name,
+                        scene.objects[part.object].name,
+                        part.name
+                    )
+                }
+                None => format!("of property set {set}"),
+            };
+            passes.warning(&name)
+        })
+        .collect()
 }
 
 /// The wind reduction of every facet ([`crate::thermal::wind`]): its

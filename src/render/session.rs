@@ -538,6 +538,10 @@ pub struct Session {
     file_hash: u64,
     /// Timings so far.
     pub timings: Timings,
+    /// Warnings of the thermal solves so far, each once (for a
+    /// `warning:` line): the materials whose exchange with the air did
+    /// not settle ([`super::scene_thermal::unsettled_exchange_warnings`]).
+    pub warnings: Vec<String>,
 }
 
 impl std::fmt::Debug for Session {
@@ -684,6 +688,7 @@ impl Session {
                 bvh_build,
                 ..Timings::default()
             },
+            warnings: Vec::new(),
         })
     }
 
@@ -712,7 +717,8 @@ impl Session {
     ) -> Result<ThermalStates> {
         let own = self.exposure_tracer()?;
         let t0 = Instant::now();
-        let states = scene_thermal(self, own, times, progress)?;
+        let (states, warnings) = scene_thermal(self, own, times, progress)?;
+        self.note_warnings(warnings);
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += states.timings.thermal;
         self.timings.reflected_shortwave += states.timings.reflected;
@@ -747,10 +753,23 @@ impl Session {
             progress,
         )?;
         let states = self.facet_states_of(&solved, &times)?;
+        self.note_warnings(super::scene_thermal::unsettled_exchange_warnings(
+            &self.scene,
+            &solved.temperatures,
+        ));
         self.timings.thermal += t0.elapsed();
         self.timings.thermal_solve += solved.timings.thermal;
         self.timings.reflected_shortwave += solved.timings.reflected;
         Ok(states)
+    }
+
+    /// Adds the warnings not yet noted to [`Session::warnings`].
+    pub(crate) fn note_warnings(&mut self, warnings: Vec<String>) {
+        for w in warnings {
+            if !self.warnings.contains(&w) {
+                self.warnings.push(w);
+            }
+        }
     }
 
     /// The tracer for the exposure's rays (solar history, sky view): rays
@@ -1065,7 +1084,7 @@ fn scene_thermal(
     exposure: Option<Box<dyn Tracer>>,
     times: &[DateTime<FixedOffset>],
     progress: &dyn Progress,
-) -> Result<ThermalStates> {
+) -> Result<(ThermalStates, Vec<String>)> {
     use super::scene_thermal::solve_scene_handing_over;
     let params = solve_params(session);
     let mut solved = solve_scene_handing_over(
@@ -1079,6 +1098,8 @@ fn scene_thermal(
     let states = session.facet_states_of(&solved, times)?;
     let mut out = session.conditions(&states)?;
     out.timings = solved.timings;
+    let warnings =
+        super::scene_thermal::unsettled_exchange_warnings(&session.scene, &solved.temperatures);
     // Per-hit temperatures need what only the solve has (each point's own
     // solar history is traced at render time against the solve's Green's
     // functions); a state folder holds per-facet values only.
@@ -1117,7 +1138,7 @@ fn scene_thermal(
             }
         }
     }
-    Ok(out)
+    Ok((out, warnings))
 }
 
 impl Session {

@@ -577,6 +577,10 @@ pub fn run_pass2(
     session.timings.thermal_solve += solved.timings.thermal;
     session.timings.reflected_shortwave += solved.timings.reflected;
     let states = session.facet_states_of(&solved, &times)?;
+    session.note_warnings(super::scene_thermal::unsettled_exchange_warnings(
+        &session.scene,
+        &solved.temperatures,
+    ));
     drop(solved);
     write_states(&path, &key, (k, n), &states.slice(range))?;
     let mut manifest = read_manifest(dir)?.unwrap_or(manifest);

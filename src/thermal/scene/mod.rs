@@ -48,7 +48,7 @@ pub use per_class::Dedup;
 use rayon::prelude::*;
 
 pub use crate::thermal::wind::FacetWind;
-use crate::thermal::{self, Exchange, Forcing, SlabProperties, SolveOptions, convection};
+use crate::thermal::{self, Exchange, Forcing, Passes, SlabProperties, SolveOptions, convection};
 use crate::{Error, Result};
 
 /// How a facet's temperature is obtained.
@@ -173,6 +173,11 @@ pub struct SceneTemperatures {
     /// sunlit history at one point of it ([`PointResponse`]; the
     /// linearised method only, `None` for the per-class one).
     pub point_response: Option<PointResponse>,
+    /// The property sets (indices into the caller's `props`) whose
+    /// exchange's reference passes stopped on their cap without settling
+    /// ([`crate::thermal::surface::Passes`]; the least settled twin of
+    /// each), in index order; empty when every one settled.
+    pub unsettled_exchanges: Vec<(usize, Passes)>,
 }
 
 /// The response of a facet's front temperature at the image records to a
@@ -272,6 +277,7 @@ pub fn solve_facet_temperatures<'a>(
     let WindSets {
         kinds,
         props,
+        origin,
         wind_class,
         orientation,
     } = WindSets::new(inputs, kinds, props);
@@ -306,7 +312,21 @@ pub fn solve_facet_temperatures<'a>(
         })
         .collect();
     let wind_class = set_class;
-    match &params.method {
+    // The caller's property sets whose reference passes stopped on their
+    // cap (the least settled twin of each), for a warning.
+    let mut unsettled: Vec<(usize, Passes)> = Vec::new();
+    for (e, &o) in exchanges.iter().zip(&origin) {
+        let Some(p) = e.passes.filter(|p| !p.settled) else {
+            continue;
+        };
+        match unsettled.iter_mut().find(|(i, _)| *i == o as usize) {
+            Some((_, q)) if q.residual_k < p.residual_k => *q = p,
+            Some(_) => {}
+            None => unsettled.push((o as usize, p)),
+        }
+    }
+    unsettled.sort_by_key(|(i, _)| *i);
+    let mut out = match &params.method {
         ThermalMethod::Linearized(lp) => linearized::solve(
             inputs,
             kinds,
@@ -329,7 +349,9 @@ pub fn solve_facet_temperatures<'a>(
             image_records,
             params,
         ),
-    }
+    }?;
+    out.unsettled_exchanges = unsettled;
+    Ok(out)
 }
 
 /// The property sets of a scene solve and each one's exchange with the
@@ -390,6 +412,8 @@ pub fn orientation_class(normal_z: f64, props: &SlabProperties) -> u32 {
 struct WindSets {
     kinds: Vec<FacetThermal>,
     props: Vec<SlabProperties>,
+    /// The caller's property set each of `props` is a twin of.
+    origin: Vec<u32>,
     wind_class: Vec<u32>,
     orientation: Vec<u32>,
 }
@@ -400,6 +424,7 @@ impl WindSets {
         let mut out = WindSets {
             kinds: Vec::with_capacity(kinds.len()),
             props: Vec::new(),
+            origin: Vec::new(),
             wind_class: Vec::new(),
             orientation: Vec::new(),
         };
@@ -416,6 +441,7 @@ impl WindSets {
                     let i = *twins.entry((pi, q, o)).or_insert(next);
                     if i == next {
                         out.props.push(*p);
+                        out.origin.push(pi);
                         out.wind_class.push(q);
                         out.orientation.push(o);
                     }

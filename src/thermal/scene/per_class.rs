@@ -162,6 +162,7 @@ pub(super) fn solve(
         surface_temperature_k: prev_image.expect("at least one pass"),
         passes,
         point_response: None,
+        unsettled_exchanges: Vec::new(),
     })
 }
 

@@ -292,6 +292,7 @@ pub(super) fn solve(
         surface_temperature_k: image,
         passes: stats,
         point_response: Some(point_response),
+        unsettled_exchanges: Vec::new(),
     })
 }
 
