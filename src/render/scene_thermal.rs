@@ -1099,11 +1099,7 @@ fn solve_windows(
             .unwrap_or_default();
         add_passes(&mut out.passes, &r.passes);
         for (set, passes) in r.unsettled_exchanges {
-            match out.unsettled_exchanges.iter_mut().find(|(s, _)| *s == set) {
-                Some((_, q)) if q.residual_k < passes.residual_k => *q = passes,
-                Some(_) => {}
-                None => out.unsettled_exchanges.push((set, passes)),
-            }
+            crate::thermal::scene::note_unsettled(&mut out.unsettled_exchanges, set, passes);
         }
         out.surface_temperature_k[i] = t;
         responses[i] = pr;
@@ -1114,7 +1110,6 @@ fn solve_windows(
             responses[i] = responses[j].clone();
         }
     }
-    out.unsettled_exchanges.sort_by_key(|(s, _)| *s);
     Ok((out, responses))
 }
 

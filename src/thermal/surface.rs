@@ -487,6 +487,25 @@ pub struct PassLimits {
     pub cap: usize,
 }
 
+impl PassLimits {
+    /// A positive finite tolerance and a cap of at least one pass.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming `passes.tolerance_k` or `passes.cap`.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.tolerance_k.is_finite() && self.tolerance_k > 0.0) {
+            return Err(Error::invalid(
+                "passes.tolerance_k",
+                format!("{}: expected > 0", self.tolerance_k),
+            ));
+        }
+        if self.cap == 0 {
+            return Err(Error::invalid("passes.cap", "0: expected at least 1"));
+        }
+        Ok(())
+    }
+}
+
 impl Default for PassLimits {
     /// [`REFERENCE_TOLERANCE_K`] and [`REFERENCE_PASSES`].
     fn default() -> Self {
@@ -683,15 +702,7 @@ impl Exchange {
         normal_z: f64,
         limits: PassLimits,
     ) -> Result<Exchange> {
-        if !(limits.tolerance_k.is_finite() && limits.tolerance_k > 0.0) {
-            return Err(Error::invalid(
-                "passes.tolerance_k",
-                format!("{}: expected > 0", limits.tolerance_k),
-            ));
-        }
-        if limits.cap == 0 {
-            return Err(Error::invalid("passes.cap", "0: expected at least 1"));
-        }
+        limits.validate()?;
         if props.surface.is_some_and(|s| s.two_source.is_some()) {
             return Exchange::two_source(props, forcing, limits);
         }
@@ -789,6 +800,7 @@ impl Exchange {
         limits: PassLimits,
     ) -> Result<Exchange> {
         use super::two_source;
+        limits.validate()?;
         let surface = props
             .surface
             .ok_or_else(|| Error::invalid("surface_energy", "a two-source canopy needs one"))?;

@@ -308,12 +308,10 @@ impl<'a> Shader<'a> {
                 let sky_tilt = if sky_scatter.is_empty() {
                     reflected_sky::tilt_table(&sky_dir)
                 } else {
-                    let zenith = conditions.sun.map_or(90.0, |s| {
-                        (s.direction.normalize_or_zero().z as f64)
-                            .clamp(-1.0, 1.0)
-                            .acos()
-                            .to_degrees()
-                    });
+                    let zenith = conditions
+                        .sun
+                        .as_ref()
+                        .map_or(90.0, sources::sun_zenith_deg);
                     let mean = scattered_sky_azimuth_mean(&sky_scatter, zenith);
                     let total: Vec<Vec<f64>> = sky_dir
                         .iter()

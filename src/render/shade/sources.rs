@@ -164,7 +164,7 @@ pub fn surface_solar_spectrum(
 }
 
 /// Solar zenith angle of `sun`, degrees.
-fn sun_zenith_deg(sun: &SunInput) -> f64 {
+pub(super) fn sun_zenith_deg(sun: &SunInput) -> f64 {
     let d = sun.direction.normalize_or_zero();
     (d.z as f64).clamp(-1.0, 1.0).acos().to_degrees()
 }
@@ -390,6 +390,8 @@ impl Shader<'_> {
     /// nodes) above the horizon, the ground beyond below it.
     pub fn miss_into(&self, dir: Vec3, out: &mut [f64]) {
         let (k, f) = sky_node(dir.z as f64, dir.length() as f64);
+        // The scattering angle once for every band.
+        let (ka, fa) = self.sky_angle(dir);
         for t in &self.bands {
             let o = &mut out[t.start..t.start + t.ground.len()];
             if dir.z >= 0.0 {
@@ -397,10 +399,9 @@ impl Shader<'_> {
                 for ((o, &a), &b) in o.iter_mut().zip(a).zip(b) {
                     *o = a + f * (b - a);
                 }
-                if let (Some(s), false) = (self.sky_sun, t.sky_scatter.is_empty()) {
+                if self.sky_sun.is_some() && !t.sky_scatter.is_empty() {
                     // The scattered sunlight of the ray's own angle: linear
                     // in the angle, then in cos θ.
-                    let (ka, fa) = angle_node((dir.dot(s) / dir.length()) as f64);
                     let (a, b) = (&t.sky_scatter[k], &t.sky_scatter[k + 1]);
                     for (j, o) in o.iter_mut().enumerate() {
                         let at = |r: &[Vec<f64>]| r[ka][j] + fa * (r[ka + 1][j] - r[ka][j]);

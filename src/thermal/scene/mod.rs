@@ -316,16 +316,10 @@ pub fn solve_facet_temperatures<'a>(
     // cap (the least settled twin of each), for a warning.
     let mut unsettled: Vec<(usize, Passes)> = Vec::new();
     for (e, &o) in exchanges.iter().zip(&origin) {
-        let Some(p) = e.passes.filter(|p| !p.settled) else {
-            continue;
-        };
-        match unsettled.iter_mut().find(|(i, _)| *i == o as usize) {
-            Some((_, q)) if q.residual_k < p.residual_k => *q = p,
-            Some(_) => {}
-            None => unsettled.push((o as usize, p)),
+        if let Some(p) = e.passes.filter(|p| !p.settled) {
+            note_unsettled(&mut unsettled, o as usize, p);
         }
     }
-    unsettled.sort_by_key(|(i, _)| *i);
     let mut out = match &params.method {
         ThermalMethod::Linearized(lp) => linearized::solve(
             inputs,
@@ -352,6 +346,17 @@ pub fn solve_facet_temperatures<'a>(
     }?;
     out.unsettled_exchanges = unsettled;
     Ok(out)
+}
+
+/// Adds property set `set`'s unsettled `passes` to `list` (kept in set
+/// order), keeping the larger residual where the set is there already (a
+/// twin, or another image window's solve).
+pub fn note_unsettled(list: &mut Vec<(usize, Passes)>, set: usize, passes: Passes) {
+    match list.binary_search_by_key(&set, |(s, _)| *s) {
+        Ok(i) if list[i].1.residual_k < passes.residual_k => list[i].1 = passes,
+        Ok(_) => {}
+        Err(i) => list.insert(i, (set, passes)),
+    }
 }
 
 /// The property sets of a scene solve and each one's exchange with the
