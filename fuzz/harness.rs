@@ -906,6 +906,7 @@ fn state_seeds() -> Vec<Vec<u8>> {
                 .to_vec(),
         },
         ground: vec![true, false, false, true, false],
+        exposed_back_shape_factor: vec![Some(0.5), None, None, Some(0.3), None],
         stats: ExposureStats::default(),
     };
     let p = dir.join("rays-1-of-1.arrow");

@@ -209,7 +209,11 @@ pub(crate) fn quad(
     first..m.indices.len()
 }
 
-fn area_mean(exp: &irsig::exposure::Exposure, ids: std::ops::Range<usize>, v: &[f32]) -> f64 {
+pub(crate) fn area_mean(
+    exp: &irsig::exposure::Exposure,
+    ids: std::ops::Range<usize>,
+    v: &[f32],
+) -> f64 {
     let (mut s, mut a) = (0.0f64, 0.0f64);
     for f in ids {
         s += (exp.facets.area[f] * v[f]) as f64;
@@ -296,7 +300,7 @@ fn tilted_plane_shape_factor() {
 /// height `h` facing each other; the middle `w`-long section is cut into
 /// 10 strips across the road / up each wall. Returns the geometry and the
 /// facet ranges of the road's and of one wall's middle sections.
-fn canyon(
+pub(crate) fn canyon(
     h: f32,
     w: f32,
 ) -> (

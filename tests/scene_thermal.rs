@@ -327,6 +327,7 @@ fn scene_inputs_that_do_not_fit_are_rejected() {
         double_sided: &ds,
         shape_factor: &f,
         back_shape_factor: &back,
+        exposed_back_shape_factor: &[],
         ground_weight: &ground,
         background_offsets: &offsets,
         background: &entries,
@@ -1301,4 +1302,209 @@ fn compact_sunlit_cosine_matches_with(points: u32) {
     }
     // Both kinds of record are exercised.
     assert!(lit >= 15 && dark >= 30, "lit {lit}, dark {dark}");
+}
+
+/// Issue 18: a single-sided wall whose back is exposed to the outdoor air
+/// (`BackBoundary::Exposed`) exchanges longwave with the sky through its
+/// back's own traced shape factor, not the slab model's `1 − F`. The walls
+/// of a street canyon of H/W = 1 (Masson 2000: `F = 0.293`) have their
+/// backs open to the outside, where a vertical face sees
+/// `(1 − cos 90°)/2 = 0.5` of the sky, not `1 − F = 0.707`. The render's
+/// pipeline traces it (`SceneThermal::exposed_back_shape_factor`, `None`
+/// for the road), and the scene solve it feeds gives the pipeline's
+/// temperatures bit for bit; forced back to `1 − F`, the wall's back sees
+/// more of the night sky (colder than the air: `L_sky = 0.75·σT_air⁴`
+/// here) and less of the background (pass 1: the air), so at night the
+/// wall with its traced back is warmer.
+#[test]
+fn exposed_back_takes_its_own_sky_view_in_the_scene_solve() {
+    use chrono::DateTime;
+    use irsig::render::scene_thermal::{
+        FacetThermalSetup, SceneThermalParams, solve_scene_temperatures,
+    };
+    use irsig::thermal::scene::SceneInputs;
+    let (weather, _) = irsig::weather::synth::town_history().unwrap();
+    let site = *weather.site().expect("the town history has a site");
+    let (geo, road, wall) = crate::exposure::canyon(10.0, 10.0);
+    let n = geo.facet_count();
+    // Every wall facet (both walls and their end sections) with an exposed
+    // back; the road on the deep ground.
+    let exp0 = compute_exposure(&Checked::new(&geo), &geo, &[], &[], &stratified(16)).unwrap();
+    let kinds: Vec<FacetThermal> = (0..n)
+        .map(|f| FacetThermal::Solve((exp0.facets.normal[f].z.abs() < 0.5) as u32))
+        .collect();
+    let setup = FacetThermalSetup {
+        kinds,
+        props: vec![asphalt(), brick().with_back(BackBoundary::BOTH_FACES)],
+        ..Default::default()
+    };
+    let night = DateTime::parse_from_rfc3339("2025-06-21T23:00:00-04:00").unwrap();
+    let params = SceneThermalParams {
+        exposure: stratified(1024),
+        ..Default::default()
+    };
+    let r = solve_scene_temperatures(
+        &Checked::new(&geo),
+        &geo,
+        &setup,
+        &weather,
+        &site,
+        &[night],
+        &params,
+    )
+    .unwrap();
+    let fb = &r.exposed_back_shape_factor;
+    assert_eq!(fb.len(), n);
+    for f in 0..n {
+        assert_eq!(
+            fb[f].is_some(),
+            setup.kinds[f] == FacetThermal::Solve(1),
+            "facet {f}"
+        );
+    }
+    assert!(road.clone().all(|f| fb[f].is_none()));
+    let back: Vec<f32> = fb.iter().map(|v| v.unwrap_or(f32::NAN)).collect();
+    let mean_back = crate::exposure::area_mean(&r.exposure, wall.clone(), &back);
+    let one_minus = 1.0 - crate::exposure::area_mean(&r.exposure, wall.clone(), r.shape_factor());
+    eprintln!("wall F_b {mean_back:.4} (exact 0.5), 1 − F {one_minus:.4}");
+    assert!((mean_back - 0.5).abs() <= 0.005, "{mean_back}");
+    assert!(one_minus > 0.69, "{one_minus}");
+    // The traced value reaches the solve: the scene solve on the pipeline's
+    // inputs gives its temperatures bit for bit, and without the traced
+    // values (the slab model's `1 − F`) other ones.
+    let forcing = Forcing::from_records(&r.records).unwrap();
+    let image = r.temperatures.image_records.clone();
+    let solve = |exposed: &[Option<f32>]| {
+        let mut inputs = SceneInputs::from(&r.exposure);
+        inputs.exposed_back_shape_factor = exposed;
+        solve_facet_temperatures(
+            inputs,
+            &r.setup.kinds,
+            &r.setup.props,
+            &forcing,
+            &image,
+            &params.thermal,
+        )
+        .unwrap()
+        .surface_temperature_k
+        .remove(0)
+    };
+    let traced = solve(fb);
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&traced), bits(r.surface_temperature_k(0)));
+    let old = solve(&[]);
+    let t_new = crate::exposure::area_mean(&r.exposure, wall.clone(), &traced);
+    let t_old = crate::exposure::area_mean(&r.exposure, wall.clone(), &old);
+    let air = weather.at(night).unwrap().air_temperature_k;
+    eprintln!("wall at 23:00: {t_new:.3} K (traced F_b), {t_old:.3} K (1 − F), air {air:.2} K");
+    // ΔF_b ≈ −0.21 of a sky ≈ 0.25·σT⁴ ≈ 95 W m⁻² colder than the air:
+    // ≈ 18 W m⁻² less loss from the back, tenths of a kelvin to a kelvin
+    // at the front of 0.2 m of brick.
+    assert!(t_new > t_old + 0.1, "{t_new} vs {t_old}");
+    assert!(t_new < t_old + 3.0, "{t_new} vs {t_old}");
+    // The road's back is the deep ground: it moves only through the walls'
+    // background in pass 2, far less.
+    let r_new = crate::exposure::area_mean(&r.exposure, road.clone(), &traced);
+    let r_old = crate::exposure::area_mean(&r.exposure, road.clone(), &old);
+    assert!(
+        (r_new - r_old).abs() < (t_new - t_old) / 2.0,
+        "{r_new} vs {r_old}"
+    );
+    // A value outside [0, 1] is refused, named.
+    let mut bad = fb.clone();
+    bad[wall.start] = Some(1.5);
+    let mut inputs = SceneInputs::from(&r.exposure);
+    inputs.exposed_back_shape_factor = &bad;
+    let e = inputs.validate().unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("exposed_back_shape_factor[{}]", wall.start)),
+        "{e}"
+    );
+}
+
+/// The state folder's rays file keeps each facet's exposed-back shape
+/// factor (column `exposed_back_shape_factor`, null for `1 − F`); a rays
+/// file written before the column existed reads as all `None` (the old
+/// `1 − F`), and a value outside [0, 1] is refused naming the file and the
+/// column.
+#[test]
+fn state_rays_keep_the_exposed_back_shape_factor() {
+    use irsig::exposure::{BackgroundEntry, ExposureStats, SkyView, SolarHistory};
+    use irsig::render::scene_thermal::FacetRays;
+    use irsig::render::state::{StateKey, read_rays, write_rays};
+    let key = StateKey {
+        scene_hash: "0123456789abcdef".into(),
+        times: vec!["2025-06-21T12:00:00-04:00".into()],
+        facets: 3,
+    };
+    let rays = |exposed: Vec<Option<f32>>| FacetRays {
+        range: 0..3,
+        solar: SolarHistory {
+            steps: 3,
+            facets: 3,
+            day: vec![1, 2],
+            points: 2,
+            lit: vec![0, 1, 2, 2, 1, 0],
+            ..SolarHistory::default()
+        },
+        sky: SkyView {
+            shape_factor: vec![1.0, 0.3, 0.29],
+            back_shape_factor: vec![None, None, None],
+            std_error: vec![0.0; 3],
+            ground_weight: vec![0.0; 3],
+            offsets: vec![0, 0, 1, 1],
+            entries: vec![BackgroundEntry {
+                facet: 2,
+                weight: 0.7,
+            }],
+        },
+        ground: vec![true, false, false],
+        exposed_back_shape_factor: exposed,
+        stats: ExposureStats::default(),
+    };
+    let dir = std::env::temp_dir().join(format!("irsig-exposed-back-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("rays-1-of-1.arrow");
+    let want = vec![None, Some(0.5), Some(0.4875)];
+    write_rays(&p, &key, (1, 1), &rays(want.clone())).unwrap();
+    let back = read_rays(&p, &key, (1, 1), 0..3).unwrap();
+    assert_eq!(back.exposed_back_shape_factor, want);
+    assert_eq!(back.sky.shape_factor, vec![1.0, 0.3, 0.29]);
+    // The same file without the column: every facet `None`.
+    let strip = |src: &std::path::Path, dst: &std::path::Path| {
+        let f = std::fs::File::open(src).unwrap();
+        let reader = arrow_ipc::reader::FileReader::try_new(f, None).unwrap();
+        let schema = reader.schema();
+        let batch = reader.into_iter().next().unwrap().unwrap();
+        let keep: Vec<usize> = (0..schema.fields().len())
+            .filter(|&i| schema.field(i).name() != "exposed_back_shape_factor")
+            .collect();
+        let batch = batch.project(&keep).unwrap();
+        let schema = batch
+            .schema()
+            .as_ref()
+            .clone()
+            .with_metadata(schema.metadata().clone());
+        let batch = batch.with_schema(std::sync::Arc::new(schema)).unwrap();
+        let out = std::fs::File::create(dst).unwrap();
+        let mut w = arrow_ipc::writer::FileWriter::try_new(out, &batch.schema()).unwrap();
+        w.write(&batch).unwrap();
+        w.finish().unwrap();
+    };
+    let old = dir.join("old");
+    std::fs::create_dir_all(&old).unwrap();
+    let po = old.join("rays-1-of-1.arrow");
+    strip(&p, &po);
+    let back = read_rays(&po, &key, (1, 1), 0..3).unwrap();
+    assert_eq!(back.exposed_back_shape_factor, vec![None; 3]);
+    // A fraction above 1 is refused, naming the file and the column.
+    write_rays(&p, &key, (1, 1), &rays(vec![None, Some(1.5), None])).unwrap();
+    let e = read_rays(&p, &key, (1, 1), 0..3).unwrap_err().to_string();
+    assert!(
+        e.contains("rays-1-of-1.arrow")
+            && e.contains("exposed_back_shape_factor")
+            && e.contains("1.5"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

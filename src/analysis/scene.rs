@@ -321,6 +321,9 @@ pub struct SceneStudy {
     history: Vec<WeatherRecord>,
     image_record: usize,
     exposure: Exposure,
+    /// The traced shape factor of each exposed back, as the render's
+    /// ([`FacetThermalSetup::exposed_back_shape_factor`]).
+    exposed_back: Vec<Option<f32>>,
     /// The wind at each facet, as the render's (empty: the weather's).
     wind: Vec<FacetWind>,
     kinds: Vec<FacetThermal>,
@@ -417,22 +420,29 @@ impl SceneStudy {
         let own = session.exposure_tracer()?;
         let tracer = own.as_deref().unwrap_or(session.tracer.as_ref());
         let scene = &session.scene;
+        let exposure_params = ExposureParams {
+            samples_per_edge: session.config.facet_samples,
+            sky: session.config.sky_sampling,
+            ..ExposureParams::default()
+        };
         let mut exposure = compute_exposure(
             tracer,
             &scene.geometry,
             &setup.double_sided,
             &dirs,
-            &ExposureParams {
-                samples_per_edge: session.config.facet_samples,
-                sky: session.config.sky_sampling,
-                ..ExposureParams::default()
-            },
+            &exposure_params,
         )?;
         for (f, o) in setup.shape_factor_override.iter().enumerate() {
             if let Some(v) = *o {
                 exposure.sky.shape_factor[f] = v;
             }
         }
+        let (exposed_back, _) = setup.exposed_back_shape_factor(
+            tracer,
+            &exposure.facets,
+            &exposure_params,
+            0..exposure.facets.len(),
+        );
         // As the render: the reflected shortwave and the wind at each facet.
         let exposure = if physics.reflected_bounces > 0 {
             exposure.with_reflected(
@@ -499,6 +509,7 @@ impl SceneStudy {
             history,
             image_record,
             exposure,
+            exposed_back,
             wind,
             kinds,
             ground,
@@ -628,7 +639,11 @@ impl SceneStudy {
             sun_fraction: &sun.0,
             cos_incidence: &sun.1,
             shape_factor: s.sky.shape_factor[f] as f64,
-            back_shape_factor: s.sky.back_shape_factor(f).map(f64::from),
+            back_shape_factor: s
+                .sky
+                .back_shape_factor(f)
+                .or(self.exposed_back[f])
+                .map(f64::from),
             background,
             reflected: if reflected.facet_count() == 0 {
                 Reflected::NONE

@@ -24,7 +24,8 @@ use rayon::prelude::*;
 
 use crate::exposure::{
     Exposure, ExposureParams, ExposureStats, FacetSamples, HistoryWindow, SkyView, SolarHistory,
-    exposure_of, history_step, history_times, image_window, sun_directions,
+    exposed_back_shape_factors, exposure_of, history_step, history_times, image_window,
+    sun_directions,
 };
 use crate::geometry::SceneGeometry;
 use crate::progress::{NoProgress, Progress, Stage};
@@ -55,6 +56,7 @@ impl<'a> From<&'a Exposure> for SceneInputs<'a> {
             double_sided: &e.facets.double_sided,
             shape_factor: &e.sky.shape_factor,
             back_shape_factor: &e.sky.back_shape_factor,
+            exposed_back_shape_factor: &[],
             ground_weight: &e.sky.ground_weight,
             background_offsets: &e.sky.offsets,
             background: &e.sky.entries,
@@ -301,6 +303,58 @@ impl FacetThermalSetup {
         ground
     }
 
+    /// Per facet of `range`: whether its back face takes its own traced
+    /// shape factor ([`FacetThermalSetup::exposed_back_shape_factor`]): a
+    /// solved facet whose property set has an exposed back
+    /// ([`BackBoundary::Exposed`]) and no shape-factor override (an
+    /// override states the front's sky view, and the back keeps `1 − F` of
+    /// it). One flag per facet of the scene, false outside `range`.
+    pub fn exposed_backs(&self, n: usize, range: Range<usize>) -> Vec<bool> {
+        let mut out = vec![false; n];
+        for f in range.start..range.end.min(n) {
+            out[f] = match self.kinds.get(f) {
+                Some(FacetThermal::Solve(pi)) => {
+                    matches!(self.props[*pi as usize].back, BackBoundary::Exposed { .. })
+                        && self
+                            .shape_factor_override
+                            .get(f)
+                            .is_none_or(|o| o.is_none())
+                }
+                _ => false,
+            };
+        }
+        out
+    }
+
+    /// The back faces' own shape factors of the facets `range` whose back
+    /// is exposed ([`FacetThermalSetup::exposed_backs`]; single-sided
+    /// facets only, a double-sided facet's back face is in the sky view)
+    /// ([`exposed_back_shape_factors`]: one more hemisphere of occlusion
+    /// rays per such facet, the same rays for any split of the facets):
+    /// one value per facet of `range` (`None`: the slab model's `1 − F`),
+    /// and the rays traced.
+    pub fn exposed_back_shape_factor<T: Tracer + ?Sized>(
+        &self,
+        tracer: &T,
+        facets: &FacetSamples,
+        params: &ExposureParams,
+        range: Range<usize>,
+    ) -> (Vec<Option<f32>>, u64) {
+        let flags = self.exposed_backs(facets.len(), range.clone());
+        if !flags.iter().any(|&b| b) {
+            return (vec![None; range.len()], 0);
+        }
+        let (mut fb, rays) = exposed_back_shape_factors(
+            tracer,
+            facets,
+            &flags,
+            params.sky,
+            params.seed,
+            params.batch_facets,
+        );
+        (fb.drain(range).collect(), rays)
+    }
+
     /// Per facet: its albedo ([`FacetThermalSetup::albedo`], or `1 − α`
     /// of its property set, 0 for a fixed facet).
     pub fn facet_albedo(&self) -> Vec<f32> {
@@ -493,6 +547,10 @@ pub struct SceneThermal {
     pub setup: FacetThermalSetup,
     /// Facets solved with the deep-ground back boundary.
     pub ground_facets: usize,
+    /// Per facet: the traced shape factor of its exposed back
+    /// ([`FacetThermalSetup::exposed_back_shape_factor`]; `None`: not
+    /// exposed, double-sided, or `1 − F`).
+    pub exposed_back_shape_factor: Vec<Option<f32>>,
     /// Per image time: how its facets' temperatures respond to a point's
     /// own sunlit history (the linearised method only; per-hit
     /// temperatures, [`crate::render::per_hit`]).
@@ -715,6 +773,10 @@ pub struct FacetRays {
     /// ([`FacetThermalSetup::ground_facets`]; all false when
     /// [`SceneThermalParams::ground`] is off).
     pub ground: Vec<bool>,
+    /// Per facet of the range: the traced shape factor of its exposed
+    /// back ([`FacetThermalSetup::exposed_back_shape_factor`]; `None`:
+    /// `1 − F`).
+    pub exposed_back_shape_factor: Vec<Option<f32>>,
     /// Ray counts and times.
     pub stats: ExposureStats,
 }
@@ -769,7 +831,7 @@ fn trace_range(
 ) -> Result<FacetRays> {
     progress.start(Stage::Exposure, 2 * range.len() as u64);
     progress.item("solar history and sky view");
-    let (solar, mut sky, stats) = exposure_of(
+    let (solar, mut sky, mut stats) = exposure_of(
         tracers.exposure,
         facets,
         &history.sun,
@@ -777,6 +839,11 @@ fn trace_range(
         range.clone(),
         &|n| progress.advance(n),
     )?;
+    let t_back = Instant::now();
+    let (exposed_back_shape_factor, back_rays) =
+        setup.exposed_back_shape_factor(tracers.exposure, facets, &params.exposure, range.clone());
+    stats.sky_rays += back_rays;
+    stats.sky += t_back.elapsed();
     if !setup.shape_factor_override.is_empty() {
         for (i, o) in setup.shape_factor_override[range.clone()]
             .iter()
@@ -799,6 +866,7 @@ fn trace_range(
         solar,
         sky,
         ground,
+        exposed_back_shape_factor,
         stats,
     })
 }
@@ -823,11 +891,13 @@ fn solve_traced(
     let mut solar = SolarHistory::empty(&history.sun, facets.per_facet as u32);
     let mut sky = SkyView::default();
     let mut ground = Vec::with_capacity(n);
+    let mut exposed_back = Vec::with_capacity(n);
     let mut stats = ExposureStats::default();
     let mut next = 0;
     for p in parts {
         if p.range.start != next
             || p.ground.len() != p.range.len()
+            || p.exposed_back_shape_factor.len() != p.range.len()
             || p.sky.facet_count() != p.range.len()
             || p.solar.steps != solar.steps
             || p.solar.day != solar.day
@@ -858,10 +928,12 @@ fn solve_traced(
             solar = p.solar;
             sky = p.sky;
             ground = p.ground;
+            exposed_back = p.exposed_back_shape_factor;
         } else {
             solar.append(p.solar);
             sky.append(p.sky);
             ground.extend(p.ground);
+            exposed_back.extend(p.exposed_back_shape_factor);
         }
         next = p.range.end;
         stats.solar_rays += p.stats.solar_rays;
@@ -920,8 +992,14 @@ fn solve_traced(
     } else {
         Vec::new()
     };
-    let (temperatures, point_response) =
-        solve_windows(&exposure, &wind, &setup, &history, &params.thermal)?;
+    let (temperatures, point_response) = solve_windows(
+        &exposure,
+        &exposed_back,
+        &wind,
+        &setup,
+        &history,
+        &params.thermal,
+    )?;
     progress.advance(n as u64);
     progress.finish();
     let t3 = Instant::now();
@@ -934,6 +1012,7 @@ fn solve_traced(
         temperatures,
         setup,
         ground_facets,
+        exposed_back_shape_factor: exposed_back,
         point_response,
         timings: SceneThermalTimings {
             setup: Duration::ZERO,
@@ -1016,6 +1095,7 @@ impl History {
 /// As [`solve_facet_temperatures`].
 fn solve_windows(
     exposure: &Exposure,
+    exposed_back: &[Option<f32>],
     wind: &[FacetWind],
     setup: &FacetThermalSetup,
     history: &History,
@@ -1052,6 +1132,7 @@ fn solve_windows(
         let r = if w.len() == all {
             let mut inputs = SceneInputs::from(exposure);
             inputs.wind = wind;
+            inputs.exposed_back_shape_factor = exposed_back;
             solve_facet_temperatures(
                 inputs,
                 &setup.kinds,
@@ -1077,6 +1158,7 @@ fn solve_windows(
             inputs.solar = &solar;
             inputs.reflected_slot = &slot;
             inputs.wind = wind;
+            inputs.exposed_back_shape_factor = exposed_back;
             let records: Vec<WeatherRecord> = w.iter().map(|&r| history.records[r]).collect();
             let forcing = Forcing::from_records(&records)?;
             solve_facet_temperatures(

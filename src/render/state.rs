@@ -1064,6 +1064,7 @@ pub fn write_rays(
         Field::new("facet", DataType::UInt32, false),
         Field::new("shape_factor", DataType::Float32, false),
         Field::new("back_shape_factor", DataType::Float32, true),
+        Field::new("exposed_back_shape_factor", DataType::Float32, true),
         Field::new("shape_factor_std_error", DataType::Float32, false),
         Field::new("ground_weight", DataType::Float32, false),
         Field::new("on_ground", DataType::Boolean, false),
@@ -1077,6 +1078,7 @@ pub fn write_rays(
         )),
         Arc::new(Float32Array::from(sky.shape_factor.clone())),
         Arc::new(Float32Array::from(sky.back_shape_factor.clone())),
+        Arc::new(Float32Array::from(rays.exposed_back_shape_factor.clone())),
         Arc::new(Float32Array::from(sky.std_error.clone())),
         Arc::new(Float32Array::from(sky.ground_weight.clone())),
         Arc::new(BooleanArray::from(rays.ground.clone())),
@@ -1207,6 +1209,7 @@ pub fn read_rays(
         .collect();
     let backs: Vec<f32> = back_shape_factor.iter().flatten().copied().collect();
     check_finite(path, "back_shape_factor", &backs)?;
+    let exposed_back_shape_factor = exposed_back_column(&batch, path, nf)?;
     let on_ground = column(&batch, path, "on_ground")?
         .as_boolean_opt()
         .ok_or_else(|| bad("column `on_ground` is not boolean".into()))?;
@@ -1261,6 +1264,45 @@ pub fn read_rays(
             entries,
         },
         ground,
+        exposed_back_shape_factor,
         stats: ExposureStats::default(),
     })
+}
+
+/// Column `exposed_back_shape_factor` of a rays file: per facet, the
+/// traced shape factor of its exposed back, null where the slab model
+/// takes `1 − F`. A file written before the column existed has none: every
+/// facet then takes `1 − F`, as when it was written.
+fn exposed_back_column(batch: &RecordBatch, path: &Path, nf: usize) -> Result<Vec<Option<f32>>> {
+    const NAME: &str = "exposed_back_shape_factor";
+    let Some(c) = batch.column_by_name(NAME) else {
+        return Ok(vec![None; nf]);
+    };
+    let a = c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
+        Error::invalid(
+            "state",
+            format!(
+                "{}: column `{NAME}` is {}, expected float32",
+                path.display(),
+                c.data_type()
+            ),
+        )
+    })?;
+    let v: Vec<Option<f32>> = (0..nf)
+        .map(|i| (!a.is_null(i)).then(|| a.value(i)))
+        .collect();
+    if let Some((i, x)) = v
+        .iter()
+        .enumerate()
+        .find_map(|(i, x)| x.filter(|x| !(0.0..=1.0).contains(x)).map(|x| (i, x)))
+    {
+        return Err(Error::invalid(
+            "state",
+            format!(
+                "{}: column `{NAME}` holds {x} at row {i}: expected a fraction in [0, 1] or null",
+                path.display()
+            ),
+        ));
+    }
+    Ok(v)
 }

@@ -125,6 +125,15 @@ pub struct SceneInputs<'a> {
     /// Shape factor of the back face of double-sided facets (`None` for
     /// single-sided ones), per facet.
     pub back_shape_factor: &'a [Option<f32>],
+    /// Shape factor of the back face of single-sided facets whose slab has
+    /// an exposed back ([`crate::thermal::BackBoundary::Exposed`]), traced
+    /// from the back (`crate::exposure::exposed_back_shape_factors`), per
+    /// facet; `None` (or an empty slice: none at all) keeps the slab
+    /// model's `1 − F`, exact only for an unobstructed plane. It feeds only
+    /// the exposed back's radiative exchange
+    /// ([`SceneInputs::slab_back_shape_factor`]), not the facet's mean sky
+    /// view ([`SceneInputs::mean_shape_factor`]).
+    pub exposed_back_shape_factor: &'a [Option<f32>],
     /// View factor to the ground beyond the scene (taken at the air
     /// temperature), per facet.
     pub ground_weight: &'a [f32],
@@ -179,6 +188,17 @@ impl<'a> SceneInputs<'a> {
     #[inline]
     pub fn back_shape_factor(&self, facet: usize) -> Option<f32> {
         self.back_shape_factor[facet]
+    }
+
+    /// The back face's shape factor the slab model takes
+    /// ([`crate::thermal::FacetInputs::back_shape_factor`]): a double-sided
+    /// facet's back face, else the traced exposed back
+    /// ([`SceneInputs::exposed_back_shape_factor`]), else `None` (the slab
+    /// model's `1 − F`).
+    #[inline]
+    pub fn slab_back_shape_factor(&self, facet: usize) -> Option<f32> {
+        self.back_shape_factor[facet]
+            .or_else(|| self.exposed_back_shape_factor.get(facet).copied().flatten())
     }
 
     /// Mean sky view factor over the facet's faces: F, or `(F + F_back)/2`
@@ -279,6 +299,26 @@ impl<'a> SceneInputs<'a> {
             return Err(Error::invalid(
                 format!("wind[{i}]"),
                 format!("expected finite factors ≥ 0, got {:?}", self.wind[i]),
+            ));
+        }
+        if !self.exposed_back_shape_factor.is_empty() && self.exposed_back_shape_factor.len() != n {
+            return Err(Error::invalid(
+                "exposed_back_shape_factor",
+                format!(
+                    "expected one entry per facet ({n}) or none, got {}",
+                    self.exposed_back_shape_factor.len()
+                ),
+            ));
+        }
+        if let Some((i, v)) = self
+            .exposed_back_shape_factor
+            .iter()
+            .enumerate()
+            .find_map(|(i, v)| v.filter(|v| !(0.0..=1.0).contains(v)).map(|v| (i, v)))
+        {
+            return Err(Error::invalid(
+                format!("exposed_back_shape_factor[{i}]"),
+                format!("expected a fraction in [0, 1], got {v}"),
             ));
         }
         if !self.reflected_diffuse.is_empty() && self.reflected_diffuse.len() != n {

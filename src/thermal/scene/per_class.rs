@@ -203,7 +203,7 @@ fn solve_classes(
                 sun_fraction: &sun,
                 cos_incidence: &cos,
                 shape_factor: ctx.inputs.shape_factor[f] as f64,
-                back_shape_factor: ctx.inputs.back_shape_factor(f).map(f64::from),
+                back_shape_factor: ctx.inputs.slab_back_shape_factor(f).map(f64::from),
                 background,
                 reflected: refl.as_reflected(),
             };
@@ -346,7 +346,7 @@ impl PassInputs<'_> {
         key.push(q(inputs.shape_factor[facet], dedup.shape_factor_quantum));
         key.push(
             inputs
-                .back_shape_factor(facet)
+                .slab_back_shape_factor(facet)
                 .map_or(u16::MAX, |b| q(b, dedup.shape_factor_quantum)),
         );
         key.extend(

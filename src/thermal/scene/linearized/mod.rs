@@ -450,7 +450,7 @@ impl Facets<'_> {
             sun_fraction: sun,
             cos_incidence: cos,
             shape_factor: inputs.shape_factor[facet] as f64,
-            back_shape_factor: inputs.back_shape_factor(facet).map(f64::from),
+            back_shape_factor: inputs.slab_back_shape_factor(facet).map(f64::from),
             background: Background::Air,
             reflected: refl.as_reflected(),
         }
@@ -500,7 +500,7 @@ impl Facets<'_> {
         let f = inputs.shape_factor[facet];
         FacetState {
             f,
-            f_back: inputs.back_shape_factor(facet).unwrap_or(1.0 - f),
+            f_back: inputs.slab_back_shape_factor(facet).unwrap_or(1.0 - f),
             b: inputs.reflected_diffuse(facet) as f32,
         }
     }

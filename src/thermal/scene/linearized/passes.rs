@@ -300,7 +300,7 @@ impl PassPlan<'_> {
         let (cf, cb) = thermal::background_coefficients(
             facets.props_of(f),
             inputs.shape_factor[f] as f64,
-            inputs.back_shape_factor(f).map(f64::from),
+            inputs.slab_back_shape_factor(f).map(f64::from),
         );
         Some((cf as f32, cb as f32))
     }
