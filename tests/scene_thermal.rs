@@ -1355,12 +1355,8 @@ fn exposed_back_takes_its_own_sky_view_in_the_scene_solve() {
     .unwrap();
     let fb = &r.exposed_back_shape_factor;
     assert_eq!(fb.len(), n);
-    for f in 0..n {
-        assert_eq!(
-            fb[f].is_some(),
-            setup.kinds[f] == FacetThermal::Solve(1),
-            "facet {f}"
-        );
+    for (f, (v, k)) in fb.iter().zip(&setup.kinds).enumerate() {
+        assert_eq!(v.is_some(), *k == FacetThermal::Solve(1), "facet {f}");
     }
     assert!(road.clone().all(|f| fb[f].is_none()));
     let back: Vec<f32> = fb.iter().map(|v| v.unwrap_or(f32::NAN)).collect();

@@ -311,8 +311,14 @@ impl FacetThermalSetup {
     /// it). One flag per facet of the scene, false outside `range`.
     pub fn exposed_backs(&self, n: usize, range: Range<usize>) -> Vec<bool> {
         let mut out = vec![false; n];
-        for f in range.start..range.end.min(n) {
-            out[f] = match self.kinds.get(f) {
+        let end = range.end.min(n);
+        for (f, o) in out
+            .iter_mut()
+            .enumerate()
+            .take(end)
+            .skip(range.start.min(end))
+        {
+            *o = match self.kinds.get(f) {
                 Some(FacetThermal::Solve(pi)) => {
                     matches!(self.props[*pi as usize].back, BackBoundary::Exposed { .. })
                         && self
