@@ -6,7 +6,7 @@
 use super::fast::{FastMiss, FastScratch};
 use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
 use super::reflected_sky::{TILT_NODES, tilt_at};
-use super::surface::{GreyFacet, PlanckTable, hit_sky, hit_temperature};
+use super::surface::{GreyFacet, PlanckTable, hit_temperature};
 use super::{BandTables, Shader};
 use crate::atmosphere::{ANGLE_NODES, scatter::angle_node_f32};
 use crate::material::Material;
@@ -871,16 +871,16 @@ impl Shader<'_> {
         let s = &self.conditions.surface;
         let (t_hit, sun_fraction) = hit_temperature(s, f, state);
         let sun_fraction = vis.unwrap_or(sun_fraction);
-        let (shape_factor, background_k) = hit_sky(s, f, state);
+        let m = &self.optics.materials[mi];
+        let (_, nrm, d) = self.hit_frame(ray, h);
+        let (shape_factor, background_k, tilt) = self.seen_sky(f, h.ng, d, state);
         let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
         let (kg, fg) = self
             .table_position(background_k as f64)
             .ok_or(FastMiss::OffTable)?;
-        let m = &self.optics.materials[mi];
-        let (_, nrm, d) = self.hit_frame(ray, h);
         let (a0, ta) = angle_row(-d.dot(nrm));
         let big_f = (shape_factor as f64).clamp(0.0, 1.0);
-        let (kb, wb) = tilt_at(self.tilt[f]);
+        let (kb, wb) = tilt_at(tilt);
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
