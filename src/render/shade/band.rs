@@ -754,6 +754,9 @@ impl Shader<'_> {
             let mut bt = grey_planck::<NB>(pl, t0, rs, g.ft, p.rx);
             let mut bg = grey_planck::<NB>(pl, g0, rs, g.fg, p.rx);
             let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, tb, p.rx);
+            // (At a height node's own height, `ax = 0`, the next node adds
+            // exactly nothing: `lerp(a, b, 0) = a`.)
+            let two = two && p.ax != 0.0;
             if two {
                 let bt1 = grey_planck::<NB>(pl, t0 + hp, rs, g.ft, p.rx);
                 let bg1 = grey_planck::<NB>(pl, g0 + hp, rs, g.fg, p.rx);
@@ -809,6 +812,7 @@ impl Shader<'_> {
             let t0 = (p.n0 * nt + g.kt as usize) * nb;
             let g0 = (p.n0 * nt + g.kg as usize) * nb;
             let q = NODE_TERMS * p.n0 * nb;
+            let two = two && p.ax != 0.0;
             for b in 0..nb {
                 let eps = lerp(ep[e + b], ep[e + nb + b], p.ta);
                 // Temperature first, then range, then height, as the
