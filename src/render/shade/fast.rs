@@ -155,11 +155,9 @@ impl Shader<'_> {
                 let range = h.t * ray.dir.length();
                 let by_range = rule & RULE_PER_HIT_BY_RANGE != 0;
                 let n2 = ray.dir.length_squared() * h.ng.length_squared();
-                if !(by_range && ph.is_some_and(|p| p.large(f, range, beta)))
-                    && !(rule & RULE_BACK_SKY != 0 && dn > 0.0)
-                    && n2 > 0.0
-                    && n2.is_finite()
-                {
+                let per_hit = by_range && ph.is_some_and(|p| p.large(f, range, beta));
+                let own_back = rule & RULE_BACK_SKY != 0 && dn > 0.0;
+                if !(per_hit || own_back) && n2 > 0.0 && n2.is_finite() {
                     let z = ray.origin.z + ray.dir.z * h.t;
                     sc.grey
                         .push(GreyHit::new(i, f, [dn, n2, range, z, cos_sc(ray)], false));
