@@ -2098,10 +2098,14 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
         let (t_s, t_bg) = (rng.f(230.0, 345.0), rng.f(230.0, 345.0));
         let (big_f, frac) = (rng.f(0.0, 1.0), [0.0, 1.0, rng.f(0.01, 0.99)][rng.u(3)]);
         let cos_sun = sun.map_or(0.0, |s| n.dot(s.direction).max(0.0));
+        // A double-sided square's back face with its own sky view (in half
+        // of those cases), which its back-face hits reflect.
+        let back_f = (m.double_sided && rng.u(2) == 0).then(|| rng.f(0.0, 1.0));
         for f in 0..surface.len() {
             surface.temperature_k[f] = t_s as f32;
             surface.background_k[f] = t_bg as f32;
             surface.shape_factor[f] = big_f as f32;
+            surface.back_shape_factor[f] = back_f.map(|b| b as f32);
             surface.sun_fraction[f] = frac as f32;
             surface.cos_sun[f] = cos_sun;
         }
@@ -2268,18 +2272,20 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
                     None => sky_dir,
                 };
                 let sky_l = reflected_sky(&sky_dir, n.z as f64);
+                // The back face's: tilt 180° − β.
+                let sky_back = reflected_sky(&sky_dir, -n.z as f64);
                 let e_s = match sun {
                     Some(s) => surface_solar_spectrum(&cond.atmosphere, &planck, &s, grid).unwrap(),
                     None => vec![0.0; band.len()],
                 };
                 let (b_t, b_bg) = (grid.blackbody(&planck, t_s), grid.blackbody(&planck, t_bg));
-                (sky_l, e_s, b_t, b_bg)
+                (sky_l, sky_back, e_s, b_t, b_bg)
             })
             .collect();
         // The glint lobe's m² while the sun lights any band.
         let sun_up = sources
             .iter()
-            .any(|(_, e_s, _, _)| e_s.iter().any(|&e| e > 0.0));
+            .any(|(_, _, e_s, _, _)| e_s.iter().any(|&e| e > 0.0));
         let m2 = if sun_up && m.specular_fraction > 0.0 {
             lobe_slope_variance(&m, cond.wind_speed_m_s)
         } else {
@@ -2314,7 +2320,12 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
                         e0 + (theta - a0 as f64) * (e1 - e0)
                     })
                     .collect();
-                let (sky_l, e_s, b_t, b_bg) = &sources[b];
+                let (sky_front, sky_back, e_s, b_t, b_bg) = &sources[b];
+                // The seen face's sky view: a back face with its own.
+                let (big_f, sky_l) = match back_f {
+                    Some(fb) if !front => (fb, sky_back),
+                    _ => (big_f, sky_front),
+                };
                 let glint_sr = match sun_dir {
                     Some(s) if m2 > 0.0 && sun_seen => glint_lobe_sr(m2, nrm, -ray.dir, s),
                     _ => 0.0,
@@ -2374,4 +2385,154 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
     );
     // Every path was exercised.
     assert!(fast_hits > 2500 && slow_hits > 500 && glinting > 100);
+}
+
+/// Issue 18: a hit on the back face of a double-sided facet reflects the
+/// sky that face sees. A double-sided fence (vertical, front facing −y
+/// onto open ground: F = 0.5) with a wall 2 m behind it (its back face's
+/// F = 0.1) under a cold blackbody sky, everything else at 300 K: viewed
+/// normally, a face leaves `B(T) − r·F·(B(T) − B(T_sky))`, r = 1 − ε(0°),
+/// with the F of the face seen — on the fast path and in the spectral
+/// reference. Front-face hits are the same whether the back face's view
+/// is known or not.
+#[test]
+fn r18_a_double_sided_fence_reflects_the_sky_of_the_face_seen() {
+    use irsig::radiometry::Planck;
+    use irsig::render::FastScratch;
+    use irsig::trace::{Coherence, Ray};
+    let mut fence = material("fence", 1, 0.6, 0.0);
+    fence.double_sided = true;
+    let wall = material("wall", 2, 0.9, 0.0);
+    // Front normal −y: counter-clockwise seen from −y.
+    let fence_q = quad(
+        "fence",
+        [
+            Vec3::new(-5.0, 0.0, 0.0),
+            Vec3::new(5.0, 0.0, 0.0),
+            Vec3::new(5.0, 0.0, 2.0),
+            Vec3::new(-5.0, 0.0, 2.0),
+        ],
+    );
+    let wall_q = quad(
+        "wall",
+        [
+            Vec3::new(-5.0, 2.0, 0.0),
+            Vec3::new(-5.0, 2.0, 4.0),
+            Vec3::new(5.0, 2.0, 4.0),
+            Vec3::new(5.0, 2.0, 0.0),
+        ],
+    );
+    let geom = geometry(vec![fence_q, wall_q]);
+    let optics = optics(&geom, vec![fence.clone(), wall], &[0, 1]);
+    let (f_front, f_back, t_sky) = (0.5f64, 0.1f64, 230.0);
+    let conditions = |back: Option<f32>| {
+        let mut surface = state(&geom, &[300.0, 300.0]);
+        for f in 0..2 {
+            surface.shape_factor[f] = f_front as f32;
+            surface.back_shape_factor[f] = back;
+        }
+        Conditions {
+            surface,
+            sky: Sky::Blackbody {
+                temperature_k: t_sky,
+            },
+            sun: None,
+            ground_temperature_k: 300.0,
+            atmosphere: Atmosphere::None,
+            per_hit: None,
+            wind_speed_m_s: 2.0,
+        }
+    };
+    // Normal views of the front (from −y) and of the back (from between
+    // the fence and the wall).
+    let rays: Vec<Ray> = [-0.5f32, 0.5]
+        .iter()
+        .flat_map(|&x| {
+            [
+                Ray::new(Vec3::new(x, -20.0, 1.0), Vec3::Y),
+                Ray::new(Vec3::new(x, 1.0, 1.0), -Vec3::Y),
+            ]
+        })
+        .collect();
+    let tracer = trace::build(&geom, Backend::Embree).unwrap();
+    let hits = trace::intersect_all(tracer.as_ref(), &rays, Coherence::Coherent);
+    assert!(
+        hits.iter()
+            .all(|h| h.is_some_and(|h| h.prim < 2 && h.instance == 0))
+    );
+    let bands = vec![Band::flat(8.0, 12.0, 0.1).unwrap()];
+    let opts = ShadeOptions {
+        max_bounces: 0,
+        offset_m: 1e-3,
+    };
+    // Per ray: the fast path's and the reference's band radiance.
+    let shade = |cond: &Conditions| -> (Vec<f64>, Vec<f64>) {
+        let shader = Shader::new(tracer.as_ref(), &geom, &optics, cond, &bands, opts).unwrap();
+        let mut fast = vec![0f32; rays.len()];
+        let mut slow = Vec::new();
+        shader.shade_fast(
+            &rays,
+            &hits,
+            &mut fast,
+            &mut slow,
+            &mut FastScratch::default(),
+            None,
+        );
+        assert!(slow.is_empty(), "{slow:?}");
+        let nl = shader.spectrum_len();
+        let mut spectra = vec![0.0; rays.len() * nl];
+        shader.shade_primary(&rays, &hits, &mut spectra);
+        let reference = spectra
+            .chunks_exact(nl)
+            .map(|s| shader.band_radiance(0, s))
+            .collect();
+        (fast.iter().map(|&v| v as f64).collect(), reference)
+    };
+    let planck = Planck::default();
+    let em = Emissivity::from_material(&fence).unwrap();
+    let grid = bands[0].grid();
+    let (b_t, b_sky) = (
+        grid.blackbody(&planck, 300.0),
+        grid.blackbody(&planck, t_sky),
+    );
+    let analytic = |big_f: f64| -> f64 {
+        let l: Vec<f64> = bands[0]
+            .wavelengths_um()
+            .iter()
+            .zip(b_t.iter().zip(&b_sky))
+            .map(|(&lambda, (&bt, &bs))| {
+                let r = 1.0 - em.eval(lambda, 0.0);
+                bt - r * big_f * (bt - bs)
+            })
+            .collect();
+        bands[0].integrate(&l)
+    };
+    let (own_fast, own_ref) = shade(&conditions(Some(f_back as f32)));
+    let (old_fast, old_ref) = shade(&conditions(None));
+    for (i, _) in rays.iter().enumerate() {
+        let back = i % 2 == 1;
+        let want = analytic(if back { f_back } else { f_front });
+        for (what, v) in [("fast", own_fast[i]), ("reference", own_ref[i])] {
+            assert!(
+                (v - want).abs() <= 1e-5 * want,
+                "ray {i} ({}): {what} {v}, analytic {want}",
+                if back { "back" } else { "front" }
+            );
+        }
+        if back {
+            // Without its own view the back face took the front face's F:
+            // brighter by r·(F − F_back)·(B(T) − B(T_sky)).
+            let front_f = analytic(f_front);
+            assert!((old_fast[i] - front_f).abs() <= 1e-5 * front_f);
+            assert!(
+                own_fast[i] > old_fast[i] + 0.1,
+                "{} {}",
+                own_fast[i],
+                old_fast[i]
+            );
+        } else {
+            assert_eq!(own_fast[i], old_fast[i]);
+            assert_eq!(own_ref[i], old_ref[i]);
+        }
+    }
 }

@@ -718,7 +718,7 @@ impl BuiltinAtmosphere {
             if band_model.active() {
                 lowtran::scaled_amounts(&mut w_bm, &lt_amounts, p_atm, t);
             }
-            let ln_w_bm = lowtran::ln_amounts(&w_bm);
+            let w_a_bm = lowtran::powered_amounts(&w_bm);
             let n_w = per_m3(st.water_g_m3, M_H2O_G_MOL);
             let rho0 = 273.15 / 296.0;
             let col_w = n_w * ds * 1e-4 * 1e-20 / rho0;
@@ -751,7 +751,7 @@ impl BuiltinAtmosphere {
             for i in 0..n {
                 let [c296, c260, cf] = h2o_cont[i];
                 cont[i] += n2_cia(nu[i]) * n2_path + (c296 + w260 * c260) * self_w + cf * foreign_w;
-                let mut t_lines = band_model.transmittance(i, &ln_w_bm);
+                let mut t_lines = band_model.transmittance(i, &w_a_bm);
                 for (b, (lb, amount)) in line_layers.iter().enumerate() {
                     cont[i] += lb.wing[i] * amount;
                     let ku = lb.kbar[i] * amount;

@@ -247,7 +247,8 @@ pub fn continuum(nu: f64) -> [f64; 3] {
 pub struct BandModelGrid {
     /// Per grid cell: the range of its samples in `samples`.
     cells: Vec<(usize, usize)>,
-    /// Per sample: for each absorbing gas, (ln C, a, index into [`REGIONS`]).
+    /// Per sample: for each absorbing gas, (C^a, a, index into
+    /// [`REGIONS`]).
     samples: Vec<Vec<(f64, f64, usize)>>,
 }
 
@@ -285,8 +286,12 @@ impl BandModelGrid {
                         })
                         .filter_map(|(j, reg)| {
                             let cp = t.bm[k][reg.gas as usize];
-                            cp.is_finite()
-                                .then_some((cp * std::f64::consts::LN_10, reg.a, j))
+                            // C^a = exp(a·ln 10·C′), once per sample.
+                            cp.is_finite().then_some((
+                                (reg.a * cp * std::f64::consts::LN_10).exp(),
+                                reg.a,
+                                j,
+                            ))
                         })
                         .collect();
                     samples.push(gases);
@@ -302,12 +307,14 @@ impl BandModelGrid {
         !self.samples.is_empty()
     }
 
-    /// Transmittance of grid cell `i` for the scaled amounts whose natural
-    /// logarithms are `ln_w` (per entry of [`REGIONS`], accumulated with
-    /// [`scaled_amounts`], see [`ln_amounts`]): the mean over its samples of
-    /// Π exp(−(C·W̃)^a), (C·W̃)^a = exp(a·(ln C + ln W̃)); 1 for a cell
-    /// without samples.
-    pub fn transmittance(&self, i: usize, ln_w: &[f64; REGIONS.len()]) -> f64 {
+    /// Transmittance of grid cell `i` for the scaled amounts raised to
+    /// their regions' exponents `w_a` (per entry of [`REGIONS`],
+    /// `W̃_j^{a_j}`: [`powered_amounts`] of the amounts accumulated with
+    /// [`scaled_amounts`]): the mean over its samples of Π exp(−(C·W̃)^a),
+    /// `(C·W̃)^a = C^a·W̃^a` (C^a tabulated per sample, W̃^a once per path
+    /// segment, so a sample costs one exponential); 1 for a cell without
+    /// samples.
+    pub fn transmittance(&self, i: usize, w_a: &[f64; REGIONS.len()]) -> f64 {
         let (lo, hi) = self.cells[i];
         if hi == lo {
             return 1.0;
@@ -315,10 +322,7 @@ impl BandModelGrid {
         let sum: f64 = self.samples[lo..hi]
             .iter()
             .map(|g| {
-                let od: f64 = g
-                    .iter()
-                    .map(|&(ln_c, a, j)| (a * (ln_c + ln_w[j])).exp())
-                    .sum();
+                let od: f64 = g.iter().map(|&(c_a, _, j)| c_a * w_a[j]).sum();
                 (-od).exp()
             })
             .sum();
@@ -326,10 +330,16 @@ impl BandModelGrid {
     }
 }
 
-/// The natural logarithms of the scaled amounts `w` (−∞ for none), for
-/// [`BandModelGrid::transmittance`].
-pub fn ln_amounts(w: &[f64; REGIONS.len()]) -> [f64; REGIONS.len()] {
-    w.map(f64::ln)
+/// The scaled amounts `w` raised to their regions' exponents, `W̃_j^{a_j}`
+/// (0 for none), for [`BandModelGrid::transmittance`].
+pub fn powered_amounts(w: &[f64; REGIONS.len()]) -> [f64; REGIONS.len()] {
+    std::array::from_fn(|j| {
+        if w[j] > 0.0 {
+            w[j].powf(REGIONS[j].a)
+        } else {
+            0.0
+        }
+    })
 }
 
 /// Add one layer's scaled amounts to `w` (per entry of [`REGIONS`]): `amounts`
@@ -378,19 +388,52 @@ mod tests {
         }
     }
 
+    /// The tabulated `C^a·W̃^a` form equals DBLTX's `exp(−(C·W̃)^a)` from
+    /// the tables' C′ over 2000–3500 cm⁻¹, for amounts from a trace to a
+    /// thick path in every region.
+    #[test]
+    fn factored_double_exponential_equals_the_direct_form() {
+        let t = tables();
+        let nu: Vec<f64> = (0..=300).map(|k| 2000.0 + 5.0 * k as f64).collect();
+        let g = BandModelGrid::new(&nu, &vec![5.0; nu.len()]);
+        for scale in [1e-6, 1e-2, 1.0, 30.0] {
+            let w: [f64; REGIONS.len()] = std::array::from_fn(|j| scale * (1.0 + 0.37 * j as f64));
+            let w_a = powered_amounts(&w);
+            for (i, &v) in nu.iter().enumerate() {
+                let k = ((v - t.bm_v0) / DV_CM).round() as usize;
+                let od: f64 = REGIONS
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, reg)| v >= reg.lo && v <= reg.hi)
+                    .filter(|(_, reg)| {
+                        !(reg.gas == Gas::Co2 && v > CO2_LINE_RANGE_CM.0 && v < CO2_LINE_RANGE_CM.1)
+                    })
+                    .filter(|(_, reg)| t.bm[k][reg.gas as usize].is_finite())
+                    .map(|(j, reg)| (10f64.powf(t.bm[k][reg.gas as usize]) * w[j]).powf(reg.a))
+                    .sum();
+                let want = (-od).exp();
+                let got = g.transmittance(i, &w_a);
+                assert!(
+                    (got - want).abs() <= 1e-12 * want.max(1e-300) + 1e-300,
+                    "{v} cm⁻¹, amounts ×{scale}: {got} against {want}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn double_exponential_limits() {
         // One sample cell: τ = exp(−(C·W)^a) exactly; W = 0 gives 1.
         let g = BandModelGrid::new(&[2700.0], &[5.0]);
         let mut w = [0.0; REGIONS.len()];
-        assert_eq!(g.transmittance(0, &ln_amounts(&w)), 1.0);
+        assert_eq!(g.transmittance(0, &powered_amounts(&w)), 1.0);
         scaled_amounts(&mut w, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, 273.15);
         // At 1 atm and 273.15 K the scaled amount is the amount (region
         // 2535–3420 cm⁻¹, the fourth).
         assert!((w[3] - 1.0).abs() < 1e-12);
         let cp = tables().bm[440][0];
         let want = (-(10f64.powf(cp)).powf(0.5495)).exp();
-        assert!((g.transmittance(0, &ln_amounts(&w)) - want).abs() < 1e-12);
+        assert!((g.transmittance(0, &powered_amounts(&w)) - want).abs() < 1e-12);
         // Nothing below the tables (20 µm), nor CO₂ inside the line range.
         assert!(!BandModelGrid::new(&[400.0], &[5.0]).active());
         let co2 = BandModelGrid::new(&[2300.0], &[5.0]);

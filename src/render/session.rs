@@ -1097,6 +1097,14 @@ fn scene_thermal(
     )?;
     let states = session.facet_states_of(&solved, times)?;
     let mut out = session.conditions(&states)?;
+    // The back faces' own sky views (double-sided facets), the parts'
+    // overrides applied as to the front face's: what a hit on a back face
+    // reflects. (A state folder holds the front face's only; its renders
+    // take it for both faces.)
+    let back = session.back_shape_factors(&solved);
+    for c in &mut out.conditions {
+        c.surface.back_shape_factor = back.clone();
+    }
     out.timings = solved.timings;
     let warnings =
         super::scene_thermal::unsettled_exchange_warnings(&session.scene, &solved.temperatures);
@@ -1142,6 +1150,20 @@ fn scene_thermal(
 }
 
 impl Session {
+    /// Per facet, the shape factor of its back face where it is
+    /// double-sided (`None` elsewhere), with the parts' overrides, from a
+    /// scene-wide solve.
+    fn back_shape_factors(&self, solved: &super::scene_thermal::SceneThermal) -> Vec<Option<f32>> {
+        let sky = &solved.exposure.sky;
+        (0..sky.facet_count())
+            .map(|f| {
+                let part = self.scene.parts[self.optics.facet_material[f] as usize].shape_factor;
+                sky.back_shape_factor(f)
+                    .map(|b| part.map_or(b, |v| v as f32))
+            })
+            .collect()
+    }
+
     /// What the render reads of a scene-wide solve at `times` (the solve's
     /// image times): per facet, its temperature, sun fraction, incidence
     /// and background at each time, and its shape factor with the parts'
@@ -1224,6 +1246,7 @@ impl Session {
             let surface = SurfaceState {
                 temperature_k: at.temperature_k.clone(),
                 shape_factor: states.shape_factor.clone(),
+                back_shape_factor: Vec::new(),
                 sun_fraction: at.sun_fraction.clone(),
                 cos_sun: at.cos_sun.clone(),
                 background_k: at.background_k.clone(),

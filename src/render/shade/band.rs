@@ -6,7 +6,7 @@
 use super::fast::{FastMiss, FastScratch};
 use super::hit::{ANGLE_ROWS, GreyHit, angle_row};
 use super::reflected_sky::{TILT_NODES, tilt_at};
-use super::surface::{GreyFacet, PlanckTable, hit_sky, hit_temperature};
+use super::surface::{GreyFacet, PlanckTable, hit_temperature};
 use super::{BandTables, Shader};
 use crate::atmosphere::{ANGLE_NODES, scatter::angle_node_f32};
 use crate::material::Material;
@@ -754,6 +754,9 @@ impl Shader<'_> {
             let mut bt = grey_planck::<NB>(pl, t0, rs, g.ft, p.rx);
             let mut bg = grey_planck::<NB>(pl, g0, rs, g.fg, p.rx);
             let [mut sky, mut sun, mut lu] = grey_node_terms::<NB>(nd, q, tb, p.rx);
+            // (At a height node's own height, `ax = 0`, the next node adds
+            // exactly nothing: `lerp(a, b, 0) = a`.)
+            let two = two && p.ax != 0.0;
             if two {
                 let bt1 = grey_planck::<NB>(pl, t0 + hp, rs, g.ft, p.rx);
                 let bg1 = grey_planck::<NB>(pl, g0 + hp, rs, g.fg, p.rx);
@@ -809,6 +812,7 @@ impl Shader<'_> {
             let t0 = (p.n0 * nt + g.kt as usize) * nb;
             let g0 = (p.n0 * nt + g.kg as usize) * nb;
             let q = NODE_TERMS * p.n0 * nb;
+            let two = two && p.ax != 0.0;
             for b in 0..nb {
                 let eps = lerp(ep[e + b], ep[e + nb + b], p.ta);
                 // Temperature first, then range, then height, as the
@@ -871,16 +875,16 @@ impl Shader<'_> {
         let s = &self.conditions.surface;
         let (t_hit, sun_fraction) = hit_temperature(s, f, state);
         let sun_fraction = vis.unwrap_or(sun_fraction);
-        let (shape_factor, background_k) = hit_sky(s, f, state);
+        let m = &self.optics.materials[mi];
+        let (_, nrm, d) = self.hit_frame(ray, h);
+        let (shape_factor, background_k, tilt) = self.seen_sky(f, h.ng, d, state);
         let (kt, ft) = self.table_position(t_hit).ok_or(FastMiss::OffTable)?;
         let (kg, fg) = self
             .table_position(background_k as f64)
             .ok_or(FastMiss::OffTable)?;
-        let m = &self.optics.materials[mi];
-        let (_, nrm, d) = self.hit_frame(ray, h);
         let (a0, ta) = angle_row(-d.dot(nrm));
         let big_f = (shape_factor as f64).clamp(0.0, 1.0);
-        let (kb, wb) = tilt_at(self.tilt[f]);
+        let (kb, wb) = tilt_at(tilt);
         let front = h.ng.dot(d) < 0.0;
         let sun_w = if front || m.double_sided {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)

@@ -36,8 +36,14 @@ pub struct SunInput {
 pub struct SurfaceState {
     /// Surface temperature, K.
     pub temperature_k: Vec<f32>,
-    /// Sky shape factor F, 0–1.
+    /// Sky shape factor F, 0–1, of the front face.
     pub shape_factor: Vec<f32>,
+    /// Sky shape factor of the back face of a double-sided facet, 0–1
+    /// ([`crate::exposure::SkyView::back_shape_factor`]); `None`: a
+    /// single-sided facet, or one whose back face's view is not known —
+    /// a hit on its back face then takes the front face's `shape_factor`.
+    /// Empty: `None` for every facet.
+    pub back_shape_factor: Vec<Option<f32>>,
     /// Sunlit fraction, 0–1.
     pub sun_fraction: Vec<f32>,
     /// Cosine of the solar incidence on the front face (0 when the sun is
@@ -53,6 +59,7 @@ impl SurfaceState {
         SurfaceState {
             temperature_k: vec![temperature_k; facets],
             shape_factor: vec![1.0; facets],
+            back_shape_factor: vec![None; facets],
             sun_fraction: vec![0.0; facets],
             cos_sun: vec![0.0; facets],
             background_k: vec![temperature_k; facets],
@@ -62,6 +69,12 @@ impl SurfaceState {
     /// Number of facets.
     pub fn len(&self) -> usize {
         self.temperature_k.len()
+    }
+
+    /// The back face's shape factor of facet `f`, where known.
+    #[inline]
+    pub fn back_shape_factor(&self, f: usize) -> Option<f32> {
+        self.back_shape_factor.get(f).copied().flatten()
     }
 
     /// Whether there are no facets.
@@ -85,6 +98,24 @@ impl SurfaceState {
                     format!("{n} values: expected one per facet ({facets})"),
                 ));
             }
+        }
+        let nb = self.back_shape_factor.len();
+        if nb != 0 && nb != facets {
+            return Err(crate::Error::invalid(
+                "surface state `back_shape_factor`",
+                format!("{nb} values: expected none or one per facet ({facets})"),
+            ));
+        }
+        if let Some((f, v)) = self
+            .back_shape_factor
+            .iter()
+            .enumerate()
+            .find_map(|(f, v)| v.filter(|v| !v.is_finite()).map(|v| (f, v)))
+        {
+            return Err(crate::Error::invalid(
+                "surface state `back_shape_factor`",
+                format!("facet {f}: {v}, expected a finite shape factor"),
+            ));
         }
         if let Some((i, t)) = self
             .temperature_k

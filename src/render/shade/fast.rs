@@ -6,7 +6,7 @@ use super::Shader;
 use super::hit::{GreyHit, HitStates, acos_deg};
 use super::sources::{SunRays, sky_node};
 use super::truth::{TruthBlock, TruthOut};
-use super::{RULE_GREY, RULE_PER_HIT_BY_RANGE};
+use super::{RULE_BACK_SKY, RULE_GREY, RULE_PER_HIT_BY_RANGE};
 use crate::trace::{Hit, Ray};
 
 /// Which primary hits [`Shader::fast_primary`] leaves to the spectral
@@ -148,16 +148,17 @@ impl Shader<'_> {
             };
             let f = self.facet_of(h);
             let rule = self.rule[f];
-            if rule & !RULE_PER_HIT_BY_RANGE == RULE_GREY {
+            // (A back face with its own sky view is not the grey record's
+            // face: such hits take the general path.)
+            if rule & !(RULE_PER_HIT_BY_RANGE | RULE_BACK_SKY) == RULE_GREY {
+                let dn = ray.dir.dot(h.ng);
                 let range = h.t * ray.dir.length();
                 let by_range = rule & RULE_PER_HIT_BY_RANGE != 0;
                 let n2 = ray.dir.length_squared() * h.ng.length_squared();
-                if !(by_range && ph.is_some_and(|p| p.large(f, range, beta)))
-                    && n2 > 0.0
-                    && n2.is_finite()
-                {
+                let per_hit = by_range && ph.is_some_and(|p| p.large(f, range, beta));
+                let own_back = rule & RULE_BACK_SKY != 0 && dn > 0.0;
+                if !(per_hit || own_back) && n2 > 0.0 && n2.is_finite() {
                     let z = ray.origin.z + ray.dir.z * h.t;
-                    let dn = ray.dir.dot(h.ng);
                     sc.grey
                         .push(GreyHit::new(i, f, [dn, n2, range, z, cos_sc(ray)], false));
                     continue;
@@ -205,10 +206,14 @@ impl Shader<'_> {
             }
             let vis = sc.sun.of(i);
             let n2 = ray.dir.length_squared() * h.ng.length_squared();
-            if self.grey[f].mi != u32::MAX && n2 > 0.0 && n2.is_finite() {
+            let dn = ray.dir.dot(h.ng);
+            if self.grey[f].mi != u32::MAX
+                && !(self.rule[f] & RULE_BACK_SKY != 0 && dn > 0.0)
+                && n2 > 0.0
+                && n2.is_finite()
+            {
                 let range = h.t * ray.dir.length();
                 let z = ray.origin.z + ray.dir.z * h.t;
-                let dn = ray.dir.dot(h.ng);
                 sc.grey.push(GreyHit::new(
                     i,
                     f,
@@ -258,9 +263,7 @@ impl Shader<'_> {
             let v = match &hits[i] {
                 None => crate::render::MISS_TRUTH,
                 Some(h) => {
-                    let f = self.facet_of(h);
-                    let range = h.t * rays[i].dir.length();
-                    let mut v = self.truth_of_hit(f, range, sc.states.of(i));
+                    let mut v = self.truth_of_hit(&rays[i], h, sc.states.of(i));
                     if let Some(x) = sc.sun.of(i) {
                         v[4] = x;
                     }

@@ -43,9 +43,11 @@
 //! values of cos θ, linear between them) and the ground beyond the scene (a
 //! blackbody at [`Conditions::ground_temperature_k`]) when they point below
 //! it. `L_eq` in the diffuse term above is that directional sky integrated
-//! over the sky a facet of tilt β faces ([`reflected_sky`]; its front face's
-//! tilt, for either face, as `F` and `T_bg`), tabulated on [`TILT_NODES`]
-//! tilts and linear between them.
+//! over the sky a facet of tilt β faces ([`reflected_sky`]), tabulated on
+//! [`TILT_NODES`] tilts and linear between them. A hit on the back face of
+//! a double-sided facet takes that face's own `F` and tilt 180° − β where
+//! its view is known ([`SurfaceState::back_shape_factor`],
+//! [`Shader::seen_sky`]), else the front face's.
 //!
 //! Units: wavelength µm, spectral radiance W·m⁻²·sr⁻¹·µm⁻¹, spectral
 //! irradiance W·m⁻²·µm⁻¹, band radiance ∫ R L dλ in W·m⁻²·sr⁻¹.
@@ -154,6 +156,10 @@ pub struct Shader<'a> {
     /// Per facet: the position of its front face's tilt on the tilt table
     /// of the reflected sky ([`tilt_position`]).
     tilt: Vec<f32>,
+    /// Per facet: the same for its back face (tilt 180° − β), which a hit
+    /// on the back face of a double-sided facet reflects
+    /// ([`Shader::seen_sky`]).
+    back_tilt: Vec<f32>,
     /// The grey path's band integrals (of the path once one is set).
     grey_tables: GreyTables,
     /// Without a sensor path: per grey facet, per band, the
@@ -188,11 +194,18 @@ pub(super) const RULE_PER_HIT: u8 = 4;
 /// Its hits take a per-hit state at ranges where it is large against the
 /// pixel footprint ([`crate::render::per_hit::PerHitRule::ByRange`]).
 pub(super) const RULE_PER_HIT_BY_RANGE: u8 = 8;
+/// Its back face has a sky view of its own (a double-sided facet with a
+/// back shape factor, [`SurfaceState::back_shape_factor`]): hits on the
+/// back face leave the grey path's front-face record for
+/// [`Shader::fast_general`].
+pub(super) const RULE_BACK_SKY: u8 = 16;
 
-/// Per facet (global order): the position of its front face's tilt on the
-/// tilt table of the reflected sky, from the vertical component of its
-/// world-space front normal ([`crate::geometry::triangle_normal_area`]).
-fn facet_tilts(geometry: &SceneGeometry) -> Vec<f32> {
+/// Per facet (global order): the positions of its front and back faces'
+/// tilts on the tilt table of the reflected sky, from the vertical
+/// component of its world-space front normal
+/// ([`crate::geometry::triangle_normal_area`]; the back face's tilt is
+/// 180° − β).
+fn facet_tilts(geometry: &SceneGeometry) -> (Vec<f32>, Vec<f32>) {
     geometry
         .instances
         .par_iter()
@@ -200,10 +213,10 @@ fn facet_tilts(geometry: &SceneGeometry) -> Vec<f32> {
         .flat_map_iter(|(i, inst)| {
             (0..geometry.meshes[inst.mesh].triangle_count()).map(move |p| {
                 let (n, _) = crate::geometry::triangle_normal_area(&geometry.world_triangle(i, p));
-                tilt_position(n.z as f64)
+                (tilt_position(n.z as f64), tilt_position(-n.z as f64))
             })
         })
-        .collect()
+        .unzip()
 }
 
 /// The thermal sky arriving from each of the [`SKY_NODES`] directions on
@@ -463,7 +476,7 @@ impl<'a> Shader<'a> {
             })
             .collect();
         let sun_ray = sun_ray_facets(optics, conditions, &tables, &fast, &table, &glint_m2);
-        let tilt = facet_tilts(geometry);
+        let (tilt, back_tilt) = facet_tilts(geometry);
         let (grey, grey_terms) = grey_facets(
             optics, conditions, &options, &fast, &table, &sun_ray, &glint_m2, &tilt,
         );
@@ -475,6 +488,7 @@ impl<'a> Shader<'a> {
         Ok(Shader {
             grey,
             tilt,
+            back_tilt,
             grey_tables,
             grey_terms,
             tracer,
@@ -531,6 +545,12 @@ impl<'a> Shader<'a> {
                 }
                 if self.sun_ray[f] {
                     r |= RULE_SUN_RAY;
+                }
+                let mi = self.optics.facet_material[f] as usize;
+                if self.optics.materials[mi].double_sided
+                    && self.conditions.surface.back_shape_factor(f).is_some()
+                {
+                    r |= RULE_BACK_SKY;
                 }
                 match ph.map(|p| p.rule(f, self.pixel_angle_rad)) {
                     Some(PerHitRule::Always) => r |= RULE_PER_HIT,

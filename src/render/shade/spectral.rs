@@ -5,7 +5,7 @@
 use super::Shader;
 use super::hit::{ANGLE_ROWS, HitStates};
 use super::sources::SunRays;
-use super::surface::{hit_sky, hit_temperature};
+use super::surface::hit_temperature;
 use crate::radiometry::{SurfaceInputs, leaving_radiance};
 use crate::render::per_hit::HitState;
 use crate::trace::{Coherence, Hit, Ray};
@@ -175,9 +175,9 @@ impl Shader<'_> {
             _ => 0.0,
         };
         self.planck_into(t_hit, &mut sc.b_t);
-        let (shape_factor, background_k) = hit_sky(s, f, state);
+        let (shape_factor, background_k, tilt) = self.seen_sky(f, h.ng, d, state);
         self.planck_into(background_k as f64, &mut sc.b_bg);
-        let (kb, wb) = super::tilt_at(self.tilt[f]);
+        let (kb, wb) = super::tilt_at(tilt);
         let wb = wb as f64;
         // The sun only lights the face it falls on: for a single-sided facet
         // seen from behind, cos σ of the front face does not apply.

@@ -183,16 +183,64 @@ pub(super) fn hit_temperature(s: &SurfaceState, f: usize, state: Option<HitState
 }
 
 /// The shape factor and background temperature (K) of a hit on facet
-/// `f`: its own (per-hit `state` with its own sky view) or its facet's.
+/// `f`: its own (per-hit `state` with its own sky view) or its facet's, of
+/// the face the ray sees (`back`: the back face of a double-sided facet;
+/// its own shape factor where known, else the front face's). The
+/// background temperature is the mean over both faces
+/// ([`crate::exposure::SkyView`]).
 #[inline]
-pub(super) fn hit_sky(s: &SurfaceState, f: usize, state: Option<HitState>) -> (f32, f32) {
+pub(super) fn hit_sky(
+    s: &SurfaceState,
+    f: usize,
+    state: Option<HitState>,
+    back: bool,
+) -> (f32, f32) {
     match state.and_then(|st| st.sky) {
-        Some(k) => (k.shape_factor, k.background_k),
-        None => (s.shape_factor[f], s.background_k[f]),
+        Some(k) => match k.back_shape_factor.filter(|_| back) {
+            Some(b) => (b, k.background_k),
+            None => (k.shape_factor, k.background_k),
+        },
+        None => match s.back_shape_factor(f).filter(|_| back) {
+            Some(b) => (b, s.background_k[f]),
+            None => (s.shape_factor[f], s.background_k[f]),
+        },
     }
 }
 
 impl Shader<'_> {
+    /// What a hit on facet `f` seen along `d` (from the ray's origin)
+    /// reflects of the sky: the shape factor and background temperature
+    /// (K) of [`hit_sky`] and the position of the seen face's tilt on the
+    /// reflected sky's tilt table. A ray that reaches the back face of a
+    /// double-sided facet sees the sky that face sees: its own shape factor
+    /// (when known) and tilt 180° − β. Otherwise (the front face, a
+    /// single-sided facet, or a back face whose view is not known) the
+    /// front face's: `F` and β.
+    #[inline]
+    pub(super) fn seen_sky(
+        &self,
+        f: usize,
+        ng: glam::Vec3,
+        d: glam::Vec3,
+        state: Option<HitState>,
+    ) -> (f32, f32, f32) {
+        let s = &self.conditions.surface;
+        let mi = self.optics.facet_material[f] as usize;
+        let back = ng.dot(d) > 0.0 && self.optics.materials[mi].double_sided;
+        let known = back
+            && match state.and_then(|st| st.sky) {
+                Some(k) => k.back_shape_factor.is_some(),
+                None => s.back_shape_factor(f).is_some(),
+            };
+        let (big_f, t_bg) = hit_sky(s, f, state, known);
+        let tilt = if known {
+            self.back_tilt[f]
+        } else {
+            self.tilt[f]
+        };
+        (big_f, t_bg, tilt)
+    }
+
     /// Whether a hit on facet `f` spawns secondary rays (specular or
     /// transmissive material, bounce budget left).
     pub fn spawns_secondary(&self, f: usize) -> bool {

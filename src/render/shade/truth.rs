@@ -90,7 +90,7 @@ impl Shader<'_> {
     /// traces a shadow ray ([`super::sources::sun_ray_facets`]).
     pub fn truth_of(&self, ray: &Ray, h: &Hit) -> [f32; 6] {
         let state = self.hit_state(ray, h);
-        let mut v = self.truth_of_hit(self.facet_of(h), h.t * ray.dir.length(), state);
+        let mut v = self.truth_of_hit(ray, h, state);
         let mut sun = SunRays::default();
         let hit = [Some(*h)];
         self.sun_visibility(
@@ -105,17 +105,19 @@ impl Shader<'_> {
         v
     }
 
-    /// [`Shader::truth_of`] of a hit on facet `f` at range `d` (m) with
-    /// its own `state` (per-hit temperatures) or its facet's.
+    /// [`Shader::truth_of`] of the hit `h` of `ray` with its own `state`
+    /// (per-hit temperatures) or its facet's; the shape factor of the face
+    /// the ray sees ([`Shader::seen_sky`]).
     #[inline]
-    pub(super) fn truth_of_hit(&self, f: usize, d: f32, state: Option<HitState>) -> [f32; 6] {
-        let mut v = self.truth_of_facet(f, d);
+    pub(super) fn truth_of_hit(&self, ray: &Ray, h: &Hit, state: Option<HitState>) -> [f32; 6] {
+        let f = self.facet_of(h);
+        let mut v = self.truth_of_facet(f, h.t * ray.dir.length());
         if let Some(st) = state {
             v[0] = self.conditions.surface.temperature_k[f] + st.dt_k;
             v[4] = st.sun_fraction;
-            if let Some(k) = st.sky {
-                v[3] = k.shape_factor;
-            }
+        }
+        if self.rule[f] & super::RULE_BACK_SKY != 0 || state.is_some_and(|st| st.sky.is_some()) {
+            v[3] = self.seen_sky(f, h.ng, ray.dir, state).0;
         }
         v
     }
