@@ -880,6 +880,7 @@ fn state_seeds() -> Vec<Vec<u8>> {
         times: Vec::new(),
         first: 0,
         shape_factor: vec![1.0, 0.8, 0.5, 0.9, 0.2],
+        back_shape_factor: vec![None, Some(0.4), None, None, None],
         at: vec![at(300.0), at(310.0)],
     };
     let p = dir.join("state-1-of-1.arrow");

@@ -452,3 +452,98 @@ fn cli_bench_facets_reports_the_stages_facets_per_second_and_peak_memory() {
         "{r}"
     );
 }
+
+/// A double-sided fence whose back face the camera sees (issue 18): the
+/// state folder keeps each double-sided facet's back-face shape factor
+/// (`back_shape_factor`, null for the single-sided ones), so a render from
+/// the state equals the render in one piece bit for bit — before the
+/// column, the back face took the front face's `F` there. A state file
+/// without the column (written before it existed) still reads, with the
+/// back faces' view unknown.
+#[test]
+fn a_state_keeps_the_back_faces_sky_view_of_double_sided_facets() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = write_scene(d, 20.0, "asphalt");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    // A 30 × 4 m leaf screen across the camera's view, its front (the
+    // plane's +z) turned to +y, away from the camera at y = −120, and 1 m
+    // from a 10 m brick wall: the camera sees the back face, open to the
+    // sky, and a render from the state must give it its own view.
+    json["objects"].as_array_mut().unwrap().push(json!({
+        "name": "fence", "material": "deciduous_canopy",
+        "shapes": [{"plane": {"size": [30.0, 4.0]},
+                    "transform": {"rotate_deg": [-90.0, 0.0, 0.0],
+                                  "translate": [0.0, -30.0, 2.0]}}]
+    }));
+    json["objects"].as_array_mut().unwrap().push(json!({
+        "name": "wall", "material": "brick",
+        "shapes": [{"box": {"size": [40.0, 1.0, 10.0]},
+                    "transform": {"translate": [0.0, -28.5, 0.0]}}]
+    }));
+    std::fs::write(&scene, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+    let (one, st, from) = (d.join("one"), d.join("st"), d.join("from"));
+    irsig(&["render", s(&scene), "-o", s(&one), "--quiet"]);
+    irsig(&["thermal-scene", s(&scene), "--state", s(&st), "--quiet"]);
+    irsig(&[
+        "render",
+        s(&scene),
+        "--state",
+        s(&st),
+        "-o",
+        s(&from),
+        "--quiet",
+    ]);
+    same_images(&one, &from);
+
+    let session = Session::open(&scene, Backend::Embree).unwrap();
+    let states = state::read_states(&session, &st, &[]).unwrap();
+    assert_eq!(states.back_shape_factor.len(), states.len());
+    let fence: Vec<usize> = (0..states.len())
+        .filter(|&f| states.back_shape_factor[f].is_some())
+        .collect();
+    // The plane's two triangles, and only they.
+    assert_eq!(fence.len(), 2, "{:?}", states.back_shape_factor);
+    for &f in &fence {
+        let (front, back) = (states.shape_factor[f], states.back_shape_factor[f].unwrap());
+        // The back sees half the sky. The front, 1 m from the wall along
+        // its length, sees the sky above the wall's top only: (1 − sin α)/2
+        // with α that top's elevation, 0.007 at the fence's top (sin α =
+        // 6/√37) and less below, plus the slot's ends.
+        assert!((0.45..=0.52).contains(&back), "F_back {back}");
+        assert!(front < 0.1, "F {front}");
+    }
+
+    // The render from the state shades the back face the camera sees
+    // with that face's own view: the truth layer `shape_factor` of the
+    // fence's pixels (object 2) is the back face's, not the front's.
+    let stack = irsig::output::read_exr(from.join("cam.exr")).unwrap();
+    let layer = |name: &str| {
+        &stack
+            .layers
+            .iter()
+            .find(|l| l.name == name)
+            .unwrap_or_else(|| panic!("no layer {name}"))
+            .data
+    };
+    let seen: Vec<f32> = layer("object_id")
+        .iter()
+        .zip(layer("shape_factor"))
+        .filter(|(o, _)| **o == 2.0)
+        .map(|(_, f)| *f)
+        .collect();
+    assert!(!seen.is_empty(), "the camera sees no fence");
+    assert!(seen.iter().all(|&f| f >= 0.45), "fence pixels' F {seen:?}");
+
+    // A state file without the column: written from the same states with
+    // the back faces' view unknown, it reads back unknown.
+    let key = state::StateKey::of(&session, &[]).unwrap();
+    let mut old = states.clone();
+    old.back_shape_factor.clear();
+    let p = d.join("old.arrow");
+    state::write_states(&p, &key, (1, 1), &old).unwrap();
+    let back = state::read_state_file(&p, &key, (1, 1), 0..states.len()).unwrap();
+    assert!(back.back_shape_factor.is_empty());
+    assert_eq!(back.shape_factor, states.shape_factor);
+}

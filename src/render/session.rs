@@ -1097,14 +1097,6 @@ fn scene_thermal(
     )?;
     let states = session.facet_states_of(&solved, times)?;
     let mut out = session.conditions(&states)?;
-    // The back faces' own sky views (double-sided facets), the parts'
-    // overrides applied as to the front face's: what a hit on a back face
-    // reflects. (A state folder holds the front face's only; its renders
-    // take it for both faces.)
-    let back = session.back_shape_factors(&solved);
-    for c in &mut out.conditions {
-        c.surface.back_shape_factor = back.clone();
-    }
     out.timings = solved.timings;
     let warnings =
         super::scene_thermal::unsettled_exchange_warnings(&session.scene, &solved.temperatures);
@@ -1214,6 +1206,7 @@ impl Session {
             times: times.to_vec(),
             first: 0,
             shape_factor,
+            back_shape_factor: self.back_shape_factors(solved),
             at,
         })
     }
@@ -1246,7 +1239,7 @@ impl Session {
             let surface = SurfaceState {
                 temperature_k: at.temperature_k.clone(),
                 shape_factor: states.shape_factor.clone(),
-                back_shape_factor: Vec::new(),
+                back_shape_factor: states.back_shape_factor.clone(),
                 sun_fraction: at.sun_fraction.clone(),
                 cos_sun: at.cos_sun.clone(),
                 background_k: at.background_k.clone(),

@@ -100,6 +100,11 @@ pub struct FacetStates {
     /// Shape factor (sky view factor of the front face, the parts'
     /// overrides applied), per facet.
     pub shape_factor: Vec<f32>,
+    /// Shape factor of the back face of each double-sided facet (the
+    /// parts' overrides applied), `None` for single-sided facets; empty
+    /// where unknown (a state file written before the column existed):
+    /// the shader then takes the front face's.
+    pub back_shape_factor: Vec<Option<f32>>,
     /// Per image time.
     pub at: Vec<FacetTimeState>,
 }
@@ -126,6 +131,11 @@ impl FacetStates {
             times: self.times.clone(),
             first: range.start,
             shape_factor: cut(&self.shape_factor),
+            back_shape_factor: if self.back_shape_factor.is_empty() {
+                Vec::new()
+            } else {
+                self.back_shape_factor[local.clone()].to_vec()
+            },
             at: self
                 .at
                 .iter()
@@ -159,6 +169,13 @@ impl FacetStates {
                     self.first + self.len()
                 ),
             ));
+        }
+        // Both halves known, or the whole unknown (the shader then takes
+        // the front face's F everywhere, as for an old state file).
+        if self.back_shape_factor.is_empty() || other.back_shape_factor.is_empty() {
+            self.back_shape_factor.clear();
+        } else {
+            self.back_shape_factor.extend(other.back_shape_factor);
         }
         self.shape_factor.extend(other.shape_factor);
         for (a, b) in self.at.iter_mut().zip(other.at) {
@@ -950,6 +967,12 @@ pub fn write_states(
         )),
         Arc::new(Float32Array::from(states.shape_factor.clone())),
     ];
+    if !states.back_shape_factor.is_empty() {
+        fields.push(Field::new("back_shape_factor", DataType::Float32, true));
+        columns.push(Arc::new(Float32Array::from(
+            states.back_shape_factor.clone(),
+        )));
+    }
     for (i, at) in states.at.iter().enumerate() {
         let time = HashMap::from([("time".to_string(), key.times[i].clone())]);
         for (q, v) in [
@@ -995,10 +1018,15 @@ pub fn read_state_file(
             background_k: f32_column(&batch, path, &time_column("background_k", i))?,
         });
     }
+    let back_shape_factor = match batch.column_by_name("back_shape_factor") {
+        Some(_) => fraction_column(&batch, path, "back_shape_factor", range.len())?,
+        None => Vec::new(),
+    };
     Ok(FacetStates {
         times: Vec::new(),
         first: range.start,
         shape_factor: f32_column(&batch, path, "shape_factor")?,
+        back_shape_factor,
         at,
     })
 }
@@ -1275,14 +1303,27 @@ pub fn read_rays(
 /// facet then takes `1 − F`, as when it was written.
 fn exposed_back_column(batch: &RecordBatch, path: &Path, nf: usize) -> Result<Vec<Option<f32>>> {
     const NAME: &str = "exposed_back_shape_factor";
-    let Some(c) = batch.column_by_name(NAME) else {
+    if batch.column_by_name(NAME).is_none() {
         return Ok(vec![None; nf]);
-    };
+    }
+    fraction_column(batch, path, NAME, nf)
+}
+
+/// A nullable float32 column of fractions in [0, 1] (`nf` rows): a
+/// mistyped column or a value outside [0, 1] (NaN included) is an error
+/// naming the file, the column and the row.
+fn fraction_column(
+    batch: &RecordBatch,
+    path: &Path,
+    name: &str,
+    nf: usize,
+) -> Result<Vec<Option<f32>>> {
+    let c = column(batch, path, name)?;
     let a = c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
         Error::invalid(
             "state",
             format!(
-                "{}: column `{NAME}` is {}, expected float32",
+                "{}: column `{name}` is {}, expected float32",
                 path.display(),
                 c.data_type()
             ),
@@ -1299,7 +1340,7 @@ fn exposed_back_column(batch: &RecordBatch, path: &Path, nf: usize) -> Result<Ve
         return Err(Error::invalid(
             "state",
             format!(
-                "{}: column `{NAME}` holds {x} at row {i}: expected a fraction in [0, 1] or null",
+                "{}: column `{name}` holds {x} at row {i}: expected a fraction in [0, 1] or null",
                 path.display()
             ),
         ));
