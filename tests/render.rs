@@ -2536,3 +2536,124 @@ fn r18_a_double_sided_fence_reflects_the_sky_of_the_face_seen() {
         }
     }
 }
+
+/// A lone double-sided plate (a leaf screen) in the sun, seen from both
+/// sides: the face the sun falls on reflects it (fast path and reference
+/// alike), the face turned from the sun reflects none — it renders exactly
+/// as with no sun at all — though its facet's `cos_sun` is `|n·s|`, lit
+/// on either side for the thermal model. Turning the sun to the other side
+/// swaps the faces (issue 18).
+#[test]
+fn r18_a_double_sided_plate_reflects_the_sun_on_its_sunlit_face_only() {
+    use irsig::render::FastScratch;
+    use irsig::trace::{Coherence, Ray};
+    let mut plate = material("plate", 1, 0.7, 0.0);
+    plate.double_sided = true;
+    // Front normal −y: counter-clockwise seen from −y.
+    let q = quad(
+        "plate",
+        [
+            Vec3::new(-5.0, 0.0, 0.0),
+            Vec3::new(5.0, 0.0, 0.0),
+            Vec3::new(5.0, 0.0, 4.0),
+            Vec3::new(-5.0, 0.0, 4.0),
+        ],
+    );
+    let geom = geometry(vec![q]);
+    let optics = optics(&geom, vec![plate], &[0]);
+    // Rays 0, 2 see the front (from −y), 1, 3 the back (from +y).
+    let rays: Vec<Ray> = [-0.5f32, 0.5]
+        .iter()
+        .flat_map(|&x| {
+            [
+                Ray::new(Vec3::new(x, -20.0, 2.0), Vec3::Y),
+                Ray::new(Vec3::new(x, 20.0, 2.0), -Vec3::Y),
+            ]
+        })
+        .collect();
+    let tracer = trace::build(&geom, Backend::Embree).unwrap();
+    let hits = trace::intersect_all(tracer.as_ref(), &rays, Coherence::Coherent);
+    assert!(hits.iter().all(|h| h.is_some_and(|h| h.prim < 2)));
+    let bands = vec![Band::flat(3.0, 5.0, 0.05).unwrap()];
+    let opts = ShadeOptions {
+        max_bounces: 0,
+        offset_m: 1e-3,
+    };
+    let conditions = |sun: Option<Vec3>| {
+        let mut surface = state(&geom, &[300.0]);
+        for f in 0..2 {
+            surface.shape_factor[f] = 0.5;
+            surface.sun_fraction[f] = 1.0;
+            // What the exposure gives a double-sided facet: |n·s|.
+            surface.cos_sun[f] = sun.map_or(0.0, |s| s.dot(Vec3::NEG_Y).abs());
+        }
+        Conditions {
+            surface,
+            sky: Sky::Blackbody {
+                temperature_k: 250.0,
+            },
+            sun: sun.map(|direction| SunInput {
+                direction,
+                direct_normal_w_m2: 800.0,
+            }),
+            ground_temperature_k: 300.0,
+            atmosphere: Atmosphere::None,
+            per_hit: None,
+            wind_speed_m_s: 2.0,
+        }
+    };
+    // Per ray: the fast path's and the reference's band radiance.
+    let shade = |cond: &Conditions| -> (Vec<f64>, Vec<f64>) {
+        let shader = Shader::new(tracer.as_ref(), &geom, &optics, cond, &bands, opts).unwrap();
+        let mut fast = vec![0f32; rays.len()];
+        let mut slow = Vec::new();
+        shader.shade_fast(
+            &rays,
+            &hits,
+            &mut fast,
+            &mut slow,
+            &mut FastScratch::default(),
+            None,
+        );
+        assert!(slow.is_empty(), "{slow:?}");
+        let nl = shader.spectrum_len();
+        let mut spectra = vec![0.0; rays.len() * nl];
+        shader.shade_primary(&rays, &hits, &mut spectra);
+        let reference = spectra
+            .chunks_exact(nl)
+            .map(|s| shader.band_radiance(0, s))
+            .collect();
+        (fast.iter().map(|&v| v as f64).collect(), reference)
+    };
+    let (dark_fast, dark_ref) = shade(&conditions(None));
+    for (sun_side, sun) in [
+        (-1.0f32, Vec3::new(0.2, -0.6, 0.7).normalize()),
+        (1.0, Vec3::new(0.2, 0.6, 0.7).normalize()),
+    ] {
+        let (lit_fast, lit_ref) = shade(&conditions(Some(sun)));
+        for i in 0..rays.len() {
+            // The viewer's side: −y for the front rays.
+            let viewer_side = if i % 2 == 0 { -1.0 } else { 1.0 };
+            let (f, r) = (lit_fast[i], lit_ref[i]);
+            assert!(
+                (f - r).abs() <= 1e-5 * r,
+                "ray {i}: fast {f}, reference {r}"
+            );
+            if viewer_side == sun_side {
+                // r_d·E·cos σ/π in 3–5 µm: well above float rounding.
+                assert!(
+                    f > dark_fast[i] * 1.01,
+                    "ray {i}: {f} vs dark {}",
+                    dark_fast[i]
+                );
+            } else {
+                assert_eq!(f, dark_fast[i], "ray {i}: the unlit face");
+                assert!(
+                    (r - dark_ref[i]).abs() <= 1e-12 * r,
+                    "ray {i}: {r} vs {}",
+                    dark_ref[i]
+                );
+            }
+        }
+    }
+}

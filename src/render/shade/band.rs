@@ -885,8 +885,7 @@ impl Shader<'_> {
         let (a0, ta) = angle_row(-d.dot(nrm));
         let big_f = (shape_factor as f64).clamp(0.0, 1.0);
         let (kb, wb) = tilt_at(tilt);
-        let front = h.ng.dot(d) < 0.0;
-        let sun_w = if front || m.double_sided {
+        let sun_w = if self.seen_face_lit(mi, h.ng, d) {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
                 / std::f64::consts::PI
         } else {

@@ -159,8 +159,12 @@ impl Shader<'_> {
                 let own_back = rule & RULE_BACK_SKY != 0 && dn > 0.0;
                 if !(per_hit || own_back) && n2 > 0.0 && n2.is_finite() {
                     let z = ray.origin.z + ray.dir.z * h.t;
+                    // A double-sided facet's face turned from the sun takes
+                    // no sun (the grey record's rule lights either face).
+                    let unlit =
+                        !self.seen_face_lit(self.optics.facet_material[f] as usize, h.ng, ray.dir);
                     sc.grey
-                        .push(GreyHit::new(i, f, [dn, n2, range, z, cos_sc(ray)], false));
+                        .push(GreyHit::new(i, f, [dn, n2, range, z, cos_sc(ray)], unlit));
                     continue;
                 }
             }
@@ -218,7 +222,12 @@ impl Shader<'_> {
                     i,
                     f,
                     [dn, n2, range, z, cos_sc(ray)],
-                    vis == Some(0.0),
+                    vis == Some(0.0)
+                        || !self.seen_face_lit(
+                            self.optics.facet_material[f] as usize,
+                            h.ng,
+                            ray.dir,
+                        ),
                 ));
                 continue;
             }

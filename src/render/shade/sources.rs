@@ -290,6 +290,22 @@ impl Shader<'_> {
         self.sun_ray[f]
     }
 
+    /// Whether the face of facet material `mi` that a ray `d` sees (`ng`
+    /// its geometric normal) is the face the sun falls on. A single-sided
+    /// facet's sunlit face is its front (its `cos_sun` is 0 when the sun
+    /// is behind it); a double-sided facet's `cos_sun` is `|n·s|`, lit on
+    /// whichever side the sun is, so the face seen is lit only when the
+    /// sun is on the viewer's side: in the thermal infrared a leaf layer
+    /// or fence is opaque and its unlit face reflects no direct sun.
+    #[inline]
+    pub(super) fn seen_face_lit(&self, mi: usize, ng: Vec3, d: Vec3) -> bool {
+        let dn = ng.dot(d);
+        if !self.optics.materials[mi].double_sided {
+            return dn < 0.0;
+        }
+        self.sun_dir.is_none_or(|s| dn * ng.dot(s) < 0.0)
+    }
+
     /// The sun visibility of a batch's hits into `sr.vis`: one shadow ray
     /// toward the sun from each hit on a facet of [`sun_ray_facets`] whose
     /// seen face the sun lights (and which has no per-hit state, `has_state`:
@@ -332,8 +348,7 @@ impl Shader<'_> {
             }
             let mi = self.optics.facet_material[f] as usize;
             let dn = h.ng.dot(ray.dir);
-            let diffuse_lit =
-                s.cos_sun[f] > 0.0 && (dn < 0.0 || self.optics.materials[mi].double_sided);
+            let diffuse_lit = s.cos_sun[f] > 0.0 && self.seen_face_lit(mi, h.ng, ray.dir);
             let sn = h.ng.dot(sun);
             // The glint lobe of the seen face needs the sun on its side.
             let glint_lit = self.glint_m2[mi] > 0.0 && dn * sn < 0.0;

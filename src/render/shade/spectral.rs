@@ -180,9 +180,9 @@ impl Shader<'_> {
         let (kb, wb) = super::tilt_at(tilt);
         let wb = wb as f64;
         // The sun only lights the face it falls on: for a single-sided facet
-        // seen from behind, cos σ of the front face does not apply.
-        let front = h.ng.dot(d) < 0.0;
-        let cos_sun = if front || m.double_sided {
+        // seen from behind, cos σ of the front face does not apply, nor for
+        // a double-sided facet's face turned from the sun.
+        let cos_sun = if self.seen_face_lit(mi, h.ng, d) {
             (s.cos_sun[f] as f64).max(0.0) * (sun_fraction as f64).clamp(0.0, 1.0)
         } else {
             0.0
