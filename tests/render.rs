@@ -2307,8 +2307,14 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
             // The hit's sunlit fraction: its own shadow ray (nothing
             // occludes a lone square) or the facet's.
             let f_sun = if shader.traces_sun_ray(f) { 1.0 } else { frac };
-            let lit_face = front || m.double_sided;
             let sun_seen = sun_dir.is_some_and(|s| s.dot(nrm) > 0.0);
+            // The sun lights a single-sided facet's front only, and the
+            // face of a double-sided one on its side only.
+            let lit_face = if m.double_sided {
+                sun_dir.is_none() || sun_seen
+            } else {
+                front
+            };
             let range = (h.t * ray.dir.length()) as f64;
             let z = (ray.origin.z + ray.dir.z * h.t) as f64;
             for (b, band) in bands.iter().enumerate() {
