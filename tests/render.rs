@@ -2404,7 +2404,6 @@ fn every_fast_path_equals_the_reference_big_equation_on_random_inputs() {
 #[test]
 fn r18_a_double_sided_fence_reflects_the_sky_of_the_face_seen() {
     use irsig::radiometry::Planck;
-    use irsig::render::FastScratch;
     use irsig::trace::{Coherence, Ray};
     let mut fence = material("fence", 1, 0.6, 0.0);
     fence.double_sided = true;
@@ -2471,28 +2470,9 @@ fn r18_a_double_sided_fence_reflects_the_sky_of_the_face_seen() {
         max_bounces: 0,
         offset_m: 1e-3,
     };
-    // Per ray: the fast path's and the reference's band radiance.
-    let shade = |cond: &Conditions| -> (Vec<f64>, Vec<f64>) {
+    let shade = |cond: &Conditions| {
         let shader = Shader::new(tracer.as_ref(), &geom, &optics, cond, &bands, opts).unwrap();
-        let mut fast = vec![0f32; rays.len()];
-        let mut slow = Vec::new();
-        shader.shade_fast(
-            &rays,
-            &hits,
-            &mut fast,
-            &mut slow,
-            &mut FastScratch::default(),
-            None,
-        );
-        assert!(slow.is_empty(), "{slow:?}");
-        let nl = shader.spectrum_len();
-        let mut spectra = vec![0.0; rays.len() * nl];
-        shader.shade_primary(&rays, &hits, &mut spectra);
-        let reference = spectra
-            .chunks_exact(nl)
-            .map(|s| shader.band_radiance(0, s))
-            .collect();
-        (fast.iter().map(|&v| v as f64).collect(), reference)
+        fast_and_reference(&shader, &rays, &hits)
     };
     let planck = Planck::default();
     let em = Emissivity::from_material(&fence).unwrap();
@@ -2543,6 +2523,34 @@ fn r18_a_double_sided_fence_reflects_the_sky_of_the_face_seen() {
     }
 }
 
+/// Per ray: the fast path's and the spectral reference's radiance in band
+/// 0 (every hit must stay on the fast paths).
+fn fast_and_reference(
+    shader: &Shader,
+    rays: &[irsig::trace::Ray],
+    hits: &[Option<irsig::trace::Hit>],
+) -> (Vec<f64>, Vec<f64>) {
+    let mut fast = vec![0f32; rays.len()];
+    let mut slow = Vec::new();
+    shader.shade_fast(
+        rays,
+        hits,
+        &mut fast,
+        &mut slow,
+        &mut irsig::render::FastScratch::default(),
+        None,
+    );
+    assert!(slow.is_empty(), "{slow:?}");
+    let nl = shader.spectrum_len();
+    let mut spectra = vec![0.0; rays.len() * nl];
+    shader.shade_primary(rays, hits, &mut spectra);
+    let reference = spectra
+        .chunks_exact(nl)
+        .map(|s| shader.band_radiance(0, s))
+        .collect();
+    (fast.iter().map(|&v| v as f64).collect(), reference)
+}
+
 /// A lone double-sided plate (a leaf screen) in the sun, seen from both
 /// sides: the face the sun falls on reflects it (fast path and reference
 /// alike), the face turned from the sun reflects none — it renders exactly
@@ -2551,7 +2559,6 @@ fn r18_a_double_sided_fence_reflects_the_sky_of_the_face_seen() {
 /// swaps the faces (issue 18).
 #[test]
 fn r18_a_double_sided_plate_reflects_the_sun_on_its_sunlit_face_only() {
-    use irsig::render::FastScratch;
     use irsig::trace::{Coherence, Ray};
     let mut plate = material("plate", 1, 0.7, 0.0);
     plate.double_sided = true;
@@ -2608,28 +2615,9 @@ fn r18_a_double_sided_plate_reflects_the_sun_on_its_sunlit_face_only() {
             wind_speed_m_s: 2.0,
         }
     };
-    // Per ray: the fast path's and the reference's band radiance.
-    let shade = |cond: &Conditions| -> (Vec<f64>, Vec<f64>) {
+    let shade = |cond: &Conditions| {
         let shader = Shader::new(tracer.as_ref(), &geom, &optics, cond, &bands, opts).unwrap();
-        let mut fast = vec![0f32; rays.len()];
-        let mut slow = Vec::new();
-        shader.shade_fast(
-            &rays,
-            &hits,
-            &mut fast,
-            &mut slow,
-            &mut FastScratch::default(),
-            None,
-        );
-        assert!(slow.is_empty(), "{slow:?}");
-        let nl = shader.spectrum_len();
-        let mut spectra = vec![0.0; rays.len() * nl];
-        shader.shade_primary(&rays, &hits, &mut spectra);
-        let reference = spectra
-            .chunks_exact(nl)
-            .map(|s| shader.band_radiance(0, s))
-            .collect();
-        (fast.iter().map(|&v| v as f64).collect(), reference)
+        fast_and_reference(&shader, &rays, &hits)
     };
     let (dark_fast, dark_ref) = shade(&conditions(None));
     for (sun_side, sun) in [

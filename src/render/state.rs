@@ -874,9 +874,11 @@ fn column<'b>(batch: &'b RecordBatch, path: &Path, name: &str) -> Result<&'b Arr
         .ok_or_else(|| Error::invalid("state", format!("{}: no column `{name}`", path.display())))
 }
 
-fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> {
+/// A float32 column of `batch` by name (a mistyped one is an error naming
+/// the file and the column).
+fn float32_array<'b>(batch: &'b RecordBatch, path: &Path, name: &str) -> Result<&'b Float32Array> {
     let c = column(batch, path, name)?;
-    let a = c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
+    c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
         Error::invalid(
             "state",
             format!(
@@ -885,7 +887,11 @@ fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> 
                 c.data_type()
             ),
         )
-    })?;
+    })
+}
+
+fn f32_column(batch: &RecordBatch, path: &Path, name: &str) -> Result<Vec<f32>> {
+    let a = float32_array(batch, path, name)?;
     if a.null_count() > 0 {
         return Err(Error::invalid(
             "state",
@@ -1318,17 +1324,7 @@ fn fraction_column(
     name: &str,
     nf: usize,
 ) -> Result<Vec<Option<f32>>> {
-    let c = column(batch, path, name)?;
-    let a = c.as_primitive_opt::<Float32Type>().ok_or_else(|| {
-        Error::invalid(
-            "state",
-            format!(
-                "{}: column `{name}` is {}, expected float32",
-                path.display(),
-                c.data_type()
-            ),
-        )
-    })?;
+    let a = float32_array(batch, path, name)?;
     let v: Vec<Option<f32>> = (0..nf)
         .map(|i| (!a.is_null(i)).then(|| a.value(i)))
         .collect();
