@@ -259,17 +259,22 @@ fn dirsig_grid_weights_are_the_cosine_measure() {
     assert!((mc - 2.0 / 3.0).abs() < 0.005, "{mc}");
 }
 
+/// A 2 m square (2 × 2 cells) whose normal tilts from +z toward +y by `b`
+/// radians, alone; its facets.
+fn tilted_square(b: f32) -> (SceneGeometry, std::ops::Range<usize>) {
+    let mut m = TriangleMesh::default();
+    let eu = Vec3::new(2.0, 0.0, 0.0);
+    let ev = Vec3::new(0.0, 2.0 * b.cos(), -2.0 * b.sin());
+    let ids = quad(&mut m, Vec3::new(-1.0, -1.0, 1.0), eu, ev, 2, 2);
+    (SceneGeometry::single(m), ids)
+}
+
 /// An unobstructed plane tilted by β sees (1 + cos β)/2 of the sky.
 #[test]
 fn tilted_plane_shape_factor() {
     for beta_deg in [0.0f32, 30.0, 60.0, 90.0, 120.0] {
         let b = beta_deg.to_radians();
-        let mut m = TriangleMesh::default();
-        // A 2 m square whose normal tilts from +z toward +y by β.
-        let eu = Vec3::new(2.0, 0.0, 0.0);
-        let ev = Vec3::new(0.0, 2.0 * b.cos(), -2.0 * b.sin());
-        let ids = quad(&mut m, Vec3::new(-1.0, -1.0, 1.0), eu, ev, 2, 2);
-        let geo = SceneGeometry::single(m);
+        let (geo, ids) = tilted_square(b);
         let brute = Checked::new(&geo);
         let exact = (1.0 + b.cos() as f64) / 2.0;
         let exp = compute_exposure(&brute, &geo, &[], &[], &stratified(1024)).unwrap();
@@ -1427,11 +1432,7 @@ fn exposed_back_takes_its_own_shape_factor() {
     }
     for beta_deg in [30.0f32, 60.0, 90.0, 120.0] {
         let b = beta_deg.to_radians();
-        let mut m = TriangleMesh::default();
-        let eu = Vec3::new(2.0, 0.0, 0.0);
-        let ev = Vec3::new(0.0, 2.0 * b.cos(), -2.0 * b.sin());
-        let ids = quad(&mut m, Vec3::new(-1.0, -1.0, 1.0), eu, ev, 2, 2);
-        let geo = SceneGeometry::single(m);
+        let (geo, ids) = tilted_square(b);
         let brute = Checked::new(&geo);
         let p = stratified(1024);
         let exp = compute_exposure(&brute, &geo, &[], &[], &p).unwrap();

@@ -166,8 +166,6 @@ pub(super) struct GreyTables {
     /// Grey emissivity at `[(material · ANGLE_ROWS + angle row) · bands + b]`
     /// (0 for materials not grey in every band: never read).
     pub(super) eps: Vec<f32>,
-    /// Per material: double-sided.
-    pub(super) double_sided: Vec<bool>,
     /// Per material: transmissivity t.
     pub(super) tr: Vec<f32>,
     /// By day: `Σ w·L_ss` of band `b` at path node `i`, scattering-angle
@@ -248,7 +246,6 @@ impl GreyTables {
             planck,
             node,
             eps,
-            double_sided: materials.iter().map(|m| m.double_sided).collect(),
             tr: materials
                 .iter()
                 .map(|m| m.transmissivity.clamp(0.0, 1.0) as f32)
@@ -604,7 +601,7 @@ impl Shader<'_> {
         let th = hit.theta;
         // θ ≥ 0: truncation is the floor.
         let a0 = (th as usize).min(ANGLE_ROWS - 2);
-        let lit = (hit.dn < 0.0 || self.grey_tables.double_sided[mi]) && !hit.shaded;
+        let lit = !hit.shaded;
         (mi, a0, th - a0 as f32, lit)
     }
 
@@ -699,17 +696,12 @@ impl Shader<'_> {
     /// seen face.
     #[inline(always)]
     fn grey_place(&self, hit: &GreyHit) -> GreyPlace<'_> {
-        let gt = &self.grey_tables;
         let g = &self.grey[hit.facet as usize];
         let mi = g.mi as usize;
         let th = hit.theta;
         // θ ≥ 0: truncation is the floor.
         let a0 = (th as usize).min(ANGLE_ROWS - 2);
-        let sd = if (hit.dn < 0.0 || gt.double_sided[mi]) && !hit.shaded {
-            g.sd
-        } else {
-            0.0
-        };
+        let sd = if !hit.shaded { g.sd } else { 0.0 };
         let (kb, wb) = tilt_at(g.tilt);
         GreyPlace {
             g,

@@ -115,7 +115,9 @@ pub(super) struct GreyHit {
     pub(super) range: f32,
     /// Height of the hit above the ground datum (scene z), m.
     pub(super) z: f32,
-    /// The hit's own shadow ray found the sun blocked.
+    /// No direct sun on the face seen: the hit's own shadow ray found the
+    /// sun blocked, or the face is not the one the sun falls on
+    /// ([`Shader::seen_face_lit`]).
     pub(super) shaded: bool,
     /// Where it reads the path's tables ([`Shader::grey_locate`]; with a
     /// path only): path node of range node `ri − 1` at height node `ai`,

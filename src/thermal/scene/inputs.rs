@@ -284,14 +284,21 @@ impl<'a> SceneInputs<'a> {
                 ));
             }
         }
-        if !self.wind.is_empty() && self.wind.len() != n {
-            return Err(Error::invalid(
-                "wind",
-                format!(
-                    "expected one entry per facet ({n}) or none, got {}",
-                    self.wind.len()
-                ),
-            ));
+        // Optional per-facet inputs: one entry per facet or none.
+        for (name, len) in [
+            ("wind", self.wind.len()),
+            (
+                "exposed_back_shape_factor",
+                self.exposed_back_shape_factor.len(),
+            ),
+            ("reflected_diffuse", self.reflected_diffuse.len()),
+        ] {
+            if len != 0 && len != n {
+                return Err(Error::invalid(
+                    name,
+                    format!("expected one entry per facet ({n}) or none, got {len}"),
+                ));
+            }
         }
         if let Some(i) = self.wind.iter().position(|w| {
             !(w.height.is_finite() && w.height >= 0.0 && w.canyon.is_finite() && w.canyon >= 0.0)
@@ -299,15 +306,6 @@ impl<'a> SceneInputs<'a> {
             return Err(Error::invalid(
                 format!("wind[{i}]"),
                 format!("expected finite factors ≥ 0, got {:?}", self.wind[i]),
-            ));
-        }
-        if !self.exposed_back_shape_factor.is_empty() && self.exposed_back_shape_factor.len() != n {
-            return Err(Error::invalid(
-                "exposed_back_shape_factor",
-                format!(
-                    "expected one entry per facet ({n}) or none, got {}",
-                    self.exposed_back_shape_factor.len()
-                ),
             ));
         }
         if let Some((i, v)) = self
@@ -319,15 +317,6 @@ impl<'a> SceneInputs<'a> {
             return Err(Error::invalid(
                 format!("exposed_back_shape_factor[{i}]"),
                 format!("expected a fraction in [0, 1], got {v}"),
-            ));
-        }
-        if !self.reflected_diffuse.is_empty() && self.reflected_diffuse.len() != n {
-            return Err(Error::invalid(
-                "reflected_diffuse",
-                format!(
-                    "expected one entry per facet ({n}) or none, got {}",
-                    self.reflected_diffuse.len()
-                ),
             ));
         }
         if self.solar.records() != self.records || self.solar.facets() != n {
