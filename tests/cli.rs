@@ -402,6 +402,16 @@ const CASES: &[Case] = &[
         expect: &["--shape-factor", "shape_factor", "0..=1"],
     },
     Case {
+        name: "thermal: back shape factor 1.5",
+        files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
+        args: &[
+            "thermal", "--material", "slab", "--materials", "@/mats.json", "--weather",
+            "@/w.csv", "--site", "43,-77,0", "--time", "2025-06-21T02:00:00-04:00",
+            "--tilt", "90", "--back", "exposed", "--back-shape-factor", "1.5",
+        ],
+        expect: &["--back-shape-factor", "back_shape_factor", "1.5", "0..=1"],
+    },
+    Case {
         name: "thermal: ground albedo 1.5",
         files: &[("w.csv", GOOD_WEATHER), ("mats.json", MATS)],
         args: &[

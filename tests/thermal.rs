@@ -788,6 +788,102 @@ fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
     assert!(last < got - 1.0, "F = 1: {last} K, F = 0.75: {got} K");
 }
 
+/// `irsig thermal --back-shape-factor`: a thin, highly conducting wall
+/// (tilt 90°, F = 0.5) exposed on both faces settles under constant night
+/// weather where the two faces' balances sum to zero, each face seeing the
+/// sky over its own shape factor; the back's default is `1 − F`, and a back
+/// that sees less sky (a canyon's next street) runs warmer by what the
+/// balance predicts.
+#[test]
+fn cli_one_facet_back_takes_its_own_shape_factor() {
+    let dir = tempfile::tempdir().unwrap();
+    let weather = dir.path().join("night.csv");
+    let (t_air, wind, sky) = (285.0, 1.0, 280.0);
+    write_constant_night_csv(&weather, 4, t_air, wind, sky);
+    let mat = dir.path().join("m.json");
+    // 0.02 m at 200 W/(m K): 1e-4 K m²/W across the wall, so its two faces
+    // are within a few mK of each other.
+    std::fs::write(
+        &mat,
+        r#"{"materials": [{"id": 7, "name": "wall", "specific_heat_j_kg_k": 900,
+            "conductivity_w_m_k": 200.0, "density_kg_m3": 2700, "thickness_m": 0.02,
+            "solar_absorptivity": 0.5, "thermal_emissivity": 0.95, "exposed_area": 1}]}"#,
+    )
+    .unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "thermal",
+            "--material",
+            mat.to_str().unwrap(),
+            "--weather",
+            weather.to_str().unwrap(),
+            "--time",
+            "2025-01-14T00:00:00+00:00",
+            "--tilt",
+            "90",
+            "--site",
+            "43.16,-77.61,170",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let out = run_irsig(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let t = v["records"].as_array().unwrap()[96]["surface_temperature_k"]
+            .as_f64()
+            .unwrap();
+        (t, stderr)
+    };
+    let eps = 0.95
+        * irsig::radiometry::emissivity::hemispherical_ratio(|t| {
+            irsig::radiometry::fresnel_emissivity(0.95, t)
+        });
+    let sigma = STEFAN_BOLTZMANN_W_M2_K4;
+    // Vertical: both faces convect as vertical surfaces (cos Σ = 0), with
+    // DOE-2's ΔT from the orientation class's reference surface — the
+    // unobstructed plane, whose back sees 1 − F — so the coefficient is
+    // the default facet's, whatever F_b.
+    let h = |t: f64| irsig::thermal::convection::doe2_w_m2_k(t - t_air, 0.0, wind, 1.52);
+    let face = |f: f64, t: f64, h: f64| {
+        eps * f * sky + eps * (1.0 - f) * sigma * t_air.powi(4) - eps * sigma * t.powi(4)
+            + h * (t_air - t)
+    };
+    let reference = bisect(|t| 2.0 * face(0.5, t, h(t)), 200.0, 400.0);
+    let expected = |f_back: f64| {
+        let h = h(reference);
+        bisect(|t| face(0.5, t, h) + face(f_back, t, h), 200.0, 400.0)
+    };
+    let (default, err) = run(&[]);
+    assert!(!err.contains("warning"), "{err}");
+    let (same, _) = run(&["--back-shape-factor", "0.5"]);
+    assert_eq!(same, default, "F_b = 1 − F is the default");
+    assert!(
+        (default - expected(0.5)).abs() < 5e-3,
+        "{default} vs {}",
+        expected(0.5)
+    );
+    let (sheltered, _) = run(&["--back-shape-factor", "0.1"]);
+    let want = expected(0.1);
+    assert!((sheltered - want).abs() < 5e-3, "{sheltered} vs {want}");
+    // The sheltered back sees the air-temperature background instead of the
+    // colder sky: the wall is warmer, by a physical margin.
+    assert!(
+        sheltered > default + 0.3,
+        "F_b 0.1: {sheltered} K, 0.5: {default} K"
+    );
+    // An insulated back ignores it, with a warning.
+    let (_, err) = run(&["--back", "insulated", "--back-shape-factor", "0.1"]);
+    assert!(
+        err.contains("warning: --back-shape-factor"),
+        "no warning for an unused --back-shape-factor: {err}"
+    );
+}
+
 /// A sunlit day of the bundled town weather: a south-facing wall is warmer
 /// at noon than a north-facing one, and the time between records is
 /// interpolated for an image time between records.

@@ -40,6 +40,13 @@ pub struct FacetSpec {
     pub azimuth_deg: f64,
     /// Sky shape factor; `None` = `(1 + cos tilt)/2` (an unobstructed plane).
     pub shape_factor: Option<f64>,
+    /// Sky shape factor of the back face, used only with an exposed back
+    /// ([`BackBoundary::Exposed`]); `None` = `1 − F`, exact for an
+    /// unobstructed plane (`(1 − cos tilt)/2`). A scene solve traces it
+    /// (`exposure::exposed_back_shape_factors`); give it here to study a
+    /// wall whose back is obstructed differently from its front (a canyon
+    /// wall's back in the next street).
+    pub back_shape_factor: Option<f64>,
     /// Albedo of the open ground the facet sees over `1 − F` of its
     /// hemisphere, which reflects the sun and sky onto it (isotropically,
     /// the ground fully sunlit: [`crate::thermal::Reflected::open_ground`]);
@@ -55,6 +62,7 @@ impl Default for FacetSpec {
             tilt_deg: 0.0,
             azimuth_deg: 180.0,
             shape_factor: None,
+            back_shape_factor: None,
             ground_albedo: crate::exposure::reflected::GROUND_ALBEDO as f64,
         }
     }
@@ -78,6 +86,8 @@ pub struct OneFacet {
     reflected_diffuse: f64,
     /// Sky shape factor used.
     pub shape_factor: f64,
+    /// Sky shape factor of an exposed back (`None`: `1 − F`).
+    pub back_shape_factor: Option<f64>,
     /// Thermal solver options (spin-up always runs its full cycle count and
     /// Newton is tightened to 1e-7 K, so outputs are smooth in parameters).
     pub options: SolveOptions,
@@ -113,6 +123,8 @@ struct FreeGeometry {
     sun_fraction: Vec<f32>,
     cos_incidence: Vec<f32>,
     shape_factor: f64,
+    /// Sky shape factor of an exposed back (`None`: `1 − F`).
+    back_shape_factor: Option<f64>,
     /// Ground-reflected shortwave per unit `E_dn`, per record.
     reflected_direct: Vec<f32>,
     /// Ground-reflected shortwave per unit `E_d`.
@@ -126,6 +138,7 @@ impl FreeGeometry {
                 direct: &self.reflected_direct,
                 diffuse: self.reflected_diffuse,
             },
+            back_shape_factor: self.back_shape_factor,
             ..FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor)
         }
     }
@@ -166,6 +179,14 @@ fn free_facet_geometry(
             format!("{shape_factor} is not a fraction in 0..=1"),
         ));
     }
+    if let Some(fb) = facet.back_shape_factor
+        && !(0.0..=1.0).contains(&fb)
+    {
+        return Err(Error::invalid(
+            "back_shape_factor",
+            format!("{fb} is not a fraction in 0..=1"),
+        ));
+    }
     if records.is_empty() {
         return Err(Error::invalid("weather", "no weather records"));
     }
@@ -194,6 +215,7 @@ fn free_facet_geometry(
         sun_fraction,
         cos_incidence,
         shape_factor,
+        back_shape_factor: facet.back_shape_factor,
         reflected_direct,
         reflected_diffuse,
     })
@@ -249,6 +271,7 @@ impl OneFacet {
             reflected_direct: g.reflected_direct,
             reflected_diffuse: g.reflected_diffuse,
             shape_factor: g.shape_factor,
+            back_shape_factor: g.back_shape_factor,
             options,
             band,
             site: *site,
@@ -305,6 +328,7 @@ impl OneFacet {
                 direct: &self.reflected_direct,
                 diffuse: self.reflected_diffuse,
             },
+            back_shape_factor: self.back_shape_factor,
             ..FacetInputs::new(&self.sun_fraction, &self.cos_incidence, self.shape_factor)
         };
         Ok(thermal::solve(&props, &forcing, &inputs, &self.options)?.surface_temperature_k)

@@ -34,6 +34,7 @@ pub(crate) const FACET_FLAGS: &[(&str, &str)] = &[
     ("tilt_deg", "--tilt"),
     ("azimuth_deg", "--azimuth"),
     ("shape_factor", "--shape-factor"),
+    ("back_shape_factor", "--back-shape-factor"),
     ("ground_albedo", "--ground-albedo"),
     ("material", "--material"),
 ];
@@ -59,6 +60,11 @@ pub struct FacetArgs {
     /// an unobstructed plane).
     #[arg(long, value_name = "F")]
     pub shape_factor: Option<f64>,
+    /// Sky shape factor of the back face, 0–1, where the back is exposed
+    /// to outdoor air (the material's exposed area, or --back exposed);
+    /// default 1 − F, an unobstructed plane's. A scene render traces it.
+    #[arg(long, value_name = "F")]
+    pub back_shape_factor: Option<f64>,
     /// Albedo of the open ground the facet sees over 1 − F of its
     /// hemisphere, reflecting sun and sky onto it (0 switches it off; a
     /// horizontal facet sees no ground).
@@ -95,6 +101,7 @@ impl FacetArgs {
             tilt_deg: self.tilt,
             azimuth_deg: self.azimuth,
             shape_factor: self.shape_factor,
+            back_shape_factor: self.back_shape_factor,
             ground_albedo: self.ground_albedo,
         }
     }
@@ -109,6 +116,16 @@ impl FacetArgs {
             o.spinup.max_cycles = n;
         }
         o
+    }
+    /// A `warning:` on stderr where --back-shape-factor is given for a
+    /// facet whose back (`back`, after --back) is not exposed to the air:
+    /// the value then changes nothing.
+    pub(crate) fn warn_unused_back_shape_factor(&self, back: &BackBoundary) {
+        if self.back_shape_factor.is_some() && !matches!(back, BackBoundary::Exposed { .. }) {
+            eprintln!(
+                "warning: --back-shape-factor is used only with a back exposed to the air; this facet's back is {back:?} (give --back exposed to expose it)"
+            );
+        }
     }
     /// The --back override, if given.
     pub(crate) fn back(&self) -> anyhow::Result<Option<BackBoundary>> {
@@ -207,6 +224,9 @@ pub(crate) fn setup_thermal(
     let facet = OneFacet::new(records, &site, &f.spec(), f.options(), facet::lwir_band()?)
         .for_flags(FACET_FLAGS)?
         .with_back(f.back()?);
+    if let Ok(p) = facet.slab(&material) {
+        f.warn_unused_back_shape_factor(&p.back);
+    }
     Ok(Setup {
         materials: vec![material],
         facet,

@@ -105,6 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(back) = f.back()? {
         props = props.with_back(back);
     }
+    f.warn_unused_back_shape_factor(&props.back);
     let options = f.options();
     let (sol, shape_factor) =
         facet::solve_free_facet(&props, &records, &site, &f.spec(), &options).for_flags(FLAGS)?;
