@@ -690,23 +690,41 @@ fn run_irsig(args: &[&str]) -> std::process::Output {
     Command::new(irsig_bin()).args(args).output().unwrap()
 }
 
+/// A temporary folder with four days of constant night weather
+/// (`write_constant_night_csv`: 285 K air, 1 m/s wind, 280 W/m² sky) and
+/// a material file holding `material` (one JSON material object): the
+/// folder, the weather file and the material file.
+fn night_case(material: &str) -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let weather = dir.path().join("night.csv");
+    write_constant_night_csv(&weather, 4, NIGHT.0, NIGHT.1, NIGHT.2);
+    let mat = dir.path().join("m.json");
+    std::fs::write(&mat, format!(r#"{{"materials": [{material}]}}"#)).unwrap();
+    (dir, weather, mat)
+}
+
+/// Air temperature (K), wind (m/s) and sky longwave (W/m²) of [`night_case`].
+const NIGHT: (f64, f64, f64) = (285.0, 1.0, 280.0);
+
+/// The hemispherical emissivity the balance uses for a normal emissivity
+/// of 0.95 (the Fresnel fall-off; issue 19 item 4).
+fn hemispherical_095() -> f64 {
+    0.95 * irsig::radiometry::emissivity::hemispherical_ratio(|t| {
+        irsig::radiometry::fresnel_emissivity(0.95, t)
+    })
+}
+
 /// `irsig thermal --json` under constant weather without sun reaches the
 /// root of the balance of a plane tilted 60°, whose default sky shape factor
 /// is (1 + cos 60°)/2 = 0.75; the output has one record per weather record.
 #[test]
 fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
-    let dir = tempfile::tempdir().unwrap();
-    let weather = dir.path().join("night.csv");
-    let (t_air, wind, sky) = (285.0, 1.0, 280.0);
-    write_constant_night_csv(&weather, 4, t_air, wind, sky);
-    let mat = dir.path().join("m.json");
-    std::fs::write(
-        &mat,
-        r#"{"materials": [{"id": 7, "name": "slab", "specific_heat_j_kg_k": 900,
+    let (_dir, weather, mat) = night_case(
+        r#"{"id": 7, "name": "slab", "specific_heat_j_kg_k": 900,
             "conductivity_w_m_k": 1.0, "density_kg_m3": 2000, "thickness_m": 0.02,
-            "solar_absorptivity": 0.5, "thermal_emissivity": 0.95, "exposed_area": 0}]}"#,
-    )
-    .unwrap();
+            "solar_absorptivity": 0.5, "thermal_emissivity": 0.95, "exposed_area": 0}"#,
+    );
+    let (t_air, wind, sky) = NIGHT;
     let out = run_irsig(&[
         "thermal",
         "--material",
@@ -735,11 +753,8 @@ fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
     assert_eq!(recs[96]["time"], "2025-01-14T00:00:00+00:00");
     let got = recs[96]["surface_temperature_k"].as_f64().unwrap();
     // The material's 0.95 is normal; the balance uses the hemispherical
-    // emissivity of the Fresnel fall-off (issue 19 item 4).
-    let eps = 0.95
-        * irsig::radiometry::emissivity::hemispherical_ratio(|t| {
-            irsig::radiometry::fresnel_emissivity(0.95, t)
-        });
+    // emissivity of the Fresnel fall-off.
+    let eps = hemispherical_095();
     let (f, sigma) = (0.75, STEFAN_BOLTZMANN_W_M2_K4);
     // The default DOE-2 convection of a concrete-rough surface tilted 60°
     // (cos Σ = 0.5), at the facet's own ΔT: the one-facet reference surface
@@ -796,20 +811,14 @@ fn cli_one_facet_reaches_steady_balance_of_tilted_plane() {
 /// balance predicts.
 #[test]
 fn cli_one_facet_back_takes_its_own_shape_factor() {
-    let dir = tempfile::tempdir().unwrap();
-    let weather = dir.path().join("night.csv");
-    let (t_air, wind, sky) = (285.0, 1.0, 280.0);
-    write_constant_night_csv(&weather, 4, t_air, wind, sky);
-    let mat = dir.path().join("m.json");
     // 0.02 m at 200 W/(m K): 1e-4 K m²/W across the wall, so its two faces
     // are within a few mK of each other.
-    std::fs::write(
-        &mat,
-        r#"{"materials": [{"id": 7, "name": "wall", "specific_heat_j_kg_k": 900,
+    let (_dir, weather, mat) = night_case(
+        r#"{"id": 7, "name": "wall", "specific_heat_j_kg_k": 900,
             "conductivity_w_m_k": 200.0, "density_kg_m3": 2700, "thickness_m": 0.02,
-            "solar_absorptivity": 0.5, "thermal_emissivity": 0.95, "exposed_area": 1}]}"#,
-    )
-    .unwrap();
+            "solar_absorptivity": 0.5, "thermal_emissivity": 0.95, "exposed_area": 1}"#,
+    );
+    let (t_air, wind, sky) = NIGHT;
     let run = |extra: &[&str]| {
         let mut args = vec![
             "thermal",
@@ -839,10 +848,7 @@ fn cli_one_facet_back_takes_its_own_shape_factor() {
             .unwrap();
         (t, stderr)
     };
-    let eps = 0.95
-        * irsig::radiometry::emissivity::hemispherical_ratio(|t| {
-            irsig::radiometry::fresnel_emissivity(0.95, t)
-        });
+    let eps = hemispherical_095();
     let sigma = STEFAN_BOLTZMANN_W_M2_K4;
     // Vertical: both faces convect as vertical surfaces (cos Σ = 0), with
     // DOE-2's ΔT from the orientation class's reference surface — the
