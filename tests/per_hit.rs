@@ -1528,3 +1528,190 @@ fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
         "size 400: the facets' own (lit) values: {big_shade:.2} K vs {big_lit:.2} K"
     );
 }
+
+/// Issue 18 item 1, an exposed back's own sky view: a point of a thin
+/// single-sided steel panel (both faces in the air) whose back is
+/// sheltered by an 8 m wall 2 m behind it, on a triangle whose sample
+/// point's back is open. The point traces its back's own view: its
+/// temperature change from its facet against two single-point slab solves
+/// (each with its own shape factors, sunlit history and background; the
+/// back's `F_b` by brute force) within 0.1 K, where keeping the facet's
+/// back view would be off by more than 0.5 K; at the facet's sample point
+/// it takes the facet's temperature bit for bit.
+#[test]
+fn exposed_back_point_takes_its_own_back_sky_view() {
+    use irsig::thermal::{BackBoundary, SlabProperties};
+    let mut m = TriangleMesh::default();
+    let ground = quad(
+        &mut m,
+        Vec3::new(-500.0, -500.0, 0.0),
+        Vec3::X * 1000.0,
+        Vec3::Y * 1000.0,
+        1,
+        1,
+    );
+    // The panel: x = 0, y in [−20, 20], 4 m high, front face +x; its two
+    // triangles' sample points at y = ±6.7.
+    let panel = quad(
+        &mut m,
+        Vec3::new(0.0, -20.0, 0.0),
+        Vec3::Y * 40.0,
+        Vec3::Z * 4.0,
+        1,
+        1,
+    );
+    // Behind it (x = −2, facing +x) along y > 0, 8 m high.
+    let shelter = quad(
+        &mut m,
+        Vec3::new(-2.0, 0.0, 0.0),
+        Vec3::Y * 20.0,
+        Vec3::Z * 8.0,
+        1,
+        1,
+    );
+    let geo = SceneGeometry::single(m);
+    let n = geo.facet_count();
+    let temp_of = |f: usize| {
+        if ground.contains(&f) {
+            290.0
+        } else if shelter.contains(&f) {
+            295.0
+        } else {
+            f32::NAN
+        }
+    };
+    let steel = SlabProperties {
+        conductivity_w_m_k: 45.0,
+        density_kg_m3: 7800.0,
+        specific_heat_j_kg_k: 500.0,
+        thickness_m: 0.003,
+        solar_absorptivity: 0.6,
+        thermal_emissivity: 0.9,
+        back: BackBoundary::BOTH_FACES,
+        ..asphalt()
+    };
+    let setup = FacetThermalSetup {
+        kinds: (0..n)
+            .map(|f| {
+                if panel.contains(&f) {
+                    FacetThermal::Solve(0)
+                } else {
+                    FacetThermal::Fixed(temp_of(f))
+                }
+            })
+            .collect(),
+        props: vec![steel],
+        ..Default::default()
+    };
+    let night = "2025-06-21T23:00:00-04:00";
+    let (r, tracer) = solve_setup(&geo, &setup, night, 0.2);
+    let e = ExposureParams::default();
+    let ph = PerHit::new(
+        Arc::new(r.exposure.solar.clone()),
+        &r.exposure.facets,
+        &r.exposure.sky,
+        r.point_response[0].as_ref().expect("linearised solve"),
+        &r.sun_directions,
+        PerHitParams::default(),
+    )
+    .with_sky(
+        SkyInputs::new(
+            &r.exposure.facets,
+            Arc::new(r.exposure.sky.clone()),
+            e.sky,
+            e.seed,
+            &r.setup.shape_factor_override,
+        )
+        .with_reflected(Arc::new(r.exposure.reflected.clone()), &r, 0.2)
+        .with_exposed_back(r.exposed_back_shape_factor.clone()),
+        r.surface_temperature_k(0),
+    );
+    // A point 3.5 m up at y = 10, in front of the shelter.
+    let p = Vec3::new(0.0, 10.0, 3.5);
+    let mut hit = [None];
+    tracer.intersect(
+        &[Ray::new(Vec3::new(1.0, 10.0, 3.5), -Vec3::X)],
+        Coherence::Incoherent,
+        &mut hit,
+    );
+    let f = hit[0].expect("the panel").prim as usize;
+    assert!(panel.contains(&f));
+    let fb_f = r.exposed_back_shape_factor[f].expect("an exposed back, traced");
+    assert!(
+        r.exposure.facets.facet_points(f)[0].y < 0.0,
+        "the facet's sample point is clear of the shelter"
+    );
+    assert!(ph.own_sky(f));
+    let mut out = Vec::new();
+    ph.states(&*tracer, &[(f as u32, p)], &mut out);
+    let st = out[0];
+    let sky = st.sky.expect("its own sky view");
+    let off = r.exposure.facets.offset_m;
+    let (fb_p, _) = brute_force_face(&*tracer, p, -Vec3::X, off);
+    eprintln!("panel point: back F_p {fb_p:.3} (brute force), facet's back F {fb_f:.3}");
+    assert!(fb_f - fb_p > 0.2, "{fb_f} vs {fb_p}: the shelter matters");
+    // Single-point solves, as in `double_sided_fence_takes_its_own_sky_view`.
+    let w = r.point_response[0].as_ref().unwrap().records.clone();
+    let last = w.len() - 1;
+    let records: Vec<_> = w.iter().map(|&k| r.records[k]).collect();
+    let forcing = Forcing::from_records(&records).unwrap();
+    let cos: Vec<f32> = w
+        .iter()
+        .map(|&k| r.exposure.solar.cos_incidence(f)[k])
+        .collect();
+    let s_f: Vec<f32> = w
+        .iter()
+        .map(|&k| r.exposure.solar.sun_fraction(f)[k])
+        .collect();
+    let s_p: Vec<f32> = w
+        .iter()
+        .map(|&k| {
+            if r.exposure.solar.cos_incidence(f)[k] <= 0.0 {
+                return 0.0;
+            }
+            let mut occ = [false];
+            tracer.occluded(
+                &[Ray::new(p + Vec3::X * off, r.sun_directions[k])],
+                Coherence::Incoherent,
+                &mut occ,
+            );
+            if occ[0] { 0.0 } else { 1.0 }
+        })
+        .collect();
+    let t = |s: &[f32], shape: f32, bg: f32, fb: f32| {
+        irsig::thermal::solve(
+            &steel,
+            &forcing,
+            &FacetInputs {
+                background: Background::Constant(bg as f64),
+                back_shape_factor: Some(fb as f64),
+                ..FacetInputs::new(s, &cos, shape as f64)
+            },
+            &SolveOptions::default(),
+        )
+        .unwrap()
+        .surface_temperature_k[last]
+    };
+    let ff = r.exposure.sky.shape_factor[f];
+    let t_bg_f = r.background_temperature_k(0)[f];
+    let facet = t(&s_f, ff, t_bg_f, fb_f);
+    let solo = t(&s_p, sky.shape_factor, sky.background_k, fb_p) - facet;
+    let front_only = t(&s_p, sky.shape_factor, sky.background_k, fb_f) - facet;
+    eprintln!(
+        "panel point: per-hit {:.3} K, single-point solves {solo:.3} K ({front_only:.3} K with the facet's back view)",
+        st.dt_k
+    );
+    assert!(
+        (solo - front_only).abs() > 0.5,
+        "the back's view matters: {solo} vs {front_only} K"
+    );
+    assert!(
+        (st.dt_k as f64 - solo).abs() <= 0.1,
+        "per-hit {} K vs solves {solo} K",
+        st.dt_k
+    );
+    // At the facet's sample point: the facet's temperature, bit for bit.
+    let q = r.exposure.facets.facet_points(f)[0];
+    ph.states(&*tracer, &[(f as u32, q)], &mut out);
+    assert_eq!(out[0].dt_k, 0.0);
+}

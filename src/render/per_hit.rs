@@ -204,6 +204,9 @@ pub struct SkyInputs {
     /// What a point's own reflected shortwave needs (`None`: the reflected
     /// shortwave is off, every hit keeps its facet's).
     refl: Option<Arc<ReflInputs>>,
+    /// Per facet: the traced sky view of its exposed back (single-sided
+    /// facets whose slab has one; `None` elsewhere, or empty: none traced).
+    exposed_back: Arc<Vec<Option<f32>>>,
 }
 
 /// What a point's own reflected shortwave needs (module docs, "Reflected
@@ -257,7 +260,17 @@ impl SkyInputs {
             eligible: Arc::new(eligible),
             sky,
             refl: None,
+            exposed_back: Arc::new(Vec::new()),
         }
+    }
+
+    /// These inputs with the facets' traced exposed-back sky views
+    /// ([`crate::render::scene_thermal::SceneThermal::exposed_back_shape_factor`]):
+    /// a hit with its own sky view on such a facet also traces its back's
+    /// (module docs, "Sky view").
+    pub fn with_exposed_back(mut self, exposed_back: Vec<Option<f32>>) -> SkyInputs {
+        self.exposed_back = Arc::new(exposed_back);
+        self
     }
 
     /// These inputs with what a point's own reflected shortwave needs:
@@ -329,6 +342,9 @@ pub struct PerHit {
     rows: Vec<f32>,
     /// `[block][k]`, K per W m⁻²: the image row of the Green's matrix.
     green_rows: Vec<f32>,
+    /// `[block][k]`, K per W m⁻²: the image row of the front's response
+    /// to the exposed back's sources (empty when no block has one).
+    back_rows: Vec<f32>,
     /// The response (whole Green's matrices, reference histories) for the
     /// second order.
     response: Arc<PointResponse>,
@@ -365,10 +381,14 @@ impl PerHit {
         let blocks = resp.sun_rows.len() / (r * resp.images).max(1);
         let mut rows = Vec::with_capacity(blocks * r);
         let mut green_rows = Vec::with_capacity(blocks * r);
+        let mut back_rows = Vec::new();
         for b in 0..blocks {
             let o = b * resp.images * r;
             rows.extend_from_slice(&resp.sun_rows[o..o + r]);
             green_rows.extend_from_slice(&resp.rows[o..o + r]);
+            if let Some(x) = resp.back_rows.get(o..o + r) {
+                back_rows.extend_from_slice(x);
+            }
         }
         let n = facets.len();
         let per = facets.per_facet.max(1) as f32;
@@ -386,6 +406,7 @@ impl PerHit {
             block_of: resp.block_of.clone(),
             rows,
             green_rows,
+            back_rows,
             response: Arc::new(resp.clone()),
             mixed,
             spacing: facets
@@ -416,6 +437,20 @@ impl PerHit {
             temperature_k: temperature_k.to_vec(),
         });
         self
+    }
+
+    /// The traced sky view of `facet`'s exposed back where its hits that
+    /// take their own sky view also take their back's: the facet has one
+    /// (single-sided, exposed back) and its reference responds to the back.
+    fn own_back(&self, facet: usize) -> Option<f32> {
+        let fb = (*self.sky.as_ref()?.inputs.exposed_back.get(facet)?)?;
+        let b = *self.block_of.get(facet)? as usize;
+        let r = self.records.len();
+        let p = &*self.response;
+        (self.back_rows.len() >= (b + 1) * r
+            && p.back_shape.len() >= (b + 1) * r
+            && p.back_radiative.get(b).is_some_and(|&x| x > 0.0))
+        .then_some(fb)
     }
 
     /// Whether hits on `facet` that get their own temperature also get their
@@ -611,9 +646,11 @@ impl PerHit {
         )
     }
 
-    /// The background source of a face of `block` with shape factor `f`,
-    /// ground weight `g` and the facets `seen` (with weights), added to
-    /// `out` times `sign` (W m⁻² per record): `ε(1 − F)·σ(T_bg⁴ − T_air⁴)`
+    /// The background source of a face with radiative coefficient
+    /// `radiative` (`εσ` of the front, `a·εσ` of an exposed back; W m⁻²
+    /// K⁻⁴) and shape factor `f`, ground weight `g` and the facets `seen`
+    /// (with weights), added to `out` times `sign` (W m⁻² per record):
+    /// `ε(1 − F)·σ(T_bg⁴ − T_air⁴)`
     /// with `T_bg⁴ = (g·T_air⁴ + Σ wᵢTᵢ⁴)/(g + Σ wᵢ)`, the term the scene
     /// solve's last pass adds to a facet's sources
     /// ([`crate::thermal::background_coefficients`]); `Tᵢ⁴` the `T⁴`
@@ -624,7 +661,7 @@ impl PerHit {
     fn add_background(
         &self,
         sky: &PointSky,
-        block: usize,
+        radiative: f32,
         f: f32,
         g: f32,
         seen: &mut dyn Iterator<Item = (u32, f32)>,
@@ -656,7 +693,7 @@ impl PerHit {
         if den <= 0.0 {
             return;
         }
-        let c = sign * p.radiative[block] * (1.0 - f);
+        let c = sign * radiative * (1.0 - f);
         for ((o, a), air) in out.iter_mut().zip(acc.iter()).zip(&p.air4) {
             *o += c * (a / den - air);
         }
@@ -924,12 +961,45 @@ impl PerHit {
         if !sky_rays.is_empty() {
             tracer.intersect(&sky_rays, Coherence::Incoherent, &mut sky_hits);
         }
+        // The own back sky views: a hit with its own sky view on a facet
+        // with a traced exposed back also traces the back's pattern from the
+        // point lifted to the back side (occlusion only: the back's
+        // background is the front's, as in the scene solve); hit `j`'s rays
+        // are `back_rays[back_at[j]..back_at[j + 1]]`.
+        let mut back_rays = Vec::new();
+        let mut back_w = Vec::new();
+        let mut back_at = Vec::with_capacity(hits.len() + 1);
+        for (j, &(f, p)) in hits.iter().enumerate() {
+            back_at.push(back_rays.len());
+            let f = f as usize;
+            if let Some(ps) = self.sky.as_ref()
+                && sky_at[j + 1] > sky_at[j]
+                && self.own_back(f).is_some()
+            {
+                let n = self.normal[f];
+                let (t, b) = ps.inputs.frame[f];
+                // `FacetSamples::to_world` with side −1, as the scene's
+                // exposed backs (`exposure::exposed_back_shape_factors`).
+                let o = p - n * self.offset_m;
+                for h in ps.inputs.patterns.back(f, &mut pat) {
+                    let d = t * h.dir.x + b * (-h.dir.y) + n * (-h.dir.z);
+                    back_rays.push(Ray::new(o, d));
+                    back_w.push(h.weight);
+                }
+            }
+        }
+        back_at.push(back_rays.len());
+        let mut back_occ = vec![false; back_rays.len()];
+        if !back_rays.is_empty() {
+            tracer.occluded(&back_rays, Coherence::Incoherent, &mut back_occ);
+        }
         // Scratch of the per-hit loop: (record, Δ(s cos θ)) where the
         // point's history differs, the sky view's source change, the point's
         // source change, the second order's change history, what the point
         // sees, a background sum.
         let mut diff: Vec<(usize, f32)> = Vec::new();
         let mut ds_sky: Vec<f32> = Vec::new();
+        let mut ds_back: Vec<f32> = Vec::new();
         let mut src: Vec<f32> = Vec::new();
         let mut delta: Vec<f32> = Vec::new();
         let mut seen: Vec<(u32, f32)> = Vec::new();
@@ -988,7 +1058,7 @@ impl PerHit {
                 }
                 self.add_background(
                     ps,
-                    b,
+                    p.radiative[b],
                     fp,
                     gp,
                     &mut seen.iter().copied(),
@@ -998,7 +1068,7 @@ impl PerHit {
                 );
                 self.add_background(
                     ps,
-                    b,
+                    p.radiative[b],
                     ff,
                     sky.ground_weight[f],
                     &mut sky.background(f).iter().map(|e| (e.facet, e.weight)),
@@ -1018,6 +1088,47 @@ impl PerHit {
                 );
                 let green = &self.green_rows[b * r..(b + 1) * r];
                 dt += green.iter().zip(&ds_sky).map(|(g, x)| g * x).sum::<f32>();
+                // The exposed back's own sky view: its sources differ by
+                // `(F_b,p − F_b,f)·∂B/∂F_b` and the back's background term
+                // `a·ε(1 − F_b)σ(T_bg⁴ − T_air⁴)` at the point's `F_b` and
+                // background, through the front's response to the back
+                // (first order).
+                let (b0, b1) = (back_at[j], back_at[j + 1]);
+                if let Some(fb_f) = self.own_back(f).filter(|_| b1 > b0) {
+                    let fb_p = (b0..b1)
+                        .filter(|&i| !back_occ[i] && back_rays[i].dir.z > 0.0)
+                        .map(|i| back_w[i] as f64)
+                        .sum::<f64>() as f32;
+                    let rb = p.back_radiative[b];
+                    ds_back.clear();
+                    ds_back.extend(
+                        p.back_shape[b * r..(b + 1) * r]
+                            .iter()
+                            .map(|x| (fb_p - fb_f) * x),
+                    );
+                    self.add_background(
+                        ps,
+                        rb,
+                        fb_p,
+                        gp,
+                        &mut seen.iter().copied(),
+                        1.0,
+                        &mut ds_back,
+                        &mut acc,
+                    );
+                    self.add_background(
+                        ps,
+                        rb,
+                        fb_f,
+                        sky.ground_weight[f],
+                        &mut sky.background(f).iter().map(|e| (e.facet, e.weight)),
+                        -1.0,
+                        &mut ds_back,
+                        &mut acc,
+                    );
+                    let row = &self.back_rows[b * r..(b + 1) * r];
+                    dt += row.iter().zip(&ds_back).map(|(g, x)| g * x).sum::<f32>();
+                }
                 let air = p.air4.last().map_or(0.0, |a| a.powf(0.25));
                 own_sky = Some(HitSky {
                     shape_factor: fp,

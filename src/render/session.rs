@@ -1114,7 +1114,8 @@ fn scene_thermal(
             params.exposure.seed,
             &solved.setup.shape_factor_override,
         )
-        .with_reflected(reflected, &solved, params.physics.ground_albedo);
+        .with_reflected(reflected, &solved, params.physics.ground_albedo)
+        .with_exposed_back(solved.exposed_back_shape_factor.clone());
         for (i, (c, image)) in out
             .conditions
             .iter_mut()

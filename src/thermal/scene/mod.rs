@@ -220,6 +220,17 @@ pub struct PointResponse {
     /// `[block][k]`: `∂S_k/∂F` of the property set, W m⁻² (for a point's
     /// own shape factor).
     pub shape: Vec<f32>,
+    /// `[block][image][k]`: the front's response to the back sources at
+    /// each image record, `∂T(image)/∂B_k`, K per W m⁻² (zeros for a block
+    /// without an exposed back; empty when no block has one): for a
+    /// point's own back sky view.
+    pub back_rows: Vec<f32>,
+    /// `[block][k]`: `∂B_k/∂F_b` of the property set, W m⁻² (zeros for a
+    /// block without an exposed back; empty when no block has one).
+    pub back_shape: Vec<f32>,
+    /// `[block]`: `a·εσ` of the exposed back, W m⁻² K⁻⁴ (0 without one;
+    /// empty when no block has one).
+    pub back_radiative: Vec<f32>,
     /// `[k]`: `T_air⁴`, K⁴.
     pub air4: Vec<f32>,
     /// The `T⁴` histories (K⁴, `[slot][k]`) of the facets others see, as

@@ -333,6 +333,9 @@ fn point_response(
         radiative: refs.iter().map(|x| x.front.radiative).collect(),
         latent: Vec::new(),
         shape: Vec::new(),
+        back_rows: Vec::new(),
+        back_shape: Vec::new(),
+        back_radiative: Vec::new(),
         air4: Vec::new(),
         background4: Default::default(),
         slot_of: Default::default(),
@@ -368,6 +371,33 @@ fn add_point_sky(
                 .copied()
         })
         .collect();
+    if refs.iter().any(|x| x.has_back) {
+        let images = pr.images;
+        pr.back_rows = refs
+            .iter()
+            .flat_map(|x| {
+                (0..images).flat_map(move |i| {
+                    let row: &[f32] = if x.has_back { x.row_back(i) } else { &[] };
+                    (0..r).map(move |k| row.get(k).copied().unwrap_or(0.0))
+                })
+            })
+            .collect();
+        pr.back_shape = (0..refs.len())
+            .flat_map(|b| {
+                let g = groups.of_solved(bins.reference[b]);
+                let sh = if refs[b].has_back {
+                    &groups.back_shape32[g][..]
+                } else {
+                    &[]
+                };
+                (0..r).map(move |k| sh.get(k).copied().unwrap_or(0.0))
+            })
+            .collect();
+        pr.back_radiative = refs
+            .iter()
+            .map(|x| if x.has_back { x.back.radiative } else { 0.0 })
+            .collect();
+    }
     pr.air4 = facets.air4.clone();
     if let Some(h) = last4 {
         pr.background4 = std::sync::Arc::new(h);
