@@ -52,6 +52,19 @@
 //! factor and its background temperature at the image time go to the
 //! radiance and the `shape_factor` truth layer ([`HitSky`]).
 //!
+//! On a single-sided facet with a traced exposed back
+//! ([`SkyInputs::with_exposed_back`]) the point also traces its back's
+//! pattern (occlusion rays from the point lifted behind the plane) for its
+//! own `F_b,p`; the back's sources (exposed fraction `a`) differ by
+//!
+//! ```text
+//! ΔB_k = (F_b,p − F_b,f)·∂B_k/∂F_b + aε(1 − F_b,p)σ(T_bg,p⁴ − T_air⁴)_k − aε(1 − F_b,f)σ(T_bg,f⁴ − T_air⁴)_k
+//! ```
+//!
+//! (the back's background is the front's, as in the scene solve), entering
+//! through the image row of the front's response to the back sources
+//! ([`PointResponse::back_rows`]), first order.
+//!
 //! # Reflected shortwave
 //! The reflected shortwave a facet receives ([`crate::exposure::reflected`])
 //! is `E_dn·a_f(t) + E_d·b_f` with `a_f = g_f ρ_g sin h + Σ_j w_j ρ_j (E⁰_j +
