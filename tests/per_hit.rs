@@ -12,7 +12,7 @@ use irsig::render::scene_thermal::{
     FacetThermalSetup, SceneThermal, SceneThermalParams, solve_scene_temperatures,
 };
 use irsig::thermal::scene::FacetThermal;
-use irsig::thermal::{Background, FacetInputs, Forcing, SolveOptions};
+use irsig::thermal::{Background, FacetInputs, Forcing, SlabProperties, SolveOptions};
 use irsig::trace::{self, Backend, Coherence, Ray, Tracer};
 
 use crate::exposure::quad;
@@ -920,9 +920,123 @@ fn per_hit_full(r: &SceneThermal, ground_albedo: f32) -> PerHit {
             e.seed,
             &r.setup.shape_factor_override,
         )
-        .with_reflected(Arc::new(r.exposure.reflected.clone()), r, ground_albedo),
+        .with_reflected(Arc::new(r.exposure.reflected.clone()), r, ground_albedo)
+        .with_exposed_back(r.exposed_back_shape_factor.clone()),
         r.surface_temperature_k(0),
     )
+}
+
+/// A thin panel 4 m high at x = 0 along y in [−20, 20] (front face +x,
+/// one quad: its two triangles' sample points at y = ±6.7) on a 1 km
+/// ground, and the `walls` `(x, y0, height, facing +x)` beside it, each
+/// 20 m long from `y0`: the mesh, the ground's, panel's and each wall's
+/// facets.
+fn panel_scene(
+    walls: &[(f32, f32, f32, bool)],
+) -> (
+    SceneGeometry,
+    std::ops::Range<usize>,
+    std::ops::Range<usize>,
+    Vec<std::ops::Range<usize>>,
+) {
+    let mut m = TriangleMesh::default();
+    let ground = quad(
+        &mut m,
+        Vec3::new(-500.0, -500.0, 0.0),
+        Vec3::X * 1000.0,
+        Vec3::Y * 1000.0,
+        1,
+        1,
+    );
+    let panel = quad(
+        &mut m,
+        Vec3::new(0.0, -20.0, 0.0),
+        Vec3::Y * 40.0,
+        Vec3::Z * 4.0,
+        1,
+        1,
+    );
+    let walls = walls
+        .iter()
+        .map(|&(x, y0, h, facing_x)| {
+            let o = Vec3::new(x, y0, 0.0);
+            // The winding sets the front: (Y, Z) faces +x, (Z, Y) −x.
+            if facing_x {
+                quad(&mut m, o, Vec3::Y * 20.0, Vec3::Z * h, 1, 1)
+            } else {
+                quad(&mut m, o, Vec3::Z * h, Vec3::Y * 20.0, 1, 1)
+            }
+        })
+        .collect();
+    (SceneGeometry::single(m), ground, panel, walls)
+}
+
+/// What single-point slab solves of a point of facet `f` need over the
+/// image's window: the weather, the facet's cosines and sun fractions,
+/// and the point's own sunlit history (its shadow rays from `p` lifted
+/// `lift` toward the sun's side when `two_sided`, else along +x).
+struct PointSolves {
+    forcing: Forcing,
+    cos: Vec<f32>,
+    s_f: Vec<f32>,
+    s_p: Vec<f32>,
+    last: usize,
+}
+
+impl PointSolves {
+    fn new(r: &SceneThermal, tracer: &dyn Tracer, f: usize, p: Vec3, two_sided: bool) -> Self {
+        let w = r.point_response[0].as_ref().unwrap().records.clone();
+        let records: Vec<_> = w.iter().map(|&k| r.records[k]).collect();
+        let off = r.exposure.facets.offset_m;
+        let s_p = w
+            .iter()
+            .map(|&k| {
+                if r.exposure.solar.cos_incidence(f)[k] <= 0.0 {
+                    return 0.0;
+                }
+                let d = r.sun_directions[k];
+                let side = if !two_sided || d.x >= 0.0 { 1.0 } else { -1.0 };
+                let mut occ = [false];
+                tracer.occluded(
+                    &[Ray::new(p + Vec3::X * (side * off), d)],
+                    Coherence::Incoherent,
+                    &mut occ,
+                );
+                if occ[0] { 0.0 } else { 1.0 }
+            })
+            .collect();
+        PointSolves {
+            forcing: Forcing::from_records(&records).unwrap(),
+            cos: w
+                .iter()
+                .map(|&k| r.exposure.solar.cos_incidence(f)[k])
+                .collect(),
+            s_f: w
+                .iter()
+                .map(|&k| r.exposure.solar.sun_fraction(f)[k])
+                .collect(),
+            s_p,
+            last: w.len() - 1,
+        }
+    }
+
+    /// The image-time temperature of slab `props` with sun fractions `s`,
+    /// shape factor `shape`, the background held at `bg` (K) and the back's
+    /// shape factor `back`.
+    fn t(&self, props: &SlabProperties, s: &[f32], shape: f32, bg: f32, back: Option<f32>) -> f64 {
+        irsig::thermal::solve(
+            props,
+            &self.forcing,
+            &FacetInputs {
+                background: Background::Constant(bg as f64),
+                back_shape_factor: back.map(f64::from),
+                ..FacetInputs::new(s, &self.cos, shape as f64)
+            },
+            &SolveOptions::default(),
+        )
+        .unwrap()
+        .surface_temperature_k[self.last]
+    }
 }
 
 /// Brute force over 64 × 64 cosine-weighted strata (their centres) about
@@ -966,43 +1080,11 @@ fn brute_force_face(tracer: &dyn Tracer, p: Vec3, n: Vec3, lift: f32) -> (f32, V
 /// sample point takes the facet's view and temperature bit for bit.
 #[test]
 fn double_sided_fence_takes_its_own_sky_view() {
-    let mut m = TriangleMesh::default();
-    let ground = quad(
-        &mut m,
-        Vec3::new(-500.0, -500.0, 0.0),
-        Vec3::X * 1000.0,
-        Vec3::Y * 1000.0,
-        1,
-        1,
-    );
-    // The fence: x = 0, y in [−20, 20], 4 m high, front face +x.
-    let fence = quad(
-        &mut m,
-        Vec3::new(0.0, -20.0, 0.0),
-        Vec3::Y * 40.0,
-        Vec3::Z * 4.0,
-        1,
-        1,
-    );
-    // Facing the front (x = 2, facing −x) along y < 0, and the back
-    // (x = −2, facing +x) along y > 0; 8 m high.
-    let front_wall = quad(
-        &mut m,
-        Vec3::new(2.0, -20.0, 0.0),
-        Vec3::Z * 8.0,
-        Vec3::Y * 20.0,
-        1,
-        1,
-    );
-    let back_wall = quad(
-        &mut m,
-        Vec3::new(-2.0, 0.0, 0.0),
-        Vec3::Y * 20.0,
-        Vec3::Z * 8.0,
-        1,
-        1,
-    );
-    let geo = SceneGeometry::single(m);
+    // The fence is the panel. Facing its front (x = 2, facing −x) along
+    // y < 0, and its back (x = −2, facing +x) along y > 0; 8 m high.
+    let (geo, ground, fence, walls) =
+        panel_scene(&[(2.0, -20.0, 8.0, false), (-2.0, 0.0, 8.0, true)]);
+    let (front_wall, back_wall) = (walls[0].clone(), walls[1].clone());
     let n = geo.facet_count();
     let temp_of = |f: usize| {
         if ground.contains(&f) {
@@ -1095,55 +1177,13 @@ fn double_sided_fence_takes_its_own_sky_view() {
     assert!(front_only - sky.background_k > 1.0, "{front_only} K");
     // Single-point solves (the background held at each one's T_bg: every
     // surface seen is held fixed).
-    let w = r.point_response[0].as_ref().unwrap().records.clone();
-    let last = w.len() - 1;
-    let records: Vec<_> = w.iter().map(|&k| r.records[k]).collect();
-    let forcing = Forcing::from_records(&records).unwrap();
-    let cos: Vec<f32> = w
-        .iter()
-        .map(|&k| r.exposure.solar.cos_incidence(f)[k])
-        .collect();
-    let s_f: Vec<f32> = w
-        .iter()
-        .map(|&k| r.exposure.solar.sun_fraction(f)[k])
-        .collect();
     let back = r.exposure.sky.back_shape_factor(f);
     let props = asphalt();
-    let t = |s: &[f32], shape: f32, bg: f32| {
-        irsig::thermal::solve(
-            &props,
-            &forcing,
-            &FacetInputs {
-                background: Background::Constant(bg as f64),
-                back_shape_factor: back.map(f64::from),
-                ..FacetInputs::new(s, &cos, shape as f64)
-            },
-            &SolveOptions::default(),
-        )
-        .unwrap()
-        .surface_temperature_k[last]
-    };
-    // The point's sunlit history (traced as per-hit does, from its lit face).
-    let s_p: Vec<f32> = w
-        .iter()
-        .map(|&k| {
-            let c = r.exposure.solar.cos_incidence(f)[k];
-            if c <= 0.0 {
-                return 0.0;
-            }
-            let d = r.sun_directions[k];
-            let side = if d.x >= 0.0 { 1.0 } else { -1.0 };
-            let mut occ = [false];
-            tracer.occluded(
-                &[Ray::new(p + Vec3::X * (side * off), d)],
-                Coherence::Incoherent,
-                &mut occ,
-            );
-            if occ[0] { 0.0 } else { 1.0 }
-        })
-        .collect();
+    let ps = PointSolves::new(&r, &*tracer, f, p, true);
+    let t = |s: &[f32], shape: f32, bg: f32| ps.t(&props, s, shape, bg, back);
+    let (s_p, s_f) = (&ps.s_p, &ps.s_f);
     let t_bg_f = r.background_temperature_k(0)[f];
-    let solo = t(&s_p, sky.shape_factor, sky.background_k) - t(&s_f, ff, t_bg_f);
+    let solo = t(s_p, sky.shape_factor, sky.background_k) - t(s_f, ff, t_bg_f);
     eprintln!(
         "fence point: per-hit {:.3} K, single-point solves {solo:.3} K",
         st.dt_k
@@ -1541,35 +1581,9 @@ fn ground_seen_in_a_mirror_takes_its_own_state_by_its_whole_path() {
 #[test]
 fn exposed_back_point_takes_its_own_back_sky_view() {
     use irsig::thermal::{BackBoundary, SlabProperties};
-    let mut m = TriangleMesh::default();
-    let ground = quad(
-        &mut m,
-        Vec3::new(-500.0, -500.0, 0.0),
-        Vec3::X * 1000.0,
-        Vec3::Y * 1000.0,
-        1,
-        1,
-    );
-    // The panel: x = 0, y in [−20, 20], 4 m high, front face +x; its two
-    // triangles' sample points at y = ±6.7.
-    let panel = quad(
-        &mut m,
-        Vec3::new(0.0, -20.0, 0.0),
-        Vec3::Y * 40.0,
-        Vec3::Z * 4.0,
-        1,
-        1,
-    );
-    // Behind it (x = −2, facing +x) along y > 0, 8 m high.
-    let shelter = quad(
-        &mut m,
-        Vec3::new(-2.0, 0.0, 0.0),
-        Vec3::Y * 20.0,
-        Vec3::Z * 8.0,
-        1,
-        1,
-    );
-    let geo = SceneGeometry::single(m);
+    // The panel; behind it (x = −2, facing +x) along y > 0, 8 m high.
+    let (geo, ground, panel, walls) = panel_scene(&[(-2.0, 0.0, 8.0, true)]);
+    let shelter = walls[0].clone();
     let n = geo.facet_count();
     let temp_of = |f: usize| {
         if ground.contains(&f) {
@@ -1605,27 +1619,7 @@ fn exposed_back_point_takes_its_own_back_sky_view() {
     };
     let night = "2025-06-21T23:00:00-04:00";
     let (r, tracer) = solve_setup(&geo, &setup, night, 0.2);
-    let e = ExposureParams::default();
-    let ph = PerHit::new(
-        Arc::new(r.exposure.solar.clone()),
-        &r.exposure.facets,
-        &r.exposure.sky,
-        r.point_response[0].as_ref().expect("linearised solve"),
-        &r.sun_directions,
-        PerHitParams::default(),
-    )
-    .with_sky(
-        SkyInputs::new(
-            &r.exposure.facets,
-            Arc::new(r.exposure.sky.clone()),
-            e.sky,
-            e.seed,
-            &r.setup.shape_factor_override,
-        )
-        .with_reflected(Arc::new(r.exposure.reflected.clone()), &r, 0.2)
-        .with_exposed_back(r.exposed_back_shape_factor.clone()),
-        r.surface_temperature_k(0),
-    );
+    let ph = per_hit_full(&r, 0.2);
     // A point 3.5 m up at y = 10, in front of the shelter.
     let p = Vec3::new(0.0, 10.0, 3.5);
     let mut hit = [None];
@@ -1651,52 +1645,14 @@ fn exposed_back_point_takes_its_own_back_sky_view() {
     eprintln!("panel point: back F_p {fb_p:.3} (brute force), facet's back F {fb_f:.3}");
     assert!(fb_f - fb_p > 0.2, "{fb_f} vs {fb_p}: the shelter matters");
     // Single-point solves, as in `double_sided_fence_takes_its_own_sky_view`.
-    let w = r.point_response[0].as_ref().unwrap().records.clone();
-    let last = w.len() - 1;
-    let records: Vec<_> = w.iter().map(|&k| r.records[k]).collect();
-    let forcing = Forcing::from_records(&records).unwrap();
-    let cos: Vec<f32> = w
-        .iter()
-        .map(|&k| r.exposure.solar.cos_incidence(f)[k])
-        .collect();
-    let s_f: Vec<f32> = w
-        .iter()
-        .map(|&k| r.exposure.solar.sun_fraction(f)[k])
-        .collect();
-    let s_p: Vec<f32> = w
-        .iter()
-        .map(|&k| {
-            if r.exposure.solar.cos_incidence(f)[k] <= 0.0 {
-                return 0.0;
-            }
-            let mut occ = [false];
-            tracer.occluded(
-                &[Ray::new(p + Vec3::X * off, r.sun_directions[k])],
-                Coherence::Incoherent,
-                &mut occ,
-            );
-            if occ[0] { 0.0 } else { 1.0 }
-        })
-        .collect();
-    let t = |s: &[f32], shape: f32, bg: f32, fb: f32| {
-        irsig::thermal::solve(
-            &steel,
-            &forcing,
-            &FacetInputs {
-                background: Background::Constant(bg as f64),
-                back_shape_factor: Some(fb as f64),
-                ..FacetInputs::new(s, &cos, shape as f64)
-            },
-            &SolveOptions::default(),
-        )
-        .unwrap()
-        .surface_temperature_k[last]
-    };
+    let ps = PointSolves::new(&r, &*tracer, f, p, false);
+    let t = |s: &[f32], shape: f32, bg: f32, fb: f32| ps.t(&steel, s, shape, bg, Some(fb));
+    let (s_p, s_f) = (&ps.s_p, &ps.s_f);
     let ff = r.exposure.sky.shape_factor[f];
     let t_bg_f = r.background_temperature_k(0)[f];
-    let facet = t(&s_f, ff, t_bg_f, fb_f);
-    let solo = t(&s_p, sky.shape_factor, sky.background_k, fb_p) - facet;
-    let front_only = t(&s_p, sky.shape_factor, sky.background_k, fb_f) - facet;
+    let facet = t(s_f, ff, t_bg_f, fb_f);
+    let solo = t(s_p, sky.shape_factor, sky.background_k, fb_p) - facet;
+    let front_only = t(s_p, sky.shape_factor, sky.background_k, fb_f) - facet;
     eprintln!(
         "panel point: per-hit {:.3} K, single-point solves {solo:.3} K ({front_only:.3} K with the facet's back view)",
         st.dt_k
