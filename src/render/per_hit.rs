@@ -452,18 +452,48 @@ impl PerHit {
         self
     }
 
+    /// The hemisphere rays of one face of `facet` from point `p` lifted
+    /// off its plane on that face's side: the facet's own pattern of the
+    /// face (the directions of its sky view) in its frame, the back face's
+    /// frame `FacetSamples::to_world` with side −1; weights times `scale`.
+    #[allow(clippy::too_many_arguments)]
+    fn face_rays(
+        &self,
+        inputs: &SkyInputs,
+        facet: usize,
+        p: Vec3,
+        back: bool,
+        scale: f32,
+        pat: &mut Vec<crate::exposure::sampling::HemiSample>,
+        rays: &mut Vec<Ray>,
+        weights: &mut Vec<f32>,
+    ) {
+        let n = self.normal[facet];
+        let (t, b) = inputs.frame[facet];
+        let side = if back { -1.0 } else { 1.0 };
+        let o = p + n * (side * self.offset_m);
+        let pattern = if back {
+            inputs.patterns.back(facet, pat)
+        } else {
+            inputs.patterns.front(facet, pat)
+        };
+        for h in pattern {
+            let d = t * h.dir.x + b * (side * h.dir.y) + n * (side * h.dir.z);
+            rays.push(Ray::new(o, d));
+            weights.push(h.weight * scale);
+        }
+    }
+
     /// The traced sky view of `facet`'s exposed back where its hits that
     /// take their own sky view also take their back's: the facet has one
     /// (single-sided, exposed back) and its reference responds to the back.
     fn own_back(&self, facet: usize) -> Option<f32> {
+        // (`back_radiative`, `back_shape` and `back_rows` are filled
+        // together.)
         let fb = (*self.sky.as_ref()?.inputs.exposed_back.get(facet)?)?;
         let b = *self.block_of.get(facet)? as usize;
-        let r = self.records.len();
-        let p = &*self.response;
-        (self.back_rows.len() >= (b + 1) * r
-            && p.back_shape.len() >= (b + 1) * r
-            && p.back_radiative.get(b).is_some_and(|&x| x > 0.0))
-        .then_some(fb)
+        let rb = *self.response.back_radiative.get(b)?;
+        (rb > 0.0).then_some(fb)
     }
 
     /// Whether hits on `facet` that get their own temperature also get their
@@ -659,56 +689,49 @@ impl PerHit {
         )
     }
 
-    /// The background source of a face with radiative coefficient
-    /// `radiative` (`εσ` of the front, `a·εσ` of an exposed back; W m⁻²
-    /// K⁻⁴) and shape factor `f`, ground weight `g` and the facets `seen`
-    /// (with weights), added to `out` times `sign` (W m⁻² per record):
-    /// `ε(1 − F)·σ(T_bg⁴ − T_air⁴)`
-    /// with `T_bg⁴ = (g·T_air⁴ + Σ wᵢTᵢ⁴)/(g + Σ wᵢ)`, the term the scene
-    /// solve's last pass adds to a facet's sources
-    /// ([`crate::thermal::background_coefficients`]); `Tᵢ⁴` the `T⁴`
-    /// history that pass used, or (a facet no other facet sees) its
-    /// temperature at the image time. Nothing with one pass (the air is
-    /// every background).
-    #[allow(clippy::too_many_arguments)]
-    fn add_background(
+    /// The background excess `T_bg⁴ − T_air⁴` (K⁴ per record) of a view
+    /// with ground weight `g` and the facets `seen` (with weights), into
+    /// `out`: `T_bg⁴ = (g·T_air⁴ + Σ wᵢTᵢ⁴)/(g + Σ wᵢ)`, `Tᵢ⁴` the `T⁴`
+    /// history the scene solve's last pass used, or (a facet no other facet
+    /// sees) its temperature at the image time. A face's background source
+    /// is `ε(1 − F)·σ` times it ([`add_background`]), the term that pass
+    /// adds to a facet's sources
+    /// ([`crate::thermal::background_coefficients`]). `out` is left empty
+    /// with one pass (the air is every background) or an empty view.
+    fn background_excess(
         &self,
         sky: &PointSky,
-        radiative: f32,
-        f: f32,
         g: f32,
         seen: &mut dyn Iterator<Item = (u32, f32)>,
-        sign: f32,
-        out: &mut [f32],
-        acc: &mut Vec<f32>,
+        out: &mut Vec<f32>,
     ) {
         let p = &*self.response;
+        out.clear();
         if p.slot_of.is_empty() {
             return;
         }
         let r = p.records;
-        acc.clear();
-        acc.extend(p.air4.iter().map(|a| g * a));
+        out.extend(p.air4.iter().map(|a| g * a));
         let mut den = g;
         for (j, w) in seen {
             den += w;
             match p.slot_of.get(j as usize) {
                 Some(&s) if s != u32::MAX => {
                     let h = &p.background4[s as usize * r..(s as usize + 1) * r];
-                    acc.iter_mut().zip(h).for_each(|(o, t4)| *o += w * t4);
+                    out.iter_mut().zip(h).for_each(|(o, t4)| *o += w * t4);
                 }
                 _ => {
                     let t4 = w * sky.temperature_k[j as usize].powi(4);
-                    acc.iter_mut().for_each(|o| *o += t4);
+                    out.iter_mut().for_each(|o| *o += t4);
                 }
             }
         }
         if den <= 0.0 {
+            out.clear();
             return;
         }
-        let c = sign * radiative * (1.0 - f);
-        for ((o, a), air) in out.iter_mut().zip(acc.iter()).zip(&p.air4) {
-            *o += c * (a / den - air);
+        for (o, air) in out.iter_mut().zip(&p.air4) {
+            *o = *o / den - air;
         }
     }
 
@@ -942,66 +965,39 @@ impl PerHit {
         let mut sky_rays = Vec::new();
         let mut sky_w = Vec::new();
         let mut sky_at = Vec::with_capacity(hits.len() + 1);
+        // A hit with its own sky view on a facet with a traced exposed back
+        // also traces the back's pattern from the point lifted to the back
+        // side (occlusion only: the back's background is the front's, as in
+        // the scene solve); hit `j`'s are `back_rays[back_at[j]..back_at[j
+        // + 1]]`.
+        let mut back_rays = Vec::new();
+        let mut back_w = Vec::new();
+        let mut back_at = Vec::with_capacity(hits.len() + 1);
         let mut pat = Vec::new();
         for &(f, p) in hits {
             sky_at.push(sky_rays.len());
+            back_at.push(back_rays.len());
             let f = f as usize;
             if let Some(ps) = self.sky.as_ref().filter(|_| own_sky && self.own_sky(f)) {
-                let n = self.normal[f];
-                let (t, b) = ps.inputs.frame[f];
                 let two = ps.inputs.sky.back_shape_factor(f).is_some();
                 let scale = if two { 0.5 } else { 1.0 };
-                let o = p + n * self.offset_m;
-                for h in ps.inputs.patterns.front(f, &mut pat) {
-                    let d = t * h.dir.x + b * h.dir.y + n * h.dir.z;
-                    sky_rays.push(Ray::new(o, d));
-                    sky_w.push(h.weight * scale);
-                }
+                let mut face = |back: bool, scale: f32, rays: &mut Vec<Ray>, w: &mut Vec<f32>| {
+                    self.face_rays(&ps.inputs, f, p, back, scale, &mut pat, rays, w)
+                };
+                face(false, scale, &mut sky_rays, &mut sky_w);
                 if two {
-                    // The back face's frame: `FacetSamples::to_world` with
-                    // side −1.
-                    let o = p - n * self.offset_m;
-                    for h in ps.inputs.patterns.back(f, &mut pat) {
-                        let d = t * h.dir.x + b * (-h.dir.y) + n * (-h.dir.z);
-                        sky_rays.push(Ray::new(o, d));
-                        sky_w.push(h.weight * scale);
-                    }
+                    face(true, scale, &mut sky_rays, &mut sky_w);
+                } else if self.own_back(f).is_some() {
+                    face(true, 1.0, &mut back_rays, &mut back_w);
                 }
             }
         }
         sky_at.push(sky_rays.len());
+        back_at.push(back_rays.len());
         let mut sky_hits = vec![None; sky_rays.len()];
         if !sky_rays.is_empty() {
             tracer.intersect(&sky_rays, Coherence::Incoherent, &mut sky_hits);
         }
-        // The own back sky views: a hit with its own sky view on a facet
-        // with a traced exposed back also traces the back's pattern from the
-        // point lifted to the back side (occlusion only: the back's
-        // background is the front's, as in the scene solve); hit `j`'s rays
-        // are `back_rays[back_at[j]..back_at[j + 1]]`.
-        let mut back_rays = Vec::new();
-        let mut back_w = Vec::new();
-        let mut back_at = Vec::with_capacity(hits.len() + 1);
-        for (j, &(f, p)) in hits.iter().enumerate() {
-            back_at.push(back_rays.len());
-            let f = f as usize;
-            if let Some(ps) = self.sky.as_ref()
-                && sky_at[j + 1] > sky_at[j]
-                && self.own_back(f).is_some()
-            {
-                let n = self.normal[f];
-                let (t, b) = ps.inputs.frame[f];
-                // `FacetSamples::to_world` with side −1, as the scene's
-                // exposed backs (`exposure::exposed_back_shape_factors`).
-                let o = p - n * self.offset_m;
-                for h in ps.inputs.patterns.back(f, &mut pat) {
-                    let d = t * h.dir.x + b * (-h.dir.y) + n * (-h.dir.z);
-                    back_rays.push(Ray::new(o, d));
-                    back_w.push(h.weight);
-                }
-            }
-        }
-        back_at.push(back_rays.len());
         let mut back_occ = vec![false; back_rays.len()];
         if !back_rays.is_empty() {
             tracer.occluded(&back_rays, Coherence::Incoherent, &mut back_occ);
@@ -1009,14 +1005,14 @@ impl PerHit {
         // Scratch of the per-hit loop: (record, Δ(s cos θ)) where the
         // point's history differs, the sky view's source change, the point's
         // source change, the second order's change history, what the point
-        // sees, a background sum.
+        // sees, the point's and the facet's background excess.
         let mut diff: Vec<(usize, f32)> = Vec::new();
         let mut ds_sky: Vec<f32> = Vec::new();
         let mut ds_back: Vec<f32> = Vec::new();
         let mut src: Vec<f32> = Vec::new();
         let mut delta: Vec<f32> = Vec::new();
         let mut seen: Vec<(u32, f32)> = Vec::new();
-        let mut acc: Vec<f32> = Vec::new();
+        let (mut exc_p, mut exc_f): (Vec<f32>, Vec<f32>) = (Vec::new(), Vec::new());
         let mut dw: Vec<(u32, f32)> = Vec::new();
         let mut da: Vec<f32> = Vec::new();
         for (j, &(f, _)) in hits.iter().enumerate() {
@@ -1069,26 +1065,18 @@ impl PerHit {
                     Some(shape) => ds_sky.extend(shape.iter().map(|x| (fp - ff) * x)),
                     None => ds_sky.resize(r, 0.0),
                 }
-                self.add_background(
+                // The point's and the facet's background excess, for the
+                // front's and an exposed back's background terms.
+                self.background_excess(ps, gp, &mut seen.iter().copied(), &mut exc_p);
+                self.background_excess(
                     ps,
-                    p.radiative[b],
-                    fp,
-                    gp,
-                    &mut seen.iter().copied(),
-                    1.0,
-                    &mut ds_sky,
-                    &mut acc,
-                );
-                self.add_background(
-                    ps,
-                    p.radiative[b],
-                    ff,
                     sky.ground_weight[f],
                     &mut sky.background(f).iter().map(|e| (e.facet, e.weight)),
-                    -1.0,
-                    &mut ds_sky,
-                    &mut acc,
+                    &mut exc_f,
                 );
+                let rf = p.radiative[b];
+                add_background(&mut ds_sky, rf * (1.0 - fp), &exc_p);
+                add_background(&mut ds_sky, -(rf * (1.0 - ff)), &exc_f);
                 Self::view_difference(&seen, sky.background(f), &mut dw);
                 let reflected_w_m2 = self.add_reflected(
                     ps,
@@ -1119,26 +1107,8 @@ impl PerHit {
                             .iter()
                             .map(|x| (fb_p - fb_f) * x),
                     );
-                    self.add_background(
-                        ps,
-                        rb,
-                        fb_p,
-                        gp,
-                        &mut seen.iter().copied(),
-                        1.0,
-                        &mut ds_back,
-                        &mut acc,
-                    );
-                    self.add_background(
-                        ps,
-                        rb,
-                        fb_f,
-                        sky.ground_weight[f],
-                        &mut sky.background(f).iter().map(|e| (e.facet, e.weight)),
-                        -1.0,
-                        &mut ds_back,
-                        &mut acc,
-                    );
+                    add_background(&mut ds_back, rb * (1.0 - fb_p), &exc_p);
+                    add_background(&mut ds_back, -(rb * (1.0 - fb_f)), &exc_f);
                     let row = &self.back_rows[b * r..(b + 1) * r];
                     dt += row.iter().zip(&ds_back).map(|(g, x)| g * x).sum::<f32>();
                 }
@@ -1172,5 +1142,14 @@ impl PerHit {
                 sky: own_sky,
             });
         }
+    }
+}
+
+/// `out += c·excess` per record (W m⁻²): a face's background source with
+/// `c = ±ε(1 − F)σ` ([`PerHit::background_excess`]); nothing with an empty
+/// excess.
+fn add_background(out: &mut [f32], c: f32, excess: &[f32]) {
+    for (o, e) in out.iter_mut().zip(excess) {
+        *o += c * e;
     }
 }
